@@ -1,0 +1,115 @@
+"""Every key expression of skyquill, in one place.
+
+All keys live under ``skyquill/<show_id>/``; see docs/protocol.md for who publishes, who answers,
+and which message each carries.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+ROOT = "skyquill"
+PROTOCOL_VERSION = 1
+
+
+def _check_chunk(value: str, what: str) -> str:
+    if not value or any(c in value for c in "/*$?#"):
+        raise ValueError(f"{what} {value!r} must be non-empty and contain none of / * $ ? #")
+    return value
+
+
+@dataclass(frozen=True)
+class ShowKeys:
+    """Key expressions of one show."""
+
+    show_id: str
+    """Show identifier from the show file; one Zenoh namespace per show."""
+
+    def __post_init__(self) -> None:
+        _check_chunk(self.show_id, "show_id")
+
+    @property
+    def prefix(self) -> str:
+        return f"{ROOT}/{self.show_id}"
+
+    # --- orchestrator -------------------------------------------------------------------------
+    @property
+    def submit(self) -> str:
+        """Queryable (orchestrator): SubmitRequest -> SubmitReply."""
+        return f"{self.prefix}/orchestrator/submit"
+
+    @property
+    def command(self) -> str:
+        """Queryable (orchestrator): OperatorCommand -> CommandReply."""
+        return f"{self.prefix}/orchestrator/command"
+
+    @property
+    def report(self) -> str:
+        """Queryable (orchestrator): AgentReport -> CommandReply; agents retry until acked."""
+        return f"{self.prefix}/orchestrator/report"
+
+    @property
+    def snapshot(self) -> str:
+        """Queryable (orchestrator): empty query -> ShowSnapshot (late joiners start here)."""
+        return f"{self.prefix}/orchestrator/snapshot"
+
+    @property
+    def orchestrator_alive(self) -> str:
+        """Liveliness token of the orchestrator."""
+        return f"{self.prefix}/orchestrator/alive"
+
+    def job(self, job_id: str) -> str:
+        """Published (orchestrator) on every change of a job: JobState."""
+        return f"{self.prefix}/jobs/{_check_chunk(job_id, 'job_id')}"
+
+    @property
+    def jobs_all(self) -> str:
+        return f"{self.prefix}/jobs/*"
+
+    @property
+    def events(self) -> str:
+        """Published (orchestrator): Event, the show's event log."""
+        return f"{self.prefix}/events"
+
+    @property
+    def fleet(self) -> str:
+        """Published (orchestrator) on change and at 1 Hz: ShowSnapshot without finished jobs."""
+        return f"{self.prefix}/fleet"
+
+    # --- vehicles -----------------------------------------------------------------------------
+    def vehicle_alive(self, vehicle_id: str) -> str:
+        """Liveliness token of one vehicle agent."""
+        return f"{self.prefix}/vehicles/{_check_chunk(vehicle_id, 'vehicle_id')}/alive"
+
+    @property
+    def vehicles_alive_all(self) -> str:
+        return f"{self.prefix}/vehicles/*/alive"
+
+    def telemetry(self, vehicle_id: str) -> str:
+        """Published (agent) at 20 Hz: Telemetry. Subscribers should drop oldest."""
+        return f"{self.prefix}/vehicles/{_check_chunk(vehicle_id, 'vehicle_id')}/telemetry"
+
+    @property
+    def telemetry_all(self) -> str:
+        return f"{self.prefix}/vehicles/*/telemetry"
+
+    def vehicle_status(self, vehicle_id: str) -> str:
+        """Published (agent) on change and at 1 Hz: VehicleStatus."""
+        return f"{self.prefix}/vehicles/{_check_chunk(vehicle_id, 'vehicle_id')}/status"
+
+    @property
+    def vehicle_status_all(self) -> str:
+        return f"{self.prefix}/vehicles/*/status"
+
+    def vehicle_command(self, vehicle_id: str) -> str:
+        """Queryable (agent): VehicleCommand -> CommandReply."""
+        return f"{self.prefix}/vehicles/{_check_chunk(vehicle_id, 'vehicle_id')}/command"
+
+
+def vehicle_id_from_key(key: str) -> str:
+    """The vehicle id inside any ``.../vehicles/<id>/...`` key."""
+    parts = key.split("/")
+    try:
+        return parts[parts.index("vehicles") + 1]
+    except (ValueError, IndexError):
+        raise ValueError(f"not a vehicle key: {key!r}") from None

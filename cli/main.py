@@ -1,0 +1,70 @@
+"""Entry point of the ``skyquill`` command.
+
+Every module ``cli/cmd_*.py`` is a subcommand. It defines ``NAME`` (the subcommand), ``HELP`` (one
+line), ``add_arguments(parser)`` and ``run(args) -> int`` (the exit status). Modules are imported
+only when their subcommand runs, so a heavy dependency of one command never slows another.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import importlib
+import pkgutil
+import sys
+from pathlib import Path
+from types import ModuleType
+
+
+def _discover() -> dict[str, tuple[str, str]]:
+    """Map subcommand name -> (module name, help line), read without importing the modules."""
+    commands: dict[str, tuple[str, str]] = {}
+    package_dir = Path(__file__).parent
+    for info in pkgutil.iter_modules([str(package_dir)]):
+        if not info.name.startswith("cmd_"):
+            continue
+        tree = ast.parse((package_dir / f"{info.name}.py").read_text(encoding="utf-8"))
+        constants: dict[str, str] = {}
+        for node in tree.body:
+            if (
+                isinstance(node, ast.Assign)
+                and len(node.targets) == 1
+                and isinstance(node.targets[0], ast.Name)
+                and isinstance(node.value, ast.Constant)
+                and isinstance(node.value.value, str)
+            ):
+                constants[node.targets[0].id] = node.value.value
+        name = constants.get("NAME", info.name.removeprefix("cmd_").replace("_", "-"))
+        commands[name] = (f"cli.{info.name}", constants.get("HELP", ""))
+    return dict(sorted(commands.items()))
+
+
+def build_parser() -> tuple[argparse.ArgumentParser, dict[str, str]]:
+    parser = argparse.ArgumentParser(
+        prog="skyquill",
+        description="Show orchestration for fleets of vehicles that write.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    modules: dict[str, str] = {}
+    for name, (module_name, help_line) in _discover().items():
+        modules[name] = module_name
+        sub.add_parser(name, help=help_line, add_help=False)
+    return parser, modules
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser, modules = build_parser()
+    if not argv or argv[0] not in modules:
+        parser.parse_args(argv or ["--help"])
+        return 2
+    name = argv[0]
+    module: ModuleType = importlib.import_module(modules[name])
+    command_parser = argparse.ArgumentParser(prog=f"skyquill {name}", description=module.HELP)
+    module.add_arguments(command_parser)
+    args = command_parser.parse_args(argv[1:])
+    return int(module.run(args))
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

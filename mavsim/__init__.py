@@ -1,0 +1,1 @@
+"""A MAVLink vehicle for tests and rehearsal: simulated vehicles that answer like an autopilot."""

@@ -1,0 +1,1 @@
+"""Jobs: submissions, moderation, queue, assignment, fleet presence, persistence, recording."""

@@ -1,0 +1,21 @@
+"""The ``skyquill`` command finds its subcommands and fails clearly on unknown ones."""
+
+from __future__ import annotations
+
+import pytest
+
+from cli.main import _discover, main
+
+
+def test_every_subcommand_module_declares_name_and_help() -> None:
+    commands = _discover()
+    for name, (module_name, help_line) in commands.items():
+        assert module_name.startswith("cli.cmd_"), name
+        assert help_line, f"{module_name} has no HELP line"
+
+
+def test_unknown_subcommand_exits_with_usage_error(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(["no-such-command"])
+    assert exit_info.value.code == 2
+    assert "invalid choice" in capsys.readouterr().err

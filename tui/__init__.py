@@ -1,0 +1,1 @@
+"""The operator console (Textual): shows what the bus says, sends operator commands."""
