@@ -52,12 +52,12 @@ class TrajectorySamples:
     @property
     def rate_hz(self) -> float:
         """Mean sample rate in [Hz]."""
-        return float((self.t_s.shape[0] - 1) / (self.t_s[-1] - self.t_s[0]))
+        return float(int(self.t_s.shape[0]) - 1) / float(self.t_s[-1] - self.t_s[0])
 
     def index_at(self, t_s: float) -> int:
         """Index of the last sample at or before ``t_s`` (clamped to the ends)."""
         i = int(np.searchsorted(self.t_s, t_s, side="right")) - 1
-        return min(max(i, 0), self.t_s.shape[0] - 1)
+        return min(max(i, 0), int(self.t_s.shape[0]) - 1)
 
     def to_json_dict(self) -> dict[str, Any]:
         """The ``samples`` object of ``TRAJ.json`` (see docs/formats.md)."""

@@ -1,0 +1,225 @@
+"""Planner timing per character on one core: stages, QP solvers, and RotorPy MinSnap as a peer.
+
+    python benchmarks/bench_planner.py            # Latin A-Z a-z + 120 common Chinese characters
+    python benchmarks/bench_planner.py --quick    # a handful of characters (smoke run)
+
+Characters are laid out on a 1 m x 1 m area (5 cm margin) with the default limits. Each stage is
+timed once per character after a warm-up; printed: median and worst [ms] per character.
+Stages: fixed-time closed-form fit (eq. 43) at the initial times; acceleration-constrained QP
+(lazy working set, PIQP); the full QP for PIQP / Clarabel / OSQP; full re-segmentation
+(analytic gradient, closed-form then QP phase); the paper's numerical-gradient re-segmentation
+on a subset (it needs one solve per segment per step); the whole ``plan_strokes``; and RotorPy's
+``MinSnap`` on the same 3-D waypoints (the data points of the path, repeats merged) with the same
+mean speed, on a subset (it takes seconds per character).
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = "1"
+if hasattr(os, "sched_setaffinity"):
+    os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+
+import argparse  # noqa: E402
+import contextlib  # noqa: E402
+import io  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
+from functools import partial  # noqa: E402
+from pathlib import Path  # noqa: E402
+from typing import Any  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import numpy as np  # noqa: E402
+
+from planner.errors import PlannerError  # noqa: E402
+from planner.fit_qp import QpFitter  # noqa: E402
+from planner.glyphs import fit_to_area, has_glyph, text_glyph  # noqa: E402
+from planner.minjerk import fit_closed_form  # noqa: E402
+from planner.pipeline import PlanOptions, plan_strokes, prepare, resegment  # noqa: E402
+from planner.retime import SegmentCost, descend_analytic, descend_numerical  # noqa: E402
+
+LATIN = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+# Common characters, roughly by frequency of use (modern corpora); the first 120 available are used.
+COMMON_HANZI = (
+    "的一是不了人我在有他这为之大来以个中上们到说国和地也子时道出而要于就下得可你年生自会那后能对着"
+    "事其里所去行过家十用发天如然作方成者多日都三小军二无同么经法当起与好看学进种将还分此心前面又定"
+    "见只主没公从知现长明问力理本意高月两实点最工开口手文外体东西水部物加名重全门间信关回老气平机"
+)
+
+
+def _timed(fn: Callable[[], Any]) -> tuple[Any, float]:
+    start = time.perf_counter()
+    result = fn()
+    return result, (time.perf_counter() - start) * 1e3
+
+
+def _corpus(quick: bool) -> list[str]:
+    if quick:
+        return list("AgQ永和我")
+    hanzi = [c for c in COMMON_HANZI if has_glyph(c)][:120]
+    return list(LATIN) + hanzi
+
+
+def _strokes(char: str) -> tuple[np.ndarray, ...]:
+    glyph = fit_to_area(text_glyph(char), width_m=1.0, height_m=1.0, margin_m=0.05)
+    return glyph.strokes
+
+
+def _minsnap(points: np.ndarray, v_avg: float, v_max: float) -> float | None:
+    """Time RotorPy's MinSnap on ``points``; ``None`` if it fails.
+
+    MinSnap silently drops waypoints closer than 0.1 m to the previous one, so the problem is
+    scaled up until no segment is that short (positions, v_avg and v_max alike: the time
+    allocation ``distance / v_avg`` and the minimum-snap solution are unchanged by the scale).
+    """
+    from rotorpy.trajectories.minsnap import MinSnap
+
+    keep = np.concatenate([[True], np.linalg.norm(np.diff(points, axis=0), axis=1) > 1e-9])
+    points = points[keep]  # corner dwells repeat a point; MinSnap needs distinct waypoints
+    seg = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    scale = max(1.0, 0.2 / float(np.min(seg)))
+    with contextlib.redirect_stdout(io.StringIO()):
+        try:
+            traj, ms = _timed(
+                lambda: MinSnap(points * scale, v_avg=v_avg * scale, v_max=v_max * scale)
+            )
+        except Exception:  # cvxopt may fail on ill-conditioned problems
+            return None
+    return None if traj.null or traj.points.shape[0] != points.shape[0] else ms
+
+
+def _row(name: str, values: list[float]) -> str:
+    if not values:
+        return f"  {name:<44} (no data)"
+    return (
+        f"  {name:<44} median {statistics.median(values):8.2f}   worst {max(values):8.2f}"
+        f"   (n={len(values)})"
+    )
+
+
+def _subset(chars: list[str], count: int) -> set[str]:
+    step = max(1, len(chars) // max(count, 1))
+    return set(chars[::step][:count])
+
+
+class _Results:
+    def __init__(self) -> None:
+        self.stages: dict[str, list[float]] = {}
+        self.pairs: list[tuple[float, float]] = []  # (plan_strokes ms, MinSnap ms)
+        self.numeric: list[tuple[float, float, float, float, float]] = []
+        self.failures: list[str] = []
+
+    def add(self, name: str, ms: float) -> None:
+        self.stages.setdefault(name, []).append(ms)
+
+
+def _measure(char: str, options: PlanOptions, res: _Results, peer: bool, numeric: bool) -> None:
+    strokes = _strokes(char)
+    try:
+        traj, plan_ms = _timed(lambda: plan_strokes(strokes, options))
+    except PlannerError as exc:
+        res.failures.append(f"{char}: {exc}")
+        return
+    res.add("plan_strokes (everything)", plan_ms)
+    prep = prepare(strokes, options)
+    problem, limits = prep.problem, prep.qp_limits
+    res.add("closed-form fit, fixed times (eq. 43)", _timed(lambda: fit_closed_form(problem))[1])
+    res.add("QP, lazy working set, PIQP", _timed(lambda: QpFitter(limits).fit(problem))[1])
+    for solver in ("piqp", "clarabel", "osqp"):
+        full = QpFitter(limits, solver, strategy="full")
+        res.add(f"QP, all rows, {solver}", _timed(partial(full.fit, problem))[1])
+    reseg_ms = _timed(lambda: resegment(problem, options, QpFitter(limits)))[1]
+    res.add("re-segmentation, analytic (full)", reseg_ms)
+    if peer:
+        points = prep.path.points_m_enu
+        length = float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1)))
+        peer_ms = _minsnap(points, length / traj.duration_s, options.limits.v_max_mps)
+        if peer_ms is None:
+            res.failures.append(f"{char}: RotorPy MinSnap failed")
+        else:
+            res.pairs.append((plan_ms, peer_ms))
+    if numeric:
+        res.numeric.append(_compare_numerical(problem, options))
+
+
+def _report(res: _Results, n_chars: int) -> None:
+    print(f"planner benchmark: {n_chars} characters, one core, times in ms per character")
+    for name, values in res.stages.items():
+        print(_row(name, values))
+    if res.pairs:
+        print(f"  peer on {len(res.pairs)} characters (same 3-D waypoints, same mean speed):")
+        print(_row("  plan_strokes (everything)", [p[0] for p in res.pairs]))
+        print(_row("  RotorPy MinSnap (7th order, cvxopt)", [p[1] for p in res.pairs]))
+        ours = statistics.median(p[0] for p in res.pairs)
+        peer = statistics.median(p[1] for p in res.pairs)
+        per_char = statistics.median(p[1] / p[0] for p in res.pairs)
+        print(
+            f"    MinSnap / plan_strokes: ratio of medians {peer / ours:.1f}x,"
+            f" median per-character ratio {per_char:.1f}x"
+        )
+    if res.numeric:
+        print(
+            f"  re-segmentation on {len(res.numeric)} characters (closed-form cost, fixed total"
+            " time), paper's numerical gradient (eq. 56, 200 steps) vs analytic:"
+        )
+        print(_row("  numerical (eq. 56) + backtracking", [n[1] for n in res.numeric]))
+        print(_row("  analytic (envelope) + L-BFGS", [n[0] for n in res.numeric]))
+        speedup = statistics.median(n[1] / n[0] for n in res.numeric)
+        share = statistics.median((n[4] - n[3]) / (n[4] - n[2]) for n in res.numeric)
+        gap = statistics.median((n[3] - n[2]) / n[2] for n in res.numeric)
+        print(
+            f"    speed-up {speedup:.0f}x; numerical reaches {100 * share:.2f} % of the analytic"
+            f" cost reduction (its final cost is {gap:.1e} relative above)"
+        )
+    for failure in res.failures:
+        print(f"  failed: {failure}")
+
+
+def run(quick: bool, numerical_subset: int, peer_subset: int) -> None:
+    options = PlanOptions()
+    chars = _corpus(quick)
+    plan_strokes(_strokes("A"), options)  # warm-up: imports, caches
+    numeric, peers = _subset(chars, numerical_subset), _subset(chars, peer_subset)
+    res = _Results()
+    for char in chars:
+        _measure(char, options, res, char in peers, char in numeric)
+    _report(res, len(chars))
+
+
+def _compare_numerical(
+    problem: Any, options: PlanOptions
+) -> tuple[float, float, float, float, float]:
+    """(analytic ms, numerical ms, analytic cost, numerical cost, initial cost)."""
+    T0 = problem.segment_durations()
+    t_min = options.min_segment_time_s
+
+    def cost() -> SegmentCost:
+        return SegmentCost(problem, fixed_total=True, min_duration_s=t_min)
+
+    fast, a_ms = _timed(lambda: descend_analytic(cost(), T0))
+    slow, n_ms = _timed(lambda: descend_numerical(cost(), T0, max_iter=200))
+    return a_ms, n_ms, fast.cost_final, slow.cost_final, fast.cost_initial
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="a handful of characters")
+    parser.add_argument(
+        "--numerical", type=int, help="characters for the numerical-gradient run (6; quick 1)"
+    )
+    parser.add_argument("--peer", type=int, help="characters for RotorPy MinSnap (20; quick 2)")
+    args = parser.parse_args()
+    numerical = args.numerical if args.numerical is not None else (1 if args.quick else 6)
+    peer = args.peer if args.peer is not None else (2 if args.quick else 20)
+    run(args.quick, numerical, peer)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,325 @@
+"""Minimum-jerk regression as a sparse QP with acceleration and speed limits (eq. 44-54).
+
+Variables are the control points of the three axes stacked, ``x = [tau_x; tau_y; tau_z]``.
+
+- cost ``x^T (w_g G + H^T W H) x - 2 d^T W H x`` (eq. 44), block diagonal, 3 super-diagonals;
+- equalities: the six end control points per axis (eq. 54);
+- acceleration: ``lo_a <= alpha^2 L_u tau_a <= hi_a`` per axis (eq. 53). The second derivative is
+  piecewise linear with these values at the knots, so this bound is exact;
+- speed (optional): the hodograph control points ``alpha K_u tau`` (eq. 47-48) are kept inside a
+  polytope of 13 direction pairs (axes, face and body diagonals) inscribed in the ball of radius
+  ``v_max``; by the convex hull property ``||p'(t)|| <= v_max`` (sufficient, ~11 % margin);
+- floor (optional): z control points ``>= z_floor`` so that ``z(t) >= z_floor`` (convex hull).
+
+The constraint matrix never depends on ``alpha``: the bounds are divided by ``alpha^e`` instead, so
+re-solves during time re-segmentation keep one sparsity pattern (PIQP ``update``).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, replace
+from functools import lru_cache
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from planner.bspline import FloatArray, IntArray, acceleration_operator, velocity_operator
+from planner.errors import InfeasibleTrajectoryError, PlannerError
+from planner.minjerk import (
+    FitProblem,
+    SplineFit,
+    closed_form_from_normal_equations,
+    evaluate_fit,
+    fit_closed_form,
+    fixed_control_points,
+    fixed_indices,
+    normal_equations,
+)
+from planner.qp_solvers import QpBackend, QpData, QpSolverError, make_backend
+
+
+def _speed_directions() -> FloatArray:
+    """13 unit directions: one of each +/- pair of the 26 neighbours of a cube cell."""
+    dirs = []
+    for v in itertools.product((-1, 0, 1), repeat=3):
+        vec = np.array(v, dtype=np.float64)
+        first = vec[np.flatnonzero(vec)[0]] if np.any(vec) else 0.0
+        if first > 0:
+            dirs.append(vec / np.linalg.norm(vec))
+    return np.array(dirs)
+
+
+SPEED_DIRECTIONS = _speed_directions()
+SPEED_POLYTOPE_APOTHEM = 1.0 / 1.1280928107595818
+"""Bound on ``|n_k . v|`` that keeps the 13-pair polytope inside the unit ball (circumradius 1)."""
+
+
+@dataclass(frozen=True)
+class QpLimits:
+    """Linear limits imposed by the QP, world frame ENU."""
+
+    accel_lower_mps2: tuple[float, float, float]
+    """Lowest allowed acceleration per axis in [m/s^2] (negative)."""
+    accel_upper_mps2: tuple[float, float, float]
+    """Highest allowed acceleration per axis in [m/s^2] (positive)."""
+    speed_max_mps: float | None = None
+    """Bound on the speed ``||v||`` in [m/s]; ``None`` for no velocity constraint."""
+    z_floor_m: float | None = None
+    """Lowest allowed z in [m] (via the z control points); ``None`` for none."""
+
+
+@dataclass(frozen=True)
+class _Structure:
+    G: sp.csr_matrix
+    """All inequality rows: acceleration (3 axes x (m+1)), then speed (13 x (m+2))."""
+    exponent: FloatArray
+    """Power of alpha in each row's physical value (2 acceleration, 1 velocity)."""
+    kind: IntArray
+    """0 for an acceleration row, 1 for a speed row."""
+    position: IntArray
+    """Knot / hodograph index of each row (its place along the trajectory)."""
+    A: sp.csc_matrix
+    P_indptr: IntArray
+    P_indices: IntArray
+    P_gather: IntArray
+    """Flat indices into the banded ``ab`` (4, n) for the three diagonal blocks of ``P``."""
+
+
+@lru_cache(maxsize=32)
+def _structure(n_spans: int, with_speed: bool) -> _Structure:
+    n = n_spans + 3
+    eye3 = sp.identity(3, format="csr")
+    acc = sp.kron(eye3, acceleration_operator(n_spans), format="csr")
+    blocks = [acc]
+    exponent = [np.full(acc.shape[0], 2.0)]
+    kind = [np.zeros(acc.shape[0], dtype=np.int64)]
+    position = [np.tile(np.arange(n_spans + 1), 3)]
+    if with_speed:
+        vel = sp.kron(sp.csr_matrix(SPEED_DIRECTIONS), velocity_operator(n_spans), format="csr")
+        blocks.append(vel)
+        exponent.append(np.full(vel.shape[0], 1.0))
+        kind.append(np.ones(vel.shape[0], dtype=np.int64))
+        position.append(np.tile(np.arange(n - 1), SPEED_DIRECTIONS.shape[0]))
+    fixed = fixed_indices(n)
+    cols = (np.arange(3)[:, None] * n + fixed[None, :]).ravel()
+    A = sp.csc_matrix((np.ones(18), (np.arange(18), cols)), shape=(18, 3 * n))
+    # Upper-banded pattern of one block, column by column: rows max(0, j-3) .. j.
+    indptr, indices, gather = [0], [], []
+    for block in range(3):
+        for j in range(n):
+            for i in range(max(0, j - 3), j + 1):
+                indices.append(block * n + i)
+                gather.append((3 - (j - i)) * n + j)
+            indptr.append(len(indices))
+    return _Structure(
+        G=sp.csr_matrix(sp.vstack(blocks, format="csr")),
+        exponent=np.concatenate(exponent),
+        kind=np.concatenate(kind),
+        position=np.concatenate(position),
+        A=A,
+        P_indptr=np.array(indptr, dtype=np.int64),
+        P_indices=np.array(indices, dtype=np.int64),
+        P_gather=np.array(gather, dtype=np.int64),
+    )
+
+
+@dataclass(frozen=True)
+class _Bounds:
+    h_l: FloatArray
+    h_u: FloatArray
+    x_l: FloatArray
+
+
+def _bounds(problem: FitProblem, limits: QpLimits, st: _Structure) -> _Bounds:
+    """Row bounds divided by ``alpha^e`` (the rows themselves are alpha-free), box bounds."""
+    alpha = problem.alpha
+    n = problem.n_ctrl
+    rows_per_axis = problem.n_spans + 1
+    lo = np.repeat(np.asarray(limits.accel_lower_mps2), rows_per_axis) / alpha**2
+    hi = np.repeat(np.asarray(limits.accel_upper_mps2), rows_per_axis) / alpha**2
+    if limits.speed_max_mps is not None:
+        bound = limits.speed_max_mps * SPEED_POLYTOPE_APOTHEM / alpha
+        n_vel = st.G.shape[0] - lo.shape[0]
+        lo = np.concatenate([lo, np.full(n_vel, -bound)])
+        hi = np.concatenate([hi, np.full(n_vel, bound)])
+    x_l = np.full(3 * n, -np.inf)
+    if limits.z_floor_m is not None:
+        x_l[2 * n :] = limits.z_floor_m
+    return _Bounds(lo, hi, x_l)
+
+
+def _qp_data(
+    problem: FitProblem,
+    st: _Structure,
+    bounds: _Bounds,
+    ab: FloatArray,
+    rhs: FloatArray,
+    rows: IntArray | None,
+) -> QpData:
+    n = problem.n_ctrl
+    P = sp.csc_matrix(
+        (2.0 * ab.ravel()[st.P_gather], st.P_indices, st.P_indptr), shape=(3 * n, 3 * n)
+    )
+    G, h_l, h_u = st.G, bounds.h_l, bounds.h_u
+    if rows is not None:
+        G, h_l, h_u = G[rows], h_l[rows], h_u[rows]
+    return QpData(
+        P_upper=P,
+        c=-2.0 * rhs.T.ravel(),
+        A=st.A,
+        b=fixed_control_points(problem).T.ravel(),
+        G=sp.csc_matrix(G),
+        h_l=h_l,
+        h_u=h_u,
+        x_l=bounds.x_l,
+        x_u=np.full(3 * n, np.inf),
+    )
+
+
+def build_qp(problem: FitProblem, limits: QpLimits) -> QpData:
+    """The full QP of ``problem`` under ``limits`` (objective ``J - d'Wd``), every row present."""
+    st = _structure(problem.n_spans, limits.speed_max_mps is not None)
+    ab, rhs = normal_equations(problem)
+    return _qp_data(problem, st, _bounds(problem, limits, st), ab, rhs, None)
+
+
+def _violated(g: FloatArray, bounds: _Bounds) -> NDArray[np.bool_]:
+    scale = 1e-9 * (1.0 + float(np.max(np.abs(bounds.h_u))))
+    return np.asarray((g > bounds.h_u + scale) | (g < bounds.h_l - scale))
+
+
+class QpFitter:
+    """Solves constrained fits, keeping one backend so re-solves can reuse its pattern.
+
+    ``strategy="lazy"`` (default) is exact and much faster than ``"full"``: the unconstrained
+    optimum is returned as is when it respects every row (it is then the QP optimum); otherwise
+    QPs are solved with a working set of rows around the violated ones, grown until the
+    solution respects all rows. The working set persists between calls (stable pattern for
+    PIQP ``update`` during re-segmentation). ``"full"`` always passes every row.
+    """
+
+    def __init__(self, limits: QpLimits, solver: str = "piqp", strategy: str = "lazy") -> None:
+        if strategy not in ("lazy", "full"):
+            raise PlannerError(f"unknown strategy {strategy!r}", field="strategy")
+        self.limits = limits
+        self.solver = solver
+        self.strategy = strategy
+        self._backend: QpBackend = make_backend(solver)
+        self._working: NDArray[np.bool_] | None = None
+        self.solves = 0
+        self.solve_ms = 0.0
+
+    def fit(self, problem: FitProblem) -> SplineFit:
+        """Optimal constrained fit; raises :class:`InfeasibleTrajectoryError` if none exists."""
+        st = _structure(problem.n_spans, self.limits.speed_max_mps is not None)
+        bounds = _bounds(problem, self.limits, st)
+        ab, rhs = normal_equations(problem)
+        if self.strategy == "full":
+            return self._solve(problem, st, bounds, ab, rhs, None)
+        if self._working is None or self._working.shape[0] != st.G.shape[0]:
+            self._working = np.zeros(st.G.shape[0], dtype=bool)
+        if not np.any(self._working):
+            free = closed_form_from_normal_equations(problem, ab, rhs)
+            floor_ok = self.limits.z_floor_m is None or bool(
+                np.all(free[:, 2] >= self.limits.z_floor_m - 1e-12)
+            )
+            new = _violated(st.G @ free.T.ravel(), bounds)
+            if floor_ok and not np.any(new):
+                return evaluate_fit(problem, free)
+            self._grow(st, new)
+        for _ in range(20):
+            fit, x = self._solve_working(problem, st, bounds, ab, rhs)
+            new = _violated(st.G @ x, bounds) & ~self._working
+            if not np.any(new):
+                return fit
+            self._grow(st, new)
+        return self._solve(problem, st, bounds, ab, rhs, None)
+
+    def _grow(self, st: _Structure, new: NDArray[np.bool_]) -> None:
+        assert self._working is not None
+        for kind in (0, 1):
+            hit = np.unique(st.position[new & (st.kind == kind)])
+            if hit.size:
+                near = np.unique((hit[:, None] + np.arange(-2, 3)[None, :]).ravel())
+                self._working |= (st.kind == kind) & np.isin(st.position, near)
+
+    def _solve_working(
+        self,
+        problem: FitProblem,
+        st: _Structure,
+        bounds: _Bounds,
+        ab: FloatArray,
+        rhs: FloatArray,
+    ) -> tuple[SplineFit, FloatArray]:
+        assert self._working is not None
+        rows = np.flatnonzero(self._working)
+        fit = self._solve(problem, st, bounds, ab, rhs, rows)
+        return fit, fit.spline.control_points.T.ravel()
+
+    def _solve(
+        self,
+        problem: FitProblem,
+        st: _Structure,
+        bounds: _Bounds,
+        ab: FloatArray,
+        rhs: FloatArray,
+        rows: IntArray | None,
+    ) -> SplineFit:
+        sol = self._backend.solve(_qp_data(problem, st, bounds, ab, rhs, rows))
+        self.solves += 1
+        self.solve_ms += sol.solve_ms
+        if sol.status == "infeasible":
+            raise diagnose_infeasible(problem, self.limits)
+        if sol.status != "solved":
+            raise QpSolverError(f"{self.solver} failed: {sol.status}", field="solver")
+        tau = sol.x.reshape(3, problem.n_ctrl).T.copy()
+        fit = evaluate_fit(problem, tau, method=self.solver)
+        sel = slice(None) if rows is None else rows
+        g_x = st.G[sel] @ sol.x
+        alpha_term = float(np.sum(st.exponent[sel] * sol.z * g_x)) / problem.alpha
+        scale = max(1.0, float(np.max(np.abs(sol.z), initial=0.0))) * 1e-7
+        return replace(
+            fit,
+            constraint_alpha_term=alpha_term,
+            active_constraints=int(np.count_nonzero(np.abs(sol.z) > scale)),
+        )
+
+
+_AXES = ("x", "y", "z")
+
+
+def diagnose_infeasible(problem: FitProblem, limits: QpLimits) -> InfeasibleTrajectoryError:
+    """Explain an infeasible QP by the worst limit the unconstrained optimum breaks."""
+    spline = fit_closed_form(problem).spline
+    accel = spline.acceleration_at_knots()
+    times = spline.knot_times_s()
+    lo = np.asarray(limits.accel_lower_mps2)
+    hi = np.asarray(limits.accel_upper_mps2)
+    excess = np.maximum(accel - hi, lo - accel) / np.maximum(hi - lo, 1e-9)
+    k, axis = np.unravel_index(int(np.argmax(excess)), excess.shape)
+    if excess[k, axis] > 0.0 or limits.speed_max_mps is None:
+        value = float(accel[k, axis])
+        bound = float(hi[axis] if value > 0 else lo[axis])
+        return InfeasibleTrajectoryError(
+            f"acceleration limit: {_AXES[axis]} reaches {value:+.3f} m/s^2 at t={times[k]:.2f} s"
+            f" (bound {bound:+.3f}); allow more time or raise a_max",
+            limit="a_max",
+            axis=_AXES[axis],
+            t_s=float(times[k]),
+            value=value,
+            bound=bound,
+        )
+    t = np.linspace(0.0, spline.duration_s, 20 * spline.n_spans + 1)
+    speed = np.linalg.norm(spline.evaluate(t, 1), axis=1)
+    i = int(np.argmax(speed))
+    return InfeasibleTrajectoryError(
+        f"speed limit: {speed[i]:.3f} m/s at t={t[i]:.2f} s (bound {limits.speed_max_mps:.3f});"
+        " allow more time or raise v_max",
+        limit="v_max",
+        axis=None,
+        t_s=float(t[i]),
+        value=float(speed[i]),
+        bound=float(limits.speed_max_mps),
+    )
