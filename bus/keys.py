@@ -101,6 +101,15 @@ class ShowKeys:
     def vehicle_status_all(self) -> str:
         return f"{self.prefix}/vehicles/*/status"
 
+    def vehicle_events(self, vehicle_id: str) -> str:
+        """Published (agent): Event about the vehicle (autopilot messages, refused take-offs);
+        the orchestrator relays them into the show's ``events``."""
+        return f"{self.prefix}/vehicles/{_check_chunk(vehicle_id, 'vehicle_id')}/events"
+
+    @property
+    def vehicle_events_all(self) -> str:
+        return f"{self.prefix}/vehicles/*/events"
+
     def vehicle_command(self, vehicle_id: str) -> str:
         """Queryable (agent): VehicleCommand -> CommandReply."""
         return f"{self.prefix}/vehicles/{_check_chunk(vehicle_id, 'vehicle_id')}/command"

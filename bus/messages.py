@@ -128,6 +128,9 @@ class JobState(State, frozen=True):
     """How many times it was assigned (a lost vehicle's job is assigned again)."""
     metrics: JobMetrics | None = None
     error: ErrorInfo | None = None
+    strokes: dict[str, Any] | None = None
+    """The strokes document of a drawn job, for previews: only in ``jobs/<id>`` publications
+    and ``snapshot`` replies while the job awaits approval or is queued (never in ``fleet``)."""
 
 
 class JobAssignment(State, frozen=True):
@@ -192,6 +195,9 @@ class AgentReport(Request, frozen=True):
     progress: float = 0.0
     metrics: JobMetrics | None = None
     error: ErrorInfo | None = None
+    retry_after_s: float | None = None
+    """With ``failed``: the vehicle could not start the job but is healthy (its autopilot refused
+    to take off); the job goes back to the queue and the vehicle takes no job for this long [s]."""
 
 
 # --- operator -----------------------------------------------------------------------------------

@@ -1,0 +1,207 @@
+"""MAVLink numbers: setpoint rate sustained per vehicle, and latency from setpoint to vehicle.
+
+    .venv/bin/python benchmarks/bench_mavlink.py [--vehicles 4] [--seconds 10] [--rates 50 100]
+
+The vehicles (``mavsim``: simulated ArduCopters, real time) run in a child process, as
+``skyquill sim-mavlink`` would; this process flies N MavlinkBackends on one asyncio loop at the
+100 Hz control rate (harsher than a show, where each agent has its own process), streaming
+SET_POSITION_TARGET_LOCAL_NED (p, v, a) along a circle at each requested rate, with
+LOCAL_POSITION_NED asked at 100 Hz. The agent clock is the tick schedule on ``time.monotonic()``,
+so setpoint stamps (``time_boot_ms``, whole ms) compare across the two processes:
+
+- setpoint -> vehicle: the vehicle records ``monotonic - stamp`` when a setpoint arrives (the
+  agent loop's lateness, UDP, the vehicle's select loop) and when its control loop takes it up
+  (plus the wait for its next 100 Hz step, which depends on the phase of the two loops);
+- round trip: the vehicle echoes the stamp of the setpoint it tracks in POSITION_TARGET_LOCAL_NED
+  (50 Hz); the backend's process measures ``monotonic - stamp`` when the echo arrives.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import math
+import multiprocessing
+import statistics
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from mavsim.config import VehicleConfig  # noqa: E402
+from mavsim.server import MavsimServer  # noqa: E402
+from vehicle_agent.backends.base import Setpoint  # noqa: E402
+from vehicle_agent.backends.mavlink import MavlinkBackend  # noqa: E402
+from vehicle_agent.backends.mavlink_settings import MavlinkSettings  # noqa: E402
+
+CONTROL_HZ = 100.0
+RADIUS_M = 0.3
+PERIOD_S = 6.0
+HOVER_Z_M = 1.0
+WARM_UP_S = 2.0
+"""The circle starts at full speed from rest: tracking is measured after this transient."""
+
+
+def _vehicles(conn: Any, count: int) -> None:
+    """Child process: serve ``count`` vehicles until told to stop, then report their stats."""
+    configs = []
+    for i in range(count):
+        home = (2.0 * i, 0.0, 0.0)
+        configs.append(VehicleConfig(vehicle_id=f"v{i}", system_id=i + 1, port=0, home_m_enu=home,
+                                     position_source_delay_s=0.0))  # fmt: skip
+    server = MavsimServer(configs).start()
+    conn.send([ep.url for ep in server.endpoints])
+    conn.recv()  # "reset": the stream starts now
+    for ep in server.endpoints:
+        ep.received_stamp_age_ms.clear()
+        ep.applied_stamp_age_ms.clear()
+        ep.autopilot.setpoints_received = 0
+    conn.recv()  # "stop"
+    stats = [
+        {
+            "received": ep.autopilot.setpoints_received,
+            "arrived_ms": list(ep.received_stamp_age_ms),
+            "applied_ms": list(ep.applied_stamp_age_ms),
+        }
+        for ep in server.endpoints
+    ]
+    server.stop()
+    conn.send(stats)
+
+
+def circle(i: int, t: float) -> Setpoint:
+    w = 2 * math.pi / PERIOD_S
+    c, s = math.cos(w * t), math.sin(w * t)
+    r = RADIUS_M
+    return Setpoint(
+        position_m_enu=(2.0 * i + r * c, r * s, HOVER_Z_M),
+        velocity_mps_enu=(-r * w * s, r * w * c, 0.0),
+        acceleration_mps2_enu=(-r * w * w * c, -r * w * w * s, 0.0),
+    )
+
+
+async def _fly(urls: list[str], rate_hz: float, seconds: float, conn: Any) -> dict[str, Any]:
+    backends = []
+    round_trips: list[float] = []
+    for i, url in enumerate(urls):
+        origin = (2.0 * i, 0.0, 0.0)
+        settings = MavlinkSettings(
+            url=url,
+            origin_m_enu=origin,
+            setpoint_rate_hz=rate_hz,
+            control_rate_hz=CONTROL_HZ,
+            telemetry_rate_hz=CONTROL_HZ,
+        )
+        backend = MavlinkBackend(settings)
+        await backend.start()
+        backends.append(backend)
+    for backend in backends:
+        link = backend.link
+        handler = link.on_message
+
+        def on_message(message: Any, handler: Any = handler) -> None:
+            handler(message)
+            if message.get_type() == "POSITION_TARGET_LOCAL_NED":
+                now_ms = int(time.monotonic() * 1000) & 0xFFFFFFFF
+                round_trips.append(float((now_ms - message.time_boot_ms) & 0xFFFFFFFF))
+
+        link.on_message = on_message
+    dt = 1.0 / CONTROL_HZ
+    for i, backend in enumerate(backends):
+        await backend.takeoff(circle(i, 0.0).position_m_enu)
+    t_hold = time.monotonic() + 15.0
+    while not all(b.mode == "hold" for b in backends):
+        for backend in backends:
+            await backend.tick(None, time.monotonic())
+        await asyncio.sleep(dt)
+        if time.monotonic() > t_hold:
+            raise SystemExit("vehicles did not reach hover")
+    for _ in range(200):  # settle on the circle's start point
+        for i, backend in enumerate(backends):
+            await backend.tick(circle(i, 0.0), time.monotonic())
+        await asyncio.sleep(dt)
+    conn.send("reset")
+    round_trips.clear()
+    sent0 = [b.setpoints_sent for b in backends]
+    errors: list[float] = []
+    lateness: list[float] = []
+    t0 = time.monotonic()
+    k = 0
+    while time.monotonic() - t0 < seconds:
+        now = t0 + k * dt  # the agent's clock: tick times, as TickClock gives them
+        lateness.append((time.monotonic() - now) * 1000)
+        for i, backend in enumerate(backends):
+            snapshot = await backend.tick(circle(i, now - t0), now)
+            if now - t0 > WARM_UP_S:
+                reference = circle(i, now - t0).position_m_enu
+                errors.append(math.dist(snapshot.position_m_enu, reference))
+        k += 1
+        await asyncio.sleep(max(0.0, t0 + k * dt - time.monotonic()))
+    elapsed = time.monotonic() - t0
+    conn.send("stop")
+    faults = [b.fault for b in backends if b.fault]
+    for backend in backends:
+        await backend.close()
+    return {
+        "sent_hz": [
+            (b.setpoints_sent - s0) / elapsed for b, s0 in zip(backends, sent0, strict=True)
+        ],
+        "elapsed": elapsed,
+        "round_trip_ms": round_trips,
+        "tracking_m": errors,
+        "lateness_ms": lateness,
+        "faults": faults,
+    }
+
+
+def _pct(values: list[float], q: int) -> float:
+    return statistics.quantiles(values, n=100)[q - 1] if len(values) > 2 else float("nan")
+
+
+def run(vehicles: int, seconds: float, rate_hz: float) -> None:
+    ctx = multiprocessing.get_context("spawn")
+    parent, child = ctx.Pipe()
+    process = ctx.Process(target=_vehicles, args=(child, vehicles), daemon=True)
+    process.start()
+    urls = parent.recv()
+    result = asyncio.run(_fly(urls, rate_hz, seconds, parent))
+    stats = parent.recv()
+    process.join(timeout=10)
+    received = [s["received"] / result["elapsed"] for s in stats]
+    arrived = [a for s in stats for a in s["arrived_ms"]]
+    applied = [a for s in stats for a in s["applied_ms"]]
+    rtt = result["round_trip_ms"]
+    print(f"\n{vehicles} vehicles, setpoints at {rate_hz:.0f} Hz, {seconds:.0f} s, "
+          f"control loop {CONTROL_HZ:.0f} Hz")  # fmt: skip
+    print("  sent per vehicle [Hz]:     " + " ".join(f"{r:6.1f}" for r in result["sent_hz"]))
+    print("  received per vehicle [Hz]: " + " ".join(f"{r:6.1f}" for r in received))
+    for name, ages in (("arrives at the vehicle", arrived), ("used by its loop", applied)):
+        median, p95, p99 = statistics.median(ages), _pct(ages, 95), _pct(ages, 99)
+        print(f"  setpoint {name} [ms]: median {median:.1f}  p95 {p95:.1f}  p99 {p99:.1f}  "
+              f"max {max(ages):.1f}")  # fmt: skip
+    print(f"  round trip via POSITION_TARGET echo [ms]: median {statistics.median(rtt):.1f}  "
+          f"p95 {_pct(rtt, 95):.1f}  max {max(rtt):.1f}")  # fmt: skip
+    late = result["lateness_ms"]
+    print(f"  agent loop lateness [ms]: median {statistics.median(late):.2f}  "
+          f"p99 {_pct(late, 99):.2f}")  # fmt: skip
+    err = result["tracking_m"]
+    print(f"  tracking after {WARM_UP_S:.0f} s (telemetry vs reference) [mm]: rms "
+          f"{1000 * math.sqrt(statistics.fmean(e * e for e in err)):.1f}  max {1000 * max(err):.1f}"
+          f"  faults: {result['faults'] or 'none'}")  # fmt: skip
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--vehicles", type=int, default=4)
+    parser.add_argument("--seconds", type=float, default=10.0)
+    parser.add_argument("--rates", type=float, nargs="+", default=[50.0, 100.0])
+    args = parser.parse_args()
+    for rate in args.rates:
+        run(args.vehicles, args.seconds, rate)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,329 @@
+"""Request/reply over Zenoh queries with typed messages.
+
+A service declares a queryable with :func:`serve` (handler on Zenoh's thread) or
+:func:`serve_async` (handler in the asyncio loop). The request is decoded before the handler sees
+it; a payload that is not a valid request gets an error reply (``on_error(info)`` when given,
+otherwise a Zenoh error reply whose payload is an ErrorInfo) and the handler never runs. A handler
+that raises produces an ``internal`` error reply; the queryable keeps serving.
+
+Clients call :func:`query` / :func:`aquery` (all replies, decoded) or :func:`query_one` /
+:func:`aquery_one` (first good reply or an exception).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
+from typing import Any, Generic, TypeVar, overload
+
+import msgspec
+import zenoh
+
+from bus.messages import ErrorInfo, MessageError, decode, encode
+from bus.session import BusError
+
+M = TypeVar("M", bound=msgspec.Struct)
+R = TypeVar("R", bound=msgspec.Struct)
+
+log = logging.getLogger(__name__)
+
+JSON = zenoh.Encoding.APPLICATION_JSON
+DEFAULT_TIMEOUT_S = 2.0
+
+Queryable = zenoh.Queryable
+
+
+class NoReplyError(BusError, TimeoutError):
+    """Nobody answered the query before the timeout."""
+
+
+class RemoteError(BusError):
+    """The queryable answered with an error; ``info`` says what."""
+
+    def __init__(self, info: ErrorInfo) -> None:
+        self.info = info
+        super().__init__(f"{info.code}: {info.message}")
+
+
+@dataclass(frozen=True)
+class QueryReply(Generic[M]):
+    """One reply to a query: a decoded message, or what went wrong."""
+
+    key: str | None
+    """Key expression the reply came on (None for error replies)."""
+    value: M | None
+    """The decoded reply; None when ``error`` is set."""
+    error: ErrorInfo | None
+    """Error reply from the queryable, or why the reply could not be decoded."""
+
+
+def error_info_from_exception(exc: BaseException) -> ErrorInfo:
+    """ErrorInfo of an exception, keeping ``stroke_index``/``point_index``/``field`` if set."""
+    if isinstance(exc, MessageError):
+        return exc.info
+    return ErrorInfo(
+        code=str(getattr(exc, "code", "") or type(exc).__name__),
+        message=str(exc) or type(exc).__name__,
+        field=getattr(exc, "field", None),
+        stroke_index=getattr(exc, "stroke_index", None),
+        point_index=getattr(exc, "point_index", None),
+    )
+
+
+def _decode_reply(reply: zenoh.Reply, reply_type: type[M]) -> QueryReply[M]:
+    ok = reply.ok
+    if ok is not None:
+        key = str(ok.key_expr)
+        try:
+            return QueryReply(key, decode(ok.payload.to_bytes(), reply_type), None)
+        except MessageError as exc:
+            return QueryReply(key, None, exc.info)
+    err = reply.err
+    raw = err.payload.to_bytes() if err is not None else b""
+    try:
+        info = decode(raw, ErrorInfo)
+    except MessageError:
+        info = ErrorInfo(code="remote_error", message=raw.decode("utf-8", "replace") or "error")
+    return QueryReply(None, None, info)
+
+
+def _payload(request: msgspec.Struct | bytes | None) -> bytes | None:
+    if request is None or isinstance(request, bytes):
+        return request
+    return encode(request)
+
+
+def query(
+    session: zenoh.Session,
+    key_expr: str,
+    request: msgspec.Struct | bytes | None,
+    reply_type: type[M],
+    *,
+    timeout_s: float = DEFAULT_TIMEOUT_S,
+) -> list[QueryReply[M]]:
+    """Send ``request`` (a message, raw bytes, or nothing) and collect every reply (blocking)."""
+    payload = _payload(request)
+    kwargs: dict[str, Any] = {"timeout": timeout_s}
+    if payload is not None:
+        kwargs.update(payload=payload, encoding=JSON)
+    return [_decode_reply(r, reply_type) for r in session.get(key_expr, **kwargs)]
+
+
+def _first(replies: list[QueryReply[M]], key_expr: str) -> M:
+    for reply in replies:
+        if reply.value is not None:
+            return reply.value
+    for reply in replies:
+        if reply.error is not None:
+            raise RemoteError(reply.error)
+    raise NoReplyError(f"no reply on {key_expr}")
+
+
+def query_one(
+    session: zenoh.Session,
+    key_expr: str,
+    request: msgspec.Struct | bytes | None,
+    reply_type: type[M],
+    *,
+    timeout_s: float = DEFAULT_TIMEOUT_S,
+) -> M:
+    """The first decoded reply; :class:`NoReplyError` or :class:`RemoteError` otherwise."""
+    return _first(query(session, key_expr, request, reply_type, timeout_s=timeout_s), key_expr)
+
+
+async def aquery(
+    session: zenoh.Session,
+    key_expr: str,
+    request: msgspec.Struct | bytes | None,
+    reply_type: type[M],
+    *,
+    timeout_s: float = DEFAULT_TIMEOUT_S,
+) -> list[QueryReply[M]]:
+    """:func:`query` without blocking the event loop (replies collected on Zenoh's thread)."""
+    loop = asyncio.get_running_loop()
+    done: asyncio.Future[list[QueryReply[M]]] = loop.create_future()
+    replies: list[QueryReply[M]] = []
+
+    def on_reply(reply: zenoh.Reply) -> None:
+        replies.append(_decode_reply(reply, reply_type))
+
+    def on_done() -> None:
+        def finish() -> None:
+            if not done.done():
+                done.set_result(list(replies))
+
+        with contextlib.suppress(RuntimeError):  # loop closed: nobody waits any more
+            loop.call_soon_threadsafe(finish)
+
+    payload = _payload(request)
+    kwargs: dict[str, Any] = {"timeout": timeout_s}
+    if payload is not None:
+        kwargs.update(payload=payload, encoding=JSON)
+    session.get(key_expr, zenoh.handlers.Callback(on_reply, on_done), **kwargs)
+    return await done
+
+
+async def aquery_one(
+    session: zenoh.Session,
+    key_expr: str,
+    request: msgspec.Struct | bytes | None,
+    reply_type: type[M],
+    *,
+    timeout_s: float = DEFAULT_TIMEOUT_S,
+) -> M:
+    """:func:`query_one` without blocking the event loop."""
+    replies = await aquery(session, key_expr, request, reply_type, timeout_s=timeout_s)
+    return _first(replies, key_expr)
+
+
+# --- serving ------------------------------------------------------------------------------------
+
+ErrorReply = Callable[[ErrorInfo], msgspec.Struct]
+"""Builds the reply message for an error, e.g. ``lambda e: SubmitReply(ok=False, error=e)``."""
+
+
+def _send_error(query: zenoh.Query, key: str, info: ErrorInfo, on_error: ErrorReply | None) -> None:
+    if on_error is not None:
+        query.reply(key, encode(on_error(info)), encoding=JSON)
+    else:
+        query.reply_err(encode(info), encoding=JSON)
+
+
+def _reply(query: zenoh.Query, key: str, reply: msgspec.Struct) -> None:
+    try:
+        query.reply(key, encode(reply), encoding=JSON)
+    except Exception as exc:  # e.g. the querier is gone, or the session closed
+        log.warning("could not reply on %s: %s", key, exc)
+    finally:
+        query.drop()  # type: ignore[no-untyped-call]
+
+
+def _decode_request(query: zenoh.Query, request_type: type[Any] | None) -> Any:
+    if request_type is None:
+        return None
+    payload = query.payload
+    return decode(payload.to_bytes() if payload is not None else b"", request_type)
+
+
+@overload
+def serve(
+    session: zenoh.Session,
+    key: str,
+    request_type: type[M],
+    handler: Callable[[M], msgspec.Struct],
+    *,
+    on_error: ErrorReply | None = None,
+) -> zenoh.Queryable[None]: ...
+@overload
+def serve(
+    session: zenoh.Session,
+    key: str,
+    request_type: None,
+    handler: Callable[[None], msgspec.Struct],
+    *,
+    on_error: ErrorReply | None = None,
+) -> zenoh.Queryable[None]: ...
+def serve(
+    session: zenoh.Session,
+    key: str,
+    request_type: type[Any] | None,
+    handler: Callable[[Any], msgspec.Struct],
+    *,
+    on_error: ErrorReply | None = None,
+) -> zenoh.Queryable[None]:
+    """Answer queries on ``key`` with ``handler(request)`` run on Zenoh's thread.
+
+    ``request_type=None`` ignores any payload and calls ``handler(None)`` (e.g. snapshots).
+    """
+
+    def callback(query: zenoh.Query) -> None:
+        try:
+            request = _decode_request(query, request_type)
+            reply = handler(request)
+        except Exception as exc:
+            if not isinstance(exc, MessageError):
+                log.exception("handler of %s failed", key)
+            info = error_info_from_exception(exc)
+            if not isinstance(exc, MessageError):
+                info = ErrorInfo(code="internal", message=f"internal error: {info.message}")
+            _send_error_and_drop(query, key, info, on_error)
+            return
+        _reply(query, key, reply)
+
+    return session.declare_queryable(key, callback, complete=True)
+
+
+def _send_error_and_drop(
+    query: zenoh.Query, key: str, info: ErrorInfo, on_error: ErrorReply | None
+) -> None:
+    try:
+        _send_error(query, key, info, on_error)
+    except Exception as exc:
+        log.warning("could not send error reply on %s: %s", key, exc)
+    finally:
+        query.drop()  # type: ignore[no-untyped-call]
+
+
+@overload
+def serve_async(
+    session: zenoh.Session,
+    key: str,
+    request_type: type[M],
+    handler: Callable[[M], Awaitable[msgspec.Struct]],
+    *,
+    loop: asyncio.AbstractEventLoop | None = None,
+    on_error: ErrorReply | None = None,
+) -> zenoh.Queryable[None]: ...
+@overload
+def serve_async(
+    session: zenoh.Session,
+    key: str,
+    request_type: None,
+    handler: Callable[[None], Awaitable[msgspec.Struct]],
+    *,
+    loop: asyncio.AbstractEventLoop | None = None,
+    on_error: ErrorReply | None = None,
+) -> zenoh.Queryable[None]: ...
+def serve_async(
+    session: zenoh.Session,
+    key: str,
+    request_type: type[Any] | None,
+    handler: Callable[[Any], Awaitable[msgspec.Struct]],
+    *,
+    loop: asyncio.AbstractEventLoop | None = None,
+    on_error: ErrorReply | None = None,
+) -> zenoh.Queryable[None]:
+    """Like :func:`serve`, but ``handler`` is a coroutine run in ``loop`` (default: running loop).
+
+    Requests are decoded on Zenoh's thread; valid ones are scheduled on the loop in arrival order.
+    """
+    target_loop = loop or asyncio.get_running_loop()
+
+    async def run(query: zenoh.Query, request: Any) -> None:
+        try:
+            reply = await handler(request)
+        except Exception as exc:
+            log.exception("handler of %s failed", key)
+            info = error_info_from_exception(exc)
+            info = ErrorInfo(code="internal", message=f"internal error: {info.message}")
+            _send_error_and_drop(query, key, info, on_error)
+            return
+        _reply(query, key, reply)
+
+    def callback(query: zenoh.Query) -> None:
+        try:
+            request = _decode_request(query, request_type)
+        except MessageError as exc:
+            _send_error_and_drop(query, key, exc.info, on_error)
+            return
+        try:
+            asyncio.run_coroutine_threadsafe(run(query, request), target_loop)
+        except RuntimeError:  # loop closed: the service is stopping
+            _send_error_and_drop(
+                query, key, ErrorInfo(code="unavailable", message="service stopping"), on_error
+            )
+
+    return session.declare_queryable(key, callback, complete=True)

@@ -1,0 +1,176 @@
+"""The one place that opens Zenoh sessions.
+
+Every process of a show opens its session with :func:`open_session` from the show's ``zenoh``
+settings: explicit listen/connect endpoints, multicast scouting off unless the show turns it on,
+TLS and access control passed through verbatim. Always use the result as a context manager::
+
+    with open_session(show.zenoh, role="client") as session:
+        ...
+
+An unclosed session with callbacks can hang interpreter exit.
+"""
+
+from __future__ import annotations
+
+import json
+import socket
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal, Protocol
+
+import zenoh
+
+Role = Literal["router", "peer", "client"]
+"""How a process joins the show: ``router`` (the hub, usually inside ``skyquill up``),
+``peer`` (joins through the router, may link directly to other peers), ``client`` (one link)."""
+
+Session = zenoh.Session
+"""Re-exported so that services can annotate sessions without importing zenoh."""
+
+
+class BusError(Exception):
+    """Root of the errors raised by :mod:`bus` helpers (other than message decoding)."""
+
+
+class SessionOpenError(BusError):
+    """No session could be opened (no router reachable, bad endpoint, bad TLS files...)."""
+
+
+class ZenohSettings(Protocol):
+    """What :func:`open_session` reads; ``showfile.ZenohSettings`` satisfies it structurally."""
+
+    @property
+    def router_listen(self) -> Sequence[str]:
+        """Endpoints the router listens on, e.g. ``tcp/127.0.0.1:7447``."""
+        ...
+
+    @property
+    def connect(self) -> Sequence[str]:
+        """Endpoints clients and peers connect to (the router's, as seen from them)."""
+        ...
+
+    @property
+    def multicast_scouting(self) -> bool:
+        """Whether to discover others by UDP multicast (off by default: explicit endpoints)."""
+        ...
+
+
+@dataclass(frozen=True)
+class BusSettings:
+    """A plain :class:`ZenohSettings` for tests and tools that have no show file."""
+
+    router_listen: Sequence[str]
+    """Endpoints the router listens on."""
+    connect: Sequence[str]
+    """Endpoints clients and peers connect to."""
+    multicast_scouting: bool = False
+    """Discover by UDP multicast."""
+    router_connect: Sequence[str] = ()
+    """Other routers this router links to (multi-host venues)."""
+    peer_listen: Sequence[str] = ()
+    """Endpoints a peer listens on (none: peers reach each other through the router)."""
+    tls: Mapping[str, Any] | None = None
+    """Verbatim ``transport/link/tls`` section of the Zenoh configuration."""
+    access_control: Mapping[str, Any] | None = None
+    """Verbatim ``access_control`` section of the Zenoh configuration."""
+    extra: Mapping[str, Any] = field(default_factory=dict)
+    """Further Zenoh configuration: ``{"path/in/config": value}`` inserted as JSON5."""
+    open_timeout_s: float = 5.0
+    """How long a client or peer keeps retrying to reach a router before giving up, in [s]."""
+
+
+def _opt(settings: object, name: str, default: Any) -> Any:
+    value = getattr(settings, name, default)
+    return default if value is None else value
+
+
+def build_config(
+    settings: ZenohSettings,
+    *,
+    role: Role,
+    listen: Sequence[str] | None = None,
+    connect: Sequence[str] | None = None,
+) -> zenoh.Config:
+    """The Zenoh configuration of a session with ``role`` (pure: builds, does not open).
+
+    ``listen``/``connect`` override the endpoints from ``settings``. Optional attributes
+    (``router_connect``, ``peer_listen``, ``tls``, ``access_control``, ``extra``) are read when the
+    settings object has them, so any object with the three protocol attributes works.
+    """
+    if role not in ("router", "peer", "client"):
+        raise ValueError(f"role must be router, peer or client, not {role!r}")
+    if listen is None:
+        if role == "router":
+            listen = list(settings.router_listen)
+        elif role == "peer":
+            listen = list(_opt(settings, "peer_listen", ()))
+        else:
+            listen = []
+    if connect is None:
+        connect = (
+            list(_opt(settings, "router_connect", ())) if role == "router" else settings.connect
+        )
+    if role == "client" and not connect:
+        raise ValueError("a client needs at least one connect endpoint")
+    conf = zenoh.Config()
+    conf.insert_json5("mode", json.dumps(role))
+    conf.insert_json5("listen/endpoints", json.dumps(list(listen)))
+    conf.insert_json5("connect/endpoints", json.dumps(list(connect)))
+    conf.insert_json5("scouting/multicast/enabled", json.dumps(bool(settings.multicast_scouting)))
+    tls = _opt(settings, "tls", None)
+    if tls:
+        conf.insert_json5("transport/link/tls", json.dumps(dict(tls)))
+    acl = _opt(settings, "access_control", None)
+    if acl:
+        conf.insert_json5("access_control", json.dumps(dict(acl)))
+    for path, value in dict(_opt(settings, "extra", {})).items():
+        conf.insert_json5(path, json.dumps(value))
+    return conf
+
+
+def open_session(
+    settings: ZenohSettings,
+    *,
+    role: Role,
+    listen: Sequence[str] | None = None,
+    connect: Sequence[str] | None = None,
+    open_timeout_s: float | None = None,
+) -> zenoh.Session:
+    """Open a Zenoh session for ``role``; use the result in a ``with`` block.
+
+    Clients and peers retry for ``open_timeout_s`` (default: the settings' ``open_timeout_s`` or
+    5 s) while no router answers, so processes may start in any order. Raises
+    :class:`SessionOpenError` when the deadline passes or the configuration is refused.
+    """
+    timeout_s = float(
+        open_timeout_s if open_timeout_s is not None else _opt(settings, "open_timeout_s", 5.0)
+    )
+    deadline = time.monotonic() + max(0.0, timeout_s)
+    delay_s = 0.05
+    while True:
+        try:
+            conf = build_config(settings, role=role, listen=listen, connect=connect)
+        except zenoh.ZError as exc:
+            raise SessionOpenError(f"invalid Zenoh configuration: {exc}") from exc
+        try:
+            return zenoh.open(conf)
+        except zenoh.ZError as exc:
+            if role == "router" or time.monotonic() + delay_s > deadline:
+                raise SessionOpenError(f"cannot open a Zenoh {role} session: {exc}") from exc
+        time.sleep(delay_s)
+        delay_s = min(0.5, delay_s * 2.0)
+
+
+def free_tcp_endpoint(host: str = "127.0.0.1") -> str:
+    """A ``tcp/HOST:PORT`` endpoint on a port free right now (for tests and temporary shows)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
+        sock.bind((host, 0))
+        port = sock.getsockname()[1]
+    return f"tcp/{host}:{port}"
+
+
+def loopback_settings(**overrides: Any) -> BusSettings:
+    """Settings for one router on a free loopback port, clients connecting to it."""
+    endpoint = free_tcp_endpoint()
+    return BusSettings(router_listen=[endpoint], connect=[endpoint], **overrides)

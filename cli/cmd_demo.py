@@ -1,0 +1,132 @@
+"""``skyquill demo``: the Airshow show, simulated, with a few characters; prints how they came out.
+
+Runs a copy of ``shows/airshow-2014.yaml`` (four quadrotors) headless on a free loopback port with
+its own storage under ``out/demo/<time>/``, submits the characters, waits until every one is
+written, prints a table (job, vehicle, RMSE, IoU) and where the recording and logs are, then stops
+everything. Needs no configuration.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import unicodedata
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from bus.messages import JobState
+
+NAME = "demo"
+HELP = "Run the simulated Airshow show with a few characters and print how well they were written."
+
+DEFAULT_TEXTS = ("永", "光", "马", "A")
+SHOW = Path(__file__).resolve().parent.parent / "shows" / "airshow-2014.yaml"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "texts", nargs="*", help=f"characters to write (default: {' '.join(DEFAULT_TEXTS)})"
+    )
+    parser.add_argument("--show", type=Path, default=SHOW, help="show file (default: the Airshow)")
+    parser.add_argument(
+        "--time-scale",
+        type=float,
+        default=4.0,
+        help="simulated seconds per wall second (default 4; a slow CPU simply runs slower)",
+    )
+    parser.add_argument("--out", type=Path, default=Path("out") / "demo", help="output directory")
+    parser.add_argument("--timeout", type=float, default=600.0, help="give up after [s] (600)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from cli.showrun import ShowRun, derived_show, submit_texts, wait_for_jobs
+    from showfile import ShowError
+
+    if not args.time_scale > 0.0:
+        print("skyquill demo: --time-scale must be positive", file=sys.stderr)
+        return 2
+    texts = list(args.texts) or list(DEFAULT_TEXTS)
+    out_dir = args.out / time.strftime("%Y%m%d-%H%M%S")
+    try:
+        show_path, show = derived_show(args.show, out_dir, time_scale=args.time_scale)
+    except ShowError as exc:
+        print(f"skyquill demo: {exc}", file=sys.stderr)
+        return 2
+    print(
+        f"show {show.show_id}: {len(show.vehicles)} vehicles, time scale {args.time_scale:g}, "
+        f"Zenoh router on {show.zenoh.router_listen[0]}"
+    )
+    started = time.monotonic()
+    with ShowRun(show_path, show, log_dir=out_dir / "logs") as run_, run_.client() as session:
+        replies = submit_texts(session, run_.keys, texts)
+        for text, reply in zip(texts, replies, strict=True):
+            print(f"submitted {text!r}: job {reply.job_id}")
+        job_ids = [str(reply.job_id) for reply in replies]
+        progress = _Progress(texts)
+        try:
+            jobs = wait_for_jobs(
+                session, run_.keys, job_ids, timeout_s=args.timeout, on_change=progress.show
+            )
+        except TimeoutError as exc:
+            print(f"skyquill demo: {exc}; logs in {out_dir / 'logs'}", file=sys.stderr)
+            return 1
+    print()
+    print(_table(texts, jobs))
+    print()
+    print(
+        f"{sum(j.state == 'done' for j in jobs)}/{len(jobs)} written in "
+        f"{time.monotonic() - started:.0f} s"
+    )
+    print(f"recording: {show.recordings_dir}/  (MCAP; read it with the mcap Python package)")
+    print(f"reports:   {show.database_path.parent / 'jobs'}/  (per job: metrics, plan, flight)")
+    print(f"database:  {show.database_path}")
+    print(f"logs:      {out_dir / 'logs'}/")
+    return 0 if all(j.state == "done" for j in jobs) else 1
+
+
+class _Progress:
+    """One line whenever a job changes state."""
+
+    def __init__(self, texts: list[str]) -> None:
+        self._texts = texts
+        self._seen: dict[str, str] = {}
+
+    def show(self, jobs: list[JobState]) -> None:
+        for job in jobs:
+            key = f"{job.state}:{job.vehicle_id}"
+            if self._seen.get(job.job_id) != key:
+                self._seen[job.job_id] = key
+                on = f" on {job.vehicle_id}" if job.vehicle_id else ""
+                print(f"  {job.label!s:>6}  {job.job_id}  {job.state}{on}", flush=True)
+
+
+def _table(texts: list[str], jobs: list[JobState]) -> str:
+    rows = [("text", "job", "vehicle", "state", "RMSE pen down", "RMSE", "IoU", "time")]
+    for text, job in zip(texts, jobs, strict=True):
+        m = job.metrics
+        rows.append(
+            (
+                text,
+                job.job_id,
+                job.vehicle_id or "-",
+                job.state,
+                f"{m.rmse_pen_down_m * 1000:.1f} mm" if m else "-",
+                f"{m.rmse_m * 1000:.1f} mm" if m else "-",
+                f"{m.iou:.2f}" if m and m.iou is not None else "-",
+                f"{m.duration_s:.1f} s" if m else "-",
+            )
+        )
+    widths = [max(_width(str(row[i])) for row in rows) for i in range(len(rows[0]))]
+    lines = [
+        "  ".join(c + " " * (w - _width(c)) for c, w in zip(map(str, row), widths, strict=True))
+        for row in rows
+    ]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(line.rstrip() for line in lines)
+
+
+def _width(text: str) -> int:
+    """Terminal columns of ``text`` (CJK characters take two)."""
+    return sum(2 if unicodedata.east_asian_width(c) in "WF" else 1 for c in text)

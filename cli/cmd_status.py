@@ -1,0 +1,61 @@
+"""``skyquill status SHOW.yaml [--json]``: jobs and vehicles as the orchestrator sees them."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+NAME = "status"
+HELP = "Show the jobs and vehicles of a running show (--json for programs)."
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("show", type=Path, help="show file (YAML)")
+    parser.add_argument(
+        "--json", action="store_true", help='print {"jobs": [...], "vehicles": [...]}'
+    )
+    parser.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for a reply")
+
+
+def run(args: argparse.Namespace) -> int:
+    import msgspec
+
+    from bus.rpc import NoReplyError, RemoteError
+    from bus.session import SessionOpenError
+    from orchestrator.client import snapshot
+    from showfile import ShowError, load_show
+
+    try:
+        snap = snapshot(load_show(args.show), timeout_s=args.timeout)
+    except (ShowError, SessionOpenError, NoReplyError, RemoteError) as exc:
+        print(f"skyquill status: {exc}", file=sys.stderr)
+        return 2
+    if args.json:
+        data = msgspec.to_builtins(snap)
+        print(
+            json.dumps(
+                {
+                    "jobs": data["jobs"],
+                    "vehicles": data["vehicles"],
+                    "queue_paused": snap.queue_paused,
+                    "time_s": snap.time_s,
+                },
+                ensure_ascii=False,
+            )
+        )
+        return 0
+    paused = " (queue paused)" if snap.queue_paused else ""
+    print(f"show {snap.show_id}{paused}")
+    for v in snap.vehicles:
+        alive = "up" if v.alive else "down"
+        print(
+            f"  {v.vehicle_id:8} {alive:4} {v.state:11} board {v.board_id or '-':4} "
+            f"job {v.job_id or '-'} {v.message}"
+        )
+    for j in snap.jobs:
+        where = f"#{j.queue_position}" if j.queue_position else (j.vehicle_id or "")
+        eta = f" eta {j.eta_s:.0f}s" if j.eta_s is not None else ""
+        print(f"  {j.job_id} {j.state:17} {where:6} {j.label}{eta}")
+    return 0

@@ -1,0 +1,180 @@
+"""A whole show run from one Python process: the demo command and the multi-process tests.
+
+:func:`derived_show` writes a copy of a show file on a free loopback port with its own storage;
+:class:`ShowRun` runs the Zenoh router in-process and supervises the orchestrator and agents;
+:func:`submit_texts` and :func:`wait_for_jobs` talk to the orchestrator like any client.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+from bus.keys import ShowKeys
+from bus.messages import ErrorInfo, JobState, ShowSnapshot, SubmitReply, SubmitRequest
+from bus.rpc import NoReplyError, RemoteError, query_one
+from bus.session import Session, free_tcp_endpoint, open_session
+from cli.supervisor import ChildSpec, RestartPolicy, Supervisor, child_env, show_children
+from showfile import Show, dump_show, load_show
+
+FINAL_STATES = frozenset({"done", "failed", "cancelled", "rejected"})
+
+
+def derived_show(
+    source: Path,
+    out_dir: Path,
+    *,
+    time_scale: float | None = None,
+    **updates: Any,
+) -> tuple[Path, Show]:
+    """A copy of ``source`` on a free loopback port, storing under ``out_dir``; returns its path."""
+    show = load_show(source)
+    endpoint = free_tcp_endpoint()
+    zenoh = show.zenoh.model_copy(update={"router_listen": (endpoint,), "connect": (endpoint,)})
+    storage = show.storage.model_copy(
+        update={"database": out_dir / "show.sqlite3", "recordings_dir": out_dir / "recordings"}
+    )
+    changes: dict[str, Any] = {"zenoh": zenoh, "storage": storage, **updates}
+    if time_scale is not None:
+        changes["time_scale"] = time_scale
+    derived = show.model_copy(update=changes)
+    path = out_dir / Path(source).name
+    dump_show(derived, path)
+    return path, load_show(path)
+
+
+@dataclass
+class ShowRun:
+    """Router in this process + supervised children; a context manager that stops everything."""
+
+    show_path: Path
+    """The show file the children read."""
+    show: Show
+    """The same show, loaded."""
+    log_dir: Path | None = None
+    """Children's output goes to ``<name>.log`` files here (None: inherited stderr)."""
+    say: Callable[[str], None] | None = None
+    """Where supervisor messages go (default: stderr)."""
+    policy: RestartPolicy | None = None
+    """Restart backoff."""
+
+    def __post_init__(self) -> None:
+        self.specs: list[ChildSpec] = show_children(
+            self.show_path,
+            [v.id for v in self.show.vehicles],
+            mavlink_sim=self.show.mavlink_sim.enabled,
+            log_dir=self.log_dir,
+        )
+        self.supervisor = Supervisor(self.specs, env=child_env(), say=self.say, policy=self.policy)
+        self._stop = threading.Event()
+        self._watcher: threading.Thread | None = None
+        self._stack = contextlib.ExitStack()
+        self.keys = ShowKeys(self.show.show_id)
+
+    def __enter__(self) -> ShowRun:
+        self._stack.enter_context(open_session(self.show.zenoh, role="router"))
+        try:
+            self.supervisor.start()
+        except BaseException:
+            self._stack.close()
+            raise
+        self._watcher = threading.Thread(target=self._watch, daemon=True)
+        self._watcher.start()
+        return self
+
+    def _watch(self) -> None:
+        self.supervisor.run_until(self._stop.is_set, period_s=0.05)
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self._stop.set()
+        if self._watcher is not None:
+            self._watcher.join()
+        self.supervisor.stop()
+        self._stack.close()
+
+    def client(self) -> Session:
+        """A client session on the show's router (use it in a ``with`` block)."""
+        return open_session(self.show.zenoh, role="client")
+
+
+def submit_texts(
+    session: Session, keys: ShowKeys, texts: Sequence[str], *, timeout_s: float = 30.0
+) -> list[SubmitReply]:
+    """Submit each text, retrying while the orchestrator is not answering yet."""
+    replies = []
+    for text in texts:
+        request = SubmitRequest(text=text, client_id="demo")
+        replies.append(_retry(functools.partial(_submit, session, keys, request), timeout_s))
+    return replies
+
+
+def _submit(session: Session, keys: ShowKeys, request: SubmitRequest) -> SubmitReply:
+    reply = query_one(session, keys.submit, request, SubmitReply, timeout_s=5.0)
+    if not reply.ok:
+        raise RemoteError(reply.error or ErrorInfo(code="refused", message="submission refused"))
+    return reply
+
+
+def _retry(call: Callable[[], Any], timeout_s: float) -> Any:
+    deadline = time.monotonic() + timeout_s
+    while True:
+        try:
+            return call()
+        except NoReplyError:
+            if time.monotonic() > deadline:
+                raise
+            time.sleep(0.2)
+
+
+def snapshot(session: Session, keys: ShowKeys, *, timeout_s: float = 5.0) -> ShowSnapshot:
+    """The orchestrator's current view of the show."""
+    return query_one(session, keys.snapshot, None, ShowSnapshot, timeout_s=timeout_s)
+
+
+def wait_for_jobs(
+    session: Session,
+    keys: ShowKeys,
+    job_ids: Sequence[str],
+    *,
+    timeout_s: float,
+    on_change: Callable[[list[JobState]], None] | None = None,
+    period_s: float = 0.5,
+) -> list[JobState]:
+    """Poll the snapshot until every job is final; the jobs in ``job_ids`` order.
+
+    Raises TimeoutError with the jobs' last states when ``timeout_s`` passes first.
+    """
+    deadline = time.monotonic() + timeout_s
+    wanted = list(job_ids)
+    last: dict[str, JobState] = {}
+    while True:
+        try:
+            snap = snapshot(session, keys)
+        except NoReplyError:
+            snap = None  # the orchestrator is restarting
+        if snap is not None:
+            jobs = {job.job_id: job for job in snap.jobs}
+            current = {job_id: jobs[job_id] for job_id in wanted if job_id in jobs}
+            if on_change is not None and current != last:
+                on_change([current[j] for j in wanted if j in current])
+            last = current
+            if len(current) == len(wanted) and all(
+                job.state in FINAL_STATES for job in current.values()
+            ):
+                return [current[j] for j in wanted]
+        if time.monotonic() > deadline:
+            states = {j: (last[j].state if j in last else "unknown") for j in wanted}
+            raise TimeoutError(f"jobs not finished after {timeout_s:.0f} s: {states}")
+        time.sleep(period_s)

@@ -1,0 +1,252 @@
+"""Supervise the processes of a show: start them, restart the ones that die, stop them all.
+
+:class:`RestartPolicy` decides (pure); :class:`Supervisor` carries it out with ``subprocess``.
+Children run in their own session, so a Ctrl-C in the terminal reaches only the supervisor, which
+then stops them in order (SIGTERM, then SIGKILL after a grace period). On Linux each child also
+gets SIGTERM if the supervisor itself dies (``PR_SET_PDEATHSIG``), so nothing is left behind.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO
+
+PR_SET_PDEATHSIG = 1
+
+
+@dataclass(frozen=True)
+class RestartPolicy:
+    """Exponential backoff between restarts, forgotten once a process has run long enough."""
+
+    initial_delay_s: float = 0.5
+    """Wait in [s] before the first restart."""
+    factor: float = 2.0
+    """Each further restart waits this much longer..."""
+    max_delay_s: float = 10.0
+    """...up to this many [s]."""
+    stable_after_s: float = 30.0
+    """A process that ran this long in [s] before dying starts over at ``initial_delay_s``."""
+
+    def delay_s(self, previous_delay_s: float | None, ran_for_s: float) -> float:
+        """How long to wait before restarting a process that died after ``ran_for_s``."""
+        if previous_delay_s is None or ran_for_s >= self.stable_after_s:
+            return self.initial_delay_s
+        return min(self.max_delay_s, previous_delay_s * self.factor)
+
+
+@dataclass(frozen=True)
+class ChildSpec:
+    """One process of the show."""
+
+    name: str
+    """Short name for messages, e.g. ``orchestrator`` or ``agent uav2``."""
+    argv: tuple[str, ...]
+    """Command line."""
+    log_path: Path | None = None
+    """Where its stdout and stderr go (None: the supervisor's own stderr)."""
+
+
+@dataclass
+class _Child:
+    spec: ChildSpec
+    process: subprocess.Popen[bytes] | None = None
+    started_s: float = 0.0
+    delay_s: float | None = None
+    restart_at_s: float | None = None
+    restarts: int = 0
+    log: IO[bytes] | None = field(default=None, repr=False)
+
+
+def _die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
+    try:
+        libc = ctypes.CDLL("libc.so.6", use_errno=True)
+        libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+    except OSError:
+        pass
+
+
+def skyquill_argv(*args: str) -> tuple[str, ...]:
+    """Command line of a ``skyquill`` subcommand run by this Python interpreter."""
+    return (sys.executable, "-m", "cli.main", *args)
+
+
+class Supervisor:
+    """Starts children, restarts those that die (saying so), stops all of them on request."""
+
+    def __init__(
+        self,
+        specs: Sequence[ChildSpec],
+        *,
+        policy: RestartPolicy | None = None,
+        env: Mapping[str, str] | None = None,
+        say: Callable[[str], None] | None = None,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.policy = policy or RestartPolicy()
+        self._children = {spec.name: _Child(spec) for spec in specs}
+        self._env = dict(env) if env is not None else None
+        self._say = say or (lambda line: print(f"skyquill up: {line}", file=sys.stderr, flush=True))
+        self._clock = clock
+        self.stopping = False
+
+    def start(self) -> None:
+        """Start every child that is not running."""
+        for child in self._children.values():
+            if child.process is None:
+                self._spawn(child)
+
+    def _spawn(self, child: _Child) -> None:
+        spec = child.spec
+        if spec.log_path is not None and child.log is None:
+            spec.log_path.parent.mkdir(parents=True, exist_ok=True)
+            child.log = spec.log_path.open("ab")
+        out = child.log if child.log is not None else sys.stderr
+        preexec = _die_with_parent if sys.platform.startswith("linux") else None
+        child.process = subprocess.Popen(
+            spec.argv,
+            env=self._env,
+            stdin=subprocess.DEVNULL,
+            stdout=out,
+            stderr=out,
+            start_new_session=True,
+            preexec_fn=preexec,
+        )
+        child.started_s = self._clock()
+        child.restart_at_s = None
+
+    def pid(self, name: str) -> int | None:
+        """Process id of a running child."""
+        process = self._children[name].process
+        return None if process is None else process.pid
+
+    def restarts(self, name: str) -> int:
+        """How many times a child was restarted."""
+        return self._children[name].restarts
+
+    def poll(self) -> None:
+        """Notice children that died and restart those whose backoff is over."""
+        now = self._clock()
+        for name, child in self._children.items():
+            process = child.process
+            if process is not None and process.poll() is not None:
+                child.process = None
+                if self.stopping:
+                    continue
+                ran_for = now - child.started_s
+                child.delay_s = self.policy.delay_s(child.delay_s, ran_for)
+                child.restart_at_s = now + child.delay_s
+                self._say(
+                    f"{name} exited ({_describe(process.returncode)}) after "
+                    f"{ran_for:.1f} s; restarting in {child.delay_s:.1f} s"
+                )
+            due = child.restart_at_s is not None and now >= child.restart_at_s
+            if child.process is None and due and not self.stopping:
+                child.restarts += 1
+                self._spawn(child)
+                self._say(f"{name} restarted (pid {self.pid(name)})")
+
+    def stop(self, grace_s: float = 5.0) -> None:
+        """SIGTERM every child, SIGKILL those still alive after ``grace_s``; agents first."""
+        self.stopping = True
+        running = [c for c in reversed(self._children.values()) if c.process is not None]
+        for child in running:
+            assert child.process is not None
+            if child.process.poll() is None:
+                child.process.send_signal(signal.SIGTERM)
+        deadline = self._clock() + grace_s
+        for child in running:
+            assert child.process is not None
+            try:
+                child.process.wait(timeout=max(0.0, deadline - self._clock()))
+            except subprocess.TimeoutExpired:
+                self._say(f"{child.spec.name} did not stop in {grace_s:.0f} s; killing it")
+                child.process.kill()
+                child.process.wait()
+        for child in self._children.values():
+            if child.log is not None:
+                child.log.close()
+                child.log = None
+
+    def run_until(self, done: Callable[[], bool], period_s: float = 0.1) -> None:
+        """Poll until ``done()`` is true."""
+        while not done():
+            self.poll()
+            time.sleep(period_s)
+
+
+def _describe(returncode: int) -> str:
+    if returncode < 0:
+        try:
+            return f"killed by {signal.Signals(-returncode).name}"
+        except ValueError:
+            return f"killed by signal {-returncode}"
+    return f"exit status {returncode}"
+
+
+def install_stop_signals(stop: Callable[[], None]) -> None:
+    """Call ``stop`` on SIGINT and SIGTERM (main thread only)."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda _signum, _frame: stop())
+
+
+def child_env() -> dict[str, str]:
+    """The environment for children: ours, unbuffered, with the checkout importable."""
+    env = dict(os.environ)
+    env["PYTHONUNBUFFERED"] = "1"
+    root = str(Path(__file__).resolve().parent.parent)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH", "")) if p)
+    return env
+
+
+# --- the processes of a show --------------------------------------------------------------------
+
+
+def has_command(name: str) -> bool:
+    """Whether ``skyquill <name>`` exists in this checkout (``cli/cmd_<name>.py``)."""
+    return (Path(__file__).resolve().parent / f"cmd_{name}.py").is_file()
+
+
+def show_children(
+    show_path: Path,
+    vehicle_ids: Sequence[str],
+    *,
+    time_scale: float | None = None,
+    kiosk: bool = False,
+    mavlink_sim: bool = False,
+    log_dir: Path | None = None,
+    verbose: bool = False,
+) -> list[ChildSpec]:
+    """Optionally the simulated MAVLink vehicles (``skyquill sim-mavlink``), the orchestrator,
+    one agent per vehicle, then optionally the kiosk (stopped in the reverse order)."""
+    show = str(show_path)
+
+    def log(name: str) -> Path | None:
+        return None if log_dir is None else log_dir / f"{name}.log"
+
+    specs = []
+    if mavlink_sim:
+        argv = ["sim-mavlink", show]
+        if time_scale is not None:
+            argv += ["--time-scale", repr(time_scale)]
+        specs.append(ChildSpec("sim-mavlink", skyquill_argv(*argv), log("sim-mavlink")))
+    specs.append(
+        ChildSpec("orchestrator", skyquill_argv("orchestrator", show), log("orchestrator"))
+    )
+    for vehicle_id in vehicle_ids:
+        argv = ["agent", show, "--vehicle", vehicle_id]
+        if time_scale is not None:
+            argv += ["--time-scale", repr(time_scale)]
+        if verbose:
+            argv.append("--verbose")
+        specs.append(ChildSpec(f"agent {vehicle_id}", skyquill_argv(*argv), log(vehicle_id)))
+    if kiosk:
+        specs.append(ChildSpec("kiosk", skyquill_argv("kiosk", show), log("kiosk")))
+    return specs

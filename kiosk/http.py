@@ -1,0 +1,124 @@
+"""HTTP plumbing of the kiosk: client identity, capped body reading, security headers."""
+
+from __future__ import annotations
+
+import hashlib
+import re
+import secrets
+from dataclasses import dataclass
+
+from starlette.requests import Request
+from starlette.responses import Response
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from kiosk import wording
+from kiosk.errors import RejectedError
+
+SESSION_COOKIE = "skyquill_kiosk"
+"""Name of the cookie that identifies one browser (no personal data)."""
+_SESSION_RE = re.compile(r"^[A-Za-z0-9_-]{20,64}$")
+_HEADERS = [
+    (b"content-security-policy",
+     b"default-src 'self'; img-src 'self' data:; object-src 'none'; frame-ancestors 'none'; "
+     b"base-uri 'none'; form-action 'self'"),
+    (b"x-content-type-options", b"nosniff"),
+    (b"referrer-policy", b"no-referrer"),
+    (b"x-frame-options", b"DENY"),
+]  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Client:
+    """Who is asking: the peer address and the browser's session cookie."""
+
+    address: str
+    """Peer IP address as seen by the server."""
+    session_id: str
+    """Value of the session cookie (fresh when the browser had none)."""
+    new_session: bool
+    """True when the cookie must be set on the response."""
+
+    @property
+    def key(self) -> str:
+        """Rate-limit key of this browser."""
+        return f"{self.address}|{self.session_id}"
+
+    @property
+    def public_id(self) -> str:
+        """A stable pseudonym for the bus (the cookie itself stays secret)."""
+        digest = hashlib.sha256(self.session_id.encode()).hexdigest()
+        return f"kiosk-{digest[:12]}"
+
+
+def identify(request: Request) -> Client:
+    """The client of ``request``; a missing or malformed cookie gets a fresh session id.
+
+    The answer is kept on ``request.state`` so refusals set the same new cookie.
+    """
+    known = getattr(request.state, "kiosk_client", None)
+    if isinstance(known, Client):
+        return known
+    address = request.client.host if request.client is not None else "unknown"
+    cookie = request.cookies.get(SESSION_COOKIE, "")
+    if _SESSION_RE.match(cookie):
+        client = Client(address, cookie, False)
+    else:
+        client = Client(address, secrets.token_urlsafe(24), True)
+    request.state.kiosk_client = client
+    return client
+
+
+def remember(response: Response, client: Client, *, secure: bool) -> Response:
+    """Set the session cookie on ``response`` when the client is new."""
+    if client.new_session:
+        response.set_cookie(
+            SESSION_COOKIE,
+            client.session_id,
+            max_age=7 * 24 * 3600,
+            httponly=True,
+            samesite="strict",
+            secure=secure,
+        )
+    return response
+
+
+async def read_capped(request: Request, max_bytes: int) -> bytes:
+    """The request body, refusing (413) anything longer than ``max_bytes`` before reading it all."""
+    declared = request.headers.get("content-length")
+    if declared is not None:
+        if not declared.isdigit():
+            raise RejectedError("bad_request", wording.BAD_JSON)
+        if int(declared) > max_bytes:
+            raise RejectedError("too_large", wording.TOO_LARGE, status=413)
+    chunks: list[bytes] = []
+    size = 0
+    async for chunk in request.stream():
+        size += len(chunk)
+        if size > max_bytes:
+            raise RejectedError("too_large", wording.TOO_LARGE, status=413)
+        chunks.append(chunk)
+    return b"".join(chunks)
+
+
+class SecurityHeaders:
+    """ASGI middleware: a strict content security policy and no caching of API replies."""
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        is_api = str(scope.get("path", "")).startswith("/api/")
+
+        async def send_with_headers(message: Message) -> None:
+            if message["type"] == "http.response.start":
+                headers = list(message.get("headers", []))
+                headers.extend(_HEADERS)
+                if is_api:
+                    headers.append((b"cache-control", b"no-store"))
+                message["headers"] = headers
+            await send(message)
+
+        await self.app(scope, receive, send_with_headers)

@@ -1,0 +1,87 @@
+"""What the vehicle will write: the glyph laid out on the writing area and planned.
+
+Uses only the planner's public functions (glyph sources, layout, ``plan_strokes``); returns plain
+JSON for the page: turning points and the planned path in the writing area's own frame (metres,
+origin at the centre, y up).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from kiosk import wording
+from kiosk.errors import RejectedError
+from kiosk.limits import Submission
+from kiosk.settings import KioskSettings
+from planner.errors import PlannerError
+from planner.glyphs import Glyph, fit_to_area, parse_strokes_json, text_glyph
+from planner.pipeline import plan_strokes
+
+PATH_POINTS_MAX = 800
+"""Most points of the path sent to the page (decimated from the planner's samples)."""
+PATH_RATE_HZ = 100.0
+"""Rate at which the planned trajectory is sampled before decimation, [Hz]."""
+
+
+def glyph_of(submission: Submission) -> Glyph:
+    """The glyph of a checked submission; a drawing that cannot be read is a RejectedError."""
+    if submission.text is not None:
+        try:
+            return text_glyph(submission.text)
+        except PlannerError:
+            raise RejectedError("no_glyph", wording.UNPLANNABLE, status=422) from None
+    try:
+        return parse_strokes_json(submission.strokes or {}, source_name="drawing")
+    except PlannerError as exc:
+        raise RejectedError(
+            "bad_drawing",
+            wording.BAD_DRAWING,
+            status=422,
+            stroke_index=exc.stroke_index,
+            point_index=exc.point_index,
+        ) from None
+
+
+def plan_preview(submission: Submission, settings: KioskSettings) -> dict[str, Any]:
+    """Turning points, path and duration of the submission as the vehicle will write it."""
+    width_m, height_m = settings.writing_area_m
+    glyph = glyph_of(submission)
+    try:
+        fitted = fit_to_area(glyph, width_m=width_m, height_m=height_m, margin_m=settings.margin_m)
+        planned = plan_strokes(fitted.strokes, settings.plan)
+    except PlannerError:
+        raise RejectedError("unplannable", wording.UNPLANNABLE, status=422) from None
+    samples = planned.sample(PATH_RATE_HZ)
+    board_xy = settings.plan.board.to_board(samples.position_m_enu)
+    step = max(1, int(np.ceil(board_xy.shape[0] / PATH_POINTS_MAX)))
+    keep = np.unique(np.r_[np.arange(0, board_xy.shape[0], step), board_xy.shape[0] - 1])
+    # keep every pen change so the page draws strokes where they really start and stop
+    pen = samples.pen_down
+    changes = np.flatnonzero(np.diff(pen.astype(np.int8)))
+    keep = np.union1d(keep, np.r_[changes, changes + 1])
+    path = [
+        [round(float(x), 4), round(float(y), 4), bool(p)]
+        for (x, y), p in zip(board_xy[keep], pen[keep], strict=True)
+    ]
+    turning = [np.round(tp, 4).tolist() for tp in planned.turning_points_board_m]
+    return {
+        "label": submission.label,
+        "writing_area_m": [width_m, height_m],
+        "stroke_count": len(fitted.strokes),
+        "turning_points": turning,
+        "turning_point_count": sum(len(tp) for tp in turning),
+        "path": path,
+        "duration_s": round(planned.duration_s, 2),
+    }
+
+
+def make_previewer(settings: KioskSettings) -> Callable[[Submission], dict[str, Any]]:
+    """``plan_preview`` bound to ``settings`` (what :func:`kiosk.app.create_app` expects)."""
+
+    def previewer(submission: Submission) -> dict[str, Any]:
+        return plan_preview(submission, settings)
+
+    return previewer

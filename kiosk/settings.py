@@ -1,0 +1,83 @@
+"""The kiosk's settings: one typed object, built from the show file or by tests."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from kiosk.limits import SubmissionLimits
+from planner.pipeline import BoardFrame, PlanOptions, VehicleLimits
+
+
+@dataclass(frozen=True)
+class KioskSettings:
+    """Everything the kiosk service needs besides the bus session."""
+
+    show_id: str
+    """Show identifier (the bus namespace)."""
+    host: str = "127.0.0.1"
+    """Address the web server listens on."""
+    port: int = 8765
+    """TCP port of the web server (0: any free port)."""
+    limits: SubmissionLimits = field(default_factory=SubmissionLimits)
+    """Bounds on one submission and the blocklist."""
+    rate_limit_per_minute: int = 6
+    """Submissions per minute per client (address + session cookie)."""
+    preview_rate_per_minute: int = 60
+    """Previews per minute per client (each runs the planner)."""
+    clients_per_address: int = 10
+    """A single address (a venue's shared Wi-Fi) may submit this many times the client rate."""
+    writing_area_m: tuple[float, float] = (1.2, 1.2)
+    """Width and height of the writing area the preview fits the glyph into, in [m]."""
+    margin_m: float = 0.05
+    """Free border kept inside the writing area, in [m]."""
+    plan: PlanOptions = field(default_factory=PlanOptions)
+    """Planner options of the preview (the board is the writing area's own frame)."""
+    submit_timeout_s: float = 5.0
+    """How long to wait for the orchestrator's answer to a submission, in [s]."""
+    secure_cookie: bool = False
+    """Mark the session cookie Secure (when served over HTTPS behind a proxy)."""
+
+
+def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
+    """Kiosk settings from a loaded show (``showfile.Show``); ``port`` overrides the file's.
+
+    The preview is planned on the first board's writing area with the show's limits and planning
+    settings (every vehicle re-plans its job on its own board).
+    """
+    kiosk, board, planning = show.kiosk, show.boards[0], show.planning
+    limits = SubmissionLimits(
+        max_payload_bytes=kiosk.max_payload_bytes,
+        max_strokes=kiosk.max_strokes,
+        max_points=kiosk.max_points,
+        max_text_chars=kiosk.max_text_chars,
+        blocklist=tuple(kiosk.blocklist),
+    )
+    lim = show.limits
+    plan = PlanOptions(
+        limits=VehicleLimits(
+            a_max_mps2=tuple(lim.a_max_mps2),
+            v_max_mps=lim.v_max_mps,
+            mass_kg=lim.mass_kg,
+            thrust_max_n=lim.thrust_max_n,
+            body_rate_max_radps=lim.body_rate_max_radps,
+        ),
+        board=BoardFrame(center_m_enu=(0.0, 0.0, 0.0)),
+        write_height_m=planning.write_height_m,
+        clearance_m=max(planning.clearance_m, 1e-3),
+        total_time_s=planning.total_time_s,
+        split_threshold_m=planning.split_threshold_m,
+        resegment=planning.resegment,
+        solver=planning.solver,
+    )
+    width_m, height_m = board.writing_area_m
+    return KioskSettings(
+        show_id=show.show_id,
+        host=kiosk.host,
+        port=kiosk.port if port is None else port,
+        limits=limits,
+        rate_limit_per_minute=kiosk.rate_limit_per_minute,
+        writing_area_m=(float(width_m), float(height_m)),
+        margin_m=min(planning.margin_m, 0.45 * min(width_m, height_m)),
+        plan=plan,
+    )

@@ -1,0 +1,74 @@
+"""Every sentence the public reads, in one place: short, friendly, no jargon."""
+
+from __future__ import annotations
+
+import math
+
+TOO_LARGE = "That drawing is too big to send. Please clear it and draw something simpler."
+TOO_MANY_STROKES = (
+    "That drawing has too many strokes (at most {limit}). Please draw something simpler."
+)
+TOO_MANY_POINTS = "That drawing is too detailed. Please clear it and draw a little more simply."
+BAD_JSON = "Something went wrong sending your character. Please reload the page and try again."
+BAD_REQUEST = "Please either draw a character or type one, not both."
+NOTHING = "Please draw a character or type one first."
+SHORT_STROKE = "One of the strokes is just a dot. Please undo it and draw a line instead."
+BAD_DRAWING = "We could not read this drawing. Please clear it and draw it again."
+TEXT_TOO_LONG = "Please type at most {limit} characters."
+TEXT_ONE_CHAR = "Please type just one character."
+TEXT_EMPTY = "Please type a character first."
+NO_GLYPH = (
+    "Sorry, the drones do not know how to write \u201c{char}\u201d yet. Please try another one."
+)
+BLOCKED = "Sorry, we cannot write that here. Please try something else."
+RATE_LIMITED = (
+    "You are sending characters very quickly! Please wait about {seconds} seconds and try again."
+)
+UNPLANNABLE = "The drones cannot fly this one. Please try a simpler character."
+NO_ORCHESTRATOR = "The drones' queue is not answering right now. Please try again in a minute."
+QUEUE_FULL = "The queue is full right now. Please try again in a few minutes."
+ORCHESTRATOR_REFUSED = "Sorry, this character could not be accepted. Please try another one."
+UNKNOWN_JOB = "We do not know this job. It may be from an earlier session."
+NOT_YOUR_JOB = "You can only follow the characters you sent from this page."
+
+
+def duration_words(seconds: float | None) -> str:
+    """A rough, friendly duration: "less than a minute", "about 3 minutes"."""
+    if seconds is None or not math.isfinite(seconds):
+        return "a little while"
+    if seconds < 60.0:
+        return "less than a minute"
+    minutes = round(seconds / 60.0)
+    return "about 1 minute" if minutes <= 1 else f"about {minutes} minutes"
+
+
+def status_text(
+    state: str,
+    *,
+    queue_position: int | None = None,
+    eta_s: float | None = None,
+    vehicle_id: str | None = None,
+    progress: float = 0.0,
+) -> str:
+    """What the page says about a job in ``state`` (a bus JobStateName)."""
+    if state in ("submitted", "awaiting_approval"):
+        return "Waiting for the show's operator to approve your character."
+    if state == "queued":
+        if queue_position is None:
+            return "In the queue."
+        place = "next in line" if queue_position <= 1 else f"number {queue_position} in the queue"
+        return f"You are {place}. Your character should start in {duration_words(eta_s)}."
+    drone = f"drone {vehicle_id}" if vehicle_id else "a drone"
+    if state == "assigned":
+        return f"Getting ready: {drone} is taking off to write your character."
+    if state == "writing":
+        return f"Being written by {drone}: {round(100.0 * max(0.0, min(1.0, progress)))}% done."
+    if state == "done":
+        return f"Done! Your character was written by {drone}."
+    if state == "failed":
+        return "Sorry, something went wrong while writing your character. The crew has been told."
+    if state == "cancelled":
+        return "Your character was cancelled by the show's operator."
+    if state == "rejected":
+        return "Sorry, the show's operator did not approve this character."
+    return "Please wait..."

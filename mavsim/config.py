@@ -1,0 +1,126 @@
+"""Configuration of one simulated MAVLink vehicle: typed, frozen, validated once."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Literal
+
+from mavsim.errors import MavsimError
+
+Vec3 = tuple[float, float, float]
+
+
+def _pid(wn_radps: float, zeta: float, ki_radps: float, eps: float) -> tuple[float, float, float]:
+    """(kp, kd, ki) placing the poles at the roots of (s + k_i)(s^2 + 2 zeta w_n s + w_n^2),
+    divided by eps (the RPT pole pattern of Phang 2015 eq. 9)."""
+    kp = (wn_radps**2 + 2 * zeta * wn_radps * ki_radps) / eps**2
+    kd = (2 * zeta * wn_radps + ki_radps) / eps
+    return kp, kd, ki_radps * wn_radps**2 / eps**3
+
+
+STIFF_EPS = 0.3
+"""Time scale of the default tune: the paper's poles 1/0.3 times faster (x, y about 5.9 rad/s,
+z about 7 rad/s), well inside the 25 rad/s inner loop."""
+_XY = _pid(1.772, 0.5, 0.2, STIFF_EPS)
+_Z = _pid(2.089, 0.66, 0.23, STIFF_EPS)
+
+
+@dataclass(frozen=True)
+class PositionGains:
+    """Per-axis PID with feed-forward of the autopilot's position controller.
+
+    ``a_cmd = a_ref + kp (p_ref - p) + kd (v_ref - v) + ki * integral(p_ref - p)``. The defaults
+    are a stiff indoor tune with the pole pattern of the paper's RPT design at ``STIFF_EPS``: the
+    autopilot's own position loop, independent of the show's outer-loop preset (which only flies
+    with attitude setpoints).
+    """
+
+    kp_xy: float = _XY[0]
+    """Position gain in [1/s^2] on the horizontal axes."""
+    kd_xy: float = _XY[1]
+    """Velocity gain in [1/s] on the horizontal axes."""
+    ki_xy: float = _XY[2]
+    """Integral gain in [1/s^3] on the horizontal axes."""
+    kp_z: float = _Z[0]
+    """Position gain in [1/s^2] on the vertical axis."""
+    kd_z: float = _Z[1]
+    """Velocity gain in [1/s] on the vertical axis."""
+    ki_z: float = _Z[2]
+    """Integral gain in [1/s^3] on the vertical axis."""
+    integral_limit_m_s: float = 0.5
+    """Anti-windup bound of each axis' error integral in [m s]."""
+
+    @classmethod
+    def from_poles(cls, eps: float) -> PositionGains:
+        """The paper's pole pattern (x, y: w_n 1.772, zeta 0.5, k_i 0.2; z: w_n 2.089,
+        zeta 0.66, k_i 0.23) at time scale ``eps`` (1: the paper's own gains)."""
+        xy, z = _pid(1.772, 0.5, 0.2, eps), _pid(2.089, 0.66, 0.23, eps)
+        return cls(*xy, *z)
+
+
+@dataclass(frozen=True)
+class VehicleConfig:
+    """One simulated vehicle, exposed as a MAVLink endpoint answering like an ArduCopter."""
+
+    vehicle_id: str
+    """Show-file vehicle id (for messages and logs)."""
+    system_id: int
+    """MAVLink system id of the vehicle (1..254); component id is 1 (autopilot)."""
+    port: int
+    """UDP port the vehicle listens on; it answers every peer that sent it a packet."""
+    host: str = "127.0.0.1"
+    """Address to bind."""
+    autopilot: Literal["ardupilot", "px4"] = "ardupilot"
+    """Which autopilot it answers like (modes, OFFBOARD rules; see mavsim/px4.py)."""
+    home_m_enu: Vec3 = (0.0, 0.0, 0.0)
+    """Start position in the show frame [m]; also the origin of its LOCAL_NED frame."""
+    mass_kg: float = 1.0
+    """Vehicle mass in [kg]."""
+    thrust_max_n: float = 19.6
+    """Largest total thrust in [N]; SET_ATTITUDE_TARGET thrust 1.0 means this."""
+    tilt_max_rad: float = math.radians(30.0)
+    """Largest commanded tilt (ArduPilot ANGLE_MAX)."""
+    position_source_delay_s: float = 3.0
+    """Seconds after start before the estimator has a position source; arming is refused before."""
+    arm_refusal: str | None = None
+    """When set, every arming attempt is refused with this pre-arm reason (tests, rehearsal)."""
+    guided_timeout_s: float = 3.0
+    """GUID_TIMEOUT: with no setpoint for this long in GUIDED the vehicle stops where it is."""
+    takeoff_speed_mps: float = 0.5
+    """Climb rate of MAV_CMD_NAV_TAKEOFF in [m/s]."""
+    land_speed_mps: float = 0.5
+    """Descent rate in LAND in [m/s] (ArduPilot LAND_SPEED)."""
+    disarm_delay_s: float = 10.0
+    """Armed on the ground for this long without taking off -> auto-disarm (DISARM_DELAY)."""
+    telemetry_rate_hz: float = 50.0
+    """Default rate of LOCAL_POSITION_NED, ATTITUDE and POSITION_TARGET_LOCAL_NED."""
+    physics_rate_hz: float = 100.0
+    """Rate of the autopilot loop in [Hz] (the simulator's control rate; 4 physics substeps)."""
+    battery_endurance_s: float = 900.0
+    """Flight time in [s] from full to empty (linear model)."""
+    gains: PositionGains = field(default_factory=PositionGains)
+    """Position controller gains."""
+
+    def __post_init__(self) -> None:
+        if not 1 <= self.system_id <= 254:
+            raise MavsimError(f"{self.vehicle_id}: system_id {self.system_id} not in 1..254")
+        if not 0 <= self.port <= 65535:
+            raise MavsimError(f"{self.vehicle_id}: port {self.port} not in 0..65535")
+        positive = {
+            "mass_kg": self.mass_kg,
+            "thrust_max_n": self.thrust_max_n,
+            "guided_timeout_s": self.guided_timeout_s,
+            "takeoff_speed_mps": self.takeoff_speed_mps,
+            "land_speed_mps": self.land_speed_mps,
+            "telemetry_rate_hz": self.telemetry_rate_hz,
+            "physics_rate_hz": self.physics_rate_hz,
+            "battery_endurance_s": self.battery_endurance_s,
+        }
+        for name, value in positive.items():
+            if not value > 0:
+                raise MavsimError(f"{self.vehicle_id}: {name} must be > 0, got {value}")
+        if self.thrust_max_n <= self.mass_kg * 9.81:
+            raise MavsimError(f"{self.vehicle_id}: thrust_max_n cannot lift mass_kg")
+        if self.position_source_delay_s < 0:
+            raise MavsimError(f"{self.vehicle_id}: position_source_delay_s must be >= 0")

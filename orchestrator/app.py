@@ -1,0 +1,60 @@
+"""Entry points: run one show's orchestrator until SIGINT/SIGTERM (``skyquill orchestrator``)."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import signal
+import time
+
+from bus.keys import ShowKeys
+from bus.recorder import McapRecorder
+from bus.session import Role, open_session
+from orchestrator.service import OrchestratorService, recording_path
+from orchestrator.store import JobStore
+from showfile import Show
+
+log = logging.getLogger(__name__)
+
+
+async def serve_show(
+    show: Show,
+    *,
+    role: Role = "client",
+    stop: asyncio.Event | None = None,
+    ready: asyncio.Event | None = None,
+) -> None:
+    """Open the session, the database and the recording; serve until ``stop`` is set.
+
+    ``role="router"`` also hosts the show's Zenoh router (listening on ``zenoh.router_listen``),
+    for a one-process set-up; under ``skyquill up`` the orchestrator is a client of its router.
+    """
+    stop = stop or asyncio.Event()
+    with contextlib.ExitStack() as stack:
+        session = stack.enter_context(open_session(show.zenoh, role=role))
+        store = stack.enter_context(JobStore(show.database_path))
+        recorder = None
+        if show.storage.record:
+            path = recording_path(show, time.time())
+            recorder = stack.enter_context(McapRecorder(path, ShowKeys(show.show_id)))
+            log.info("recording the bus to %s", path)
+        service = OrchestratorService(show, session, store, recorder=recorder)
+        if ready is not None:
+            ready.set()
+        await service.run(stop)
+
+
+def run_orchestrator(show: Show, *, role: Role = "client") -> int:
+    """Blocking: serve ``show`` until SIGINT or SIGTERM; returns the exit status."""
+
+    async def main() -> None:
+        stop = asyncio.Event()
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            with contextlib.suppress(NotImplementedError, RuntimeError):
+                loop.add_signal_handler(sig, stop.set)
+        await serve_show(show, role=role, stop=stop)
+
+    asyncio.run(main())
+    return 0

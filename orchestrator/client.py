@@ -1,0 +1,63 @@
+"""Blocking client calls to a show's orchestrator, for the command line (and scripts).
+
+Each call opens a Zenoh client session to the show's router endpoints, asks, and closes it.
+Errors: :class:`bus.rpc.NoReplyError` (no orchestrator answered), :class:`bus.rpc.RemoteError`
+(it answered with an error), :class:`bus.session.SessionOpenError` (no router).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from bus.keys import ShowKeys
+from bus.messages import (
+    CommandReply,
+    OperatorCommand,
+    ShowSnapshot,
+    SubmitReply,
+    SubmitRequest,
+)
+from bus.rpc import query_one
+from bus.session import open_session
+from showfile import Show
+
+DEFAULT_TIMEOUT_S = 5.0
+
+
+def submit(
+    show: Show,
+    *,
+    text: str | None = None,
+    strokes: dict[str, Any] | None = None,
+    client_id: str = "cli",
+    priority: int = 0,
+    timeout_s: float = DEFAULT_TIMEOUT_S,
+) -> SubmitReply:
+    """Hand in a character (text or a strokes document); the reply carries the job id or error."""
+    request = SubmitRequest(text=text, strokes=strokes, client_id=client_id, priority=priority)
+    with open_session(show.zenoh, role="client") as session:
+        return query_one(
+            session, ShowKeys(show.show_id).submit, request, SubmitReply, timeout_s=timeout_s
+        )
+
+
+def command(
+    show: Show, operator_command: OperatorCommand, *, timeout_s: float = DEFAULT_TIMEOUT_S
+) -> CommandReply:
+    """Send an operator command; the reply says what happened."""
+    with open_session(show.zenoh, role="client") as session:
+        return query_one(
+            session,
+            ShowKeys(show.show_id).command,
+            operator_command,
+            CommandReply,
+            timeout_s=timeout_s,
+        )
+
+
+def snapshot(show: Show, *, timeout_s: float = DEFAULT_TIMEOUT_S) -> ShowSnapshot:
+    """The orchestrator's current view: every job (latest finished ones too) and vehicle."""
+    with open_session(show.zenoh, role="client") as session:
+        return query_one(
+            session, ShowKeys(show.show_id).snapshot, None, ShowSnapshot, timeout_s=timeout_s
+        )

@@ -1,0 +1,353 @@
+"""The orchestrator's decisions (pure): jobs, queue, assignment, presence, operator commands.
+
+A :class:`Book` is fed facts (a validated submission, an agent report, a vehicle status, a
+liveliness change, an operator command, the passing of time) and returns :class:`Effects`: jobs
+that changed (to store and publish), events, and commands for vehicles. It never touches the
+network, the disk or a clock; the service (orchestrator/service.py) does, with what it returns.
+
+Invariants (tests/test_orchestrator_core.py checks them with hypothesis): no job is lost or
+duplicated; at most one active job per vehicle and per board; jobs are assigned in queue order
+(priority, then submission order).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+import msgspec
+
+from bus.messages import (
+    AgentReport,
+    CommandReply,
+    ErrorInfo,
+    Event,
+    JobAssignment,
+    ShowSnapshot,
+    SubmitReply,
+    SubmitRequest,
+    VehicleCommand,
+    VehicleStatus,
+)
+from orchestrator import presence, reports
+from orchestrator.core_types import CoreConfig, Effects, Level
+from orchestrator.fleet import VehicleView, queue_etas, ready_for_job
+from orchestrator.jobs import WAITING_STATES, Job, to_state, transition, update
+from orchestrator.operator import apply_operator
+
+__all__ = ["Book", "CoreConfig", "Effects", "Level"]
+
+
+class Book:
+    """All jobs and vehicles of a show, and the rules that move them."""
+
+    def __init__(
+        self,
+        config: CoreConfig,
+        jobs: Iterable[Job] = (),
+        *,
+        now_s: float,
+        queue_paused: bool = False,
+        paused_vehicles: Iterable[str] = (),
+    ) -> None:
+        self.config = config
+        self.queue_paused = queue_paused
+        self.vehicles = {v.vehicle_id: VehicleView(v, gone_since_s=now_s) for v in config.vehicles}
+        for vid in paused_vehicles:
+            if vid in self.vehicles:
+                self.vehicles[vid].paused = True
+        self.jobs: dict[str, Job] = {}
+        for job in jobs:  # restart: active jobs must be confirmed by their vehicle again
+            self.jobs[job.job_id] = update(job, now_s, assigned_at_s=now_s) if job.active else job
+        self.next_seq = max((j.seq for j in self.jobs.values()), default=0) + 1
+
+    # --- views ------------------------------------------------------------------------------
+    def queue(self) -> list[Job]:
+        """Queued jobs in the order they will be assigned."""
+        return sorted(
+            (j for j in self.jobs.values() if j.state == "queued"), key=lambda j: j.sort_key
+        )
+
+    def waiting_count(self) -> int:
+        return sum(1 for j in self.jobs.values() if j.state in ("awaiting_approval", "queued"))
+
+    def active_job_of(self, vehicle_id: str) -> Job | None:
+        for job in self.jobs.values():
+            if job.active and job.vehicle_id == vehicle_id:
+                return job
+        return None
+
+    def busy_boards(self) -> set[str]:
+        return {j.board_id for j in self.jobs.values() if j.active and j.board_id is not None}
+
+    def etas(self, now_s: float) -> dict[str, tuple[int, float | None]]:
+        """Queue position (1 = next) and ETA in [s] of every queued job."""
+        queue = self.queue()
+        active = {j.vehicle_id: j for j in self.jobs.values() if j.active and j.vehicle_id}
+        usable = [v.info.vehicle_id for v in self.vehicles.values() if v.alive and not v.paused]
+        etas = (
+            {} if self.queue_paused else queue_etas(queue, active, usable, now_s, self.config.eta)
+        )
+        return {j.job_id: (i + 1, etas.get(j.job_id)) for i, j in enumerate(queue)}
+
+    def snapshot(
+        self,
+        now_s: float,
+        *,
+        include_final: bool = True,
+        max_final: int = 500,
+        strokes_budget_bytes: int = 0,
+    ) -> ShowSnapshot:
+        """Everything a late joiner needs: jobs (in submission order) and vehicles.
+
+        With ``include_final`` the latest ``max_final`` finished jobs are included too. Waiting
+        drawn jobs carry their strokes, oldest first, while their JSON fits the budget.
+        """
+        etas = self.etas(now_s)
+        finals = sorted((j.seq for j in self.jobs.values() if j.final), reverse=True)
+        oldest_final = finals[max_final - 1] if include_final and len(finals) >= max_final else 0
+        budget = strokes_budget_bytes
+        jobs = []
+        for j in sorted(self.jobs.values(), key=lambda j: j.seq):
+            if j.final and not (include_final and j.seq >= oldest_final):
+                continue
+            waiting = j.state in WAITING_STATES and j.strokes is not None
+            size = len(msgspec.json.encode(j.strokes)) if waiting and budget > 0 else 0
+            with_strokes = 0 < size <= budget
+            budget -= size if with_strokes else 0
+            position, eta = etas.get(j.job_id, (None, None))
+            jobs.append(to_state(j, queue_position=position, eta_s=eta, with_strokes=with_strokes))
+        vehicles = [
+            view.summary(job.job_id if (job := self.active_job_of(vid)) else None)
+            for vid, view in self.vehicles.items()
+        ]
+        return ShowSnapshot(
+            show_id=self.config.show_id,
+            time_s=now_s,
+            queue_paused=self.queue_paused,
+            jobs=jobs,
+            vehicles=vehicles,
+        )
+
+    # --- helpers ----------------------------------------------------------------------------
+    def event(
+        self,
+        eff: Effects,
+        now_s: float,
+        level: Level,
+        kind: str,
+        message: str,
+        *,
+        vehicle_id: str | None = None,
+        job_id: str | None = None,
+    ) -> None:
+        eff.events.append(
+            Event(
+                time_s=now_s,
+                level=level,
+                kind=kind,
+                message=message,
+                vehicle_id=vehicle_id,
+                job_id=job_id,
+            )
+        )
+
+    def put(self, eff: Effects, job: Job) -> Job:
+        self.jobs[job.job_id] = job
+        eff.jobs[job.job_id] = job
+        return job
+
+    def requeue(self, eff: Effects, job: Job, now_s: float, reason: str, *, lost: bool) -> None:
+        """Take an active job back: queued again, or failed after too many lost attempts."""
+        info = ErrorInfo(code="vehicle_lost" if lost else "requeued", message=reason)
+        if lost and job.attempts >= self.config.max_attempts:
+            self.put(eff, transition(job, "failed", now_s, error=info, progress=0.0))
+            self.event(
+                eff,
+                now_s,
+                "alert",
+                "job_failed",
+                f"{job.label}: {reason}; gave up after {job.attempts} attempts",
+                vehicle_id=job.vehicle_id,
+                job_id=job.job_id,
+            )
+            return
+        self.put(
+            eff, transition(job, "queued", now_s, error=info, progress=0.0, assigned_at_s=None)
+        )
+        self.event(
+            eff,
+            now_s,
+            "warning",
+            "job_requeued",
+            f"{job.label}: {reason}",
+            vehicle_id=job.vehicle_id,
+            job_id=job.job_id,
+        )
+        eff.fleet_changed = True
+
+    # --- submissions --------------------------------------------------------------------------
+    def submit(
+        self, job_id: str, request: SubmitRequest, *, label: str, estimate_s: float, now_s: float
+    ) -> tuple[SubmitReply, Effects]:
+        """Accept a validated submission (the caller parsed its glyph); refuse when full."""
+        eff = Effects()
+        if job_id in self.jobs:
+            raise ValueError(f"duplicate job id {job_id}")
+        if self.waiting_count() >= self.config.max_queue:
+            info = ErrorInfo(
+                code="queue_full",
+                message=f"the queue is full ({self.config.max_queue} jobs waiting)",
+            )
+            return SubmitReply(ok=False, error=info), eff
+        job = Job(
+            job_id=job_id,
+            seq=self.next_seq,
+            state="submitted",
+            kind="text" if request.text is not None else "strokes",
+            text=request.text,
+            strokes=request.strokes,
+            label=label,
+            client_id=request.client_id,
+            priority=request.priority,
+            created_at_s=now_s,
+            updated_at_s=now_s,
+            estimate_s=estimate_s,
+        )
+        self.next_seq += 1
+        job = transition(job, "awaiting_approval" if self.config.moderation else "queued", now_s)
+        self.put(eff, job)
+        self.event(
+            eff, now_s, "info", "job_submitted", f"{label} from {request.client_id}", job_id=job_id
+        )
+        self.assign(eff, now_s)
+        job = self.jobs[job_id]
+        position, eta = self.etas(now_s).get(job_id, (None, None))
+        return SubmitReply(
+            ok=True, job_id=job_id, state=job.state, queue_position=position, eta_s=eta
+        ), eff
+
+    def set_estimate(self, job_id: str, estimate_s: float, now_s: float) -> Effects:
+        """A better duration estimate (from the planner) for a job."""
+        eff = Effects()
+        job = self.jobs.get(job_id)
+        if job is not None and not job.final:
+            self.put(eff, update(job, now_s, estimate_s=estimate_s))
+        return eff
+
+    # --- assignment ---------------------------------------------------------------------------
+    def assign(self, eff: Effects, now_s: float) -> None:
+        """Give queued jobs, in order, to ready vehicles whose board is free."""
+        if self.queue_paused:
+            return
+        queue = self.queue()
+        if not queue:
+            return
+        busy_boards = self.busy_boards()
+        busy_vehicles = {j.vehicle_id for j in self.jobs.values() if j.active}
+        for view in self.vehicles.values():
+            if not queue:
+                break
+            vid = view.info.vehicle_id
+            if vid in busy_vehicles or view.info.board_id in busy_boards:
+                continue
+            if not ready_for_job(view, now_s):
+                continue
+            job = queue.pop(0)
+            job = self.put(
+                eff,
+                transition(
+                    job,
+                    "assigned",
+                    now_s,
+                    vehicle_id=vid,
+                    board_id=view.info.board_id,
+                    assigned_at_s=now_s,
+                    attempts=job.attempts + 1,
+                    progress=0.0,
+                    error=None,
+                ),
+            )
+            busy_boards.add(view.info.board_id)
+            view.mismatch_since_s = None
+            assignment = JobAssignment(
+                job_id=job.job_id, text=job.text, strokes=job.strokes, attempt=job.attempts
+            )
+            eff.commands.append((vid, VehicleCommand(command="assign", job=assignment)))
+            self.event(
+                eff,
+                now_s,
+                "info",
+                "job_assigned",
+                f"{job.label} -> {vid} (attempt {job.attempts})",
+                vehicle_id=vid,
+                job_id=job.job_id,
+            )
+            eff.fleet_changed = True
+
+    def assignment_result(
+        self, vehicle_id: str, job_id: str, reply: CommandReply | None, now_s: float
+    ) -> Effects:
+        """The agent's answer to an assign command (None: no answer)."""
+        eff = Effects()
+        if reply is not None and reply.ok:
+            return eff
+        view = self.vehicles.get(vehicle_id)
+        if view is not None:
+            view.refused_until_s = now_s + self.config.refuse_backoff_s
+        job = self.jobs.get(job_id)
+        if job is not None and job.state == "assigned" and job.vehicle_id == vehicle_id:
+            why = reply.message if reply is not None else "no answer"
+            if reply is not None and reply.error is not None:
+                why = reply.error.message
+            self.requeue(
+                eff,
+                update(job, now_s, attempts=job.attempts - 1),
+                now_s,
+                f"{vehicle_id} did not take the job: {why}",
+                lost=False,
+            )
+        self.assign(eff, now_s)
+        return eff
+
+    # --- vehicles and reports (orchestrator/presence.py, orchestrator/reports.py) ----------------
+    def liveliness(self, vehicle_id: str, alive: bool, now_s: float) -> Effects:
+        """A vehicle's token appeared or disappeared."""
+        return presence.liveliness(self, vehicle_id, alive, now_s)
+
+    def status(self, status: VehicleStatus, now_s: float) -> Effects:
+        """A vehicle's published status."""
+        return presence.status(self, status, now_s)
+
+    def telemetry(
+        self, vehicle_id: str, tracking_error_m: float, job_id: str | None, now_s: float
+    ) -> Effects:
+        """A telemetry sample: liveness, and an alert (at most every 5 s) on large errors."""
+        return presence.telemetry(self, vehicle_id, tracking_error_m, job_id, now_s)
+
+    def vehicle_event(self, vehicle_id: str, event: Event, now_s: float) -> Effects:
+        """An event an agent published about its vehicle: into the show's log (rate-limited)."""
+        return presence.vehicle_event(self, vehicle_id, event, now_s)
+
+    def tick(self, now_s: float) -> Effects:
+        """Time passed: lost vehicles, unconfirmed jobs, then assignment."""
+        eff = Effects()
+        presence.tick_into(self, eff, now_s)
+        return eff
+
+    def report(self, rep: AgentReport, now_s: float) -> tuple[CommandReply, Effects]:
+        """An agent's report; idempotent (agents retry until acknowledged)."""
+        eff = Effects()
+        reply = reports.apply_report(self, rep, eff, now_s)
+        return reply, eff
+
+    # --- operator -----------------------------------------------------------------------------
+    def operator(self, command: object, now_s: float) -> tuple[CommandReply, Effects]:
+        """An operator command (see orchestrator/operator.py)."""
+        eff = Effects()
+        reply = apply_operator(self, command, eff, now_s)
+        self.assign(eff, now_s)
+        return reply, eff
+
+    def vehicle_ids(self, vehicle_id: str | None) -> Sequence[str]:
+        """One vehicle (validated by the caller) or all."""
+        return [vehicle_id] if vehicle_id is not None else list(self.vehicles)

@@ -1,0 +1,55 @@
+"""Policy and effects shared by the pure decision modules."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+from bus.messages import Event, VehicleCommand
+from orchestrator.fleet import EtaModel, VehicleInfo
+from orchestrator.jobs import Job
+
+
+@dataclass(frozen=True)
+class CoreConfig:
+    """Policy of one show, from the show file."""
+
+    show_id: str
+    """Show id."""
+    vehicles: tuple[VehicleInfo, ...]
+    """Declared vehicles."""
+    moderation: bool = False
+    """Submissions wait for approval."""
+    lost_after_s: float = 1.5
+    """Grace after a liveliness token disappears before the vehicle is lost, [s]."""
+    max_queue: int = 200
+    """Most waiting jobs (awaiting approval + queued)."""
+    max_attempts: int = 3
+    """Assignments lost before the job fails."""
+    confirm_grace_s: float = 3.0
+    """How long a vehicle may not mention its assigned job before it is taken back, [s]."""
+    refuse_backoff_s: float = 2.0
+    """No new assignment to a vehicle this long after it refused or did not answer, [s]."""
+    tracking_error_alert_m: float = 0.05
+    """Tracking error that raises an alert, [m]."""
+    eta: EtaModel = field(default_factory=EtaModel)
+    """ETA assumptions."""
+
+
+@dataclass
+class Effects:
+    """What the service must do after a decision."""
+
+    jobs: dict[str, Job] = field(default_factory=dict)
+    """Changed jobs (latest version): store, then publish."""
+    events: list[Event] = field(default_factory=list)
+    """Event log lines to store and publish."""
+    commands: list[tuple[str, VehicleCommand]] = field(default_factory=list)
+    """(vehicle_id, command) to send to agents."""
+    fleet_changed: bool = False
+    """The fleet snapshot should be republished now."""
+    settings_changed: bool = False
+    """Queue pause or vehicle pauses changed (store them)."""
+
+
+Level = Literal["info", "warning", "alert"]

@@ -1,0 +1,170 @@
+"""Operator commands applied to a :class:`~orchestrator.core.Book` (pure).
+
+=============  ===========================================================================
+approve        job awaiting approval -> queued
+reject         job awaiting approval -> rejected (``reason`` kept)
+pause          no new assignments: the whole queue, or one vehicle (``vehicle_id``)
+resume         undo pause / land / estop: the queue and every vehicle, or one vehicle
+cancel         job -> cancelled; a vehicle writing it is told to stop
+land           vehicle lands and takes no new job; its job goes back to the queue
+land_all       every vehicle lands; the queue is paused; jobs go back to the queue
+estop          motors off at once: one vehicle, or all (then the queue is paused too)
+prioritize     set a waiting job's ``priority`` (higher first)
+=============  ===========================================================================
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Literal
+
+from bus.messages import CommandReply, ErrorInfo, OperatorCommand, VehicleCommand
+
+if TYPE_CHECKING:
+    from orchestrator.core import Book
+    from orchestrator.core_types import Effects, Level
+    from orchestrator.jobs import Job
+
+from orchestrator.jobs import transition, update
+
+
+def _error(code: str, message: str, field: str | None = None) -> CommandReply:
+    return CommandReply(
+        ok=False, message=message, error=ErrorInfo(code=code, message=message, field=field)
+    )
+
+
+def _job(book: Book, cmd: OperatorCommand) -> Job | CommandReply:
+    if cmd.job_id is None:
+        return _error("missing_field", f"{cmd.command} needs job_id", "job_id")
+    job = book.jobs.get(cmd.job_id)
+    if job is None:
+        return _error("unknown_job", f"no job {cmd.job_id}", "job_id")
+    return job
+
+
+def _vehicle_ok(book: Book, cmd: OperatorCommand, required: bool) -> CommandReply | None:
+    if cmd.vehicle_id is None:
+        return (
+            _error("missing_field", f"{cmd.command} needs vehicle_id", "vehicle_id")
+            if required
+            else None
+        )
+    if cmd.vehicle_id not in book.vehicles:
+        return _error(
+            "unknown_vehicle",
+            f"no vehicle {cmd.vehicle_id}; vehicles: {sorted(book.vehicles)}",
+            "vehicle_id",
+        )
+    return None
+
+
+def _stop_vehicles(
+    book: Book, cmd: OperatorCommand, eff: Effects, now_s: float, order: Literal["land", "estop"]
+) -> list[str]:
+    everyone = cmd.command == "land_all" or cmd.vehicle_id is None
+    vids = list(book.vehicle_ids(None if everyone else cmd.vehicle_id))
+    for vid in vids:
+        book.vehicles[vid].paused = True
+        eff.commands.append((vid, VehicleCommand(command=order)))
+        job = book.active_job_of(vid)
+        if job is not None:
+            book.requeue(eff, job, now_s, f"{vid}: operator {cmd.command}", lost=False)
+    eff.settings_changed = eff.fleet_changed = True
+    return vids
+
+
+def _moderate(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> CommandReply:
+    job = _job(book, cmd)
+    if isinstance(job, CommandReply):
+        return job
+    if job.state != "awaiting_approval":
+        return _error("bad_state", f"{job.job_id} is {job.state}, not awaiting approval", "job_id")
+    if cmd.command == "approve":
+        book.put(eff, transition(job, "queued", now_s))
+    else:
+        info = ErrorInfo(code="rejected", message=cmd.reason or "rejected by the operator")
+        book.put(eff, transition(job, "rejected", now_s, error=info))
+    return CommandReply(ok=True, message=f"{job.job_id} {cmd.command}d")
+
+
+def _cancel(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> CommandReply:
+    job = _job(book, cmd)
+    if isinstance(job, CommandReply):
+        return job
+    if job.final:
+        return _error("bad_state", f"{job.job_id} is already {job.state}", "job_id")
+    if job.active and job.vehicle_id is not None:
+        eff.commands.append((job.vehicle_id, VehicleCommand(command="cancel", job_id=job.job_id)))
+    info = ErrorInfo(code="cancelled", message=cmd.reason or f"cancelled by {cmd.operator}")
+    book.put(eff, transition(job, "cancelled", now_s, error=info))
+    eff.fleet_changed = True
+    return CommandReply(ok=True, message=f"{job.job_id} cancelled")
+
+
+def _prioritize(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> CommandReply:
+    job = _job(book, cmd)
+    if isinstance(job, CommandReply):
+        return job
+    if cmd.priority is None:
+        return _error("missing_field", "prioritize needs priority", "priority")
+    if job.state not in ("awaiting_approval", "queued"):
+        return _error("bad_state", f"{job.job_id} is {job.state}; only waiting jobs", "job_id")
+    book.put(eff, update(job, now_s, priority=cmd.priority))
+    return CommandReply(ok=True, message=f"{job.job_id} priority {cmd.priority}")
+
+
+def _pause_resume(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandReply:
+    paused = cmd.command == "pause"
+    if cmd.vehicle_id is not None:
+        book.vehicles[cmd.vehicle_id].paused = paused
+        what = cmd.vehicle_id
+    else:
+        book.queue_paused = paused
+        if not paused:
+            for view in book.vehicles.values():
+                view.paused = False
+        what = "queue"
+    eff.settings_changed = eff.fleet_changed = True
+    return CommandReply(ok=True, message=f"{what} {'paused' if paused else 'resumed'}")
+
+
+def apply_operator(book: Book, command: object, eff: Effects, now_s: float) -> CommandReply:
+    """Carry out one operator command; the reply says what happened or what was wrong."""
+    if not isinstance(command, OperatorCommand):
+        return _error("invalid", "not an operator command")
+    cmd = command
+    needs_vehicle = cmd.command == "land"
+    if bad := _vehicle_ok(book, cmd, needs_vehicle):
+        return bad
+    if cmd.command in ("approve", "reject"):
+        reply = _moderate(book, cmd, eff, now_s)
+    elif cmd.command == "cancel":
+        reply = _cancel(book, cmd, eff, now_s)
+    elif cmd.command == "prioritize":
+        reply = _prioritize(book, cmd, eff, now_s)
+    elif cmd.command in ("pause", "resume"):
+        reply = _pause_resume(book, cmd, eff)
+    elif cmd.command in ("land", "land_all"):
+        vids = _stop_vehicles(book, cmd, eff, now_s, "land")
+        if cmd.command == "land_all":
+            book.queue_paused = True
+        reply = CommandReply(ok=True, message=f"landing {', '.join(vids)}")
+    else:  # estop
+        vids = _stop_vehicles(book, cmd, eff, now_s, "estop")
+        if cmd.vehicle_id is None:
+            book.queue_paused = True
+        reply = CommandReply(ok=True, message=f"emergency stop {', '.join(vids)}")
+    if reply.ok:
+        level: Level = "alert" if cmd.command == "estop" else "info"
+        target = cmd.job_id or cmd.vehicle_id or ""
+        book.event(
+            eff,
+            now_s,
+            level,
+            "operator",
+            f"{cmd.operator}: {cmd.command} {target}".rstrip()
+            + (f" ({cmd.reason})" if cmd.reason else ""),
+            vehicle_id=cmd.vehicle_id,
+            job_id=cmd.job_id,
+        )
+    return reply

@@ -1,0 +1,166 @@
+"""Agent reports (pure): started / progress / done / failed, idempotent because agents retry.
+
+A report from a vehicle that no longer owns the job: ``done`` is accepted (the character is
+written; a vehicle that took it over is told to stop); ``started``/``progress`` reclaim a job that
+is back in the queue and not yet given to another vehicle (a liveliness flap), otherwise the
+vehicle is told to stop (``not_assigned``); ``failed`` is acknowledged and ignored. A ``failed``
+report with ``retry_after_s`` hands the job back to the queue instead of failing it.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from bus.messages import AgentReport, CommandReply, ErrorInfo, VehicleCommand
+from orchestrator.core_types import Effects
+from orchestrator.jobs import Job, transition, update
+
+if TYPE_CHECKING:
+    from orchestrator.core import Book
+
+
+def apply_report(book: Book, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
+    """Record one report; the reply acknowledges it (or tells the vehicle to stop)."""
+    job = book.jobs.get(rep.job_id)
+    if job is None:
+        return CommandReply(
+            ok=False, error=ErrorInfo(code="unknown_job", message=f"no job {rep.job_id}")
+        )
+    if job.final:
+        return CommandReply(ok=True, message=f"job already {job.state}")
+    if rep.event == "done":
+        return _done(book, job, rep, eff, now_s)
+    owner = job.vehicle_id if job.active else None
+    if owner != rep.vehicle_id:
+        if rep.event == "failed":
+            return CommandReply(ok=True, message="ignored: the job is not yours any more")
+        if not _reclaim(book, eff, job, rep, now_s):
+            eff.commands.append(
+                (rep.vehicle_id, VehicleCommand(command="cancel", job_id=job.job_id))
+            )
+            info = ErrorInfo(
+                code="not_assigned",
+                message=f"{rep.job_id} is not assigned to {rep.vehicle_id}; stop it",
+            )
+            return CommandReply(ok=False, error=info)
+        job = book.jobs[job.job_id]
+    if rep.event == "failed":
+        return _failed(book, job, rep, eff, now_s)
+    return _writing(book, job, rep, eff, now_s)
+
+
+def _done(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
+    owner = job.vehicle_id if job.active else None
+    planned = rep.planned_duration_s or job.planned_duration_s
+    done = transition(
+        job,
+        "done",
+        now_s,
+        vehicle_id=rep.vehicle_id,
+        progress=1.0,
+        metrics=rep.metrics,
+        planned_duration_s=planned,
+    )
+    book.put(eff, done)
+    book.event(
+        eff,
+        now_s,
+        "info",
+        "job_done",
+        f"{job.label} written by {rep.vehicle_id}",
+        vehicle_id=rep.vehicle_id,
+        job_id=job.job_id,
+    )
+    if owner is not None and owner != rep.vehicle_id:
+        eff.commands.append((owner, VehicleCommand(command="cancel", job_id=job.job_id)))
+    eff.fleet_changed = True
+    book.assign(eff, now_s)
+    return CommandReply(ok=True, message="done recorded")
+
+
+def _failed(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
+    if rep.retry_after_s is not None:
+        return _handed_back(book, job, rep, eff, now_s, rep.retry_after_s)
+    book.put(eff, transition(job, "failed", now_s, error=rep.error))
+    reason = rep.error.message if rep.error else "no reason given"
+    book.event(
+        eff,
+        now_s,
+        "alert",
+        "job_failed",
+        f"{job.label} failed on {rep.vehicle_id}: {reason}",
+        vehicle_id=rep.vehicle_id,
+        job_id=job.job_id,
+    )
+    eff.fleet_changed = True
+    book.assign(eff, now_s)
+    return CommandReply(ok=True, message="failure recorded")
+
+
+def _handed_back(
+    book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float, retry_after_s: float
+) -> CommandReply:
+    """The vehicle could not start the job (take-off refused) but is healthy: the job goes back
+    to the queue without counting the attempt; the vehicle gets no job for ``retry_after_s``."""
+    view = book.vehicles[rep.vehicle_id]
+    view.refused_until_s = max(view.refused_until_s, now_s + max(0.0, retry_after_s))
+    reason = rep.error.message if rep.error else "no reason given"
+    requeued = update(job, now_s, attempts=max(0, job.attempts - 1))
+    book.requeue(eff, requeued, now_s, f"{rep.vehicle_id} could not start it: {reason}", lost=False)
+    book.assign(eff, now_s)
+    return CommandReply(ok=True, message="job back in the queue")
+
+
+def _writing(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
+    book.vehicles[rep.vehicle_id].mismatch_since_s = None
+    if job.state == "assigned":
+        book.event(
+            eff,
+            now_s,
+            "info",
+            "job_writing",
+            f"{rep.vehicle_id} writes {job.label}",
+            vehicle_id=rep.vehicle_id,
+            job_id=job.job_id,
+        )
+        eff.fleet_changed = True
+    writing = transition(
+        job,
+        "writing",
+        now_s,
+        planned_duration_s=rep.planned_duration_s or job.planned_duration_s,
+        progress=max(job.progress, min(1.0, rep.progress)),
+    )
+    book.put(eff, writing)
+    return CommandReply(ok=True, message=f"{rep.event} recorded")
+
+
+def _reclaim(book: Book, eff: Effects, job: Job, rep: AgentReport, now_s: float) -> bool:
+    """A vehicle still writing a job that was requeued (e.g. after a liveliness flap)."""
+    view = book.vehicles.get(rep.vehicle_id)
+    if job.state != "queued" or view is None or not view.alive:
+        return False
+    if book.active_job_of(rep.vehicle_id) is not None or view.info.board_id in book.busy_boards():
+        return False
+    book.put(
+        eff,
+        transition(
+            job,
+            "assigned",
+            now_s,
+            vehicle_id=rep.vehicle_id,
+            board_id=view.info.board_id,
+            assigned_at_s=now_s,
+            error=None,
+        ),
+    )
+    book.event(
+        eff,
+        now_s,
+        "info",
+        "job_reclaimed",
+        f"{rep.vehicle_id} still writes {job.label}",
+        vehicle_id=rep.vehicle_id,
+        job_id=job.job_id,
+    )
+    return True

@@ -1,0 +1,359 @@
+"""The orchestrator process: the pure :class:`~orchestrator.core.Book` wired to Zenoh and SQLite.
+
+Every input (query, status, liveliness change, timer) is handled in the asyncio loop, one at a
+time: decide (Book) -> store (one SQLite transaction) -> publish / reply / send. A submission is
+therefore committed before its acknowledgement leaves. Zenoh callbacks only push into bridge
+channels or schedule coroutines.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import os
+import time
+import uuid
+from collections.abc import Callable, Coroutine
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import msgspec
+
+from bus.bridge import FifoChannel, LatestByKey, RingChannel
+from bus.keys import ShowKeys, vehicle_id_from_key
+from bus.messages import (
+    AgentReport,
+    CommandReply,
+    Event,
+    OperatorCommand,
+    ShowSnapshot,
+    SubmitReply,
+    SubmitRequest,
+    Telemetry,
+    VehicleCommand,
+    VehicleStatus,
+)
+from bus.pubsub import declare_token, publish, subscribe, subscribe_raw, watch_liveliness
+from bus.recorder import McapRecorder
+from bus.rpc import NoReplyError, RemoteError, aquery_one, serve_async
+from bus.session import Session
+from orchestrator.core import Book, CoreConfig, Effects
+from orchestrator.fleet import EtaModel, VehicleInfo
+from orchestrator.jobs import to_state
+from orchestrator.store import JobStore
+from orchestrator.submissions import SubmissionError, planned_duration_s, validate_submission
+from showfile import Show
+
+log = logging.getLogger(__name__)
+
+TICK_PERIOD_S = 0.1
+"""Wall time between timer decisions (loss detection, confirmation, assignment), [s]."""
+VEHICLE_COMMAND_TIMEOUT_S = 2.0
+"""How long an agent has to answer a command, [s]."""
+MAX_PENDING_PLANS = 4
+"""Planner runs for ETAs waiting at most; beyond, submissions keep their rough estimate."""
+SNAPSHOT_STROKES_BYTES = 300_000
+"""JSON bytes of waiting jobs' strokes a ``snapshot`` reply carries at most (replies stay well
+under ``bus.messages.MAX_PAYLOAD_BYTES``); ``jobs/<id>`` publications always carry them."""
+
+
+def core_config(show: Show) -> CoreConfig:
+    """The Book's policy from a show file."""
+    return CoreConfig(
+        show_id=show.show_id,
+        vehicles=tuple(VehicleInfo(v.id, v.kind, v.board) for v in show.vehicles),
+        moderation=show.policy.moderation,
+        lost_after_s=show.policy.lost_after_s,
+        max_queue=show.policy.max_queue,
+        max_attempts=show.policy.max_attempts,
+        tracking_error_alert_m=show.policy.tracking_error_alert_m,
+        eta=EtaModel(time_scale=show.time_scale),
+    )
+
+
+def new_job_id() -> str:
+    """A short unique job id (also a Zenoh key chunk)."""
+    return "j" + uuid.uuid4().hex[:12]
+
+
+def recording_path(show: Show, now_s: float) -> Path:
+    """One MCAP file per run: ``<recordings_dir>/<show_id>-<UTC time>-<pid>.mcap``."""
+    stamp = time.strftime("%Y%m%dT%H%M%SZ", time.gmtime(now_s))
+    return show.recordings_dir / f"{show.show_id}-{stamp}-{os.getpid()}.mcap"
+
+
+class OrchestratorService:
+    """One show's orchestrator on an open session; :meth:`run` until ``stop`` is set."""
+
+    def __init__(
+        self,
+        show: Show,
+        session: Session,
+        store: JobStore,
+        *,
+        recorder: McapRecorder | None = None,
+        clock: Callable[[], float] = time.time,
+    ) -> None:
+        self.show, self.session, self.store, self.recorder = show, session, store, recorder
+        self.keys = ShowKeys(show.show_id)
+        self.clock = clock
+        stored = store.load()
+        self.book = Book(
+            core_config(show),
+            stored.jobs,
+            now_s=clock(),
+            queue_paused=stored.queue_paused,
+            paused_vehicles=stored.paused_vehicles,
+        )
+        self._planner = ThreadPoolExecutor(max_workers=1, thread_name_prefix="eta-planner")
+        self._tasks: set[asyncio.Task[Any]] = set()
+        self._plans_pending = 0
+        self._stop: asyncio.Event | None = None
+        self.fatal: BaseException | None = None
+        """Set when the database failed; :meth:`run` raises it after stopping."""
+        self._durations: dict[str, float] = {}
+        log.info("show %s: %d jobs restored", show.show_id, len(stored.jobs))
+
+    # --- effects ------------------------------------------------------------------------------
+    def apply(self, eff: Effects) -> None:
+        """Store, then publish, then send: the order that keeps acknowledged data safe."""
+        settings: dict[str, Any] = {}
+        if eff.settings_changed:
+            settings = {
+                "queue_paused": self.book.queue_paused,
+                "paused_vehicles": [v for v, view in self.book.vehicles.items() if view.paused],
+            }
+        try:
+            self.store.save(eff.jobs.values(), eff.events, **settings)
+        except Exception as exc:
+            # Memory and disk may now disagree: stop, and let the supervisor restart us from
+            # the database (crash-only). The caller's query gets an ``internal`` error.
+            log.critical("cannot store state, stopping: %s", exc)
+            self.fatal = exc
+            if self._stop is not None:
+                self._stop.set()
+            raise
+        now = self.clock()
+        etas = self.book.etas(now) if eff.jobs else {}
+        for job in eff.jobs.values():
+            position, eta = etas.get(job.job_id, (None, None))
+            state = to_state(job, queue_position=position, eta_s=eta, with_strokes=True)
+            self._publish(self.keys.job(job.job_id), state)
+        for event in eff.events:
+            self._publish(self.keys.events, event)
+        if eff.fleet_changed or eff.jobs:
+            self._publish(self.keys.fleet, self.book.snapshot(now, include_final=False))
+        for vehicle_id, command in eff.commands:
+            self._spawn(self._send(vehicle_id, command))
+
+    def _publish(self, key: str, message: msgspec.Struct) -> None:
+        try:
+            publish(self.session, key, message)
+        except Exception as exc:  # the session is closing
+            log.warning("cannot publish on %s: %s", key, exc)
+
+    def _spawn(self, coro: Coroutine[Any, Any, None]) -> None:
+        task = asyncio.get_running_loop().create_task(coro)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    async def _send(self, vehicle_id: str, command: VehicleCommand) -> None:
+        key = self.keys.vehicle_command(vehicle_id)
+        self._record(key + "#request", command)
+        reply: CommandReply | None
+        try:
+            reply = await aquery_one(
+                self.session, key, command, CommandReply, timeout_s=VEHICLE_COMMAND_TIMEOUT_S
+            )
+        except RemoteError as exc:
+            reply = CommandReply(ok=False, message=exc.info.message, error=exc.info)
+        except NoReplyError:
+            reply = None
+        if reply is not None:
+            self._record(key + "#reply", reply)
+        log.info("%s %s -> %s", vehicle_id, command.command, reply.message if reply else "no reply")
+        if command.command == "assign" and command.job is not None:
+            now = self.clock()
+            self.apply(self.book.assignment_result(vehicle_id, command.job.job_id, reply, now))
+
+    def _record(self, topic: str, message: msgspec.Struct) -> None:
+        if self.recorder is not None:
+            self.recorder.record_message(topic, message)
+
+    # --- queryables ---------------------------------------------------------------------------
+    async def on_submit(self, request: SubmitRequest) -> SubmitReply:
+        self._record(self.keys.submit + "#request", request)
+        try:
+            accepted = validate_submission(request, self.show)
+        except SubmissionError as exc:
+            reply = SubmitReply(ok=False, error=exc.info)
+        else:
+            job_id = new_job_id()
+            reply, eff = self.book.submit(
+                job_id,
+                request,
+                label=accepted.label,
+                estimate_s=accepted.estimate_s,
+                now_s=self.clock(),
+            )
+            self.apply(eff)  # committed to SQLite before the reply below is sent
+            if reply.ok:
+                key = f"text:{request.text}" if request.text is not None else None
+                self._spawn(self._refine_estimate(job_id, accepted.glyph, key))
+        self._record(self.keys.submit + "#reply", reply)
+        return reply
+
+    async def _refine_estimate(self, job_id: str, glyph: Any, cache_key: str | None) -> None:
+        """Replace the rough estimate by the planner's duration (best effort, bounded work)."""
+        duration = self._durations.get(cache_key) if cache_key else None
+        if duration is None:
+            if self._plans_pending >= MAX_PENDING_PLANS:
+                return  # a burst of submissions: keep the rough estimates
+            self._plans_pending += 1
+            loop = asyncio.get_running_loop()
+            try:
+                duration = await loop.run_in_executor(
+                    self._planner, planned_duration_s, glyph, self.show
+                )
+            except Exception:
+                log.exception("planning %s for its ETA failed", job_id)
+                return
+            finally:
+                self._plans_pending -= 1
+            if duration is None:
+                return
+            if cache_key:
+                self._durations[cache_key] = duration
+        self.apply(self.book.set_estimate(job_id, duration, self.clock()))
+
+    async def on_command(self, command: OperatorCommand) -> CommandReply:
+        self._record(self.keys.command + "#request", command)
+        reply, eff = self.book.operator(command, self.clock())
+        self.apply(eff)
+        log.info("operator %s -> %s", command.command, reply.message)
+        self._record(self.keys.command + "#reply", reply)
+        return reply
+
+    async def on_report(self, report: AgentReport) -> CommandReply:
+        self._record(self.keys.report + "#request", report)
+        reply, eff = self.book.report(report, self.clock())
+        self.apply(eff)
+        self._record(self.keys.report + "#reply", reply)
+        return reply
+
+    async def on_snapshot(self, _: None) -> ShowSnapshot:
+        return self.book.snapshot(self.clock(), strokes_budget_bytes=SNAPSHOT_STROKES_BYTES)
+
+    # --- subscriptions ------------------------------------------------------------------------
+    async def _follow_presence(self, changes: FifoChannel[tuple[str, bool]]) -> None:
+        async for key, alive in changes:
+            with contextlib.suppress(ValueError):
+                self.apply(self.book.liveliness(vehicle_id_from_key(key), alive, self.clock()))
+
+    async def _follow_status(self, statuses: FifoChannel[VehicleStatus]) -> None:
+        async for status in statuses:
+            self.apply(self.book.status(status, self.clock()))
+
+    async def _follow_vehicle_events(self, events: RingChannel[tuple[str, Event]]) -> None:
+        async for key, event in events:
+            with contextlib.suppress(ValueError):
+                vehicle_id = vehicle_id_from_key(key)
+                self.apply(self.book.vehicle_event(vehicle_id, event, self.clock()))
+
+    async def _follow_telemetry(self, latest: LatestByKey[str, Telemetry]) -> None:
+        while True:
+            for sample in (await latest.take()).values():
+                eff = self.book.telemetry(
+                    sample.vehicle_id, sample.tracking_error_m, sample.job_id, self.clock()
+                )
+                if eff.events:
+                    self.apply(eff)
+            await asyncio.sleep(0.05)  # merge telemetry: at most 20 decisions per second
+
+    async def _timers(self) -> None:
+        next_fleet = 0.0
+        while True:
+            await asyncio.sleep(TICK_PERIOD_S)
+            now = self.clock()
+            self.apply(self.book.tick(now))
+            if now >= next_fleet:
+                next_fleet = now + self.show.policy.fleet_period_s
+                self._publish(self.keys.fleet, self.book.snapshot(now, include_final=False))
+                if self.recorder is not None:
+                    self.recorder.flush()
+
+    # --- run ----------------------------------------------------------------------------------
+    def _declare(self) -> list[Any]:
+        keys, s = self.keys, self.session
+        presence: FifoChannel[tuple[str, bool]] = FifoChannel()
+        statuses: FifoChannel[VehicleStatus] = FifoChannel()
+        telemetry: LatestByKey[str, Telemetry] = LatestByKey()
+        vehicle_events: RingChannel[tuple[str, Event]] = RingChannel(256)
+        declared: list[Any] = []
+        if self.recorder is not None:
+            rec = self.recorder
+            declared.append(
+                subscribe_raw(s, f"{keys.prefix}/**", lambda x: rec.record(x.key, x.payload))
+            )
+            declared.append(watch_liveliness(s, f"{keys.prefix}/**", rec.record_liveliness))
+        declared += [
+            watch_liveliness(s, keys.vehicles_alive_all, lambda k, a: presence.push((k, a))),
+            subscribe(s, keys.vehicle_status_all, VehicleStatus, lambda _, m: statuses.push(m)),
+            subscribe(
+                s, keys.telemetry_all, Telemetry, lambda _, m: telemetry.push(m.vehicle_id, m)
+            ),
+            subscribe(s, keys.vehicle_events_all, Event, lambda k, m: vehicle_events.push((k, m))),
+            serve_async(
+                s,
+                keys.submit,
+                SubmitRequest,
+                self.on_submit,
+                on_error=lambda e: SubmitReply(ok=False, error=e),
+            ),
+            serve_async(
+                s,
+                keys.command,
+                OperatorCommand,
+                self.on_command,
+                on_error=lambda e: CommandReply(ok=False, message=e.message, error=e),
+            ),
+            serve_async(
+                s,
+                keys.report,
+                AgentReport,
+                self.on_report,
+                on_error=lambda e: CommandReply(ok=False, message=e.message, error=e),
+            ),
+            serve_async(s, keys.snapshot, None, self.on_snapshot),
+            declare_token(s, keys.orchestrator_alive),
+        ]
+        self._spawn(self._follow_presence(presence))
+        self._spawn(self._follow_status(statuses))
+        self._spawn(self._follow_telemetry(telemetry))
+        self._spawn(self._follow_vehicle_events(vehicle_events))
+        self._spawn(self._timers())
+        return declared
+
+    async def run(self, stop: asyncio.Event) -> None:
+        """Serve until ``stop`` is set; then undeclare everything and stop background work.
+
+        Raises the database error that stopped the service, if one did.
+        """
+        self._stop = stop
+        declared = self._declare()
+        self.apply(self.book.tick(self.clock()))
+        log.info("orchestrator of %s ready", self.show.show_id)
+        try:
+            await stop.wait()
+        finally:
+            for entity in reversed(declared):
+                with contextlib.suppress(Exception):
+                    entity.undeclare()
+            for task in list(self._tasks):
+                task.cancel()
+            await asyncio.gather(*self._tasks, return_exceptions=True)
+            self._planner.shutdown(wait=False, cancel_futures=True)
+        if self.fatal is not None:
+            raise self.fatal

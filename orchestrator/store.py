@@ -1,0 +1,185 @@
+"""Durable state of the orchestrator in SQLite: jobs, the event log, queue settings.
+
+Durability choice: WAL journal with ``synchronous=FULL``. In WAL mode ``NORMAL`` already survives
+a crash of the process (kill -9): a committed transaction is in the WAL file. It does not survive
+a power cut or an OS crash: the last commits may roll back because the WAL is not fsynced at each
+commit. A submission acknowledged to a visitor must survive both, and submissions are rare (a few
+per minute), so every commit is fsynced (FULL). Frequent, replaceable data (job progress,
+telemetry) is never written here; only state changes are.
+
+One transaction per decision (:meth:`JobStore.save`): the jobs it changed, its events and the
+queue settings commit together, before the service replies or publishes.
+"""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import TracebackType
+
+import msgspec
+
+from bus.messages import Event
+from orchestrator.jobs import Job
+
+SCHEMA_VERSION = 1
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS jobs (
+    job_id TEXT PRIMARY KEY,
+    seq INTEGER NOT NULL UNIQUE,
+    state TEXT NOT NULL,
+    data BLOB NOT NULL
+);
+CREATE INDEX IF NOT EXISTS jobs_state ON jobs (state);
+CREATE TABLE IF NOT EXISTS events (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,
+    time_s REAL NOT NULL,
+    data BLOB NOT NULL
+);
+CREATE TABLE IF NOT EXISTS settings (
+    key TEXT PRIMARY KEY,
+    value TEXT NOT NULL
+);
+"""
+
+_job_decoder = msgspec.json.Decoder(Job)
+_event_decoder = msgspec.json.Decoder(Event)
+
+
+class StoreError(RuntimeError):
+    """The database cannot be opened or has an unknown schema."""
+
+
+@dataclass(frozen=True)
+class StoredState:
+    """What a restarted orchestrator starts from."""
+
+    jobs: list[Job]
+    """Every job, in submission order."""
+    queue_paused: bool
+    """The queue was paused."""
+    paused_vehicles: list[str]
+    """Vehicles the operator had paused, landed or stopped."""
+
+
+class JobStore:
+    """The orchestrator's SQLite database; use as a context manager."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            self._db = sqlite3.connect(self.path, isolation_level=None)
+            self._db.execute("PRAGMA journal_mode=WAL")
+            self._db.execute("PRAGMA synchronous=FULL")
+            self._db.execute("PRAGMA busy_timeout=5000")
+            version = self._db.execute("PRAGMA user_version").fetchone()[0]
+            if version not in (0, SCHEMA_VERSION):
+                raise StoreError(
+                    f"{self.path}: schema version {version}, expected {SCHEMA_VERSION}"
+                )
+            self._db.executescript(_SCHEMA)
+            self._db.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
+        except sqlite3.Error as exc:
+            raise StoreError(f"{self.path}: {exc}") from exc
+
+    def __enter__(self) -> JobStore:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self._db.close()
+
+    def save(
+        self,
+        jobs: Iterable[Job] = (),
+        events: Iterable[Event] = (),
+        *,
+        queue_paused: bool | None = None,
+        paused_vehicles: Iterable[str] | None = None,
+    ) -> None:
+        """Write changed jobs, new events and settings in one durable transaction."""
+        job_rows = [(j.job_id, j.seq, j.state, msgspec.json.encode(j)) for j in jobs]
+        event_rows = [(e.time_s, msgspec.json.encode(e)) for e in events]
+        settings: list[tuple[str, str]] = []
+        if queue_paused is not None:
+            settings.append(("queue_paused", json.dumps(queue_paused)))
+        if paused_vehicles is not None:
+            settings.append(("paused_vehicles", json.dumps(sorted(paused_vehicles))))
+        if not (job_rows or event_rows or settings):
+            return
+        try:
+            self._write(job_rows, event_rows, settings)
+        except sqlite3.Error as exc:
+            raise StoreError(f"{self.path}: {exc}") from exc
+
+    def _write(
+        self,
+        job_rows: Sequence[tuple[str, int, str, bytes]],
+        event_rows: Sequence[tuple[float, bytes]],
+        settings: Sequence[tuple[str, str]],
+    ) -> None:
+        with _Transaction(self._db):
+            self._db.executemany(
+                "INSERT INTO jobs (job_id, seq, state, data) VALUES (?, ?, ?, ?) "
+                "ON CONFLICT(job_id) DO UPDATE SET state=excluded.state, data=excluded.data",
+                job_rows,
+            )
+            self._db.executemany("INSERT INTO events (time_s, data) VALUES (?, ?)", event_rows)
+            self._db.executemany(
+                "INSERT INTO settings (key, value) VALUES (?, ?) "
+                "ON CONFLICT(key) DO UPDATE SET value=excluded.value",
+                settings,
+            )
+
+    def load(self) -> StoredState:
+        """Every job and the settings."""
+        jobs = [
+            _job_decoder.decode(row[0])
+            for row in self._db.execute("SELECT data FROM jobs ORDER BY seq")
+        ]
+        settings = dict(self._db.execute("SELECT key, value FROM settings").fetchall())
+        return StoredState(
+            jobs=jobs,
+            queue_paused=bool(json.loads(settings.get("queue_paused", "false"))),
+            paused_vehicles=list(json.loads(settings.get("paused_vehicles", "[]"))),
+        )
+
+    def job(self, job_id: str) -> Job | None:
+        """One job as stored."""
+        row = self._db.execute("SELECT data FROM jobs WHERE job_id = ?", (job_id,)).fetchone()
+        return _job_decoder.decode(row[0]) if row else None
+
+    def events(self, limit: int = 200) -> list[Event]:
+        """The latest events, oldest first."""
+        rows = self._db.execute(
+            "SELECT data FROM events ORDER BY id DESC LIMIT ?", (limit,)
+        ).fetchall()
+        return [_event_decoder.decode(r[0]) for r in reversed(rows)]
+
+
+class _Transaction:
+    def __init__(self, db: sqlite3.Connection) -> None:
+        self._db = db
+
+    def __enter__(self) -> None:
+        self._db.execute("BEGIN IMMEDIATE")
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self._db.execute("ROLLBACK" if exc_type else "COMMIT")

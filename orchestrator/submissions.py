@@ -1,0 +1,160 @@
+"""Submissions: validated by the planner's glyph parsing before acknowledgement; durations.
+
+:func:`validate_submission` turns a :class:`SubmitRequest` into an :class:`Accepted` (label,
+glyph, rough duration) or raises :class:`SubmissionError` whose ``info`` names the field, stroke
+and point at fault. :func:`planned_duration_s` runs the real planner on a board (slow: run it in a
+worker thread, after the acknowledgement).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from bus.messages import ErrorInfo, SubmitRequest
+from planner.errors import PlannerError
+from planner.glyphs import Glyph, fit_to_area, parse_strokes_json, text_glyph
+from showfile import Show
+
+MAX_CLIENT_ID_CHARS = 100
+PRIORITY_RANGE = (-10, 10)
+PEN_UP_OVERHEAD_S = 1.5
+"""Rough time per stroke for lifting, moving and lowering the brush, [s]."""
+
+
+class SubmissionError(ValueError):
+    """A submission that cannot be accepted; ``info`` says why and where."""
+
+    def __init__(self, info: ErrorInfo) -> None:
+        self.info = info
+        super().__init__(info.message)
+
+
+@dataclass(frozen=True)
+class Accepted:
+    """A submission that passed validation."""
+
+    label: str
+    """Short human label."""
+    glyph: Glyph
+    """What will be written, in its source units."""
+    estimate_s: float
+    """Rough writing duration in sim seconds (before the planner has run)."""
+
+
+def _planner_error(exc: PlannerError, code: str, field_prefix: str) -> SubmissionError:
+    field = (
+        f"{field_prefix}.{exc.field}" if exc.field and exc.field != field_prefix else field_prefix
+    )
+    return SubmissionError(
+        ErrorInfo(
+            code=code,
+            message=str(exc),
+            field=field,
+            stroke_index=exc.stroke_index,
+            point_index=exc.point_index,
+        )
+    )
+
+
+def _glyph(request: SubmitRequest) -> Glyph:
+    if (request.text is None) == (request.strokes is None):
+        raise SubmissionError(
+            ErrorInfo(code="invalid", message="give exactly one of text and strokes", field="text")
+        )
+    if request.text is not None:
+        if not request.text.strip():
+            raise SubmissionError(
+                ErrorInfo(code="invalid_text", message="empty text", field="text")
+            )
+        try:
+            return text_glyph(request.text)
+        except PlannerError as exc:
+            raise _planner_error(exc, "invalid_text", "text") from None
+    try:
+        return parse_strokes_json(dict(request.strokes or {}), source_name="submission")
+    except PlannerError as exc:
+        raise _planner_error(exc, "invalid_strokes", "strokes") from None
+
+
+def validate_submission(request: SubmitRequest, show: Show) -> Accepted:
+    """Check a submission fully (glyph parsing included); raises :class:`SubmissionError`."""
+    if len(request.client_id) > MAX_CLIENT_ID_CHARS:
+        raise SubmissionError(
+            ErrorInfo(
+                code="invalid",
+                message=f"client_id longer than {MAX_CLIENT_ID_CHARS} characters",
+                field="client_id",
+            )
+        )
+    low, high = PRIORITY_RANGE
+    if not low <= request.priority <= high:
+        raise SubmissionError(
+            ErrorInfo(
+                code="invalid", message=f"priority must be in {low}..{high}", field="priority"
+            )
+        )
+    glyph = _glyph(request)
+    if request.text is not None:
+        label = request.text.strip()
+    else:
+        named = glyph.label if glyph.label and glyph.label != "submission" else ""
+        label = named or f"drawing ({len(glyph.strokes)} strokes)"
+    return Accepted(label=label[:80], glyph=glyph, estimate_s=rough_duration_s(glyph, show))
+
+
+def _fitted(glyph: Glyph, show: Show) -> Glyph:
+    board = show.boards[0]
+    width, height = board.writing_area_m
+    return fit_to_area(glyph, width_m=width, height_m=height, margin_m=show.planning.margin_m)
+
+
+def rough_duration_s(glyph: Glyph, show: Show) -> float:
+    """Ink length at 60 % of the speed limit plus a pen-up allowance per stroke, [s]."""
+    try:
+        fitted = _fitted(glyph, show)
+    except PlannerError:
+        return 30.0
+    length_m = sum(
+        float(np.sum(np.linalg.norm(np.diff(stroke, axis=0), axis=1))) for stroke in fitted.strokes
+    )
+    speed = 0.6 * show.limits.v_max_mps
+    return length_m / speed + PEN_UP_OVERHEAD_S * len(fitted.strokes)
+
+
+def planned_duration_s(glyph: Glyph, show: Show) -> float | None:
+    """Duration of the real plan on the first vehicle's board, or None if planning fails."""
+    try:
+        from planner.board import BoardFrame
+        from planner.limits import VehicleLimits
+        from planner.pipeline import PlanOptions, plan_strokes
+    except ImportError:  # planner pipeline not available
+        return None
+    vehicle = show.vehicles[0]
+    board = show.board(vehicle.board)
+    limits = show.vehicle_limits(vehicle.id)
+    planning = show.planning
+    try:
+        options = PlanOptions(
+            limits=VehicleLimits(
+                a_max_mps2=limits.a_max_mps2,
+                v_max_mps=limits.v_max_mps,
+                mass_kg=limits.mass_kg,
+                thrust_max_n=limits.thrust_max_n,
+                body_rate_max_radps=limits.body_rate_max_radps,
+            ),
+            board=BoardFrame(center_m_enu=board.center_m_enu, yaw_rad=board.yaw_rad),
+            write_height_m=planning.write_height_m,
+            clearance_m=planning.clearance_m,
+            total_time_s=planning.total_time_s,
+            split_threshold_m=planning.split_threshold_m,
+            resegment=planning.resegment,
+            solver=planning.solver,
+            sample_rate_hz=planning.sample_rate_hz,
+        )
+        duration = plan_strokes(list(_fitted(glyph, show).strokes), options).duration_s
+    except PlannerError:
+        return None
+    return float(duration) if math.isfinite(duration) else None

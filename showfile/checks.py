@@ -1,0 +1,141 @@
+"""Cross-checks of a show that one field alone cannot express (pure).
+
+Each problem is returned with the path of the field at fault (``("vehicles", 2, "board")``) so the
+loader can name the file line.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+
+from showfile.models import KIND_ORIENTATION, Board, Show
+
+Loc = tuple[str | int, ...]
+Problem = tuple[Loc, str]
+
+_VERTICAL_DEPTH_M = 0.05
+"""Plan-view depth assumed for a vertical board (a wall panel)."""
+_MIN_HOME_SEPARATION_M = 0.3
+"""Closest two vehicles may stand at take-off, in [m] (40 cm Airshow airframes overlap below)."""
+
+
+def footprint(board: Board) -> list[tuple[float, float]]:
+    """Corners of the board's plan-view rectangle in world x/y [m], counter-clockwise."""
+    width, depth = board.size_m
+    if board.orientation == "vertical":
+        depth = _VERTICAL_DEPTH_M
+    c, s = math.cos(board.yaw_rad), math.sin(board.yaw_rad)
+    cx, cy = board.center_m_enu[0], board.center_m_enu[1]
+    corners = [(-width / 2, -depth / 2), (width / 2, -depth / 2), (width / 2, depth / 2)]
+    corners.append((-width / 2, depth / 2))
+    return [(cx + c * x - s * y, cy + s * x + c * y) for x, y in corners]
+
+
+def _axes(poly: list[tuple[float, float]]) -> Iterator[tuple[float, float]]:
+    for i, (x0, y0) in enumerate(poly):
+        x1, y1 = poly[(i + 1) % len(poly)]
+        yield (y0 - y1, x1 - x0)
+
+
+def _project(poly: list[tuple[float, float]], axis: tuple[float, float]) -> tuple[float, float]:
+    values = [x * axis[0] + y * axis[1] for x, y in poly]
+    return min(values), max(values)
+
+
+def polygons_overlap(a: list[tuple[float, float]], b: list[tuple[float, float]]) -> bool:
+    """Separating-axis test for two convex polygons; touching edges do not overlap."""
+    for axis in [*_axes(a), *_axes(b)]:
+        a_lo, a_hi = _project(a, axis)
+        b_lo, b_hi = _project(b, axis)
+        scale = math.hypot(*axis)
+        if a_hi <= b_lo + 1e-9 * scale or b_hi <= a_lo + 1e-9 * scale:
+            return False
+    return True
+
+
+def _boards_overlap(a: Board, b: Board) -> bool:
+    if not polygons_overlap(footprint(a), footprint(b)):
+        return False
+    if a.orientation == b.orientation == "vertical":  # walls may be stacked at other heights
+        half_a, half_b = a.size_m[1] / 2, b.size_m[1] / 2
+        return abs(a.center_m_enu[2] - b.center_m_enu[2]) < half_a + half_b - 1e-9
+    return True
+
+
+def _duplicates(ids: list[str], section: str) -> Iterator[Problem]:
+    seen: set[str] = set()
+    for index, item_id in enumerate(ids):
+        if item_id in seen:
+            yield (section, index, "id"), f"duplicate id {item_id!r}"
+        seen.add(item_id)
+
+
+def cross_check(show: Show) -> list[Problem]:
+    """Every problem of the show that single fields cannot catch; empty when the show is sound."""
+    problems: list[Problem] = []
+    problems += _duplicates([b.id for b in show.boards], "boards")
+    problems += _duplicates([v.id for v in show.vehicles], "vehicles")
+    for i, board in enumerate(show.boards):
+        for axis, (area, size) in enumerate(zip(board.writing_area_m, board.size_m, strict=True)):
+            if area > size + 1e-9:
+                problems.append(
+                    (
+                        ("boards", i, "writing_area_m", axis),
+                        f"writing area {area} m exceeds the board size {size} m",
+                    )
+                )
+        for j in range(i):
+            if _boards_overlap(board, show.boards[j]):
+                problems.append(
+                    (("boards", i, "center_m_enu"), f"overlaps board {show.boards[j].id!r}")
+                )
+    board_ids = {b.id: b for b in show.boards}
+    for i, vehicle in enumerate(show.vehicles):
+        target = board_ids.get(vehicle.board)
+        if target is None:
+            problems.append(
+                (
+                    ("vehicles", i, "board"),
+                    f"unknown board {vehicle.board!r}; boards: {sorted(board_ids)}",
+                )
+            )
+        elif KIND_ORIENTATION[vehicle.kind] != target.orientation:
+            problems.append(
+                (
+                    ("vehicles", i, "board"),
+                    f"a {vehicle.kind} writes on a {KIND_ORIENTATION[vehicle.kind]} board, "
+                    f"but board {target.id!r} is {target.orientation}",
+                )
+            )
+        for j in range(i):
+            neighbour = show.vehicles[j]
+            if math.dist(vehicle.home_m_enu, neighbour.home_m_enu) < _MIN_HOME_SEPARATION_M:
+                problems.append(
+                    (
+                        ("vehicles", i, "home_m_enu"),
+                        f"closer than {_MIN_HOME_SEPARATION_M} m to the home of {neighbour.id!r}",
+                    )
+                )
+    problems += _mavlink_problems(show)
+    if show.zenoh.multicast_scouting is False and not show.zenoh.connect:
+        problems.append((("zenoh", "connect"), "no connect endpoint and multicast scouting off"))
+    return problems
+
+
+def _mavlink_problems(show: Show) -> list[Problem]:
+    """MAVLink settings that only make sense together with the rest of the show."""
+    problems: list[Problem] = []
+    mavlink = [i for i, v in enumerate(show.vehicles) if v.backend == "mavlink"]
+    for i in mavlink:
+        rate_hz = show.vehicles[i].mavlink_setpoint_rate_hz
+        if rate_hz > show.controller.rate_hz:
+            problems.append(
+                (
+                    ("vehicles", i, "mavlink_setpoint_rate_hz"),
+                    f"{rate_hz} Hz exceeds the control rate {show.controller.rate_hz} Hz",
+                )
+            )
+    if show.mavlink_sim.enabled and not mavlink:
+        problems.append((("mavlink_sim", "enabled"), "no vehicle has backend: mavlink"))
+    return problems

@@ -1,0 +1,297 @@
+"""Typed, frozen models of a show file (pydantic v2). Loaded once by :func:`showfile.load_show`.
+
+World frame ENU, SI units; angles in the file are in degrees (``yaw_deg``) for people, exposed in
+radians (``yaw_rad``) for code.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+Vec3 = tuple[float, float, float]
+Size2 = tuple[float, float]
+Identifier = str
+
+_ID_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]*$"
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid", use_attribute_docstrings=True)
+
+
+class ZenohSettings(_Model):
+    """How processes of the show find each other (explicit endpoints; see bus/session.py)."""
+
+    router_listen: tuple[str, ...] = ("tcp/127.0.0.1:7447",)
+    """Endpoints the show's router listens on."""
+    connect: tuple[str, ...] = ("tcp/127.0.0.1:7447",)
+    """Endpoints clients and peers connect to (the router, as seen from them)."""
+    multicast_scouting: bool = False
+    """Discover other processes by UDP multicast; off so that only explicit endpoints are used."""
+    router_connect: tuple[str, ...] = ()
+    """Other routers the show's router links to (ground station <-> companion computers)."""
+    peer_listen: tuple[str, ...] = ()
+    """Endpoints a peer-mode process listens on (none: peers go through the router)."""
+    tls: dict[str, Any] | None = None
+    """Zenoh ``transport/link/tls`` section, passed through verbatim (certificate paths...)."""
+    access_control: dict[str, Any] | None = None
+    """Zenoh ``access_control`` section, passed through verbatim."""
+    extra: dict[str, Any] = Field(default_factory=dict)
+    """Further Zenoh settings as ``{"path/in/config": value}``."""
+    open_timeout_s: float = Field(default=5.0, ge=0.0)
+    """How long clients and peers retry reaching the router at start, in [s]."""
+
+
+class StorageSettings(_Model):
+    """Where the orchestrator keeps its durable state (relative paths: from the working dir)."""
+
+    database: Path | None = None
+    """SQLite file of the job queue and event log; default ``out/<show_id>/show.sqlite3``."""
+    recordings_dir: Path | None = None
+    """Directory of the MCAP recordings, one file per run; default ``out/<show_id>/recordings``."""
+    record: bool = True
+    """Record every message of the show to MCAP."""
+
+
+class PolicySettings(_Model):
+    """Moderation and queue policy."""
+
+    moderation: bool = False
+    """Submissions wait for an operator's approval before they are queued."""
+    lost_after_s: float = Field(default=1.5, gt=0.0)
+    """A vehicle whose liveliness token is gone this long is lost; its job is requeued, in [s]."""
+    tracking_error_alert_m: float = Field(default=0.05, gt=0.0)
+    """Tracking error that raises an alert event, in [m]."""
+    max_queue: int = Field(default=200, ge=1)
+    """Submissions beyond this many waiting jobs are refused."""
+    max_attempts: int = Field(default=3, ge=1)
+    """A job whose vehicle was lost this many times fails instead of being requeued again."""
+    fleet_period_s: float = Field(default=1.0, gt=0.0)
+    """Period of the fleet snapshot publication, in [s]."""
+
+
+class KioskSettings(_Model):
+    """The public web kiosk."""
+
+    host: str = "127.0.0.1"
+    """Address the kiosk's HTTP server binds to."""
+    port: int = Field(default=8765, ge=1, le=65535)
+    """TCP port of the kiosk."""
+    rate_limit_per_minute: int = Field(default=6, ge=1)
+    """Submissions accepted per client per minute."""
+    max_payload_bytes: int = Field(default=200_000, ge=1)
+    """Largest request body, in bytes."""
+    max_strokes: int = Field(default=60, ge=1)
+    """Most strokes in one drawing."""
+    max_points: int = Field(default=5000, ge=2)
+    """Most points in one drawing, all strokes together."""
+    max_text_chars: int = Field(default=1, ge=1, le=64)
+    """Longest typed text, in characters (1: one letter or one Chinese character)."""
+    blocklist: tuple[str, ...] = ()
+    """Texts refused by the kiosk (compared after Unicode normalisation, case-folded)."""
+
+
+class Board(_Model):
+    """A writing board: its writing area is centred on ``center_m_enu``."""
+
+    id: Identifier = Field(pattern=_ID_PATTERN)
+    """Board identifier, referenced by vehicles."""
+    center_m_enu: Vec3
+    """Centre of the writing area on the board surface, in [m], world ENU."""
+    yaw_deg: float = 0.0
+    """Rotation of the board's x axis about world z, in [deg] (counter-clockwise from east)."""
+    orientation: Literal["horizontal", "vertical", "floor"] = "horizontal"
+    """``horizontal`` (table, brush from above), ``vertical`` (wall), ``floor`` (ground)."""
+    size_m: Size2
+    """Board extent along its own x and y (vertical: width and height), in [m]."""
+    writing_area_m: Size2
+    """Extent of the area glyphs are laid out in, centred on the board, in [m]."""
+
+    @property
+    def yaw_rad(self) -> float:
+        """``yaw_deg`` in [rad]."""
+        return math.radians(self.yaw_deg)
+
+    @model_validator(mode="after")
+    def _positive_sizes(self) -> Board:
+        for name in ("size_m", "writing_area_m"):
+            if min(getattr(self, name)) <= 0.0:
+                raise ValueError(f"{name} must be positive")
+        return self
+
+
+VehicleKind = Literal["quadrotor-brush", "hexarotor-sponge", "omni-wheel"]
+"""Vehicle kinds (ARCHITECTURE.md): brush quadrotor over a horizontal board (Airshow), fully
+actuated hexarotor with a sponge pen on a wall, omnidirectional wheeled vehicle on the floor."""
+
+KIND_ORIENTATION: dict[str, str] = {
+    "quadrotor-brush": "horizontal",
+    "hexarotor-sponge": "vertical",
+    "omni-wheel": "floor",
+}
+"""The board orientation each vehicle kind writes on."""
+
+
+class Limits(_Model):
+    """Dynamic limits used by the planner (planner.pipeline.VehicleLimits)."""
+
+    a_max_mps2: Vec3 = (0.8, 0.8, 0.8)
+    """Largest acceleration per world axis x, y, z, in [m/s^2]."""
+    v_max_mps: float = Field(default=0.6, gt=0.0)
+    """Largest speed, in [m/s]."""
+    mass_kg: float = Field(default=1.0, gt=0.0)
+    """Vehicle mass, in [kg] (the Airshow quadrotors were about 1 kg)."""
+    thrust_max_n: float = Field(default=19.6, gt=0.0)
+    """Largest total thrust, in [N]."""
+    body_rate_max_radps: float = Field(default=3.0, gt=0.0)
+    """Largest body rate, in [rad/s]."""
+
+    @model_validator(mode="after")
+    def _positive_acceleration(self) -> Limits:
+        if min(self.a_max_mps2) <= 0.0:
+            raise ValueError("a_max_mps2 must be positive on every axis")
+        return self
+
+
+class PlanningSettings(_Model):
+    """How a job is planned on its board (planner.pipeline.PlanOptions)."""
+
+    write_height_m: float = Field(default=0.25, gt=0.0)
+    """Height of the vehicle reference point above the board surface while writing, in [m]."""
+    clearance_m: float = Field(default=0.05, ge=0.0)
+    """Extra height with the pen up between strokes, in [m]."""
+    margin_m: float = Field(default=0.05, ge=0.0)
+    """Margin kept free inside the writing area when a glyph is fitted to it, in [m]."""
+    split_threshold_m: float = Field(default=0.01, gt=0.0)
+    """Split-and-merge tolerance for turning points, in [m]."""
+    resegment: bool = True
+    """Apply the paper's time re-segmentation."""
+    solver: Literal["piqp", "clarabel"] = "piqp"
+    """QP solver of the acceleration-limited fit."""
+    sample_rate_hz: float = Field(default=100.0, ge=100.0)
+    """Rate the trajectory is sampled at for the control loop, in [Hz]."""
+    total_time_s: float | None = Field(default=None, gt=0.0)
+    """Fixed duration of a character, or None to let the planner choose, in [s]."""
+
+
+class ControllerSettings(_Model):
+    """Outer-loop controller of the vehicles."""
+
+    preset: Literal["default", "paper"] = "default"
+    """``paper``: the RPT gains of the Airshow paper; ``default``: the project's tuned gains."""
+    rate_hz: float = Field(default=100.0, gt=0.0)
+    """Control loop rate, in [Hz]."""
+    overrides: dict[str, float] = Field(default_factory=dict)
+    """Individual gains replacing the preset's (names as in vehicle_agent/control)."""
+
+
+class Vehicle(_Model):
+    """One vehicle and the board it writes on."""
+
+    id: Identifier = Field(pattern=_ID_PATTERN)
+    """Vehicle identifier (also in its Zenoh keys)."""
+    kind: VehicleKind = "quadrotor-brush"
+    """What kind of vehicle it is."""
+    backend: Literal["sim", "mavlink"] = "sim"
+    """``sim``: the in-process simulator; ``mavlink``: an autopilot at ``mavlink_url``."""
+    board: Identifier
+    """Id of the board it writes on."""
+    home_m_enu: Vec3
+    """Take-off and landing point, in [m], world ENU."""
+    mavlink_url: str | None = None
+    """pymavlink connection string, e.g. ``udpin:127.0.0.1:14550`` (mavlink backend only)."""
+    mavlink_system_id: int | None = Field(default=None, ge=1, le=255)
+    """MAVLink system id of the autopilot, when several share a link."""
+    mavlink_origin_m_enu: Vec3 | None = None
+    """Where the autopilot's LOCAL_NED origin (its estimator's home) is in the show frame, in
+    [m], world ENU; None: ``home_m_enu`` (mavlink backend only)."""
+    mavlink_setpoints: Literal["position", "attitude"] = "position"
+    """``position``: the autopilot's position loop tracks our p, v, a setpoints; ``attitude``: the
+    show's controller runs in the agent and streams attitude and thrust (mavlink backend only)."""
+    mavlink_setpoint_rate_hz: float = Field(default=50.0, gt=0.0)
+    """Rate of the setpoint stream, in [Hz], at most ``controller.rate_hz`` (mavlink only)."""
+    mavlink_mocap: Literal["none", "vision_position_estimate", "att_pos_mocap"] = "none"
+    """Forward motion-capture poses to the autopilot with this message (indoor flight); needs a
+    mocap source handed to the backend (mavlink backend only)."""
+    limits: Limits | None = None
+    """Limits of this vehicle, replacing the show's ``limits``."""
+
+    @model_validator(mode="after")
+    def _mavlink_needs_url(self) -> Vehicle:
+        if self.backend == "mavlink" and not self.mavlink_url:
+            raise ValueError("backend mavlink needs mavlink_url")
+        return self
+
+
+class MavlinkSimSettings(_Model):
+    """Simulated MAVLink vehicles for rehearsals (``skyquill sim-mavlink``)."""
+
+    enabled: bool = False
+    """``skyquill up`` also runs ``skyquill sim-mavlink SHOW.yaml`` (supervised, started before
+    the agents), simulating every ``backend: mavlink`` vehicle on its ``mavlink_url``."""
+
+
+class Show(_Model):
+    """A whole show: fleet, boards, endpoints, policies."""
+
+    show_id: Identifier = Field(pattern=_ID_PATTERN)
+    """Show identifier; the Zenoh namespace ``skyquill/<show_id>/``."""
+    title: str = ""
+    """Human title for displays."""
+    time_scale: float = Field(default=1.0, gt=0.0, le=1000.0)
+    """Simulation speed-up: sim backends run this many times faster than real time (tests)."""
+    zenoh: ZenohSettings = Field(default_factory=ZenohSettings)
+    """Transport settings."""
+    storage: StorageSettings = Field(default_factory=StorageSettings)
+    """Durable state and recordings."""
+    policy: PolicySettings = Field(default_factory=PolicySettings)
+    """Moderation and queue policy."""
+    kiosk: KioskSettings = Field(default_factory=KioskSettings)
+    """Public kiosk settings."""
+    boards: tuple[Board, ...] = Field(min_length=1)
+    """Writing boards."""
+    vehicles: tuple[Vehicle, ...] = Field(min_length=1)
+    """Vehicles, each assigned to one board."""
+    limits: Limits = Field(default_factory=Limits)
+    """Default dynamic limits of every vehicle."""
+    planning: PlanningSettings = Field(default_factory=PlanningSettings)
+    """Planner settings."""
+    controller: ControllerSettings = Field(default_factory=ControllerSettings)
+    """Controller settings."""
+    mavlink_sim: MavlinkSimSettings = Field(default_factory=MavlinkSimSettings)
+    """Rehearsal: simulate the MAVLink vehicles alongside the show."""
+
+    source_path: Path | None = Field(default=None, exclude=True)
+    """The file the show was loaded from (set by load_show, not written in the file)."""
+
+    @property
+    def database_path(self) -> Path:
+        """SQLite file of the orchestrator."""
+        return self.storage.database or Path("out") / self.show_id / "show.sqlite3"
+
+    @property
+    def recordings_dir(self) -> Path:
+        """Directory of MCAP recordings."""
+        return self.storage.recordings_dir or Path("out") / self.show_id / "recordings"
+
+    def board(self, board_id: str) -> Board:
+        """The board with ``board_id``; KeyError listing the known ids otherwise."""
+        for board in self.boards:
+            if board.id == board_id:
+                return board
+        raise KeyError(f"no board {board_id!r}; boards: {[b.id for b in self.boards]}")
+
+    def vehicle(self, vehicle_id: str) -> Vehicle:
+        """The vehicle with ``vehicle_id``; KeyError listing the known ids otherwise."""
+        for vehicle in self.vehicles:
+            if vehicle.id == vehicle_id:
+                return vehicle
+        raise KeyError(f"no vehicle {vehicle_id!r}; vehicles: {[v.id for v in self.vehicles]}")
+
+    def vehicle_limits(self, vehicle_id: str) -> Limits:
+        """Limits of one vehicle: its own, or the show's."""
+        return self.vehicle(vehicle_id).limits or self.limits

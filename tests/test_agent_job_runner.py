@@ -1,0 +1,319 @@
+"""The pure decision logic of one vehicle agent, driven tick by tick against an ideal vehicle."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import pytest
+
+from bus.messages import AgentReport, ErrorInfo, JobAssignment, Telemetry, VehicleCommand
+from planner.samples import TrajectorySamples
+from vehicle_agent.backends.base import Vec3
+from vehicle_agent.backends.kinematic import KinematicVehicle
+from vehicle_agent.job_runner import JobRunner, PreparedJob, RunnerConfig
+from vehicle_agent.motion import PEAK_ACCEL_FACTOR, PEAK_SPEED_FACTOR, plan_move
+from vehicle_agent.trace import FlownTrace
+
+DT = 0.01
+HOME: Vec3 = (0.0, -1.2, 0.0)
+CRUISE_Z = 0.5
+WRITE_Z = 0.35
+
+
+def config(**overrides: float) -> RunnerConfig:
+    values: dict[str, float] = {"loss_land_after_s": 3.0, "v_max_mps": 0.6, "a_max_mps2": 0.8}
+    values.update(overrides)
+    return RunnerConfig(
+        vehicle_id="uav1",
+        kind="quadrotor-brush",
+        board_id="b1",
+        home_m_enu=HOME,
+        cruise_z_m=CRUISE_Z,
+        **values,
+    )
+
+
+def line_samples(duration_s: float = 2.0) -> TrajectorySamples:
+    """Down to writing height, a pen-down line along x, back up: like a one-stroke plan."""
+    n = round(duration_s / DT) + 1
+    t = np.linspace(0.0, duration_s, n)
+    u = t / duration_s
+
+    def smooth(a: float, b: float) -> np.ndarray:
+        w = np.clip((u - a) / (b - a), 0.0, 1.0)
+        return w * w * (3.0 - 2.0 * w)
+
+    x = smooth(0.25, 0.75) * 0.4 - 0.2
+    z = CRUISE_Z - (CRUISE_Z - WRITE_Z) * (smooth(0.0, 0.2) - smooth(0.8, 1.0))
+    p = np.column_stack([x, np.zeros(n), z])
+    v = np.gradient(p, t, axis=0)
+    return TrajectorySamples(t, p, v, np.zeros((n, 3)), z <= WRITE_Z + 1e-9)
+
+
+@dataclass
+class Run:
+    """A runner, an ideal vehicle and everything the runner said, advanced tick by tick."""
+
+    runner: JobRunner = field(default_factory=lambda: JobRunner(config()))
+    vehicle: KinematicVehicle = field(default_factory=lambda: KinematicVehicle(HOME, dt_s=DT))
+    ticks: int = 0
+    reports: list[AgentReport] = field(default_factory=list)
+    telemetry: list[Telemetry] = field(default_factory=list)
+    finished: list[FlownTrace] = field(default_factory=list)
+    states: list[str] = field(default_factory=list)
+    positions: list[Vec3] = field(default_factory=list)
+    samples: TrajectorySamples = field(default_factory=line_samples)
+    auto_plan: bool = True
+    commands: list[str] = field(default_factory=list)
+    refuse_takeoffs: int = 0
+    """The vehicle refuses this many take-offs (pre-arm checks) before it flies."""
+
+    def tick(self) -> None:
+        actions = self.runner.step(self.vehicle.snapshot(), self.now_s)
+        if actions.backend_command is not None:
+            name, hover = actions.backend_command
+            self.commands.append(name)
+            if name == "takeoff" and self.refuse_takeoffs > 0:
+                self.refuse_takeoffs -= 1
+                self.runner.takeoff_refused("PreArm: Compass not calibrated", self.now_s)
+            else:
+                getattr(self.vehicle, name)(*(() if hover is None else (hover,)))
+        if actions.plan_request is not None and self.auto_plan:
+            self.runner.plan_ready(PreparedJob(actions.plan_request.job_id, self.samples))
+        self.vehicle.tick(actions.setpoint)
+        self.reports.extend(actions.reports)
+        if actions.telemetry is not None:
+            self.telemetry.append(actions.telemetry)
+        if actions.finished is not None:
+            self.finished.append(actions.finished)
+        if not self.states or self.states[-1] != self.runner.state:
+            self.states.append(self.runner.state)
+        self.positions.append(self.vehicle.position_m_enu)
+        self.ticks += 1
+
+    @property
+    def now_s(self) -> float:
+        return self.ticks * DT
+
+    def until(self, done: Callable[[], bool], max_s: float = 60.0) -> None:
+        end = self.now_s + max_s
+        while not done():
+            assert self.now_s < end, f"timed out in state {self.runner.state}/{self.runner.phase}"
+            self.tick()
+
+    def command(self, name: str, **kwargs: object) -> bool:
+        reply = self.runner.handle_command(VehicleCommand(command=name, **kwargs), self.now_s)  # type: ignore[arg-type]
+        return reply.ok
+
+    def assign(self, job_id: str = "j1") -> bool:
+        self.runner.set_orchestrator_alive(True, self.now_s)
+        return self.command("assign", job=JobAssignment(job_id=job_id, text="L"))
+
+    def events(self) -> list[str]:
+        return [r.event for r in self.reports if r.event != "progress"]
+
+
+def test_a_job_goes_through_every_state_and_flies_the_plan_exactly() -> None:
+    run = Run()
+    assert run.assign()
+    run.until(lambda: run.runner.state == "idle" and run.runner.phase == "ground")
+    assert run.states == ["taking_off", "writing", "returning", "landing", "idle"]
+    assert run.events() == ["started"]
+    assert run.reports[0].planned_duration_s == pytest.approx(2.0)
+    progress = [r.progress for r in run.reports if r.event == "progress"]
+    assert progress == sorted(progress) and 0.4 < progress[0] < 0.6  # 1 s of 2 s
+    (trace,) = run.finished
+    assert trace.t_s.shape[0] == pytest.approx(201, abs=1)
+    np.testing.assert_allclose(trace.position_m_enu[1:], trace.reference_m_enu[:-1], atol=1e-12)
+    assert trace.pen_down.sum() == (run.samples.pen_down).sum()
+    assert run.vehicle.position_m_enu == pytest.approx(HOME, abs=1e-6)
+    assert run.commands == ["takeoff", "land"]
+
+
+def test_transit_moves_respect_the_speed_limit() -> None:
+    run = Run()
+    run.assign()
+    run.until(lambda: run.runner.state == "idle" and run.runner.phase == "ground")
+    p = np.asarray(run.positions)
+    speed = np.linalg.norm(np.diff(p, axis=0), axis=1) / DT
+    assert speed.max() <= 0.6 * 1.001  # transit moves and the plan itself
+    assert np.all(p[:, 2] >= HOME[2] - 1e-12)
+
+
+def test_orchestrator_loss_lifts_the_brush_hovers_then_lands() -> None:
+    run = Run()
+    run.assign()
+    run.until(lambda: run.runner.state == "writing" and run.vehicle.position_m_enu[2] < 0.4)
+    lost_at, xy = run.now_s, run.vehicle.position_m_enu[:2]
+    run.runner.set_orchestrator_alive(False, run.now_s)
+    run.until(lambda: run.runner.phase == "hover")
+    assert run.vehicle.position_m_enu == pytest.approx((*xy, CRUISE_Z), abs=0.02)
+    status = run.runner.status()
+    assert status.job_id is None and status.state == "returning"  # abandoned, for a requeue
+    run.until(lambda: run.runner.phase == "return")
+    assert run.now_s - lost_at == pytest.approx(3.0, abs=1.0)  # lift + 3 s hover
+    run.until(lambda: run.runner.phase == "ground")
+    assert run.runner.state == "landed" and not run.finished
+    assert run.vehicle.position_m_enu == pytest.approx(HOME, abs=1e-6)
+    assert run.events() == ["started"]
+
+
+def test_orchestrator_back_during_hover_returns_and_takes_jobs_again() -> None:
+    run = Run(runner=JobRunner(config(loss_land_after_s=60.0)))
+    run.assign()
+    run.until(lambda: run.runner.state == "writing")
+    run.runner.set_orchestrator_alive(False, run.now_s)
+    run.until(lambda: run.runner.phase == "hover")
+    for _ in range(50):
+        run.tick()
+    assert run.runner.phase == "hover"
+    run.runner.set_orchestrator_alive(True, run.now_s)
+    run.until(lambda: run.runner.phase == "ground")
+    assert run.runner.state == "idle"
+    assert run.assign("j2")
+    run.until(lambda: len(run.finished) == 1 and run.runner.phase == "ground")
+    assert run.finished[0].job_id == "j2"
+
+
+def test_loss_while_idle_changes_nothing() -> None:
+    run = Run()
+    run.runner.set_orchestrator_alive(True, 0.0)
+    run.runner.set_orchestrator_alive(False, 0.0)
+    for _ in range(500):
+        run.tick()
+    assert run.vehicle.mode == "idle" and run.states == ["idle"]
+
+
+def test_cancel_lifts_returns_and_lands_without_a_report() -> None:
+    run = Run()
+    run.assign()
+    run.until(lambda: run.runner.state == "writing" and run.vehicle.position_m_enu[2] < 0.4)
+    assert run.command("cancel", job_id="j1")
+    run.until(lambda: run.runner.phase == "ground")
+    assert run.runner.state == "idle" and not run.finished
+    assert run.events() == ["started"]
+    lift = [p for p in run.positions[-400:] if p[2] > 0.0]
+    assert max(p[2] for p in lift) == pytest.approx(CRUISE_Z)
+
+
+def test_cancel_of_another_job_is_ignored() -> None:
+    run = Run()
+    run.assign()
+    run.until(lambda: run.runner.state == "writing")
+    assert run.command("cancel", job_id="other")
+    run.until(lambda: run.runner.phase == "ground")
+    assert len(run.finished) == 1
+
+
+def test_estop_cuts_motors_abandons_the_job_and_refuses_new_ones() -> None:
+    run = Run()
+    run.assign()
+    run.until(lambda: run.runner.state == "writing")
+    assert run.command("estop")
+    run.tick()
+    assert run.vehicle.mode == "estop" and run.runner.state == "fault"
+    assert run.events() == ["started"] and run.runner.status().job_id is None
+    assert not run.assign("j2")
+
+
+def test_a_refused_takeoff_hands_the_job_back_and_backs_off_twice_as_long_each_time() -> None:
+    run = Run(refuse_takeoffs=2)
+    assert run.assign("j1")
+    run.tick()
+    run.tick()
+    (report,) = run.reports
+    assert (report.event, report.job_id, report.retry_after_s) == ("failed", "j1", 5.0)
+    assert report.error is not None and report.error.code == "takeoff_refused"
+    status = run.runner.status()
+    assert (status.state, status.job_id) == ("idle", None) and "Compass" in status.message
+    assert run.vehicle.mode == "idle"
+    refused_at = run.now_s
+    run.until(lambda: run.now_s >= refused_at + 4.9)
+    reply = run.runner.handle_command(
+        VehicleCommand(command="assign", job=JobAssignment(job_id="j2", text="L")), run.now_s
+    )
+    assert not reply.ok and reply.error is not None and reply.error.code == "takeoff_refused"
+    run.until(lambda: run.now_s >= refused_at + 5.1)
+    assert run.assign("j2")
+    run.until(lambda: len(run.reports) == 2)
+    assert run.reports[1].retry_after_s == 10.0  # refused again: twice as long
+    refused_at = run.now_s
+    run.until(lambda: run.now_s >= refused_at + 10.1)
+    assert run.assign("j3")  # this time it flies
+    run.until(lambda: len(run.finished) == 1 and run.runner.phase == "ground")
+    assert run.finished[0].job_id == "j3"
+    run.refuse_takeoffs = 1
+    assert run.assign("j4")
+    run.until(lambda: run.events().count("failed") == 3)
+    assert run.reports[-1].retry_after_s == 5.0  # it flew in between: back to the first backoff
+
+
+def test_assign_while_busy_is_refused_but_a_repeat_is_accepted() -> None:
+    run = Run()
+    run.assign()
+    run.until(lambda: run.runner.state == "writing")
+    reply = run.runner.handle_command(
+        VehicleCommand(command="assign", job=JobAssignment(job_id="j2", text="A")), run.now_s
+    )
+    assert not reply.ok and reply.error is not None and reply.error.code == "busy"
+    assert run.assign("j1")
+
+
+def test_plan_failure_reports_and_comes_back() -> None:
+    run = Run(auto_plan=False)
+    run.assign()
+    run.until(lambda: run.runner.phase == "wait_plan")
+    run.runner.plan_failed("j1", ErrorInfo(code="invalid_strokes", message="bad", stroke_index=2))
+    run.until(lambda: run.runner.phase == "ground")
+    assert run.runner.state == "idle"
+    (report,) = run.reports
+    assert report.event == "failed" and report.error is not None
+    assert report.error.stroke_index == 2
+
+
+def test_land_command_while_writing_ends_landed() -> None:
+    run = Run()
+    run.assign()
+    run.until(lambda: run.runner.state == "writing")
+    assert run.command("land")
+    run.until(lambda: run.runner.phase == "ground")
+    assert run.runner.state == "landed" and run.events() == ["started"]
+    assert run.assign("j2")
+
+
+def test_telemetry_comes_at_its_period() -> None:
+    run = Run()
+    run.assign()
+    run.until(lambda: run.now_s > 2.0 - DT / 2)  # ticks at 0, 0.01, ..., 1.99
+    assert len(run.telemetry) == 40
+    t = [m.t_s for m in run.telemetry]
+    assert np.diff(t) == pytest.approx(np.full(39, 0.05))
+    assert {m.job_id for m in run.telemetry} == {"j1"}
+
+
+def test_status_follows_the_state() -> None:
+    run = Run()
+    assert run.runner.status().state == "idle"
+    run.assign()
+    status = run.runner.status()
+    assert (status.state, status.job_id, status.board_id) == ("taking_off", "j1", "b1")
+
+
+@pytest.mark.parametrize("distance", [0.05, 0.5, 3.0])
+def test_quintic_move_peaks_match_the_closed_form(distance: float) -> None:
+    move = plan_move((0.0, 0.0, 1.0), (distance, 0.0, 1.0), 2.0, v_max_mps=0.6, a_max_mps2=0.8)
+    t = np.linspace(move.t0_s, move.end_s, 20001)
+    sp = [move.setpoint(float(x)) for x in t]
+    v = np.array([s.velocity_mps_enu[0] for s in sp])
+    a = np.array([s.acceleration_mps2_enu[0] for s in sp])
+    x = np.array([s.position_m_enu[0] for s in sp])
+    big_t = move.duration_s
+    assert v.max() == pytest.approx(PEAK_SPEED_FACTOR * distance / big_t, rel=1e-6)
+    assert a.max() == pytest.approx(PEAK_ACCEL_FACTOR * distance / big_t**2, rel=1e-6)
+    assert v.max() <= 0.6 + 1e-9 and a.max() <= 0.8 + 1e-9
+    assert math.isclose(v.max(), 0.6, rel_tol=1e-6) or math.isclose(a.max(), 0.8, rel_tol=1e-6)
+    np.testing.assert_allclose(np.gradient(x, t), v, atol=1e-4)
+    assert (x[0], x[-1]) == (0.0, pytest.approx(distance))

@@ -1,0 +1,248 @@
+"""The agent's asyncio wiring over real Zenoh (in one process), against a fake orchestrator."""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+from collections.abc import AsyncIterator, Callable
+from contextlib import asynccontextmanager
+
+from test_agent_job_runner import HOME, config, line_samples
+
+from bus.keys import ShowKeys
+from bus.messages import (
+    AgentReport,
+    CommandReply,
+    Event,
+    JobAssignment,
+    JobMetrics,
+    Telemetry,
+    VehicleCommand,
+    VehicleStatus,
+)
+from bus.pubsub import declare_token, subscribe
+from bus.rpc import aquery_one, serve
+from bus.session import BusSettings, Session, open_session
+from vehicle_agent.backends.base import BackendError, CommandRefusedError, Vec3
+from vehicle_agent.backends.kinematic import KinematicBackend
+from vehicle_agent.job_runner import JobRunner, PreparedJob
+from vehicle_agent.service import AgentService, EventOutbox, ServiceSettings
+from vehicle_agent.trace import FlownTrace
+
+SHOW = "agenttest"
+KEYS = ShowKeys(SHOW)
+METRICS = JobMetrics(
+    rmse_pen_down_m=0.001, rmse_m=0.002, max_error_m=0.003, iou=0.9, duration_s=2.0
+)
+
+
+class FakeOrchestrator:
+    """Presence token, a ``report`` queryable that records, and a way to command the vehicle."""
+
+    def __init__(self, session: Session) -> None:
+        self.session = session
+        self.reports: list[AgentReport] = []
+        self.telemetry: list[Telemetry] = []
+        self.statuses: list[VehicleStatus] = []
+        self._lock = threading.Lock()
+        self.token = declare_token(session, KEYS.orchestrator_alive)
+        self.queryable = serve(session, KEYS.report, AgentReport, self._on_report)
+        self.subscribers = [
+            subscribe(
+                session, KEYS.telemetry_all, Telemetry, lambda _k, m: self.telemetry.append(m)
+            ),
+            subscribe(
+                session,
+                KEYS.vehicle_status_all,
+                VehicleStatus,
+                lambda _k, m: self.statuses.append(m),
+            ),
+        ]
+
+    def _on_report(self, report: AgentReport) -> CommandReply:
+        with self._lock:
+            self.reports.append(report)
+        return CommandReply(ok=True)
+
+    def events(self) -> list[str]:
+        with self._lock:
+            return [r.event for r in self.reports if r.event != "progress"]
+
+    async def command(self, command: VehicleCommand) -> CommandReply:
+        key = KEYS.vehicle_command("uav1")
+        return await aquery_one(self.session, key, command, CommandReply, timeout_s=5.0)
+
+
+async def wait_for(condition: Callable[[], bool], timeout_s: float = 20.0) -> None:
+    async with asyncio.timeout(timeout_s):
+        while not condition():
+            await asyncio.sleep(0.02)
+
+
+def prepare(assignment: JobAssignment) -> PreparedJob:
+    if assignment.text == "bad":
+        raise ValueError("cannot write that")
+    return PreparedJob(assignment.job_id, line_samples(2.0))
+
+
+def measure(prepared: PreparedJob, trace: FlownTrace) -> JobMetrics:
+    return METRICS
+
+
+class RefusingBackend(KinematicBackend):
+    """Refuses its first take-offs as an autopilot failing its pre-arm checks would (or fails)."""
+
+    def __init__(self, error: BackendError, refusals: int = 1) -> None:
+        super().__init__(HOME)
+        self.error, self.refusals = error, refusals
+
+    async def takeoff(self, hover_m_enu: Vec3) -> None:
+        if self.refusals > 0:
+            self.refusals -= 1
+            raise self.error
+        await super().takeoff(hover_m_enu)
+
+
+@asynccontextmanager
+async def show(
+    free_tcp_port: Callable[[], int],
+    backend: KinematicBackend | None = None,
+) -> AsyncIterator[tuple[AgentService, FakeOrchestrator]]:
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    bus = BusSettings(router_listen=[endpoint], connect=[endpoint])
+    with open_session(bus, role="router"), open_session(bus, role="client") as orch_session:
+        orchestrator = FakeOrchestrator(orch_session)
+        settings = ServiceSettings(show_id=SHOW, zenoh=bus, time_scale=5.0, report_retry_s=0.1)
+        service = AgentService(
+            settings, JobRunner(config()), backend or KinematicBackend(HOME), prepare, measure
+        )
+        stop = asyncio.Event()
+        task = asyncio.create_task(service.run(stop))
+        try:
+            await wait_for(lambda: service.runner.orchestrator_alive)
+            yield service, orchestrator
+        finally:
+            stop.set()
+            await asyncio.wait_for(task, 10.0)
+
+
+def assign(job_id: str, text: str = "L") -> VehicleCommand:
+    return VehicleCommand(command="assign", job=JobAssignment(job_id=job_id, text=text))
+
+
+def test_a_job_is_flown_and_reported_with_telemetry_and_status(
+    free_tcp_port: Callable[[], int],
+) -> None:
+    async def scenario() -> None:
+        async with show(free_tcp_port) as (service, orch):
+            reply = await orch.command(assign("j1"))
+            assert reply.ok
+            busy = await orch.command(assign("j2"))
+            assert not busy.ok and busy.error is not None and busy.error.code == "busy"
+            await wait_for(lambda: "done" in orch.events() and service.runner.state == "idle")
+            assert orch.events() == ["started", "done"]
+            done = orch.reports[-1]
+            assert done.metrics == METRICS and done.job_id == "j1"
+            states = [s.state for s in orch.statuses]
+            for state in ("taking_off", "writing", "returning", "landing"):
+                assert state in states
+            writing = [t for t in orch.telemetry if t.state == "writing"]
+            assert writing and all(t.job_id == "j1" for t in writing)
+            assert 0.0 < max(t.progress for t in writing) <= 1.0
+
+    asyncio.run(scenario())
+
+
+def test_orchestrator_loss_abandons_the_job_and_hovers_until_it_returns(
+    free_tcp_port: Callable[[], int],
+) -> None:
+    async def scenario() -> None:
+        async with show(free_tcp_port) as (service, orch):
+            assert (await orch.command(assign("j1"))).ok
+            await wait_for(lambda: service.runner.state == "writing")
+            orch.token.undeclare()
+            await wait_for(lambda: service.runner.phase == "hover")
+            await wait_for(lambda: orch.statuses[-1].job_id is None)
+            assert orch.statuses[-1].state == "returning"
+            orch.token = declare_token(orch.session, KEYS.orchestrator_alive)
+            await wait_for(lambda: service.runner.state == "idle")
+            assert orch.events() == ["started"]
+
+    asyncio.run(scenario())
+
+
+def test_reports_are_retried_until_acknowledged_and_plan_errors_reported(
+    free_tcp_port: Callable[[], int],
+) -> None:
+    async def scenario() -> None:
+        async with show(free_tcp_port) as (service, orch):
+            orch.queryable.undeclare()  # type: ignore[no-untyped-call]
+            assert (await orch.command(assign("j1", text="bad"))).ok
+            await wait_for(lambda: service.runner.state == "idle" and service.runner.job_id is None)
+            await asyncio.sleep(0.3)
+            assert orch.reports == []
+            orch.queryable = serve(orch.session, KEYS.report, AgentReport, orch._on_report)
+            await wait_for(lambda: orch.events() == ["failed"])
+            error = orch.reports[0].error
+            assert error is not None and "cannot write that" in error.message
+
+    asyncio.run(scenario())
+
+
+def test_a_refused_takeoff_hands_the_job_back_and_is_told_on_the_events_key(
+    free_tcp_port: Callable[[], int],
+) -> None:
+    refusal = CommandRefusedError("autopilot refused arming: PreArm: Compass not calibrated")
+
+    async def scenario() -> None:
+        async with show(free_tcp_port, RefusingBackend(refusal)) as (service, orch):
+            events: list[Event] = []
+            subscribe(
+                orch.session, KEYS.vehicle_events("uav1"), Event, lambda _k, m: events.append(m)
+            )
+            assert (await orch.command(assign("j1"))).ok
+            await wait_for(lambda: orch.events() == ["failed"] and bool(events))
+            report = orch.reports[0]
+            assert report.retry_after_s == 5.0 and report.error is not None
+            assert report.error.code == "takeoff_refused" and "Compass" in report.error.message
+            assert (events[0].kind, events[0].level, events[0].job_id) == (
+                "takeoff_refused",
+                "warning",
+                "j1",
+            )
+            assert service.runner.state == "idle" and service.runner.job_id is None
+            busy = await orch.command(assign("j2"))  # backing off: 5 s of agent time
+            assert not busy.ok and busy.error is not None and busy.error.code == "takeoff_refused"
+
+    asyncio.run(scenario())
+
+
+def test_any_other_takeoff_error_is_a_fault(free_tcp_port: Callable[[], int]) -> None:
+    async def scenario() -> None:
+        async with show(free_tcp_port, RefusingBackend(BackendError("lost link"))) as (
+            service,
+            orch,
+        ):
+            assert (await orch.command(assign("j1"))).ok
+            await wait_for(lambda: service.runner.state == "fault")
+            assert "lost link" in service.runner.message and orch.events() == []
+
+    asyncio.run(scenario())
+
+
+def test_autopilot_texts_become_events_without_repeats() -> None:
+    now = [100.0]
+    outbox = EventOutbox("uav1", clock=lambda: now[0], repeat_after_s=10.0)
+    outbox.autopilot_text(2, "PreArm: Need Position Estimate")  # MAV_SEVERITY_CRITICAL
+    outbox.autopilot_text(4, "EKF3 IMU0 is using GPS")  # WARNING
+    outbox.autopilot_text(6, "Arming motors")  # INFO
+    outbox.autopilot_text(7, "debug chatter")  # DEBUG: dropped
+    outbox.autopilot_text(2, "PreArm: Need Position Estimate")  # repeated at once: dropped
+    drained = outbox.drain()
+    assert [e.level for e in drained] == ["alert", "warning", "info"]
+    assert drained[0].message == "uav1 autopilot: PreArm: Need Position Estimate"
+    assert all(e.vehicle_id == "uav1" and e.time_s == 100.0 for e in drained)
+    assert outbox.drain() == []
+    now[0] = 111.0
+    outbox.autopilot_text(2, "PreArm: Need Position Estimate")  # said again later: kept
+    assert len(outbox.drain()) == 1

@@ -1,0 +1,149 @@
+"""The show supervisor of ``skyquill up``: restart policy (pure), child processes, a real ``up``."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from bus.keys import ShowKeys
+from bus.session import open_session
+from cli.showrun import derived_show, submit_texts, wait_for_jobs
+from cli.supervisor import (
+    ChildSpec,
+    RestartPolicy,
+    Supervisor,
+    child_env,
+    show_children,
+    skyquill_argv,
+)
+
+SHOWS = Path(__file__).resolve().parent.parent / "shows"
+
+
+def test_backoff_doubles_up_to_the_cap_and_resets_after_a_stable_run() -> None:
+    policy = RestartPolicy(initial_delay_s=0.5, factor=2.0, max_delay_s=3.0, stable_after_s=30.0)
+    delays: list[float] = []
+    previous = None
+    for _ in range(5):
+        previous = policy.delay_s(previous, ran_for_s=1.0)
+        delays.append(previous)
+    assert delays == [0.5, 1.0, 2.0, 3.0, 3.0]
+    assert policy.delay_s(3.0, ran_for_s=31.0) == 0.5
+
+
+def python(code: str) -> tuple[str, ...]:
+    return (sys.executable, "-c", code)
+
+
+@pytest.mark.multiprocess
+def test_a_show_with_simulated_mavlink_vehicles_starts_them_first_and_stops_them_last() -> None:
+    specs = show_children(Path("r.yaml"), ["uav1"], time_scale=2.0, mavlink_sim=True, kiosk=True)
+    names = [spec.name for spec in specs]
+    assert names == ["sim-mavlink", "orchestrator", "agent uav1", "kiosk"]
+    assert specs[0].argv[-4:] == ("sim-mavlink", "r.yaml", "--time-scale", "2.0")
+    assert "sim-mavlink" not in [s.name for s in show_children(Path("r.yaml"), ["uav1"])]
+
+
+def test_a_child_that_dies_is_restarted_and_the_supervisor_says_so() -> None:
+    said: list[str] = []
+    policy = RestartPolicy(initial_delay_s=0.05, max_delay_s=0.05)
+    supervisor = Supervisor(
+        [
+            ChildSpec("short", python("pass")),
+            ChildSpec("long", python("import time; time.sleep(60)")),
+        ],
+        policy=policy,
+        say=said.append,
+    )
+    supervisor.start()
+    long_pid = supervisor.pid("long")
+    try:
+        deadline = time.monotonic() + 10.0
+        while supervisor.restarts("short") < 2:
+            assert time.monotonic() < deadline
+            supervisor.poll()
+            time.sleep(0.02)
+    finally:
+        supervisor.stop(grace_s=2.0)
+    assert supervisor.pid("long") == long_pid and supervisor.restarts("long") == 0
+    assert any(
+        "short exited (exit status 0)" in line and "restarting in 0.1 s" in line for line in said
+    )
+    assert any(line.startswith("short restarted (pid ") for line in said)
+
+
+@pytest.mark.multiprocess
+def test_stop_kills_a_child_that_ignores_sigterm() -> None:
+    code = (
+        "import signal, sys, time\n"
+        "signal.signal(signal.SIGTERM, signal.SIG_IGN)\n"
+        "print('ready', flush=True)\n"
+        "time.sleep(60)\n"
+    )
+    said: list[str] = []
+    supervisor = Supervisor([ChildSpec("stubborn", python(code))], say=said.append)
+    supervisor.start()
+    time.sleep(0.5)
+    started = time.monotonic()
+    supervisor.stop(grace_s=0.5)
+    assert time.monotonic() - started < 5.0
+    assert len(said) == 1 and said[0].startswith("stubborn did not stop") and "killing" in said[0]
+    supervisor.poll()
+    assert supervisor.pid("stubborn") is None
+
+
+def _children_of(pid: int) -> set[int]:
+    found = set()
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+            except OSError:
+                continue
+            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+                found.add(int(entry.name))
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+@pytest.mark.multiprocess
+@pytest.mark.slow
+@pytest.mark.timeout(120)
+@pytest.mark.skipif(not Path("/proc").is_dir(), reason="reads /proc")
+def test_skyquill_up_runs_a_show_and_stops_every_process_on_ctrl_c(tmp_path: Path) -> None:
+    show_path, show = derived_show(SHOWS / "solo.yaml", tmp_path, time_scale=6.0)
+    up = subprocess.Popen(
+        skyquill_argv("up", str(show_path), "--headless", "--no-kiosk"),
+        env=child_env(),
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        with open_session(show.zenoh, role="client", open_timeout_s=20.0) as session:
+            keys = ShowKeys(show.show_id)
+            (reply,) = submit_texts(session, keys, ["一"], timeout_s=60.0)
+            (job,) = wait_for_jobs(session, keys, [str(reply.job_id)], timeout_s=60.0)
+        assert job.state == "done" and job.metrics is not None
+        children = _children_of(up.pid)
+        assert len(children) == 2  # orchestrator and one agent
+        up.send_signal(signal.SIGINT)
+        _, stderr = up.communicate(timeout=30.0)
+    finally:
+        if up.poll() is None:
+            up.kill()
+    assert up.returncode == 0, stderr
+    assert "skyquill up: stopping" in stderr
+    assert not [pid for pid in children if _alive(pid)]

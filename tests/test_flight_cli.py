@@ -1,0 +1,38 @@
+"""``skyquill fly``: plans, flies, writes metrics.json and report.png."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from cli.main import main
+
+DATA = Path(__file__).parent / "data"
+
+
+def test_fly_writes_metrics_and_report(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "report"
+    status = main(
+        ["fly", "--strokes", str(DATA / "l_tick_m_up.json"), "--wind", "1", "--seed", "3",
+         "--height", "0.5", "--report", str(out)]
+    )  # fmt: skip
+    assert status == 0
+    metrics = json.loads((out / "metrics.json").read_text(encoding="utf-8"))
+    for key in ("rmse_pen_down_m", "rmse_m", "max_error_m", "iou", "sim_time_s", "wall_time_s"):
+        assert isinstance(metrics[key], float)
+    assert metrics["seed"] == 3 and metrics["wind_mps"] == 1.0
+    assert metrics["gains"]["name"] == "default"
+    assert 0.0 < metrics["rmse_pen_down_m"] < 0.01
+    assert metrics["iou"] > 0.7
+    png = (out / "report.png").read_bytes()
+    assert png.startswith(b"\x89PNG") and len(png) > 50_000
+    assert json.loads(capsys.readouterr().out.strip().splitlines()[-1])["iou"] == metrics["iou"]
+
+
+def test_fly_reports_a_bad_strokes_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"strokes": "nope"}', encoding="utf-8")
+    assert main(["fly", "--strokes", str(bad)]) == 2
+    assert "skyquill fly:" in capsys.readouterr().err

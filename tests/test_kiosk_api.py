@@ -1,0 +1,318 @@
+"""The kiosk's JSON API over HTTP against a fake orchestrator on real loopback Zenoh.
+
+One router, one fake orchestrator session and one kiosk (uvicorn in a thread) for the module.
+"""
+
+from __future__ import annotations
+
+import http.client
+import json
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+from test_kiosk_support import (
+    L_DRAWING,
+    WAIT_S,
+    Browser,
+    FakeOrchestrator,
+    done_metrics,
+    drawing,
+    sse_events,
+)
+
+from bus.keys import ShowKeys
+from bus.session import BusSettings, loopback_settings, open_session
+from kiosk.limits import SubmissionLimits
+from kiosk.service import serving
+from kiosk.settings import KioskSettings, settings_from_show
+from showfile import load_show
+
+pytestmark = pytest.mark.timeout(120)
+
+KEYS = ShowKeys("kiosk-api-test")
+BLOCKLIST = ("bad", "坏蛋")
+
+
+@pytest.fixture(scope="module")
+def bus() -> Iterator[tuple[BusSettings, FakeOrchestrator]]:
+    settings = loopback_settings()
+    with (
+        open_session(settings, role="router"),
+        open_session(settings, role="client") as orchestrator_session,
+    ):
+        fake = FakeOrchestrator(orchestrator_session, KEYS).start()
+        yield settings, fake
+        fake.stop()
+
+
+@pytest.fixture(scope="module")
+def kiosk(bus: tuple[BusSettings, FakeOrchestrator]) -> Iterator[str]:
+    zenoh_settings, _ = bus
+    settings = KioskSettings(
+        show_id=KEYS.show_id,
+        port=0,
+        limits=SubmissionLimits(
+            max_payload_bytes=200_000, max_strokes=60, max_points=5_000, max_text_chars=4,
+            blocklist=BLOCKLIST,
+        ),
+        rate_limit_per_minute=6,
+        clients_per_address=100,
+        submit_timeout_s=1.0,
+    )  # fmt: skip
+    with serving(settings, zenoh_settings, role="client") as server:
+        yield server.url
+
+
+@pytest.fixture
+def fake(bus: tuple[BusSettings, FakeOrchestrator]) -> Iterator[FakeOrchestrator]:
+    orchestrator = bus[1]
+    orchestrator.mode = "accept"
+    yield orchestrator
+    orchestrator.mode = "accept"
+
+
+@pytest.fixture
+def visitor(kiosk: str) -> Browser:
+    return Browser(kiosk)
+
+
+def wait_for(check: Callable[[], Any], what: str) -> Any:
+    deadline = time.monotonic() + WAIT_S
+    while time.monotonic() < deadline:
+        if value := check():
+            return value
+        time.sleep(0.05)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def assert_refused(reply: Any, status: int, code: str) -> str:
+    assert reply.status == status, reply.body
+    assert reply.body["ok"] is False
+    assert reply.body["error"]["code"] == code
+    message = reply.body["error"]["message"]
+    assert message and "Traceback" not in message and "{" not in message
+    return str(message)
+
+
+# --- the page and its configuration ---------------------------------------------------------------
+
+
+def test_page_is_served_with_a_session_cookie_and_a_strict_policy(visitor: Browser) -> None:
+    with visitor._opener.open(visitor.base_url + "/", timeout=WAIT_S) as resp:
+        html = resp.read().decode()
+        assert resp.status == 200
+        assert "default-src 'self'" in resp.headers["content-security-policy"]
+    assert '<canvas id="pad"' in html and "/static/kiosk.js" in html
+    assert any(c.name == "skyquill_kiosk" for c in visitor.cookies)
+    reply = visitor.get("/api/config")
+    assert reply.status == 200
+    assert reply.body["config"]["max_text_chars"] == 4
+    assert reply.body["config"]["writing_area_m"] == [1.2, 1.2]
+    with visitor._opener.open(visitor.base_url + "/static/kiosk.js", timeout=WAIT_S) as resp:
+        assert "setPointerCapture" in resp.read().decode()
+
+
+# --- preview --------------------------------------------------------------------------------------
+
+
+def test_preview_of_typed_text_has_turning_points_and_a_pen_down_path(visitor: Browser) -> None:
+    reply = visitor.post("/api/preview", {"text": "L"})
+    assert reply.status == 200, reply.body
+    preview = reply.body["preview"]
+    assert preview["turning_point_count"] >= 3  # an L has a corner between its two ends
+    path = preview["path"]
+    half = 0.6 + 1e-6
+    assert all(abs(x) <= half + 0.1 and abs(y) <= half + 0.1 for x, y, _ in path)
+    down = [p for p in path if p[2]]
+    assert down and len(down) < len(path)  # starts and ends in the air, writes in between
+    # the corner of the L (bottom left) is visited with the pen down
+    xs, ys = [p[0] for p in down], [p[1] for p in down]
+    corner = min(down, key=lambda p: (p[0] - min(xs)) ** 2 + (p[1] - min(ys)) ** 2)
+    assert any(abs(tp[0] - corner[0]) < 0.05 and abs(tp[1] - corner[1]) < 0.05
+               for tp in preview["turning_points"][0])  # fmt: skip
+    assert preview["duration_s"] > 1.0
+
+
+def test_preview_of_a_drawing_keeps_its_shape(visitor: Browser) -> None:
+    reply = visitor.post("/api/preview", L_DRAWING)
+    assert reply.status == 200, reply.body
+    preview = reply.body["preview"]
+    (tps,) = preview["turning_points"]
+    # drawn top-down then right, y down on screen: in the preview (y up) it starts high
+    assert tps[0][1] > tps[-1][1]
+    assert tps[-1][0] > tps[0][0]
+
+
+def test_preview_of_a_drawing_with_a_zero_length_stroke_is_refused(visitor: Browser) -> None:
+    dot = drawing([[[10.0, 10.0, 0.0], [10.0, 10.0, 0.1]]])
+    message = assert_refused(visitor.post("/api/preview", dot), 422, "bad_drawing")
+    assert "draw" in message
+
+
+# --- rejections -----------------------------------------------------------------------------------
+
+
+def test_too_large_payload_is_refused_before_reading(
+    visitor: Browser, fake: FakeOrchestrator
+) -> None:
+    n_before = len(fake.requests)
+    huge = b'{"text": "' + b"a" * 300_000 + b'"}'
+    message = assert_refused(visitor.post("/api/submit", huge), 413, "too_large")
+    assert "too big" in message
+    assert len(fake.requests) == n_before
+
+
+def test_too_large_chunked_payload_is_refused(kiosk: str) -> None:
+    conn = http.client.HTTPConnection(kiosk.split("//")[1].rstrip("/"), timeout=WAIT_S)
+    chunks = (b"[" + b"1," * 50_000 + b"1]" for _ in range(3))
+    conn.request("POST", "/api/preview", body=chunks, encode_chunked=True,
+                 headers={"Content-Type": "application/json"})  # fmt: skip
+    resp = conn.getresponse()
+    assert resp.status == 413
+    assert json.loads(resp.read())["error"]["code"] == "too_large"
+    conn.close()
+
+
+def test_too_many_points_is_refused(visitor: Browser, fake: FakeOrchestrator) -> None:
+    n_before = len(fake.requests)
+    stroke = [[float(i % 300), float(i // 300), 0.001 * i] for i in range(5_001)]
+    assert_refused(visitor.post("/api/submit", drawing([stroke])), 400, "too_many_points")
+    assert len(fake.requests) == n_before
+
+
+def test_too_many_strokes_is_refused(visitor: Browser) -> None:
+    strokes = [[[float(i), 0.0], [float(i), 10.0]] for i in range(61)]
+    message = assert_refused(
+        visitor.post("/api/preview", drawing(strokes)), 400, "too_many_strokes"
+    )
+    assert "60" in message
+
+
+def test_malformed_json_is_refused(visitor: Browser) -> None:
+    for body in (b"{not json", b"[1, 2]", b"\xff\xfe", b'{"text": "A", "priority": 9}'):
+        assert visitor.post("/api/submit", body).body["error"]["code"] in (
+            "bad_json",
+            "bad_request",
+        )
+        reply = visitor.post("/api/preview", body)
+        assert reply.status == 400
+    assert_refused(visitor.post("/api/preview", {"text": 5}), 400, "bad_request")
+    assert_refused(visitor.post("/api/preview", {"text": "A", **L_DRAWING}), 400, "bad_request")
+    assert_refused(visitor.post("/api/preview", {}), 400, "empty")
+
+
+@pytest.mark.parametrize("text", ["bad", "BAD", "b ad", "ＢＡＤ", "坏蛋"])
+def test_blocked_text_is_refused_without_echoing_it(
+    visitor: Browser, fake: FakeOrchestrator, text: str
+) -> None:
+    n_before = len(fake.requests)
+    for path in ("/api/preview", "/api/submit"):
+        message = assert_refused(visitor.post(path, {"text": text}), 400, "blocked_text")
+        assert text.lower() not in message.lower() and "坏" not in message
+    assert len(fake.requests) == n_before
+
+
+def test_text_too_long_or_without_glyph_is_refused(visitor: Browser) -> None:
+    assert "4" in assert_refused(
+        visitor.post("/api/preview", {"text": "ABCDE"}), 400, "text_too_long"
+    )
+    message = assert_refused(visitor.post("/api/preview", {"text": "\U0001f600"}), 422, "no_glyph")
+    assert "\U0001f600" in message
+
+
+def test_rate_limit_per_client(kiosk: str, fake: FakeOrchestrator) -> None:
+    walker = Browser(kiosk)
+    for _ in range(6):  # attempts count even when refused for another reason
+        assert walker.post("/api/submit", {}).status == 400
+    reply = walker.post("/api/submit", {"text": "A"})
+    message = assert_refused(reply, 429, "rate_limited")
+    assert "wait" in message
+    assert 1 <= int(reply.headers["retry-after"]) <= 60
+    # another visitor from the same address is not affected
+    assert Browser(kiosk).post("/api/submit", {}).status == 400
+
+
+def test_orchestrator_refusal_and_absence_get_plain_messages(
+    visitor: Browser, fake: FakeOrchestrator
+) -> None:
+    fake.mode = "queue_full"
+    assert "queue is full" in assert_refused(
+        visitor.post("/api/submit", {"text": "A"}), 503, "queue_full"
+    )
+    fake.mode = "accept"
+    fake.stop()
+    try:
+        message = assert_refused(visitor.post("/api/submit", {"text": "A"}), 503, "unavailable")
+        assert "try again" in message
+    finally:
+        fake.start()
+    # the service kept running and accepts again
+    assert visitor.post("/api/submit", {"text": "A"}).status == 200
+
+
+def test_unknown_job_and_other_clients_job(kiosk: str, fake: FakeOrchestrator) -> None:
+    owner, other = Browser(kiosk), Browser(kiosk)
+    submitted = owner.post("/api/submit", {"text": "永"})
+    assert submitted.status == 200, submitted.body
+    job_id, token = submitted.body["job_id"], submitted.body["token"]
+    assert_refused(other.get("/api/jobs/no-such-job?token=x"), 404, "unknown_job")
+    # a job on the bus that this kiosk did not submit (e.g. from the operator's CLI)
+    fake.set_state("cli-job", "queued")
+    assert_refused(other.get("/api/jobs/cli-job?token=x"), 404, "unknown_job")
+    assert_refused(other.get(f"/api/jobs/{job_id}"), 403, "not_your_job")
+    assert_refused(other.get(f"/api/jobs/{job_id}?token={token[:-1]}x"), 403, "not_your_job")
+    assert_refused(other.get(f"/api/jobs/{job_id}/events?token=wrong"), 403, "not_your_job")
+    mine = owner.get(f"/api/jobs/{job_id}?token={token}")
+    assert mine.status == 200 and mine.body["job"]["job_id"] == job_id
+
+
+# --- submitting and following a job ---------------------------------------------------------------
+
+
+def test_submit_reaches_the_orchestrator_and_status_follows_the_bus(
+    kiosk: str, visitor: Browser, fake: FakeOrchestrator
+) -> None:
+    reply = visitor.post("/api/submit", L_DRAWING)
+    assert reply.status == 200, reply.body
+    body = reply.body
+    job_id, token = body["job_id"], body["token"]
+    request = fake.requests[-1]
+    assert request.strokes is not None and request.text is None
+    assert request.strokes["strokes"] == L_DRAWING["strokes"]["strokes"]
+    cookie = next(str(c.value) for c in visitor.cookies if c.name == "skyquill_kiosk")
+    assert request.client_id.startswith("kiosk-") and cookie not in request.client_id
+    assert body["job"]["state"] == "queued" and body["job"]["queue_position"] >= 1
+    assert body["preview"]["path"]
+
+    path = f"/api/jobs/{job_id}?token={token}"
+    fake.set_state(job_id, "queued", queue_position=2, eta_s=95.0)
+    job = wait_for(
+        lambda: (j := visitor.get(path).body["job"])["queue_position"] == 2 and j, "queue update"
+    )
+    assert "number 2" in job["status_text"] and "about 2 minutes" in job["status_text"]
+
+    events = sse_events(kiosk, f"/api/jobs/{job_id}/events?token={token}")
+    name, first = next(events)
+    assert name == "job" and first["state"] == "queued" and not first["final"]
+    fake.set_state(job_id, "writing", vehicle_id="uav3", progress=0.4, queue_position=None)
+    _, writing = next(events)
+    assert writing["state"] == "writing" and "uav3" in writing["status_text"]
+    assert "40%" in writing["status_text"]
+    fake.set_state(job_id, "done", vehicle_id="uav3", progress=1.0, metrics=done_metrics())
+    _, done = next(events)
+    assert done["final"] and done["metrics"]["rmse_pen_down_m"] == pytest.approx(0.012)
+    assert "Done" in done["status_text"]
+    assert list(events) == []  # the stream ends after the final state
+    # a late reader gets the final state at once
+    assert next(sse_events(kiosk, f"/api/jobs/{job_id}/events?token={token}"))[1]["state"] == "done"
+
+
+def test_the_show_files_kiosk_section_sets_the_limits() -> None:
+    show = load_show(Path(__file__).resolve().parents[1] / "shows" / "solo.yaml")
+    assert settings_from_show(show).limits.max_text_chars == 1
+    kiosk = show.kiosk.model_copy(update={"max_text_chars": 4, "max_strokes": 7})
+    settings = settings_from_show(show.model_copy(update={"kiosk": kiosk}), port=0)
+    assert (settings.limits.max_text_chars, settings.limits.max_strokes, settings.port) == (4, 7, 0)

@@ -1,0 +1,191 @@
+"""Helpers of the kiosk tests (no tests here): a fake orchestrator on real Zenoh, an HTTP client.
+
+The fake answers ``submit`` and ``snapshot`` like the orchestrator (bus/keys.py) and publishes
+``jobs/<id>`` JobState when a test says so, so the kiosk is tested over the real bus.
+"""
+
+from __future__ import annotations
+
+import http.client
+import http.cookiejar
+import json
+import threading
+import time
+import urllib.error
+import urllib.request
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from typing import Any
+
+from bus.keys import ShowKeys
+from bus.messages import (
+    ErrorInfo,
+    JobMetrics,
+    JobState,
+    ShowSnapshot,
+    SubmitReply,
+    SubmitRequest,
+)
+from bus.pubsub import publish
+from bus.rpc import serve
+from bus.session import Session
+
+WAIT_S = 10.0
+"""Upper bound for anything to arrive on loopback; never a timing assertion."""
+
+
+@dataclass
+class FakeOrchestrator:
+    """Answers ``submit`` and ``snapshot``; publishes job states on request."""
+
+    session: Session
+    keys: ShowKeys
+    mode: str = "accept"
+    """``accept`` or an error code to reply with (e.g. ``queue_full``)."""
+    requests: list[SubmitRequest] = field(default_factory=list)
+    jobs: dict[str, JobState] = field(default_factory=dict)
+    _queryables: list[Any] = field(default_factory=list)
+    _lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def start(self) -> FakeOrchestrator:
+        self._queryables = [
+            serve(self.session, self.keys.submit, SubmitRequest, self._on_submit),
+            serve(self.session, self.keys.snapshot, None, self._on_snapshot),
+        ]
+        return self
+
+    def stop(self) -> None:
+        for q in self._queryables:
+            q.undeclare()
+        self._queryables = []
+
+    def _on_submit(self, request: SubmitRequest) -> SubmitReply:
+        with self._lock:
+            self.requests.append(request)
+            if self.mode != "accept":
+                return SubmitReply(ok=False, error=ErrorInfo(code=self.mode, message=self.mode))
+            job_id = f"job-{len(self.requests)}"
+            queued = [j for j in self.jobs.values() if j.state == "queued"]
+            now = time.time()
+            state = JobState(
+                job_id=job_id,
+                state="queued",
+                label=request.text or "drawing",
+                kind="text" if request.text else "strokes",
+                client_id=request.client_id,
+                created_at_s=now,
+                updated_at_s=now,
+                queue_position=len(queued) + 1,
+                eta_s=30.0 * len(queued),
+            )
+            self.jobs[job_id] = state
+        return SubmitReply(
+            ok=True,
+            job_id=job_id,
+            state="queued",
+            queue_position=state.queue_position,
+            eta_s=state.eta_s,
+        )
+
+    def _on_snapshot(self, _request: None) -> ShowSnapshot:
+        with self._lock:
+            jobs = list(self.jobs.values())
+        return ShowSnapshot(
+            show_id=self.keys.show_id, time_s=time.time(), queue_paused=False, jobs=jobs,
+            vehicles=[],
+        )  # fmt: skip
+
+    def set_state(self, job_id: str, state: str, **changes: Any) -> JobState:
+        """Change a job and publish it on ``jobs/<id>`` like the orchestrator does."""
+        with self._lock:
+            old = self.jobs.get(job_id) or JobState(
+                job_id=job_id, state="queued", label="?", kind="text", client_id="cli",
+                created_at_s=time.time(), updated_at_s=time.time(),
+            )  # fmt: skip
+            fields = {f: getattr(old, f) for f in old.__struct_fields__}
+            fields.update(changes, state=state, updated_at_s=time.time())
+            new = JobState(**fields)
+            self.jobs[job_id] = new
+        publish(self.session, self.keys.job(job_id), new)
+        return new
+
+
+def done_metrics() -> JobMetrics:
+    return JobMetrics(
+        rmse_pen_down_m=0.012, rmse_m=0.02, max_error_m=0.05, iou=0.8, duration_s=21.0
+    )
+
+
+@dataclass
+class Reply:
+    status: int
+    body: dict[str, Any]
+    headers: dict[str, str]
+
+
+class Browser:
+    """An HTTP client with its own cookie jar (one visitor)."""
+
+    def __init__(self, base_url: str) -> None:
+        self.base_url = base_url.rstrip("/")
+        self.cookies = http.cookiejar.CookieJar()
+        self._opener = urllib.request.build_opener(urllib.request.HTTPCookieProcessor(self.cookies))
+
+    def request(self, method: str, path: str, body: bytes | dict[str, Any] | None = None) -> Reply:
+        data = json.dumps(body).encode() if isinstance(body, dict) else body
+        req = urllib.request.Request(self.base_url + path, data=data, method=method)
+        if data is not None:
+            req.add_header("Content-Type", "application/json")
+        try:
+            with self._opener.open(req, timeout=WAIT_S) as resp:
+                return Reply(resp.status, json.loads(resp.read()), dict(resp.headers))
+        except urllib.error.HTTPError as err:
+            with err:
+                return Reply(err.code, json.loads(err.read()), dict(err.headers))
+
+    def post(self, path: str, body: bytes | dict[str, Any] | None) -> Reply:
+        return self.request("POST", path, body)
+
+    def get(self, path: str) -> Reply:
+        return self.request("GET", path)
+
+
+def sse_events(base_url: str, path: str) -> Iterator[tuple[str, dict[str, Any]]]:
+    """``(event, data)`` of a server-sent event stream until the server ends it."""
+    host_port = base_url.split("//", 1)[1].rstrip("/")
+    conn = http.client.HTTPConnection(host_port, timeout=WAIT_S)
+    try:
+        conn.request("GET", path, headers={"Accept": "text/event-stream"})
+        resp = conn.getresponse()
+        assert resp.status == 200, resp.read()
+        assert resp.headers["content-type"].startswith("text/event-stream")
+        event, data = "message", ""
+        while line := resp.readline():
+            text = line.decode().rstrip("\n")
+            if text.startswith("event: "):
+                event = text[7:]
+            elif text.startswith("data: "):
+                data += text[6:]
+            elif text == "" and data:
+                yield event, json.loads(data)
+                event, data = "message", ""
+    finally:
+        conn.close()
+
+
+def drawing(strokes: list[list[list[float]]]) -> dict[str, Any]:
+    """A strokes document as the page sends it (canvas pixels, y down)."""
+    return {
+        "strokes": {
+            "units": "px",
+            "y_axis": "down",
+            "canvas": {"width": 300, "height": 300},
+            "strokes": strokes,
+        }
+    }
+
+
+L_DRAWING = drawing(
+    [[[100.0, 50.0, 0.0, 0.5], [100.0, 150.0, 0.2, 0.6], [100.0, 250.0, 0.4, 0.6],
+      [180.0, 250.0, 0.6, 0.5], [240.0, 250.0, 0.8, 0.4]]]
+)  # fmt: skip

@@ -1,0 +1,365 @@
+"""The MAVLink backend against the MAVLink vehicle simulator: real MAVLink bytes over UDP loopback.
+
+Both sides run at ``SCALE`` times real time (every rate and timeout on both sides is in vehicle /
+agent time), so the flights are the real code paths but short.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import socket
+import time
+from collections.abc import AsyncIterator, Callable, Iterator
+from contextlib import asynccontextmanager, contextmanager
+from pathlib import Path
+from typing import Any
+
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from mavsim.config import VehicleConfig
+from mavsim.modes import CopterMode
+from mavsim.server import MavsimServer
+from showfile import load_show
+from vehicle_agent.backends.base import (
+    CommandRefusedError,
+    Setpoint,
+    VehicleBackend,
+    VehicleSnapshot,
+)
+from vehicle_agent.backends.mavlink import MavlinkBackend
+from vehicle_agent.backends.mavlink_errors import (
+    ArmingRefusedError,
+    LinkLostError,
+    VehicleFaultError,
+)
+from vehicle_agent.backends.mavlink_mocap import MocapPose
+from vehicle_agent.backends.mavlink_settings import MavlinkSettings, settings_from_show
+from vehicle_agent.backends.mavlink_state import ARDUPILOT, PX4
+from vehicle_agent.motion import plan_move
+
+pytestmark = pytest.mark.timeout(60)
+
+SCALE = 2.0
+EPOCH_S = 1000.0
+"""The agent clock does not start at 0 (the backend must not assume it does)."""
+HOME = (1.0, -1.2, 0.0)
+HOVER = (1.0, -1.2, 0.6)
+
+SHOWS = Path(__file__).resolve().parents[1] / "shows"
+
+
+@contextmanager
+def vehicle(**overrides: Any) -> Iterator[MavsimServer]:
+    settings: dict[str, Any] = {"position_source_delay_s": 0.0, **overrides}
+    config = VehicleConfig(vehicle_id="uav3", system_id=7, port=0, home_m_enu=HOME, **settings)
+    server = MavsimServer([config], time_scale=SCALE).start()
+    try:
+        yield server
+    finally:
+        server.stop()
+
+
+class Driver:
+    """The agent's fixed-rate loop, reduced to what the backend sees."""
+
+    def __init__(self, backend: MavlinkBackend) -> None:
+        self.backend = backend
+        self.dt = backend.control_period_s
+        self.k = 0
+        self.t0 = time.monotonic()
+
+    @property
+    def now(self) -> float:
+        return EPOCH_S + self.k * self.dt
+
+    async def tick(self, setpoint: Setpoint | None = None) -> VehicleSnapshot:
+        snapshot = await self.backend.tick(setpoint, self.now)
+        self.k += 1
+        await asyncio.sleep(max(0.0, self.t0 + self.k * self.dt / SCALE - time.monotonic()))
+        return snapshot
+
+    async def until(
+        self,
+        done: Callable[[VehicleSnapshot], bool],
+        within_s: float,
+        setpoint: Callable[[float], Setpoint | None] = lambda _t: None,
+    ) -> VehicleSnapshot:
+        end = self.now + within_s
+        while self.now < end:
+            snapshot = await self.tick(setpoint(self.now))
+            if done(snapshot):
+                return snapshot
+        raise AssertionError(f"not done within {within_s} s of agent time: {snapshot}")
+
+    def pause(self, agent_s: float) -> None:
+        """The agent's loop stalls (no tick) for ``agent_s``; its clock jumps ahead."""
+        time.sleep(agent_s / SCALE)
+        skipped = round(agent_s / self.dt)
+        self.k += skipped
+        self.t0 = time.monotonic() - self.k * self.dt / SCALE
+
+
+@asynccontextmanager
+async def connected(
+    server: MavsimServer, **settings: Any
+) -> AsyncIterator[tuple[MavlinkBackend, Driver]]:
+    backend = MavlinkBackend(
+        MavlinkSettings(url=server.endpoints[0].url, origin_m_enu=HOME, **settings)
+    )
+    assert isinstance(backend, VehicleBackend)
+    await backend.start()
+    try:
+        yield backend, Driver(backend)
+    finally:
+        await backend.close()
+
+
+async def airborne(backend: MavlinkBackend, driver: Driver) -> VehicleSnapshot:
+    await backend.takeoff(HOVER)
+    return await driver.until(lambda s: s.mode == "hold", 6.0)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "reason"),
+    [
+        ({"position_source_delay_s": 60.0}, "PreArm: Need Position Estimate"),
+        ({"arm_refusal": "Compass not calibrated"}, "PreArm: Compass not calibrated"),
+    ],
+)
+def test_a_refused_arm_is_reported_with_the_autopilots_reason(
+    overrides: dict[str, Any], reason: str
+) -> None:
+    async def scenario(server: MavsimServer) -> None:
+        async with connected(server) as (backend, driver):
+            with pytest.raises(ArmingRefusedError) as refused:
+                await backend.takeoff(HOVER)
+            assert refused.value.reason == reason
+            assert reason in str(refused.value)
+            assert isinstance(refused.value, CommandRefusedError)  # the agent will try again
+            snapshot = await driver.tick()
+            assert (snapshot.mode, snapshot.armed, snapshot.fault) == ("idle", False, None)
+            assert (
+                server.endpoints[0].autopilot.mode == CopterMode.GUIDED
+            )  # the mode change was fine
+
+    with vehicle(**overrides) as server:
+        asyncio.run(scenario(server))
+
+
+def test_take_off_follow_a_move_and_land_over_udp() -> None:
+    async def scenario(server: MavsimServer) -> None:
+        ap = server.endpoints[0].autopilot
+        async with connected(server, telemetry_rate_hz=100.0) as (backend, driver):
+            assert backend.state.system_id == 7 and backend.state.flavor is ARDUPILOT
+            hold = await airborne(backend, driver)
+            # telemetry asked with MAV_CMD_SET_MESSAGE_INTERVAL (LOCAL_POSITION_NED, SYS_STATUS)
+            intervals = server.endpoints[0].intervals_s
+            assert (intervals[32], intervals[1]) == (pytest.approx(0.01), pytest.approx(1.0))
+            assert hold.position_m_enu[2] == pytest.approx(HOVER[2], abs=0.1)
+            await driver.until(lambda s: math.dist(s.position_m_enu, HOVER) < 0.01, 3.0)
+            move = plan_move(HOVER, (1.4, -0.9, 0.7), driver.now, v_max_mps=0.6, a_max_mps2=0.8)
+            sent_before, t_before = backend.setpoints_sent, driver.now
+            worst = 0.0
+            while not move.done(driver.now):
+                snapshot = await driver.tick(move.setpoint(driver.now))
+                assert snapshot.mode == "offboard"
+                # the snapshot is the state at the end of the tick, the reference is of its start
+                reference = move.setpoint(driver.now - driver.dt).position_m_enu
+                worst = max(worst, math.dist(snapshot.position_m_enu, reference))
+            rate_hz = (backend.setpoints_sent - sent_before) / (driver.now - t_before)
+            assert rate_hz == pytest.approx(50.0, rel=0.05)
+            assert worst < 0.03
+            settled = await driver.until(lambda s: s.mode == "hold", 1.0)
+            assert math.dist(settled.position_m_enu, move.end_m_enu) < 0.03
+            assert ap.setpoints_received >= backend.setpoints_sent - 5
+            await backend.land()
+            landed = await driver.until(lambda s: s.mode == "idle", 6.0)
+            assert landed.on_ground and not landed.armed and landed.fault is None
+            assert landed.position_m_enu[2] == pytest.approx(HOME[2], abs=1e-6)
+            assert landed.battery_fraction is not None and 0.9 < landed.battery_fraction <= 1.0
+            assert [t for _, t in backend.events] == ["Arming motors", "Disarming motors"]
+
+    with vehicle() as server:
+        asyncio.run(scenario(server))
+
+
+def test_a_stopped_setpoint_stream_triggers_the_vehicles_failsafe_and_is_reported() -> None:
+    async def scenario(server: MavsimServer) -> None:
+        ap = server.endpoints[0].autopilot
+        async with connected(server, setpoint_timeout_s=1.0) as (backend, driver):
+            await airborne(backend, driver)
+            move = plan_move(HOVER, (1.6, -1.2, 0.6), driver.now, v_max_mps=0.6, a_max_mps2=0.8)
+            for _ in range(50):
+                await driver.tick(move.setpoint(driver.now))
+            driver.pause(1.6)  # the agent stalls: no setpoint for longer than GUID_TIMEOUT
+            assert ap.submode == "stopped"
+            snapshot = await driver.tick(move.setpoint(driver.now))
+            assert snapshot.fault is not None and "setpoint stream stopped" in snapshot.fault
+            sent, received = backend.setpoints_sent, ap.setpoints_received
+            for _ in range(200):  # the vehicle brakes to a stop on its own; we stream nothing
+                snapshot = await driver.tick(move.setpoint(driver.now))
+            for _ in range(50):
+                later = await driver.tick(move.setpoint(driver.now))
+            assert math.dist(later.position_m_enu, snapshot.position_m_enu) < 0.005
+            assert math.hypot(*later.velocity_mps_enu) < 0.01
+            assert (backend.setpoints_sent, ap.setpoints_received) == (sent, received)
+            assert any(text.startswith("Guided failsafe") for _, text in backend.events)
+            assert later.fault == snapshot.fault and later.mode == "hold"
+
+    with vehicle(guided_timeout_s=1.0) as server:
+        asyncio.run(scenario(server))
+
+
+@pytest.mark.slow
+def test_px4_offboard_take_off_fly_land_and_offboard_loss() -> None:
+    """PX4: stream first, OFFBOARD, arm, climb on our own setpoints, AUTO.LAND; then a stream
+    stopped in flight makes the vehicle leave OFFBOARD on its own, which is reported."""
+
+    async def scenario(server: MavsimServer) -> None:
+        ap = server.endpoints[0].autopilot
+        async with connected(server) as (backend, driver):
+            assert backend.state.flavor is PX4
+            await airborne(backend, driver)
+            assert ap.mode == CopterMode.GUIDED and ap.armed  # GUIDED is OFFBOARD inside mavsim
+            goal = (1.3, -1.0, 0.6)
+            move = plan_move(HOVER, goal, driver.now, v_max_mps=0.6, a_max_mps2=0.8)
+            await driver.until(lambda s: move.done(driver.now), 4.0, move.setpoint)
+            await backend.land()
+            landed = await driver.until(lambda s: s.mode == "idle", 6.0)
+            assert math.dist(landed.position_m_enu[:2], goal[:2]) < 0.03 and not landed.armed
+            await airborne(backend, driver)
+            driver.pause(1.5)
+            snapshot = await driver.tick(Setpoint(HOVER))
+            assert snapshot.fault is not None and "setpoint stream stopped" in snapshot.fault
+            await driver.until(lambda s: ap.mode == CopterMode.LOITER, 1.0)
+            assert any(text.startswith("Failsafe: offboard lost") for _, text in backend.events)
+
+    with vehicle(autopilot="px4", guided_timeout_s=1.0) as server:
+        asyncio.run(scenario(server))
+
+
+def pilot_switch(port: int, system_id: int, mode: CopterMode) -> None:
+    """A pilot's ground station (system 250) switches the vehicle's mode."""
+    pilot = mavlink.MAVLink(None, srcSystem=250, srcComponent=190)
+    command = pilot.command_long_encode(system_id, 1, mavlink.MAV_CMD_DO_SET_MODE, 0,
+                                        1, int(mode), 0, 0, 0, 0, 0)  # fmt: skip
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.sendto(command.pack(pilot), ("127.0.0.1", port))
+
+
+def test_a_pilot_mode_change_stops_the_stream_and_is_never_fought() -> None:
+    async def scenario(server: MavsimServer) -> None:
+        ap = server.endpoints[0].autopilot
+        async with connected(server) as (backend, driver):
+            await airborne(backend, driver)
+            for _ in range(20):
+                await driver.tick(Setpoint(HOVER))
+            pilot_switch(server.endpoints[0].port, 7, CopterMode.LOITER)
+            snapshot = await driver.until(lambda s: s.fault is not None, 3.0,
+                                          lambda _t: Setpoint(HOVER))  # fmt: skip
+            assert "LOITER" in str(snapshot.fault) and "pilot" in str(snapshot.fault)
+            sent = backend.setpoints_sent
+            for _ in range(50):
+                await driver.tick(Setpoint(HOVER))
+            assert backend.setpoints_sent == sent
+            with pytest.raises(VehicleFaultError):
+                await backend.land()
+            assert ap.mode == CopterMode.LOITER and ap.armed
+
+    with vehicle() as server:
+        asyncio.run(scenario(server))
+
+
+def test_a_silent_vehicle_is_a_lost_link() -> None:
+    async def scenario(server: MavsimServer) -> None:
+        async with connected(server, heartbeat_timeout_s=1.5) as (_, driver):
+            await driver.until(lambda s: s.position_m_enu == pytest.approx(HOME), 1.0)
+            server.stop()
+            snapshot = await driver.until(lambda s: s.fault is not None, 3.0)
+            assert "no heartbeat" in str(snapshot.fault)
+
+    with vehicle() as server:
+        asyncio.run(scenario(server))
+
+
+def test_a_stalled_agent_is_not_a_lost_link() -> None:
+    """The agent's clock jumps after a stall (skip_when_late); heartbeats wait in the socket."""
+
+    async def scenario(server: MavsimServer) -> None:
+        async with connected(server, heartbeat_timeout_s=1.5) as (_, driver):
+            await driver.tick()
+            driver.pause(4.0)
+            for _ in range(100):
+                snapshot = await driver.tick()
+                assert snapshot.fault is None
+
+    with vehicle() as server:
+        asyncio.run(scenario(server))
+
+
+def test_no_vehicle_at_the_url_is_an_error_at_start(free_tcp_port: Callable[[], int]) -> None:
+    async def scenario() -> None:
+        url = f"udp:127.0.0.1:{free_tcp_port()}"
+        backend = MavlinkBackend(MavlinkSettings(url=url, origin_m_enu=HOME, connect_timeout_s=0.6))
+        with pytest.raises(LinkLostError, match="no autopilot heartbeat"):
+            await backend.start()
+
+    asyncio.run(scenario())
+
+
+def test_attitude_setpoints_from_our_outer_loop_fly_the_vehicle() -> None:
+    async def scenario(server: MavsimServer) -> None:
+        async with connected(server, setpoints="attitude", setpoint_rate_hz=100.0) as (
+            backend,
+            driver,
+        ):
+            await airborne(backend, driver)
+            goal = (1.2, -1.1, 0.65)
+            move = plan_move(HOVER, goal, driver.now, v_max_mps=0.4, a_max_mps2=0.8)
+            snapshot = await driver.until(lambda s: move.done(driver.now), 5.0,
+                                          lambda t: move.setpoint(t))  # fmt: skip
+            snapshot = await driver.until(lambda s: math.dist(s.position_m_enu, goal) < 0.02, 3.0,
+                                          lambda t: Setpoint(goal))  # fmt: skip
+            assert snapshot.fault is None
+            assert server.endpoints[0].autopilot.submode == "attitude"
+
+    with vehicle() as server:
+        asyncio.run(scenario(server))
+
+
+def test_mocap_poses_are_forwarded_in_local_ned() -> None:
+    pose = MocapPose(position_m_enu=(1.0, -1.0, 0.0))
+
+    async def scenario(server: MavsimServer) -> None:
+        async with connected(server, mocap="vision_position_estimate", mocap_rate_hz=50.0,
+                             ) as (backend, driver):  # fmt: skip
+            backend._mocap.source = lambda _t: pose
+            for _ in range(50):
+                await driver.tick()
+            assert backend._mocap.sent == 25
+        assert server.endpoints[0].autopilot.mocap_received >= 20
+
+    with vehicle() as server:
+        asyncio.run(scenario(server))
+
+
+def test_settings_come_from_the_show_files_typed_vehicle_fields() -> None:
+    show = load_show(SHOWS / "rehearsal-mavlink.yaml")
+    uav2 = show.vehicle("uav2")
+    plain = settings_from_show(show, uav2)
+    assert plain.origin_m_enu == uav2.home_m_enu and plain.system_id == 2
+    assert (plain.setpoints, plain.setpoint_rate_hz, plain.mocap) == ("position", 50.0, "none")
+    tuned = uav2.model_copy(
+        update={
+            "mavlink_origin_m_enu": (0.5, 0.0, 0.0),
+            "mavlink_setpoints": "attitude",
+            "mavlink_setpoint_rate_hz": 100.0,
+            "mavlink_mocap": "att_pos_mocap",
+        }
+    )
+    settings = settings_from_show(show, tuned)
+    assert settings.origin_m_enu == (0.5, 0.0, 0.0) and settings.setpoints == "attitude"
+    assert (settings.setpoint_rate_hz, settings.mocap) == (100.0, "att_pos_mocap")
+    assert settings.mass_kg == show.limits.mass_kg

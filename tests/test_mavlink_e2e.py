@@ -1,0 +1,105 @@
+"""An agent writes a character through the MAVLink path, end to end, and as well as in-process.
+
+The same pure agent code (JobRunner, prepare_job, job_metrics) flies one job twice: against the
+in-process simulator backend, and over MAVLink/UDP against the simulated ArduCopter built from the
+same show file (as ``skyquill sim-mavlink`` builds it). Only the bus is left out.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import socket
+from typing import Any
+
+import pytest
+
+from bus.messages import JobAssignment, JobMetrics, VehicleCommand
+from mavsim.server import MavsimServer
+from mavsim.show import vehicle_configs
+from showfile import parse_show
+from vehicle_agent.agent import job_metrics, make_backend, prepare_job, vehicle_setup
+from vehicle_agent.backends.base import VehicleBackend
+from vehicle_agent.backends.mavlink import MavlinkBackend
+from vehicle_agent.clock import TickClock
+from vehicle_agent.job_runner import JobRunner
+
+SCALE = 2.0
+"""Vehicle and agent both run this many times faster than real time."""
+
+SHOW = """
+show_id: mavlink-e2e
+boards:
+  - {{id: b1, center_m_enu: [0.0, 0.0, 0.75], size_m: [1.4, 1.4], writing_area_m: [0.6, 0.6]}}
+  - {{id: b2, center_m_enu: [2.0, 0.0, 0.75], size_m: [1.4, 1.4], writing_area_m: [0.6, 0.6]}}
+vehicles:
+  - {{id: sim1, backend: sim, board: b1, home_m_enu: [0.0, -1.0, 0.0]}}
+  - {{id: mav1, backend: mavlink, mavlink_url: "udp:127.0.0.1:{port}", mavlink_system_id: 3,
+     board: b2, home_m_enu: [2.0, -1.0, 0.0]}}
+planning: {{write_height_m: 0.25, clearance_m: 0.05}}
+"""
+
+
+def free_udp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+async def write_job(backend: VehicleBackend, setup: Any, text: str, *, paced: bool) -> JobMetrics:
+    """The agent's control loop without the bus: assign, fly, measure; back on the ground."""
+    runner = JobRunner(setup.runner_config)
+    assignment = JobAssignment(job_id="j1", text=text)
+    prepared = prepare_job(setup, assignment)
+    snapshot = await backend.start()
+    assert runner.handle_command(VehicleCommand(command="assign", job=assignment), 0.0).ok
+    # the agent's pacing (AgentService): a real vehicle's clock skips ahead after a stall
+    clock = TickClock(backend.control_period_s, time_scale=SCALE, skip_when_late=True)
+    metrics: JobMetrics | None = None
+    while clock.now_s < 60.0:
+        if paced:
+            await asyncio.sleep(clock.delay_s())
+        now = clock.now_s
+        actions = runner.step(snapshot, now)
+        if actions.plan_request is not None:
+            runner.plan_ready(prepared)
+        assert not any(r.event == "failed" for r in actions.reports), actions.reports
+        if actions.backend_command is not None:
+            name, hover = actions.backend_command
+            await (backend.takeoff(hover) if name == "takeoff" else backend.land())  # type: ignore[arg-type]
+        snapshot = await backend.tick(actions.setpoint, now)
+        if actions.finished is not None:
+            metrics = job_metrics(setup, prepared, actions.finished)
+        if metrics is not None and runner.phase == "ground":
+            await backend.close()
+            return metrics
+        clock.advance()
+    raise AssertionError(f"job not finished: runner {runner.state}/{runner.phase}, {snapshot}")
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(120)
+def test_a_character_written_over_mavlink_matches_the_in_process_simulator() -> None:
+    show = parse_show(SHOW.format(port=free_udp_port()))
+    configs = vehicle_configs(show, position_source_delay_s=0.0)  # the default stiff tune
+    assert [(c.vehicle_id, c.system_id) for c in configs] == [("mav1", 3)]
+
+    sim_setup = vehicle_setup(show, "sim1")
+    in_process = asyncio.run(write_job(make_backend(sim_setup), sim_setup, "一", paced=False))
+
+    mav_setup = vehicle_setup(show, "mav1", time_scale=SCALE)
+    backend = make_backend(mav_setup)
+    assert isinstance(backend, MavlinkBackend)
+    with MavsimServer(configs, time_scale=SCALE) as server:
+        over_mavlink = asyncio.run(write_job(backend, mav_setup, "一", paced=True))
+        autopilot = server.endpoints[0].autopilot
+        assert not autopilot.armed and autopilot.on_ground
+        assert autopilot.setpoints_received > 0.9 * backend.setpoints_sent > 100
+
+    print(f"\nin-process: {in_process}\nover MAVLink: {over_mavlink}")
+    assert over_mavlink.duration_s == pytest.approx(in_process.duration_s, abs=0.05)
+    assert in_process.rmse_pen_down_m < 0.01
+    # the same character, within a small margin of the in-process flight
+    assert over_mavlink.rmse_pen_down_m < in_process.rmse_pen_down_m + 0.005
+    assert over_mavlink.max_error_m < in_process.max_error_m + 0.01
+    assert in_process.iou is not None and over_mavlink.iou is not None  # brush from the pose
+    assert over_mavlink.iou > in_process.iou - 0.05

@@ -1,0 +1,150 @@
+"""A whole show as separate processes over real Zenoh on loopback: orchestrator + four agents.
+
+One show runs for the whole module (router in this process, children supervised as in
+``skyquill up``), on a free port with its own storage, sped up by ``time_scale``. Each test submits
+its own characters; the last one also checks every submission acknowledged during the module.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+from bus.messages import Event, JobState
+from bus.pubsub import subscribe
+from bus.session import Session
+from cli.showrun import ShowRun, derived_show, snapshot, submit_texts, wait_for_jobs
+from showfile import load_show
+
+pytestmark = [pytest.mark.multiprocess, pytest.mark.slow, pytest.mark.timeout(240)]
+
+AIRSHOW = Path(__file__).resolve().parent.parent / "shows" / "airshow-2014.yaml"
+TIME_SCALE = 6.0
+LOST_AFTER_S = 0.5
+JOB_TIMEOUT_S = 90.0
+
+
+@dataclass
+class LiveShow:
+    run: ShowRun
+    session: Session
+    events: list[Event] = field(default_factory=list)
+    acknowledged: list[str] = field(default_factory=list)
+    lock: threading.Lock = field(default_factory=threading.Lock)
+    said: list[str] = field(default_factory=list)
+
+    def submit(self, texts: list[str]) -> list[str]:
+        replies = submit_texts(self.session, self.run.keys, texts)
+        ids = [str(reply.job_id) for reply in replies]
+        assert all(reply.ok and reply.job_id for reply in replies)
+        self.acknowledged.extend(ids)
+        return ids
+
+    def wait(self, job_ids: list[str]) -> list[JobState]:
+        return wait_for_jobs(self.session, self.run.keys, job_ids, timeout_s=JOB_TIMEOUT_S)
+
+    def job(self, job_id: str) -> JobState | None:
+        jobs = {j.job_id: j for j in snapshot(self.session, self.run.keys).jobs}
+        return jobs.get(job_id)
+
+    def wait_until_writing(self, job_ids: list[str]) -> JobState:
+        deadline = time.monotonic() + JOB_TIMEOUT_S
+        while time.monotonic() < deadline:
+            for job_id in job_ids:
+                job = self.job(job_id)
+                if job is not None and job.state == "writing" and job.progress > 0.0:
+                    return job
+            time.sleep(0.1)
+        raise AssertionError(f"none of {job_ids} started writing")
+
+    def events_of(self, kind: str) -> list[Event]:
+        with self.lock:
+            return [e for e in self.events if e.kind == kind]
+
+
+@pytest.fixture(scope="module")
+def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveShow]:
+    out = tmp_path_factory.mktemp("show")
+    base = load_show(AIRSHOW)
+    path, show = derived_show(
+        AIRSHOW,
+        out,
+        time_scale=TIME_SCALE,
+        policy=base.policy.model_copy(update={"lost_after_s": LOST_AFTER_S}),
+        controller=base.controller.model_copy(update={"preset": "default"}),
+    )
+    said: list[str] = []
+    with ShowRun(path, show, log_dir=out / "logs", say=said.append) as run, run.client() as session:
+        live = LiveShow(run, session, said=said)
+
+        def on_event(_key: str, event: Event) -> None:
+            with live.lock:
+                live.events.append(event)
+
+        subscriber = subscribe(session, run.keys.events, Event, on_event)
+        yield live
+        subscriber.undeclare()  # type: ignore[no-untyped-call]
+
+
+def test_eight_characters_are_all_written_with_metrics(live: LiveShow) -> None:
+    texts = ["一", "L", "二", "十", "I", "T", "V", "Z"]
+    jobs = live.wait(live.submit(texts))
+    assert [j.state for j in jobs] == ["done"] * 8, [(j.label, j.state, j.error) for j in jobs]
+    assert {j.vehicle_id for j in jobs} == {"uav1", "uav2", "uav3", "uav4"}
+    for job in jobs:
+        m = job.metrics
+        assert m is not None, job
+        assert 0.0 < m.rmse_pen_down_m < 0.02, (job.label, m)
+        assert m.max_error_m < 0.05 and m.duration_s > 1.0, (job.label, m)
+        assert m.iou is not None and m.iou > 0.5, (job.label, m)
+
+
+def test_an_agent_killed_mid_character_is_detected_and_another_vehicle_finishes(
+    live: LiveShow,
+) -> None:
+    (job_id,) = live.submit(["L"])
+    writing = live.wait_until_writing([job_id])
+    victim = writing.vehicle_id
+    assert victim is not None
+    pid = live.run.supervisor.pid(f"agent {victim}")
+    assert pid is not None
+    killed_at = time.time()
+    os.kill(pid, signal.SIGKILL)
+    (job,) = live.wait([job_id])
+    assert job.state == "done" and job.vehicle_id not in (None, victim)
+    assert job.attempts == 2 and job.metrics is not None
+    lost = [e for e in live.events_of("vehicle_lost") if e.vehicle_id == victim]
+    assert lost, "no vehicle_lost event"
+    assert 0.0 <= lost[0].time_s - killed_at < 2.0
+    deadline = time.monotonic() + 30.0
+    while live.run.supervisor.restarts(f"agent {victim}") < 1:  # and `up` brings it back
+        assert time.monotonic() < deadline
+        time.sleep(0.1)
+    assert any(line.startswith(f"agent {victim} exited (killed by SIGKILL)") for line in live.said)
+
+
+def test_the_orchestrator_killed_and_restarted_loses_no_acknowledged_submission(
+    live: LiveShow,
+) -> None:
+    job_ids = live.submit(["一", "L", "十", "I"])
+    interrupted = live.wait_until_writing(job_ids)
+    pid = live.run.supervisor.pid("orchestrator")
+    assert pid is not None
+    os.kill(pid, signal.SIGKILL)
+    deadline = time.monotonic() + 30.0
+    while live.run.supervisor.pid("orchestrator") in (None, pid):
+        assert time.monotonic() < deadline, "the orchestrator was not restarted"
+        time.sleep(0.1)
+    jobs = live.wait(list(live.acknowledged))
+    assert [j.state for j in jobs] == ["done"] * len(jobs), [(j.job_id, j.state) for j in jobs]
+    assert all(j.metrics is not None for j in jobs)
+    again = next(j for j in jobs if j.job_id == interrupted.job_id)
+    assert again.attempts >= 2  # abandoned when the orchestrator vanished, written again
+    assert any(line.startswith("orchestrator exited (killed by SIGKILL)") for line in live.said)

@@ -1,0 +1,147 @@
+"""The console against the real orchestrator (in a thread, hosting the Zenoh router on loopback)."""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from bus.keys import ShowKeys
+from bus.messages import SubmitReply, SubmitRequest
+from bus.rpc import query_one
+from bus.session import free_tcp_endpoint, open_session
+from orchestrator.app import serve_show
+from showfile import Show, dump_show, load_show
+from tui.app import ConsoleApp
+from tui.link import ConsoleLink
+from tui.settings import settings_from_show
+
+pytestmark = [pytest.mark.timeout(90), pytest.mark.slow]
+
+SHOWS = Path(__file__).resolve().parents[1] / "shows"
+
+
+def moderated_show(tmp_path: Path) -> Show:
+    """The airshow on a free loopback port, with moderation on and files in ``tmp_path``."""
+    base = load_show(SHOWS / "airshow-2014.yaml")
+    endpoint = free_tcp_endpoint()
+    show = base.model_copy(
+        update={
+            "show_id": "tui-orchestrator",
+            "zenoh": base.zenoh.model_copy(
+                update={"router_listen": (endpoint,), "connect": (endpoint,)}
+            ),
+            "storage": base.storage.model_copy(
+                update={
+                    "database": tmp_path / "show.sqlite3",
+                    "recordings_dir": tmp_path / "rec",
+                    "record": False,
+                }
+            ),
+            "policy": base.policy.model_copy(update={"moderation": True}),
+        }
+    )
+    path = tmp_path / "show.yaml"
+    dump_show(show, path)
+    return load_show(path)
+
+
+class Orchestrator:
+    """``serve_show`` on its own event loop in a thread; stopped on exit."""
+
+    def __init__(self, show: Show) -> None:
+        self.show = show
+        self.ready = threading.Event()
+        self.error: BaseException | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._stop: asyncio.Event | None = None
+        self._thread = threading.Thread(target=self._main, daemon=True)
+
+    def _main(self) -> None:
+        async def body() -> None:
+            self._loop, self._stop = asyncio.get_running_loop(), asyncio.Event()
+            ready = asyncio.Event()
+            task = asyncio.create_task(
+                serve_show(self.show, role="router", stop=self._stop, ready=ready)
+            )
+            await ready.wait()
+            self.ready.set()
+            await task
+
+        try:
+            asyncio.run(body())
+        except BaseException as exc:
+            self.error = exc
+            self.ready.set()
+
+    def __enter__(self) -> Orchestrator:
+        self._thread.start()
+        assert self.ready.wait(20.0) and self.error is None, self.error
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        if self._loop is not None and self._stop is not None:
+            self._loop.call_soon_threadsafe(self._stop.set)
+        self._thread.join(20.0)
+        assert self.error is None, self.error
+
+
+async def until(pilot: Any, condition: Callable[[], object], what: str) -> None:
+    deadline = time.monotonic() + 20.0
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"console never showed: {what}")
+        await pilot.pause(0.05)
+
+
+def test_console_approves_and_pauses_with_the_real_orchestrator(tmp_path: Path) -> None:
+    show = moderated_show(tmp_path)
+    keys = ShowKeys(show.show_id)
+    with Orchestrator(show), open_session(show.zenoh, role="client") as session:
+        reply = query_one(
+            session,
+            keys.submit,
+            SubmitRequest(text="永", client_id="test"),
+            SubmitReply,
+            timeout_s=10.0,
+        )
+        assert reply.ok and reply.state == "awaiting_approval", reply
+        job_id = reply.job_id
+        app = ConsoleApp(settings_from_show(show), link=ConsoleLink(session, keys))
+
+        async def scenario(pilot: Any) -> None:
+            # Late joiner: the submission was made before the console started.
+            await until(pilot, lambda: app._queue.selected_job == job_id, "the submission")
+            assert app.model.orchestrator == "online"
+            app._queue.focus()
+            await pilot.press("a")
+            await until(
+                pilot,
+                lambda: app.model.job(job_id).state in ("queued", "assigned"),
+                "the job approved",
+            )
+            assert app.model.last_reply is not None and app.model.last_reply[1].ok
+            await pilot.press("p")
+            await until(pilot, lambda: app._header.queue_paused, "the queue paused")
+            await pilot.press("p")
+            await until(pilot, lambda: not app._header.queue_paused, "the queue resumed")
+            # The orchestrator's event log reaches the console: one line per accepted command.
+            await until(
+                pilot,
+                lambda: len([e for _, e in app.model.events_after(0) if e.kind == "operator"]) == 3,
+                "three operator events",
+            )
+            logged = [e.message for _, e in app.model.events_after(0) if e.kind == "operator"]
+            for line, command in zip(logged, ["approve", "pause", "resume"], strict=True):
+                assert command in line
+
+        async def main() -> None:
+            async with app.run_test(size=(100, 30)) as pilot:
+                await scenario(pilot)
+
+        asyncio.run(main())

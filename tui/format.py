@@ -1,0 +1,123 @@
+"""How values read on screen: short, unit-bearing, and the same in every view. Pure."""
+
+from __future__ import annotations
+
+import time
+
+from rich.text import Text
+
+from bus.messages import JobState
+from tui.rows import QueueRow, VehicleRow
+
+STATE_STYLES = {
+    "idle": "green",
+    "taking_off": "cyan",
+    "writing": "bold #00d7ff",
+    "returning": "cyan",
+    "landing": "cyan",
+    "landed": "green",
+    "fault": "bold red",
+    "lost": "bold white on red",
+    "unknown": "dim",
+}
+"""Style of each vehicle state name."""
+
+SECTION_LABELS = {
+    "awaiting": ("approve?", "bold black on yellow"),
+    "queued": ("queued", "cyan"),
+    "active": ("active", "bold #00d7ff"),
+    "done": ("done", "green"),
+    "failed": ("failed", "bold red"),
+}
+"""Label and style of each queue section."""
+
+
+def state_text(state: str) -> Text:
+    """A vehicle state as a coloured word (``taking_off`` reads ``taking off``)."""
+    return Text(state.replace("_", " "), style=STATE_STYLES.get(state, ""))
+
+
+def duration(seconds: float | None) -> str:
+    """``45s``, ``2m05s``, ``1h03m``; ``-`` when unknown."""
+    if seconds is None:
+        return "-"
+    s = max(0, round(seconds))
+    if s < 60:
+        return f"{s}s"
+    if s < 3600:
+        return f"{s // 60}m{s % 60:02d}s"
+    return f"{s // 3600}h{(s % 3600) // 60:02d}m"
+
+
+def link_age(row: VehicleRow) -> Text:
+    """Seconds since the vehicle was last heard from (``<1s`` when fresh); red when stale."""
+    if row.link_age_s is None:
+        return Text("-", style="dim")
+    age = row.link_age_s
+    shown = "<1s" if age < 1 else f"{age:.1f}s" if age < 10 else duration(age)
+    return Text(shown, style="bold red" if row.stale or row.state == "lost" else "")
+
+
+def tracking_error(row: VehicleRow) -> Text:
+    """Tracking error in centimetres; reversed red above the show's threshold."""
+    if row.tracking_error_m is None:
+        return Text("-", style="dim")
+    return Text(
+        f"{100 * row.tracking_error_m:.1f}cm",
+        style="bold white on red" if row.over_threshold else "",
+    )
+
+
+def battery(fraction: float | None) -> Text:
+    """Battery in percent; yellow under 30 %, red under 15 %."""
+    if fraction is None:
+        return Text("-", style="dim")
+    style = "bold red" if fraction < 0.15 else "yellow" if fraction < 0.30 else ""
+    return Text(f"{100 * fraction:.0f}%", style=style)
+
+
+def progress(fraction: float, width: int = 6) -> str:
+    """A small bar and a percentage, e.g. ``███░░░ 50%``."""
+    fraction = min(1.0, max(0.0, fraction))
+    full = round(fraction * width)
+    return "█" * full + "░" * (width - full) + f" {100 * fraction:3.0f}%"
+
+
+def clock(time_s: float) -> str:
+    """Local wall-clock time ``HH:MM:SS`` of a Unix time."""
+    return time.strftime("%H:%M:%S", time.localtime(time_s))
+
+
+def job_detail(row: QueueRow) -> str:
+    """The one thing to know about a job in its section."""
+    job = row.job
+    if row.section == "awaiting":
+        return f"from {job.client_id}"
+    if row.section == "queued":
+        position = f"#{job.queue_position}" if job.queue_position is not None else "#?"
+        return f"{position} ETA {duration(job.eta_s)}"
+    if row.section == "active":
+        return f"{job.vehicle_id or '?'} {100 * job.progress:.0f}%"
+    if row.section == "done":
+        return metrics_text(job)
+    reason = job.error.message if job.error is not None else ""
+    return f"{job.state}: {reason}" if reason else job.state
+
+
+def metrics_text(job: JobState) -> str:
+    """``RMSE 1.2cm IoU 0.84`` of a finished job."""
+    m = job.metrics
+    if m is None:
+        return "no metrics"
+    iou = "-" if m.iou is None else f"{m.iou:.2f}"
+    return f"RMSE {100 * m.rmse_pen_down_m:.1f}cm IoU {iou}"
+
+
+def section_text(row: QueueRow) -> Text:
+    label, style = SECTION_LABELS[row.section]
+    return Text(label, style=style)
+
+
+def short_id(identifier: str, width: int = 8) -> str:
+    """An identifier cut to ``width`` characters (ids are unique in their first characters)."""
+    return identifier if len(identifier) <= width else identifier[: width - 1] + "…"

@@ -1,0 +1,432 @@
+"""The console's state: bus messages merged into a fleet, a queue, an event log and alerts.
+
+Pure: no Textual and no Zenoh. :meth:`ConsoleModel.apply` takes any message from the bus (and the
+console's own presence/command records) with the time it arrived; widgets read rows from it.
+Telemetry of many vehicles is merged here, so widgets redraw at a bounded rate whatever the
+message rate. Each area has a version counter so a view can tell whether it has to redraw.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from typing import Literal
+
+import msgspec
+
+from bus.messages import (
+    CommandReply,
+    Event,
+    JobState,
+    OperatorCommand,
+    ShowSnapshot,
+    Telemetry,
+    VehicleStatus,
+    VehicleSummary,
+)
+from tui.inputs import BadPayload, BusInput, OrchestratorPresence, VehiclePresence
+from tui.rows import Alert, QueueRow, QueueSection, VehicleRow
+from tui.settings import ConsoleSettings
+from tui.tracks import Track, TrackPoint
+
+FINAL_JOB_STATES = frozenset({"done", "failed", "cancelled", "rejected"})
+ACTIVE_JOB_STATES = frozenset({"assigned", "writing"})
+OrchestratorStatus = Literal["unknown", "online", "offline"]
+
+
+def with_known_strokes(job: JobState, known: JobState | None) -> JobState:
+    """``job``, keeping the strokes of an earlier version of it: the orchestrator sends a drawing's
+    strokes only in some messages (``jobs/<id>`` while waiting), never in ``fleet``."""
+    if job.strokes is None and known is not None and known.strokes is not None:
+        return msgspec.structs.replace(job, strokes=known.strokes)
+    return job
+
+
+class _Vehicle:
+    """Mutable record behind a :class:`VehicleRow`."""
+
+    def __init__(self, vehicle_id: str, kind: str = "", board_id: str | None = None) -> None:
+        self.vehicle_id = vehicle_id
+        self.kind = kind
+        self.board_id = board_id
+        self.state = "unknown"
+        self.job_id: str | None = None
+        self.progress = 0.0
+        self.tracking_error_m: float | None = None
+        self.battery_fraction: float | None = None
+        self.heard_s: float | None = None
+        self.alive: bool | None = None
+        self.message = ""
+        self.position_m_enu: tuple[float, float, float] | None = None
+        self.track = Track()
+
+
+class ConsoleModel:
+    """Fleet, queue, events and alerts as the console knows them."""
+
+    def __init__(
+        self, settings: ConsoleSettings, *, max_events: int = 500, max_finished: int = 100
+    ):
+        self.settings = settings
+        self.max_finished = max_finished
+        self._vehicles: dict[str, _Vehicle] = {}
+        self._order = {spec.vehicle_id: i for i, spec in enumerate(settings.vehicles)}
+        for spec in settings.vehicles:
+            self._vehicles[spec.vehicle_id] = _Vehicle(spec.vehicle_id, spec.kind, spec.board_id)
+        self._sorted_ids: list[str] | None = None
+        self._jobs: dict[str, JobState] = {}
+        self._events: deque[tuple[int, Event]] = deque(maxlen=max_events)
+        self._event_seq = 0
+        self._acknowledged: set[str] = set()
+        self.orchestrator: OrchestratorStatus = "unknown"
+        """Whether the orchestrator's liveliness token exists (unknown before any news)."""
+        self.orchestrator_changed_s: float | None = None
+        """When :attr:`orchestrator` last changed (arrival time)."""
+        self.last_snapshot_s: float | None = None
+        """Arrival time of the latest snapshot or fleet message."""
+        self.queue_paused = False
+        self.last_reply: tuple[OperatorCommand, CommandReply] | None = None
+        self.fleet_version = 0
+        self.queue_version = 0
+        self.status_version = 0
+        self.tracks_version = 0
+
+    # --- reading ---------------------------------------------------------------------------------
+    @property
+    def version(self) -> int:
+        """Changes whenever anything visible changes."""
+        return (
+            self.fleet_version
+            + self.queue_version
+            + self.status_version
+            + self.tracks_version
+            + self._event_seq
+        )
+
+    def vehicle_ids(self) -> list[str]:
+        """Show-file vehicles first, in file order, then others by id."""
+        if self._sorted_ids is None:
+            big = len(self._order)
+            self._sorted_ids = sorted(
+                self._vehicles, key=lambda vid: (self._order.get(vid, big), vid)
+            )
+        return list(self._sorted_ids)
+
+    def vehicle_row(self, vehicle_id: str, now_s: float) -> VehicleRow | None:
+        v = self._vehicles.get(vehicle_id)
+        if v is None:
+            return None
+        job = self._jobs.get(v.job_id) if v.job_id else None
+        age = None if v.heard_s is None else max(0.0, now_s - v.heard_s)
+        state = "lost" if v.alive is False else v.state
+        return VehicleRow(
+            vehicle_id=v.vehicle_id,
+            kind=v.kind,
+            state=state,
+            board_id=v.board_id,
+            job_id=v.job_id,
+            job_label=job.label if job else None,
+            progress=job.progress if job and v.progress == 0.0 else v.progress,
+            tracking_error_m=v.tracking_error_m,
+            battery_fraction=v.battery_fraction,
+            link_age_s=age,
+            stale=age is not None and age > self.settings.lost_after_s,
+            over_threshold=self._over_threshold(v),
+            message=v.message,
+            position_m_enu=v.position_m_enu,
+        )
+
+    def vehicle_rows(self, now_s: float) -> list[VehicleRow]:
+        rows = (self.vehicle_row(vid, now_s) for vid in self.vehicle_ids())
+        return [row for row in rows if row is not None]
+
+    def state_counts(self) -> dict[str, int]:
+        """How many vehicles are in each state (``lost`` when their token vanished)."""
+        counts: dict[str, int] = {}
+        for v in self._vehicles.values():
+            state = "lost" if v.alive is False else v.state
+            counts[state] = counts.get(state, 0) + 1
+        return counts
+
+    def track(self, vehicle_id: str) -> Track | None:
+        v = self._vehicles.get(vehicle_id)
+        return None if v is None else v.track
+
+    def vehicles_on_board(self, board_id: str) -> list[str]:
+        vehicles = self._vehicles
+        return [vid for vid in self.vehicle_ids() if vehicles[vid].board_id == board_id]
+
+    def job(self, job_id: str | None) -> JobState | None:
+        return self._jobs.get(job_id) if job_id else None
+
+    def queue_rows(self) -> list[QueueRow]:
+        """Awaiting approval, queued (in queue order), active, then done and failed (newest
+        first)."""
+        jobs = list(self._jobs.values())
+        awaiting = sorted(
+            (j for j in jobs if j.state in ("awaiting_approval", "submitted")),
+            key=lambda j: j.created_at_s,
+        )
+        queued = sorted(
+            (j for j in jobs if j.state == "queued"),
+            key=lambda j: (j.queue_position or 10**9, -j.priority, j.created_at_s),
+        )
+        active = sorted(
+            (j for j in jobs if j.state in ACTIVE_JOB_STATES), key=lambda j: j.vehicle_id or ""
+        )
+        done = sorted((j for j in jobs if j.state == "done"), key=lambda j: -j.updated_at_s)
+        failed = sorted(
+            (j for j in jobs if j.state in ("failed", "cancelled", "rejected")),
+            key=lambda j: -j.updated_at_s,
+        )
+        sections: list[tuple[QueueSection, list[JobState]]] = [
+            ("awaiting", awaiting),
+            ("queued", queued),
+            ("active", active),
+            ("done", done),
+            ("failed", failed),
+        ]
+        return [QueueRow(section, job) for section, group in sections for job in group]
+
+    def events_after(self, seq: int) -> list[tuple[int, Event]]:
+        """Events with a sequence number above ``seq`` (0 for all kept), oldest first."""
+        return [(s, e) for s, e in self._events if s > seq]
+
+    @property
+    def event_seq(self) -> int:
+        """Sequence number of the newest event."""
+        return self._event_seq
+
+    def alerts(self) -> list[Alert]:
+        """Current alerts, minus the acknowledged ones (whose causes still last)."""
+        current = self._all_alerts()
+        self._acknowledged &= {a.key for a in current}
+        return [a for a in current if a.key not in self._acknowledged]
+
+    def acknowledge_alerts(self) -> int:
+        """Hide the current alerts until their cause clears and comes back; returns how many."""
+        current = self.alerts()
+        self._acknowledged.update(a.key for a in current)
+        self.status_version += 1
+        return len(current)
+
+    def _all_alerts(self) -> list[Alert]:
+        alerts: list[Alert] = []
+        if self.orchestrator == "offline":
+            alerts.append(
+                Alert(
+                    "orchestrator",
+                    "orchestrator_lost",
+                    "orchestrator gone: showing the last known state",
+                )
+            )
+        for vid in self.vehicle_ids():
+            v = self._vehicles[vid]
+            if v.alive is False or v.state == "lost":
+                alerts.append(Alert(f"lost:{vid}", "vehicle_lost", f"{vid} lost"))
+            elif self._over_threshold(v):
+                limit_cm = 100 * self.settings.tracking_error_alert_m
+                error_cm = 100 * (v.tracking_error_m or 0.0)
+                alerts.append(
+                    Alert(
+                        f"tracking:{vid}",
+                        "tracking_error",
+                        f"{vid} tracking error {error_cm:.1f} cm > {limit_cm:.1f} cm",
+                    )
+                )
+        for job in self._jobs.values():
+            if job.state == "failed":
+                reason = job.error.message if job.error else "no reason given"
+                alerts.append(
+                    Alert(
+                        f"failed:{job.job_id}",
+                        "job_failed",
+                        f"job {job.job_id} ({job.label}) failed: {reason}",
+                    )
+                )
+        return alerts
+
+    def _over_threshold(self, v: _Vehicle) -> bool:
+        return (
+            v.alive is not False
+            and v.state == "writing"
+            and v.tracking_error_m is not None
+            and v.tracking_error_m > self.settings.tracking_error_alert_m
+        )
+
+    # --- writing ---------------------------------------------------------------------------------
+    def apply(self, item: BusInput, now_s: float) -> None:
+        """Merge one message that arrived at ``now_s`` (console clock, in [s])."""
+        if isinstance(item, Telemetry):
+            self._telemetry(item, now_s)
+        elif isinstance(item, VehicleStatus):
+            self._status(item, now_s)
+        elif isinstance(item, JobState):
+            self._job(item)
+        elif isinstance(item, Event):
+            self.add_event(item)
+        elif isinstance(item, ShowSnapshot):
+            self.apply_snapshot(item, now_s, full=False)
+        elif isinstance(item, VehiclePresence):
+            self._presence(item)
+        elif isinstance(item, OrchestratorPresence):
+            self._orchestrator(item.alive, now_s)
+        elif isinstance(item, BadPayload):
+            self.note(
+                now_s, "warning", "bad_message", f"unreadable message on {item.key}: {item.message}"
+            )
+
+    def apply_snapshot(self, snapshot: ShowSnapshot, now_s: float, *, full: bool) -> None:
+        """A ``snapshot`` answer (``full``: it lists every job) or a ``fleet`` publication."""
+        if snapshot.show_id != self.settings.show_id:
+            self.note(
+                now_s, "warning", "bad_message", f"snapshot of show {snapshot.show_id!r} ignored"
+            )
+            return
+        if full:
+            # Live updates that arrived while the query was under way are newer: keep them.
+            jobs = {j.job_id: j for j in self._jobs.values() if j.updated_at_s > snapshot.time_s}
+            for job in snapshot.jobs:
+                known = jobs.get(job.job_id)
+                if known is None or known.updated_at_s <= job.updated_at_s:
+                    jobs[job.job_id] = with_known_strokes(job, self._jobs.get(job.job_id))
+            self._jobs = jobs
+            self._evict_finished()
+            self.queue_version += 1
+        else:
+            for job in snapshot.jobs:
+                self._job(job)
+        for summary in snapshot.vehicles:
+            self._summary(summary, now_s)
+        if self.queue_paused != snapshot.queue_paused:
+            self.queue_paused = snapshot.queue_paused
+            self.status_version += 1
+        self.last_snapshot_s = now_s
+        self.fleet_version += 1
+
+    def add_event(self, event: Event) -> None:
+        self._event_seq += 1
+        self._events.append((self._event_seq, event))
+
+    def note(
+        self,
+        now_s: float,
+        level: Literal["info", "warning", "alert"],
+        kind: str,
+        message: str,
+        *,
+        vehicle_id: str | None = None,
+    ) -> None:
+        """An event of the console itself (operator actions, answers, presence)."""
+        self.add_event(
+            Event(time_s=now_s, level=level, kind=kind, message=message, vehicle_id=vehicle_id)
+        )
+
+    def record_command(self, command: OperatorCommand, reply: CommandReply, now_s: float) -> None:
+        """An operator command and the orchestrator's answer (kept for the status line).
+
+        A refused or unanswered command is also logged here; accepted ones are logged by the
+        orchestrator itself, so they are not repeated.
+        """
+        self.last_reply = (command, reply)
+        self.status_version += 1
+        if reply.ok:
+            return
+        target = command.job_id or command.vehicle_id or ""
+        answer = reply.message or "refused"
+        if reply.error is not None:
+            answer = f"{answer}: {reply.error.message}" if reply.message else reply.error.message
+        self.note(
+            now_s,
+            "warning",
+            "command",
+            f"{command.command} {target}".rstrip() + f" -> {answer}",
+            vehicle_id=command.vehicle_id,
+        )
+
+    def _vehicle(self, vehicle_id: str) -> _Vehicle:
+        v = self._vehicles.get(vehicle_id)
+        if v is None:
+            v = self._vehicles[vehicle_id] = _Vehicle(vehicle_id)
+            self._sorted_ids = None
+        return v
+
+    def _telemetry(self, t: Telemetry, now_s: float) -> None:
+        v = self._vehicle(t.vehicle_id)
+        v.state = t.state
+        v.position_m_enu = t.position_m_enu
+        v.tracking_error_m = t.tracking_error_m
+        if t.battery_fraction is not None:
+            v.battery_fraction = t.battery_fraction
+        v.job_id = t.job_id
+        v.progress = t.progress
+        v.heard_s = now_s
+        if v.alive is None:
+            v.alive = True
+        v.track.add(t.job_id, TrackPoint(t.position_m_enu, t.reference_m_enu, t.pen_down))
+        self.fleet_version += 1
+        self.tracks_version += 1
+
+    def _status(self, s: VehicleStatus, now_s: float) -> None:
+        v = self._vehicle(s.vehicle_id)
+        v.kind = s.kind or v.kind
+        v.state = s.state
+        v.board_id = s.board_id or v.board_id
+        if s.job_id != v.job_id:
+            v.progress = 0.0
+        v.job_id = s.job_id
+        v.message = s.message
+        v.heard_s = now_s
+        if v.alive is None:
+            v.alive = True
+        self.fleet_version += 1
+
+    def _summary(self, s: VehicleSummary, now_s: float) -> None:
+        """The orchestrator's view; the vehicle's own recent messages take precedence."""
+        v = self._vehicle(s.vehicle_id)
+        v.kind = v.kind or s.kind
+        v.board_id = v.board_id or s.board_id
+        if v.alive is None:
+            v.alive = s.alive
+        recent = v.heard_s is not None and now_s - v.heard_s <= self.settings.lost_after_s
+        if s.state == "lost" or not recent:
+            v.state = s.state
+            v.job_id = s.job_id
+            v.message = s.message or v.message
+
+    def _job(self, job: JobState) -> None:
+        known = self._jobs.get(job.job_id)
+        if known is not None and known.updated_at_s > job.updated_at_s:
+            return
+        self._jobs[job.job_id] = with_known_strokes(job, known)
+        self._evict_finished()
+        self.queue_version += 1
+        self.fleet_version += 1
+
+    def _evict_finished(self) -> None:
+        finished = [j for j in self._jobs.values() if j.state in FINAL_JOB_STATES]
+        if len(finished) <= self.max_finished:
+            return
+        finished.sort(key=lambda j: j.updated_at_s)
+        for job in finished[: len(finished) - self.max_finished]:
+            del self._jobs[job.job_id]
+
+    def _presence(self, p: VehiclePresence) -> None:
+        v = self._vehicle(p.vehicle_id)
+        if v.alive != p.alive:
+            v.alive = p.alive
+            if p.alive and v.state == "lost":
+                v.state = "unknown"
+            self.fleet_version += 1
+
+    def _orchestrator(self, alive: bool, now_s: float) -> None:
+        status: OrchestratorStatus = "online" if alive else "offline"
+        if status == self.orchestrator:
+            return
+        previous = self.orchestrator
+        self.orchestrator = status
+        self.orchestrator_changed_s = now_s
+        self.status_version += 1
+        if not alive:
+            self.note(now_s, "alert", "orchestrator", "orchestrator gone; last known state kept")
+        elif previous == "offline":
+            self.note(now_s, "info", "orchestrator", "orchestrator back")

@@ -1,0 +1,57 @@
+"""What the console's views read from the model: frozen rows and alerts."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from bus.messages import JobState
+
+QueueSection = Literal["awaiting", "queued", "active", "done", "failed"]
+"""Sections of the queue view, in display order."""
+
+
+@dataclass(frozen=True)
+class VehicleRow:
+    """One vehicle as the fleet table shows it."""
+
+    vehicle_id: str
+    kind: str
+    state: str
+    """A vehicle state name, ``lost`` when its token vanished, or ``unknown`` before any news."""
+    board_id: str | None
+    job_id: str | None
+    job_label: str | None
+    """The character being written (the job's label)."""
+    progress: float
+    """Fraction of the job flown, 0..1."""
+    tracking_error_m: float | None
+    """Latest tracking error in [m]; None before the first telemetry."""
+    battery_fraction: float | None
+    """0..1 when known."""
+    link_age_s: float | None
+    """Seconds since the vehicle's last telemetry or status; None if never heard."""
+    stale: bool
+    """Heard from before, but not within the show's ``lost_after_s``."""
+    over_threshold: bool
+    """Writing with a tracking error above the show's alert threshold."""
+    message: str
+    position_m_enu: tuple[float, float, float] | None
+
+
+@dataclass(frozen=True)
+class QueueRow:
+    """One job in the queue view."""
+
+    section: QueueSection
+    job: JobState
+
+
+@dataclass(frozen=True)
+class Alert:
+    """Something the operator must see now."""
+
+    key: str
+    """Stable identity, e.g. ``lost:uav1``; acknowledged alerts stay hidden until it clears."""
+    kind: Literal["vehicle_lost", "tracking_error", "job_failed", "orchestrator_lost"]
+    message: str

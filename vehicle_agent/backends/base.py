@@ -1,0 +1,130 @@
+"""The contract between a vehicle agent and the vehicle it flies: in-process sim or MAVLink.
+
+The agent runs a fixed-rate loop (100 Hz by default). Each control period it calls
+:meth:`VehicleBackend.tick` exactly once, with a :class:`Setpoint` while it wants the vehicle to
+track a reference (writing, returning, hovering in place), or with ``None`` while the backend's
+own mode is in charge (on the ground, taking off, landing, stopped). ``tick`` returns the vehicle's
+state at the end of that period as a :class:`VehicleSnapshot`.
+
+Mode changes are commands that return as soon as the vehicle accepted them; their progress is seen
+in the following snapshots (``mode``, ``on_ground``):
+
+======================  ===============================================================
+call                    what the backend does, seen through ``VehicleSnapshot.mode``
+======================  ===============================================================
+``start()``             connect / create the vehicle; mode ``idle`` (on the ground, disarmed)
+``takeoff(hover)``      arm and climb to ``hover`` on its own; ``takeoff`` then ``hold``
+``tick(setpoint)``      track the setpoint for one period (only airborne); ``offboard``
+``tick(None)``          continue the current mode; after ``offboard`` it holds the last point
+``land()``              descend at the current horizontal position; ``landing`` then ``idle``
+``estop()``             motors off at once; ``estop`` (the vehicle drops; sim: comes to rest)
+``close()``             release the connection / the simulated vehicle
+======================  ===============================================================
+
+Time: a backend never reads a global clock inside ``tick``. The in-process simulator advances its
+own time by one control period per call (so a faster-than-real-time loop is the same code); a
+MAVLink backend stamps messages with ``now_s`` passed by the agent. World frame ENU and SI units
+everywhere; conversion to NED happens only inside the MAVLink backend.
+
+Creating a backend: ``vehicle_agent.agent.make_backend(setup)`` builds the simulator itself and,
+for ``backend: mavlink`` vehicles, calls ``vehicle_agent.backends.mavlink.create_backend(setup)``
+with the agent's ``VehicleSetup`` (show, vehicle id, board frame, runner config, time scale).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal, Protocol, runtime_checkable
+
+Vec3 = tuple[float, float, float]
+"""A 3-vector in the world frame ENU."""
+
+BackendMode = Literal["idle", "takeoff", "hold", "offboard", "landing", "estop"]
+"""What the vehicle is doing, as its autopilot (or the simulator) sees it."""
+
+AIRBORNE_MODES: frozenset[str] = frozenset({"takeoff", "hold", "offboard", "landing"})
+
+
+class BackendError(RuntimeError):
+    """A backend cannot do what was asked (no connection, rejected command, not airborne)."""
+
+
+class CommandRefusedError(BackendError):
+    """The vehicle declined a command but is healthy (e.g. its pre-arm checks failed): the agent
+    may try again later. Any other :class:`BackendError` from ``takeoff`` is a fault."""
+
+
+@dataclass(frozen=True)
+class Setpoint:
+    """The reference for one control period, from the planned trajectory or a hold point."""
+
+    position_m_enu: Vec3
+    """Reference position in [m], world frame ENU."""
+    velocity_mps_enu: Vec3 = (0.0, 0.0, 0.0)
+    """Reference velocity in [m/s] (feed-forward)."""
+    acceleration_mps2_enu: Vec3 = (0.0, 0.0, 0.0)
+    """Reference acceleration in [m/s^2] (feed-forward)."""
+    pen_down: bool = False
+    """True while the brush is meant to touch the board (for vehicles with an actuated pen)."""
+
+
+@dataclass(frozen=True)
+class VehicleSnapshot:
+    """The vehicle at the end of one control period."""
+
+    t_s: float
+    """Backend time in [s]: simulated time, or the agent clock when the state was read."""
+    position_m_enu: Vec3
+    """Position in [m] of the vehicle reference point, world frame ENU."""
+    velocity_mps_enu: Vec3
+    """Velocity in [m/s], world frame ENU."""
+    armed: bool
+    """Motors armed."""
+    mode: BackendMode
+    """What the vehicle is doing (see the module docstring)."""
+    on_ground: bool
+    """Resting on the ground (landed or never took off)."""
+    battery_fraction: float | None = None
+    """Remaining battery 0..1 when known."""
+    fault: str | None = None
+    """A fault that stops flying (lost link, failsafe, crash), in words; None when healthy."""
+    pen_contact: bool | None = None
+    """Whether the brush touches the board, when the backend knows (the simulator does)."""
+    pen_tip_m_enu: Vec3 | None = None
+    """Where the brush tip is in [m], ENU, when the backend knows (for ink metrics)."""
+    pen_width_m: float | None = None
+    """Width in [m] of the stroke the brush paints now (0 without contact), when known."""
+
+
+@runtime_checkable
+class VehicleBackend(Protocol):
+    """One vehicle, as the agent drives it. Implementations: ``sim.SimBackend``, ``mavlink``."""
+
+    @property
+    def control_period_s(self) -> float:
+        """Length in [s] of one ``tick`` (1 / control rate, 0.01 at 100 Hz)."""
+        ...
+
+    async def start(self) -> VehicleSnapshot:
+        """Connect to / create the vehicle; returns its first state (on the ground)."""
+        ...
+
+    async def takeoff(self, hover_m_enu: Vec3) -> None:
+        """Arm and climb to ``hover_m_enu``; the mode goes ``takeoff`` then ``hold``."""
+        ...
+
+    async def tick(self, setpoint: Setpoint | None, now_s: float) -> VehicleSnapshot:
+        """Advance one control period; ``now_s`` is the agent's clock in [s]."""
+        ...
+
+    async def land(self) -> None:
+        """Descend at the current horizontal position; mode ``landing`` then ``idle``."""
+        ...
+
+    async def estop(self) -> None:
+        """Cut the motors now; mode ``estop``."""
+        ...
+
+    async def close(self) -> None:
+        """Release the vehicle; safe to call twice."""
+        ...

@@ -1,0 +1,48 @@
+"""Typed errors of the MAVLink backend; all are :class:`BackendError` so the agent catches them."""
+
+from __future__ import annotations
+
+from vehicle_agent.backends.base import BackendError, CommandRefusedError
+
+MAV_RESULT_NAMES = {0: "ACCEPTED", 1: "TEMPORARILY_REJECTED", 2: "DENIED", 3: "UNSUPPORTED",
+                    4: "FAILED", 5: "IN_PROGRESS", 6: "CANCELLED"}  # fmt: skip
+COMMAND_NAMES = {11: "SET_MODE", 21: "NAV_LAND", 22: "NAV_TAKEOFF", 176: "DO_SET_MODE",
+                 400: "COMPONENT_ARM_DISARM", 511: "SET_MESSAGE_INTERVAL"}  # fmt: skip
+
+
+class MavlinkError(BackendError):
+    """Root of the MAVLink backend's errors."""
+
+
+class LinkLostError(MavlinkError):
+    """No heartbeat from the autopilot (at start, or for longer than the timeout)."""
+
+
+class UnsupportedAutopilotError(MavlinkError):
+    """The heartbeat names an autopilot other than ArduPilot or PX4."""
+
+
+class CommandTimeoutError(MavlinkError):
+    """A command got no COMMAND_ACK after every attempt."""
+
+
+class CommandRejectedError(MavlinkError, CommandRefusedError):
+    """The autopilot answered a command with a result other than ACCEPTED (it is still healthy)."""
+
+    def __init__(self, command: int, result: int, reason: str | None) -> None:
+        self.command = command
+        self.result = result
+        self.reason = reason
+        """The autopilot's own words (its STATUSTEXT around the refusal), when it said any."""
+        name = COMMAND_NAMES.get(command, str(command))
+        outcome = MAV_RESULT_NAMES.get(result, str(result))
+        because = f": {reason}" if reason else ""
+        super().__init__(f"autopilot refused {name} ({outcome}){because}")
+
+
+class ArmingRefusedError(CommandRejectedError):
+    """Arming was refused (pre-arm checks: no position estimate yet, ...)."""
+
+
+class VehicleFaultError(MavlinkError):
+    """A command while the vehicle is in a fault (pilot has control, link lost, failsafe)."""

@@ -1,0 +1,108 @@
+"""Settings of one MAVLink vehicle, typed and frozen; built from the show file once."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Literal
+
+from showfile import Show, Vehicle
+from vehicle_agent.backends.base import BackendError, Vec3
+from vehicle_agent.control.controller import DEFAULT_CONFIG, PAPER_CONFIG, ControllerConfig
+
+SetpointKind = Literal["position", "attitude"]
+MocapMessage = Literal["none", "vision_position_estimate", "att_pos_mocap"]
+
+
+@dataclass(frozen=True)
+class MavlinkSettings:
+    """How the agent talks to one autopilot."""
+
+    url: str
+    """Where the autopilot is (see :mod:`vehicle_agent.backends.mavlink_url`)."""
+    origin_m_enu: Vec3
+    """Where the vehicle's LOCAL_NED origin (its estimator's home) is in the show frame, [m]."""
+    system_id: int | None = None
+    """The autopilot's system id; None: the first autopilot heartbeat on the link."""
+    control_rate_hz: float = 100.0
+    """Rate of ``tick`` (the agent's control loop) in [Hz]."""
+    setpoint_rate_hz: float = 50.0
+    """Rate of the setpoint stream in [Hz] (50-100; ArduPilot follows 50 Hz well)."""
+    setpoints: SetpointKind = "position"
+    """``position``: SET_POSITION_TARGET_LOCAL_NED with p, v, a (type_mask 0x0C00), the
+    autopilot's position loop flies; ``attitude``: our RPT outer loop runs here and streams
+    SET_ATTITUDE_TARGET (ArduPilot needs GUID_OPTIONS bit 3: thrust is thrust)."""
+    telemetry_rate_hz: float = 50.0
+    """Rate asked for LOCAL_POSITION_NED and ATTITUDE (MAV_CMD_SET_MESSAGE_INTERVAL)."""
+    heartbeat_timeout_s: float = 3.0
+    """No autopilot heartbeat for this long -> fault (lost link)."""
+    connect_timeout_s: float = 10.0
+    """How long ``start`` waits for the first heartbeat."""
+    command_timeout_s: float = 1.0
+    """How long one attempt of a command waits for its COMMAND_ACK."""
+    command_attempts: int = 3
+    """Attempts per command before it times out."""
+    setpoint_timeout_s: float | None = None
+    """Setpoint gap after which the autopilot has stopped following (None: its default, ArduPilot
+    GUID_TIMEOUT 3 s, PX4 COM_OF_LOSS_T 1 s); a longer gap in our stream is a fault."""
+    takeoff_tolerance_m: float = 0.1
+    """Height error in [m] under which the take-off is complete."""
+    takeoff_timeout_s: float = 30.0
+    """A take-off not complete after this long is a fault."""
+    land_timeout_s: float = 60.0
+    """A landing not finished (disarmed on the ground) after this long is a fault."""
+    climb_speed_mps: float = 0.5
+    """Climb rate of our own take-off ramp (PX4 OFFBOARD) in [m/s]."""
+    mocap: MocapMessage = "none"
+    """Forward motion-capture poses from ``mocap_source`` with this message."""
+    mocap_rate_hz: float = 50.0
+    """Rate of forwarded mocap poses in [Hz]."""
+    mass_kg: float = 1.0
+    """Vehicle mass (attitude setpoints: thrust normalisation)."""
+    thrust_max_n: float = 19.6
+    """Largest thrust (attitude setpoints: thrust 1.0)."""
+    controller: ControllerConfig = DEFAULT_CONFIG
+    """Our outer loop, used with ``setpoints = "attitude"``."""
+
+    def __post_init__(self) -> None:
+        for name in ("control_rate_hz", "setpoint_rate_hz", "telemetry_rate_hz",
+                     "heartbeat_timeout_s", "connect_timeout_s", "command_timeout_s",
+                     "mocap_rate_hz", "mass_kg", "thrust_max_n", "climb_speed_mps"):  # fmt: skip
+            if not getattr(self, name) > 0:
+                raise BackendError(f"mavlink setting {name} must be > 0")
+        if self.setpoint_rate_hz > self.control_rate_hz:
+            raise BackendError("mavlink setpoint_rate_hz cannot exceed the control rate")
+        if self.command_attempts < 1:
+            raise BackendError("mavlink command_attempts must be >= 1")
+
+    @property
+    def control_period_s(self) -> float:
+        return 1.0 / self.control_rate_hz
+
+
+def settings_from_show(show: Show, vehicle: Vehicle) -> MavlinkSettings:
+    """Settings of ``vehicle`` (a show-file vehicle with ``backend: mavlink``) in ``show``: its
+    ``mavlink_*`` fields (origin default: its home), limits and controller from the show."""
+    if not vehicle.mavlink_url:
+        raise BackendError(f"vehicle {vehicle.id}: backend mavlink needs mavlink_url")
+    limits = show.vehicle_limits(vehicle.id)
+    origin = vehicle.mavlink_origin_m_enu or vehicle.home_m_enu
+    return MavlinkSettings(
+        url=vehicle.mavlink_url,
+        origin_m_enu=(float(origin[0]), float(origin[1]), float(origin[2])),
+        system_id=vehicle.mavlink_system_id,
+        control_rate_hz=float(show.controller.rate_hz),
+        telemetry_rate_hz=float(show.controller.rate_hz),
+        setpoint_rate_hz=float(vehicle.mavlink_setpoint_rate_hz),
+        setpoints=vehicle.mavlink_setpoints,
+        mocap=vehicle.mavlink_mocap,
+        mass_kg=float(limits.mass_kg),
+        thrust_max_n=float(limits.thrust_max_n),
+        controller=_controller(show),
+    )
+
+
+def _controller(show: Show) -> ControllerConfig:
+    """The show's outer loop (as the in-process simulator flies it), aiming the brush tip."""
+    if show.controller.preset == "paper":
+        return PAPER_CONFIG
+    return replace(DEFAULT_CONFIG, brush_lever_m=show.planning.write_height_m)

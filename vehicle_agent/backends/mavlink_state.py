@@ -1,0 +1,188 @@
+"""What the autopilot told us, absorbed message by message (pure: no I/O, no clock).
+
+:class:`Flavor` captures the two autopilots' mode encodings: ArduPilot's HEARTBEAT ``custom_mode``
+is the mode number (GUIDED 4, LAND 9); PX4's is ``main << 16 | sub << 24`` (OFFBOARD main 6,
+AUTO.LAND main 4 sub 6) and MAV_CMD_DO_SET_MODE takes main and sub in params 2 and 3.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+from typing import Any, Literal
+
+from vehicle_agent.backends.mavlink_frames import Vec3
+
+MAV_AUTOPILOT_ARDUPILOTMEGA = 3
+MAV_AUTOPILOT_INVALID = 8
+MAV_AUTOPILOT_PX4 = 12
+MAV_TYPE_GCS = 6
+MAV_MODE_FLAG_SAFETY_ARMED = 128
+MAV_LANDED_STATE_ON_GROUND = 1
+SEVERITY_WARNING = 4
+
+_ARDUPILOT_MODES = {0: "STABILIZE", 2: "ALT_HOLD", 3: "AUTO", 4: "GUIDED", 5: "LOITER", 6: "RTL",
+                    9: "LAND", 16: "POSHOLD", 17: "BRAKE", 20: "GUIDED_NOGPS"}  # fmt: skip
+_PX4_MAIN = {1: "MANUAL", 2: "ALTCTL", 3: "POSCTL", 4: "AUTO", 5: "ACRO", 6: "OFFBOARD",
+             7: "STABILIZED", 8: "RATTITUDE"}  # fmt: skip
+_PX4_AUTO = {1: "READY", 2: "TAKEOFF", 3: "LOITER", 4: "MISSION", 5: "RTL", 6: "LAND"}
+
+
+@dataclass(frozen=True)
+class Flavor:
+    """How one autopilot family encodes the modes we use."""
+
+    name: Literal["ardupilot", "px4"]
+    """Autopilot family."""
+    offboard_mode: int
+    """HEARTBEAT custom_mode of the mode that follows our setpoints (GUIDED / OFFBOARD)."""
+    land_mode: int
+    """HEARTBEAT custom_mode of the autopilot's landing mode."""
+    setpoint_timeout_s: float
+    """Default time without setpoints after which the autopilot stops following us [s]
+    (ArduPilot GUID_TIMEOUT 3 s; PX4 COM_OF_LOSS_T 1 s)."""
+
+    def set_mode_params(self, custom_mode: int) -> tuple[float, float, float]:
+        """(param1, param2, param3) of MAV_CMD_DO_SET_MODE for ``custom_mode``."""
+        if self.name == "px4":
+            return (1.0, float((custom_mode >> 16) & 0xFF), float((custom_mode >> 24) & 0xFF))
+        return (1.0, float(custom_mode), 0.0)
+
+    def mode_name(self, custom_mode: int) -> str:
+        """Human name of a HEARTBEAT custom_mode."""
+        if self.name == "px4":
+            main, sub = (custom_mode >> 16) & 0xFF, (custom_mode >> 24) & 0xFF
+            name = _PX4_MAIN.get(main, f"MAIN{main}")
+            return f"{name}.{_PX4_AUTO.get(sub, sub)}" if main == 4 else name
+        return _ARDUPILOT_MODES.get(custom_mode, f"MODE{custom_mode}")
+
+
+ARDUPILOT = Flavor("ardupilot", offboard_mode=4, land_mode=9, setpoint_timeout_s=3.0)
+PX4 = Flavor("px4", offboard_mode=6 << 16, land_mode=(4 << 16) | (6 << 24), setpoint_timeout_s=1.0)
+
+
+def flavor_for(autopilot: int) -> Flavor | None:
+    """The flavor of a HEARTBEAT ``autopilot`` field, None when unsupported."""
+    return {MAV_AUTOPILOT_ARDUPILOTMEGA: ARDUPILOT, MAV_AUTOPILOT_PX4: PX4}.get(autopilot)
+
+
+class LinkState:
+    """Latest vehicle state from its messages; counters let callers see what is new."""
+
+    def __init__(self, system_id: int | None = None, *, own_system_id: int = 255) -> None:
+        self.own_system_id = own_system_id
+        """Our system id: COMMAND_ACKs addressed to another ground station are not ours."""
+        self.system_id = system_id
+        """The autopilot's system id: configured, or taken from its first HEARTBEAT."""
+        self.component_id: int | None = None
+        self.autopilot: int | None = None
+        self.heartbeats = 0
+        self.custom_mode: int | None = None
+        self.armed = False
+        self.positions = 0
+        self.position_ned: Vec3 | None = None
+        self.velocity_ned: Vec3 = (0.0, 0.0, 0.0)
+        self.position_time_ms = 0
+        self.attitude_ned: Vec3 | None = None
+        self.battery_fraction: float | None = None
+        self._battery_from_status = False
+        self.landed_state: int | None = None
+        self.target_stamps = 0
+        self.target_stamp_ms: int | None = None
+        """``time_boot_ms`` of the last POSITION_TARGET_LOCAL_NED (our stamp, on mavsim)."""
+        self.acks: deque[tuple[int, int]] = deque(maxlen=64)
+        self.texts: deque[tuple[int, str]] = deque(maxlen=64)
+        """STATUSTEXTs (severity, text) not yet taken by :meth:`take_texts`."""
+        self.recent_texts: deque[tuple[int, str]] = deque(maxlen=16)
+
+    @property
+    def flavor(self) -> Flavor | None:
+        return None if self.autopilot is None else flavor_for(self.autopilot)
+
+    @property
+    def connected(self) -> bool:
+        """A heartbeat of the autopilot was seen."""
+        return self.heartbeats > 0
+
+    def take_texts(self) -> list[tuple[int, str]]:
+        """The STATUSTEXTs received since the last call."""
+        texts = list(self.texts)
+        self.texts.clear()
+        return texts
+
+    def absorb(self, message: Any) -> str:
+        """Take one message into the state; returns its type ("" when ignored: other system)."""
+        kind: str = message.get_type()
+        source = message.get_srcSystem()
+        if kind == "HEARTBEAT":
+            return kind if self._heartbeat(message) else ""
+        if self.system_id is None or source != self.system_id:
+            return ""
+        handler = _HANDLERS.get(kind)
+        if handler is None:
+            return kind
+        return kind if handler(self, message) is not False else ""
+
+    def _heartbeat(self, m: Any) -> bool:
+        if m.autopilot == MAV_AUTOPILOT_INVALID or m.type == MAV_TYPE_GCS:
+            return False
+        source, component = m.get_srcSystem(), m.get_srcComponent()
+        if self.system_id is not None and source != self.system_id:
+            return False
+        if self.component_id is not None and component != self.component_id:
+            return False
+        self.system_id, self.component_id = source, component
+        self.autopilot = int(m.autopilot)
+        self.custom_mode = int(m.custom_mode)
+        self.armed = bool(m.base_mode & MAV_MODE_FLAG_SAFETY_ARMED)
+        self.heartbeats += 1
+        return True
+
+    def _local_position(self, m: Any) -> None:
+        self.position_ned = (float(m.x), float(m.y), float(m.z))
+        self.velocity_ned = (float(m.vx), float(m.vy), float(m.vz))
+        self.position_time_ms = int(m.time_boot_ms)
+        self.positions += 1
+
+    def _attitude(self, m: Any) -> None:
+        self.attitude_ned = (float(m.roll), float(m.pitch), float(m.yaw))
+
+    def _battery_status(self, m: Any) -> None:
+        if m.battery_remaining >= 0:
+            self.battery_fraction = m.battery_remaining / 100.0
+            self._battery_from_status = True
+
+    def _sys_status(self, m: Any) -> None:
+        if m.battery_remaining >= 0 and not self._battery_from_status:
+            self.battery_fraction = m.battery_remaining / 100.0
+
+    def _extended_sys_state(self, m: Any) -> None:
+        self.landed_state = int(m.landed_state)
+
+    def _statustext(self, m: Any) -> None:
+        text = m.text.decode(errors="replace") if isinstance(m.text, bytes) else str(m.text)
+        entry = (int(m.severity), text.rstrip("\x00"))
+        self.texts.append(entry)
+        self.recent_texts.append(entry)
+
+    def _command_ack(self, m: Any) -> bool:
+        if getattr(m, "target_system", 0) not in (0, self.own_system_id):
+            return False
+        self.acks.append((int(m.command), int(m.result)))
+        return True
+
+    def _position_target(self, m: Any) -> None:
+        self.target_stamp_ms = int(m.time_boot_ms)
+        self.target_stamps += 1
+
+
+_HANDLERS = {
+    "LOCAL_POSITION_NED": LinkState._local_position,
+    "ATTITUDE": LinkState._attitude,
+    "BATTERY_STATUS": LinkState._battery_status,
+    "SYS_STATUS": LinkState._sys_status,
+    "EXTENDED_SYS_STATE": LinkState._extended_sys_state,
+    "STATUSTEXT": LinkState._statustext,
+    "COMMAND_ACK": LinkState._command_ack,
+    "POSITION_TARGET_LOCAL_NED": LinkState._position_target,
+}

@@ -1,0 +1,229 @@
+"""The in-process simulated vehicle: the SIM world of one quadrotor flown by our RPT controller.
+
+Each ``tick`` is one control period of the closed loop the SIM helper built (``flight.Flight`` does
+the same for batches): read the mocap frame, run the position controller on the reference,
+step the world under the resulting inner-loop command. The backend plays the autopilot's part
+around it: it rests on the ground until ``takeoff`` (the world is not stepped there: it has no
+ground), climbs and descends along its own min-jerk moves, holds the last point when no setpoint
+comes, and freezes where it touched down. Time is the world's tick count; nothing reads a clock.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from sim.params import WorldParams
+from sim.quadrotor import InnerLoopCommand
+from sim.world import World
+from vehicle_agent.backends.base import BackendError, BackendMode, Setpoint, Vec3, VehicleSnapshot
+from vehicle_agent.control.controller import (
+    DEFAULT_CONFIG,
+    ControllerConfig,
+    PositionController,
+    ReferenceTick,
+)
+from vehicle_agent.motion import Move, plan_move
+
+TOUCHDOWN_TOLERANCE_M = 0.03
+"""Height above the ground in [m] below which a finished descent counts as landed."""
+SETTLE_LIMIT_S = 2.0
+"""After a take-off or landing move ends, how long in [s] the vehicle may take to get there."""
+
+
+class SimVehicle:
+    """One simulated quadrotor with an autopilot-like mode logic (synchronous, pure)."""
+
+    def __init__(
+        self,
+        home_m_enu: Vec3,
+        *,
+        world: WorldParams | None = None,
+        controller: ControllerConfig = DEFAULT_CONFIG,
+        seed: int = 0,
+        vertical_speed_mps: float = 0.5,
+        vertical_accel_mps2: float = 0.8,
+        contact_region: Callable[[Vec3], bool] | None = None,
+    ) -> None:
+        self.params = world if world is not None else WorldParams()
+        self.controller_config = controller
+        self.seed = seed
+        self.home_m_enu = home_m_enu
+        self.dt_s = self.params.dt_s
+        self.vertical_speed_mps = vertical_speed_mps
+        self.vertical_accel_mps2 = vertical_accel_mps2
+        self.contact_region = contact_region
+        """Where the board is: contact only counts with the tip over it (None: everywhere)."""
+        self.t_s = 0.0
+        self.mode: BackendMode = "idle"
+        self._rest_m_enu: Vec3 = home_m_enu
+        self._world: World | None = None
+        self._controller: PositionController | None = None
+        self._move: Move | None = None
+        self._hold: Setpoint = Setpoint(position_m_enu=home_m_enu)
+        self._flights = 0
+
+    # --- mode commands -------------------------------------------------------------------------
+    def takeoff(self, hover_m_enu: Vec3) -> None:
+        """Spin up where it rests and climb straight up to the height of ``hover_m_enu``."""
+        if self.mode != "idle":
+            raise BackendError(f"cannot take off in mode {self.mode}")
+        start = self._rest_m_enu
+        self._world = World(self.params, [start], seed=self.seed + self._flights)
+        self._controller = PositionController(self.controller_config, self.dt_s, np.array([start]))
+        self._flights += 1
+        self._begin_move(start, (start[0], start[1], hover_m_enu[2]), "takeoff")
+
+    def land(self) -> None:
+        """Descend straight down to ground height (the home's z)."""
+        if self.mode in ("idle", "estop"):
+            return
+        here = self._hold.position_m_enu
+        self._begin_move(here, (here[0], here[1], self.home_m_enu[2]), "landing")
+
+    def estop(self) -> None:
+        """Motors off: the vehicle drops to the ground where it is and stays there."""
+        x, y, _ = self._position()
+        self._rest_m_enu = (x, y, self.home_m_enu[2])
+        self._world = None
+        self._controller = None
+        self.mode = "estop"
+
+    def _begin_move(self, start: Vec3, end: Vec3, mode: BackendMode) -> None:
+        self._move = plan_move(
+            start,
+            end,
+            self.t_s,
+            v_max_mps=self.vertical_speed_mps,
+            a_max_mps2=self.vertical_accel_mps2,
+        )
+        self.mode = mode
+
+    # --- the tick ------------------------------------------------------------------------------
+    def tick(self, setpoint: Setpoint | None) -> VehicleSnapshot:
+        """One control period: the reference from the mode (or ``setpoint``), then the loop."""
+        if setpoint is not None:
+            if self.mode not in ("hold", "offboard"):
+                raise BackendError(f"setpoint refused in mode {self.mode}")
+            self.mode, self._hold = "offboard", setpoint
+        elif self.mode == "offboard":
+            self.mode = "hold"
+            self._hold = Setpoint(position_m_enu=self._hold.position_m_enu)
+        reference = self._reference()
+        if reference is not None:
+            self._step(reference)
+        self.t_s += self.dt_s
+        self._finish_move()
+        return self.snapshot()
+
+    def _reference(self) -> Setpoint | None:
+        if self._world is None:
+            return None
+        if self.mode in ("takeoff", "landing") and self._move is not None:
+            return self._move.setpoint(self.t_s)
+        return self._hold
+
+    def _step(self, reference: Setpoint) -> None:
+        assert self._world is not None and self._controller is not None
+        tick = ReferenceTick(
+            position_m_enu=np.asarray([reference.position_m_enu]),
+            velocity_mps_enu=np.asarray([reference.velocity_mps_enu]),
+            acceleration_mps2_enu=np.asarray([reference.acceleration_mps2_enu]),
+        )
+        command = self._controller.update(self._world.mocap_frame().position_m_enu, tick)
+        self._world.step(
+            InnerLoopCommand(command.throttle, command.roll_rad, command.pitch_rad, command.yaw_rad)
+        )
+
+    def _finish_move(self) -> None:
+        move = self._move
+        if move is None or self.mode not in ("takeoff", "landing") or not move.done(self.t_s):
+            return
+        error = math.dist(self._position(), move.end_m_enu)
+        late = self.t_s - move.end_s >= SETTLE_LIMIT_S
+        if error > TOUCHDOWN_TOLERANCE_M and not late:
+            self._hold = Setpoint(position_m_enu=move.end_m_enu)
+            return
+        self._move = None
+        if self.mode == "takeoff":
+            self.mode, self._hold = "hold", Setpoint(position_m_enu=move.end_m_enu)
+        else:
+            x, y, _ = self._position()
+            self._rest_m_enu = (x, y, self.home_m_enu[2])
+            self._world = None
+            self._controller = None
+            self.mode = "idle"
+
+    # --- state ---------------------------------------------------------------------------------
+    def _position(self) -> Vec3:
+        if self._world is None:
+            return self._rest_m_enu
+        return _vec(self._world.state.position_m_enu[0])
+
+    def snapshot(self) -> VehicleSnapshot:
+        """The vehicle now."""
+        world = self._world
+        if world is None:
+            return VehicleSnapshot(
+                t_s=self.t_s,
+                position_m_enu=self._rest_m_enu,
+                velocity_mps_enu=(0.0, 0.0, 0.0),
+                armed=False,
+                mode=self.mode,
+                on_ground=True,
+                battery_fraction=None,
+                pen_contact=False,
+                pen_width_m=0.0,
+            )
+        brush = world.brush()
+        tip = _vec(brush.tip_m_enu[0])
+        contact = bool(brush.contact[0])
+        if contact and self.contact_region is not None and not self.contact_region(tip):
+            contact = False  # the world's board spans everything; the real one does not
+        return VehicleSnapshot(
+            t_s=self.t_s,
+            position_m_enu=_vec(world.state.position_m_enu[0]),
+            velocity_mps_enu=_vec(world.state.velocity_mps_enu[0]),
+            armed=True,
+            mode=self.mode,
+            on_ground=False,
+            battery_fraction=None,
+            pen_contact=contact,
+            pen_tip_m_enu=tip,
+            pen_width_m=float(brush.width_m[0]) if contact else 0.0,
+        )
+
+
+def _vec(row: np.ndarray) -> Vec3:
+    return (float(row[0]), float(row[1]), float(row[2]))
+
+
+class SimBackend:
+    """:class:`SimVehicle` behind the async backend protocol."""
+
+    def __init__(self, vehicle: SimVehicle) -> None:
+        self.vehicle = vehicle
+
+    @property
+    def control_period_s(self) -> float:
+        return self.vehicle.dt_s
+
+    async def start(self) -> VehicleSnapshot:
+        return self.vehicle.snapshot()
+
+    async def takeoff(self, hover_m_enu: Vec3) -> None:
+        self.vehicle.takeoff(hover_m_enu)
+
+    async def tick(self, setpoint: Setpoint | None, now_s: float) -> VehicleSnapshot:
+        return self.vehicle.tick(setpoint)
+
+    async def land(self) -> None:
+        self.vehicle.land()
+
+    async def estop(self) -> None:
+        self.vehicle.estop()
+
+    async def close(self) -> None:
+        return None

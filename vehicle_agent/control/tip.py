@@ -1,0 +1,104 @@
+"""Aim the brush tip, not the body: a preview filter on the horizontal reference.
+
+The brush hangs along the body z axis, ``lever`` below the vehicle reference point. The horizontal
+thrust per unit mass must carry the acceleration and the linear drag, ``p'' + c p'``, so the body
+tilts by that over g and the tip writes at ``p_tip = p - lever (p'' + c p') / g`` (small angles).
+For the tip to follow ``r(t)`` the body must follow the solution of
+``p - tau^2 (p'' + c p') = r``, ``tau^2 = lever / g``. Its transfer function has one stable and one
+unstable pole, ``a / (s + a) * b / (b - s)``: a first-order low-pass run forward and another run
+backward over the whole reference, which is known in advance (a two-sided exponential kernel;
+with c = 0 both time constants are tau). Being linear and time-invariant it maps velocity and
+acceleration references the same way.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.signal import lfilter
+
+from vehicle_agent.control.errors import ControlError
+
+FloatArray = NDArray[np.float64]
+
+
+def tip_filter_poles(
+    lever_m: float, drag_per_s: float, gravity_mps2: float = 9.81
+) -> tuple[float, float]:
+    """(a, b) in [1/s] with ``1 / (1 - tau^2 (s^2 + c s)) = a / (s + a) * b / (b - s)``,
+    ``tau^2 = lever / g``."""
+    if not lever_m > 0.0:
+        raise ControlError("must be positive", field="lever_m")
+    tau2 = lever_m / gravity_mps2
+    root = math.sqrt(drag_per_s**2 + 4.0 / tau2)
+    return 0.5 * (drag_per_s + root), 0.5 * (root - drag_per_s)
+
+
+def _two_sided_lowpass(
+    signal: FloatArray, forward_alpha: float, backward_alpha: float
+) -> FloatArray:
+    """First-order low-pass forward, then another backward, along axis 0, at rest on the ends."""
+    fwd = lfilter(
+        [1.0 - forward_alpha], [1.0, -forward_alpha], signal, axis=0, zi=forward_alpha * signal[:1]
+    )[0]
+    rev = fwd[::-1]
+    bwd = lfilter(
+        [1.0 - backward_alpha], [1.0, -backward_alpha], rev, axis=0, zi=backward_alpha * rev[:1]
+    )[0]
+    result: FloatArray = bwd[::-1]
+    return result
+
+
+def body_reference_for_tip(
+    position_m_enu: FloatArray,
+    velocity_mps_enu: FloatArray,
+    acceleration_mps2_enu: FloatArray,
+    dt_s: float,
+    lever_m: float,
+    gravity_mps2: float = 9.81,
+    drag_per_s: tuple[float, float] = (0.0, 0.0),
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Body reference (p, v, a) whose tilt puts the brush tip on the given reference.
+
+    Arrays of shape (K, ..., 3) sampled every ``dt_s`` along axis 0; only x and y change. The
+    reference should start and end at rest (the filter assumes constant values beyond the ends).
+    ``drag_per_s`` is the known linear drag per unit mass of x and y: the thrust, hence the tilt,
+    must also carry ``c v``.
+    """
+    if lever_m == 0.0:
+        return position_m_enu, velocity_mps_enu, acceleration_mps2_enu
+    out = [
+        np.array(ref, dtype=np.float64, copy=True)
+        for ref in (position_m_enu, velocity_mps_enu, acceleration_mps2_enu)
+    ]
+    for axis in (0, 1):
+        a, b = tip_filter_poles(lever_m, drag_per_s[axis], gravity_mps2)
+        fa, fb = math.exp(-a * dt_s), math.exp(-b * dt_s)
+        for shifted in out:
+            shifted[..., axis] = _two_sided_lowpass(shifted[..., axis], fa, fb)
+    return out[0], out[1], out[2]
+
+
+def lag_compensated(
+    acceleration_mps2_enu: FloatArray,
+    dt_s: float,
+    lead_s: ArrayLike,
+    second_order_s2: ArrayLike | None = None,
+) -> FloatArray:
+    """Acceleration feed-forward that inverts the inner loop: ``a + c1 a' + c2 a''`` per axis.
+
+    The inner loop and motors deliver a commanded acceleration through roughly
+    ``1 / (c2 s^2 + c1 s + 1)`` (``c1 = 2 zeta / w_n`` plus half a tick of hold,
+    ``c2 = 1 / w_n^2``); the reference is known in advance, so its derivatives lead the command.
+    ``lead_s`` and ``second_order_s2`` have one entry per axis (3,).
+    """
+    if acceleration_mps2_enu.shape[0] < 3:
+        return acceleration_mps2_enu
+    rate = np.gradient(acceleration_mps2_enu, dt_s, axis=0)
+    led: FloatArray = acceleration_mps2_enu + np.asarray(lead_s, dtype=np.float64) * rate
+    if second_order_s2 is not None:
+        curvature = np.gradient(rate, dt_s, axis=0)
+        led = led + np.asarray(second_order_s2, dtype=np.float64) * curvature
+    return led

@@ -1,0 +1,125 @@
+"""The flight report figure (``report.png``): tracking against time and the writing on the board.
+
+Rows: position x, y, z against time (Phang 2015 Fig. 12: the writing point, i.e. the brush axis at
+the nominal lever, and the body, which leans away from it on purpose); velocity x, y, z of the
+body (Fig. 13); the input
+strokes, planned path and flown brush path on the board (Fig. 14), then the written ink beside the
+target ink with their intersection over union (Guo 2024 section VII). Matplotlib's Agg backend
+only, never pyplot, so it runs headless and in threads.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from numpy.typing import NDArray
+
+from vehicle_agent.flight import FlightLog
+from vehicle_agent.metrics import FlightMetrics, InkResult, writing_point_error
+
+FloatArray = NDArray[np.float64]
+
+_AXES = "xyz"
+
+
+def _time_rows(fig: Figure, log: FlightLog, vehicle: int, grid: object) -> None:
+    t = log.t_s - log.t_s[0]
+    pen = log.pen_down[:, vehicle]
+    writing = log.reference_position_m_enu + writing_point_error(log)
+    rows = (
+        ("writing point", "m", log.reference_position_m_enu, writing, log.position_m_enu),
+        ("velocity", "m/s", log.reference_velocity_mps_enu, log.velocity_mps_enu, None),
+    )
+    for r, (name, unit, ref, flown, body) in enumerate(rows):
+        for c in range(3):
+            ax = fig.add_subplot(grid[r, c])  # type: ignore[index]
+            if body is not None:
+                ax.plot(t, body[:, vehicle, c], color="tab:green", lw=0.7, alpha=0.6, label="body")
+            ax.plot(t, ref[:, vehicle, c], "--", color="tab:gray", lw=1.0, label="reference")
+            ax.plot(t, flown[:, vehicle, c], color="tab:blue", lw=0.9, label="flown")
+            lo, hi = ax.get_ylim()
+            ax.fill_between(t, lo, hi, where=pen, color="tab:orange", alpha=0.12, lw=0)
+            ax.set_ylim(lo, hi)
+            ax.set_title(f"{name} {_AXES[c]} [{unit}]", fontsize=9)
+            ax.tick_params(labelsize=7)
+            if r == 1:
+                ax.set_xlabel("t [s]", fontsize=8)
+            if r == 0 and c == 0:
+                ax.legend(fontsize=7, loc="best")
+
+
+def _board_panel(
+    fig: Figure,
+    log: FlightLog,
+    vehicle: int,
+    grid: object,
+    input_strokes_xy_m: Sequence[FloatArray] | None,
+) -> None:
+    ax = fig.add_subplot(grid[2, 0])  # type: ignore[index]
+    if input_strokes_xy_m:
+        for i, stroke in enumerate(input_strokes_xy_m):
+            pts = np.asarray(stroke, dtype=np.float64)
+            ax.plot(pts[:, 0], pts[:, 1], color="tab:green", lw=2.5, alpha=0.45,
+                    label="input" if i == 0 else None)  # fmt: skip
+    ref = log.reference_position_m_enu[:, vehicle, :2].copy()
+    ref[~log.pen_down[:, vehicle]] = np.nan
+    ax.plot(ref[:, 0], ref[:, 1], ":", color="k", lw=1.0, label="planned")
+    tip = log.tip_m_enu[:, vehicle, :2].copy()
+    tip[~log.brush_contact[:, vehicle]] = np.nan
+    ax.plot(tip[:, 0], tip[:, 1], color="tab:red", lw=0.8, label="brush (flown)")
+    ax.set_aspect("equal")
+    ax.set_title("board: input, planned, flown", fontsize=9)
+    ax.tick_params(labelsize=7)
+    ax.legend(fontsize=7, loc="best")
+
+
+def _ink_panels(fig: Figure, ink: InkResult, metrics: FlightMetrics, grid: object) -> None:
+    extent = ink.target.spec.extent_m()
+    panels = (
+        (ink.written.pixels, f"written ink (IoU {metrics.iou:.2f})"),
+        (ink.target.pixels, "target ink (planned path, nominal width)"),
+    )
+    for c, (pixels, title) in enumerate(panels, start=1):
+        ax = fig.add_subplot(grid[2, c])  # type: ignore[index]
+        ax.imshow(pixels, origin="lower", extent=extent, cmap="Greys", interpolation="nearest")
+        ax.set_title(title, fontsize=9)
+        ax.tick_params(labelsize=7)
+
+
+def _plain(text: str) -> str:
+    """Characters the default font lacks (CJK) spelt as U+XXXX."""
+    return "".join(ch if ord(ch) < 0x2000 else f"U+{ord(ch):04X}" for ch in text)
+
+
+def build_report(
+    log: FlightLog,
+    metrics: FlightMetrics,
+    ink: InkResult,
+    *,
+    vehicle: int = 0,
+    input_strokes_xy_m: Sequence[FloatArray] | None = None,
+    title: str = "",
+) -> Figure:
+    """The report figure of one vehicle (not yet saved)."""
+    fig = Figure(figsize=(15.0, 13.0), dpi=100)
+    FigureCanvasAgg(fig)
+    grid = fig.add_gridspec(3, 3, height_ratios=(1.0, 1.0, 1.7), hspace=0.35, wspace=0.25)
+    _time_rows(fig, log, vehicle, grid)
+    _board_panel(fig, log, vehicle, grid, input_strokes_xy_m)
+    _ink_panels(fig, ink, metrics, grid)
+    summary = (
+        f"pen-down RMSE {metrics.rmse_pen_down_m * 1000:.1f} mm, "
+        f"whole flight {metrics.rmse_m * 1000:.1f} mm, max {metrics.max_error_m * 1000:.1f} mm, "
+        f"IoU {metrics.iou:.2f}, {metrics.sim_time_s:.1f} s simulated"
+    )
+    fig.suptitle(f"{_plain(title)}\n{summary}" if title else summary, fontsize=11)
+    return fig
+
+
+def save_report(fig: Figure, path: str | Path) -> None:
+    """Write the figure as PNG."""
+    fig.savefig(str(path), format="png")

@@ -1,0 +1,186 @@
+"""What goes into and out of the job runner: configuration, planned jobs, per-tick actions."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from bus.messages import (
+    AgentReport,
+    CommandReply,
+    ErrorInfo,
+    JobAssignment,
+    JobMetrics,
+    Telemetry,
+    VehicleStateName,
+)
+from planner.samples import TrajectorySamples
+from vehicle_agent.backends.base import Setpoint, Vec3, VehicleSnapshot
+from vehicle_agent.trace import FlownTrace
+
+ACTIVE_PHASES = ("climb", "wait_plan", "transit", "settle", "write")
+"""Phases in which a job is running (an interruption lifts the brush and abandons it)."""
+
+BackendCommand = tuple[str, Vec3 | None]
+"""``("takeoff", hover)``, ``("land", None)`` or ``("estop", None)``."""
+
+
+@dataclass(frozen=True)
+class RunnerConfig:
+    """Everything the runner needs to know about its vehicle, from the show file."""
+
+    vehicle_id: str
+    """Vehicle id from the show file."""
+    kind: str
+    """Vehicle kind, e.g. ``quadrotor-brush``."""
+    board_id: str | None
+    """The board this vehicle writes on."""
+    home_m_enu: Vec3
+    """Where the vehicle rests on the ground in [m], ENU."""
+    cruise_z_m: float
+    """Height in [m] (world z) of pen-up flight: board surface + write height + clearance."""
+    v_max_mps: float
+    """Speed limit in [m/s] for transit moves."""
+    a_max_mps2: float
+    """Acceleration limit in [m/s^2] for transit moves (the smallest per-axis limit)."""
+    settle_tolerance_m: float = 0.01
+    """Before writing, the vehicle holds the start until it is this close in [m] to it..."""
+    settle_timeout_s: float = 3.0
+    """...or for at most this long in [s] (agent time)."""
+    loss_land_after_s: float = 10.0
+    """How long in [s] (agent time) to hover after losing the orchestrator before landing."""
+    telemetry_period_s: float = 0.05
+    """Agent time in [s] between telemetry messages (20 Hz at time scale 1)."""
+    progress_period_s: float = 1.0
+    """Agent time in [s] between progress reports while writing."""
+    takeoff_retry_s: float = 5.0
+    """After its take-off was refused (pre-arm checks) the vehicle takes no job for this long in
+    [s] (agent time)..."""
+    takeoff_retry_max_s: float = 60.0
+    """...doubled at each refusal in a row, up to this many [s]."""
+
+    @property
+    def hover_home_m_enu(self) -> Vec3:
+        """The hover point above home in [m], at cruise height."""
+        return (self.home_m_enu[0], self.home_m_enu[1], self.cruise_z_m)
+
+
+@dataclass(frozen=True)
+class PreparedJob:
+    """A job laid out on the board and planned, ready to fly."""
+
+    job_id: str
+    """The orchestrator's job id."""
+    samples: TrajectorySamples
+    """The planned reference (where the brush should be), at rest above the first stroke at 0."""
+    command_samples: TrajectorySamples | None = None
+    """What to send the vehicle, same times (e.g. the body reference that puts the brush tip on
+    ``samples``); None: ``samples`` itself."""
+    context: object = None
+    """Whatever the metrics of the flown job need later (the laid-out glyph, the board...)."""
+
+
+@dataclass(frozen=True)
+class TickActions:
+    """What the service must do in this control period, in this order."""
+
+    backend_command: BackendCommand | None = None
+    """A mode change to send to the backend before ticking it."""
+    setpoint: Setpoint | None = None
+    """The reference for ``backend.tick`` (None: the backend's mode is in charge)."""
+    plan_request: JobAssignment | None = None
+    """A job to lay out and plan (off the control loop); answer with ``plan_ready/failed``."""
+    reports: tuple[AgentReport, ...] = ()
+    """Reports for the orchestrator, in order (started/failed must be retried until acked)."""
+    telemetry: Telemetry | None = None
+    """A telemetry message to publish now."""
+    finished: FlownTrace | None = None
+    """A job just flown to its end: compute its metrics and report ``done``."""
+
+
+def done_report(vehicle_id: str, trace: FlownTrace, metrics: JobMetrics | None) -> AgentReport:
+    """The ``done`` report of a flown job with its metrics."""
+    return AgentReport(
+        vehicle_id=vehicle_id,
+        job_id=trace.job_id,
+        event="done",
+        progress=1.0,
+        planned_duration_s=trace.duration_s,
+        metrics=metrics,
+    )
+
+
+def telemetry_message(
+    vehicle_id: str,
+    state: VehicleStateName,
+    snap: VehicleSnapshot,
+    setpoint: Setpoint | None,
+    now_s: float,
+    *,
+    job_id: str | None,
+    progress: float,
+) -> Telemetry:
+    """Telemetry of the vehicle in ``snap`` following ``setpoint`` (pen from the backend when it
+    knows the brush, else from the reference)."""
+    ref = None if setpoint is None else setpoint.position_m_enu
+    pen = (
+        snap.pen_contact
+        if snap.pen_contact is not None
+        else (setpoint is not None and setpoint.pen_down)
+    )
+    return Telemetry(
+        vehicle_id=vehicle_id,
+        t_s=now_s,
+        state=state,
+        position_m_enu=snap.position_m_enu,
+        velocity_mps_enu=snap.velocity_mps_enu,
+        reference_m_enu=ref,
+        pen_down=bool(pen),
+        tracking_error_m=0.0 if ref is None else math.dist(ref, snap.position_m_enu),
+        battery_fraction=snap.battery_fraction,
+        job_id=job_id,
+        progress=progress,
+    )
+
+
+def sample_at(samples: TrajectorySamples, t_s: float) -> Setpoint:
+    """The reference at ``t_s`` in [s], linearly interpolated between samples (clamped)."""
+    i = samples.index_at(t_s)
+    j = min(i + 1, samples.t_s.shape[0] - 1)
+    span = float(samples.t_s[j] - samples.t_s[i])
+    w = 0.0 if span <= 0.0 else min(max((t_s - float(samples.t_s[i])) / span, 0.0), 1.0)
+
+    def lerp(values: np.ndarray) -> Vec3:
+        return vec3((1.0 - w) * values[i] + w * values[j])
+
+    return Setpoint(
+        position_m_enu=lerp(samples.position_m_enu),
+        velocity_mps_enu=lerp(samples.velocity_mps_enu),
+        acceleration_mps2_enu=lerp(samples.acceleration_mps2_enu),
+        pen_down=bool(samples.pen_down[i] if w < 0.5 else samples.pen_down[j]),
+    )
+
+
+def takeoff_refused_report(
+    vehicle_id: str, job_id: str, reason: str, retry_after_s: float
+) -> AgentReport:
+    """The job handed back because the vehicle refused to take off (it stays available)."""
+    return AgentReport(
+        vehicle_id=vehicle_id,
+        job_id=job_id,
+        event="failed",
+        error=ErrorInfo(code="takeoff_refused", message=reason),
+        retry_after_s=retry_after_s,
+    )
+
+
+def refuse(code: str, message: str, *, field: str | None = None) -> CommandReply:
+    return CommandReply(
+        ok=False, message=message, error=ErrorInfo(code=code, message=message, field=field)
+    )
+
+
+def vec3(row: np.ndarray) -> Vec3:
+    return (float(row[0]), float(row[1]), float(row[2]))

@@ -1,0 +1,378 @@
+"""Thin asyncio wiring of one vehicle agent to the bus: every decision is the JobRunner's.
+
+Tasks of a running agent (one process, one event loop):
+
+- control loop: at each tick ``runner.step`` -> backend mode command -> ``backend.tick``; telemetry
+  and status published from what the runner says;
+- planning and metrics: off the loop in worker threads (the loop keeps flying meanwhile);
+- reports: a FIFO sent to the orchestrator's ``report`` queryable, each retried until some reply
+  acknowledges it (``progress`` reports are best effort and superseded by newer ones);
+- presence: the agent's liveliness token; the orchestrator's token watched and fed to the runner;
+- commands: the ``vehicles/<id>/command`` queryable answered by ``runner.handle_command``;
+- events: what the vehicle says (autopilot STATUSTEXT, a refused take-off) published as Event on
+  ``vehicles/<id>/events``, which the orchestrator relays into the show's event log.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import signal
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import Literal
+
+from bus.bridge import FifoChannel
+from bus.keys import ShowKeys
+from bus.messages import (
+    AgentReport,
+    CommandReply,
+    ErrorInfo,
+    Event,
+    JobAssignment,
+    JobMetrics,
+    VehicleCommand,
+    VehicleStatus,
+)
+from bus.pubsub import MessagePublisher, declare_token, publish, watch_liveliness
+from bus.rpc import NoReplyError, RemoteError, aquery_one, error_info_from_exception, serve_async
+from bus.session import ZenohSettings, open_session
+from vehicle_agent.backends.base import (
+    BackendError,
+    CommandRefusedError,
+    Vec3,
+    VehicleBackend,
+    VehicleSnapshot,
+)
+from vehicle_agent.clock import TickClock
+from vehicle_agent.job_runner import JobRunner, PreparedJob, TickActions, done_report
+from vehicle_agent.trace import FlownTrace
+
+log = logging.getLogger(__name__)
+
+Prepare = Callable[[JobAssignment], PreparedJob]
+"""Lays a job out on the board and plans it (runs in a worker thread; may raise)."""
+RETRY_CODES = frozenset({"internal", "unavailable", "busy"})
+"""Error replies to a report after which it is sent again (the orchestrator could not take it)."""
+Measure = Callable[[PreparedJob, FlownTrace], JobMetrics]
+"""Metrics of a flown job (runs in a worker thread)."""
+Archive = Callable[[PreparedJob, FlownTrace, JobMetrics | None], object]
+"""Keeps a record of a flown job, e.g. files on disk (runs in a worker thread; may raise)."""
+Level = Literal["info", "warning", "alert"]
+MAV_SEVERITY_DEBUG = 7
+
+
+@dataclass(frozen=True)
+class ServiceSettings:
+    """How the agent joins the bus and paces its loop."""
+
+    show_id: str
+    """Show id: the Zenoh namespace."""
+    zenoh: ZenohSettings
+    """Endpoints from the show file."""
+    time_scale: float = 1.0
+    """Agent seconds per wall second."""
+    skip_when_late: bool = False
+    """Real vehicles: jump ahead after a stall (see ``TickClock``)."""
+    report_retry_s: float = 0.5
+    """Wall time in [s] between attempts to deliver a report."""
+    report_timeout_s: float = 2.0
+    """Wall time in [s] to wait for the orchestrator's acknowledgement of one attempt."""
+    status_period_s: float = 1.0
+    """Wall time in [s] between status heartbeats (status is also sent on every change)."""
+
+
+class EventOutbox:
+    """Events about one vehicle waiting to be published; filled from the backend's callbacks
+    (on the event loop) and by the service. A text repeated within ``repeat_after_s`` is dropped
+    (autopilots repeat their pre-arm complaints)."""
+
+    def __init__(
+        self,
+        vehicle_id: str,
+        *,
+        clock: Callable[[], float] = time.time,
+        repeat_after_s: float = 10.0,
+        max_events: int = 100,
+    ) -> None:
+        self.vehicle_id = vehicle_id
+        self._clock = clock
+        self._repeat_after_s = repeat_after_s
+        self._events: deque[Event] = deque(maxlen=max_events)
+        self._last_said: dict[str, float] = {}
+        self._max_remembered = 4 * max_events
+
+    def push(self, level: Level, kind: str, message: str, *, job_id: str | None = None) -> None:
+        """Queue one event (Unix time now)."""
+        now = self._clock()
+        said_at = self._last_said.get(message)
+        if said_at is not None and now - said_at < self._repeat_after_s:
+            return
+        if len(self._last_said) > self._max_remembered:
+            self._last_said.clear()
+        self._last_said[message] = now
+        event = Event(
+            time_s=now,
+            level=level,
+            kind=kind,
+            message=message,
+            vehicle_id=self.vehicle_id,
+            job_id=job_id,
+        )
+        self._events.append(event)
+
+    def autopilot_text(self, severity: int, text: str) -> None:
+        """A STATUSTEXT of the vehicle's autopilot (MAV_SEVERITY 0..7; debug is dropped)."""
+        if severity >= MAV_SEVERITY_DEBUG:
+            return
+        level: Level = "alert" if severity <= 2 else "warning" if severity <= 4 else "info"
+        self.push(level, "autopilot", f"{self.vehicle_id} autopilot: {text.strip()}")
+
+    def drain(self) -> list[Event]:
+        """The queued events, oldest first; the outbox is then empty."""
+        events = list(self._events)
+        self._events.clear()
+        return events
+
+
+class AgentService:
+    """One vehicle agent on the bus; ``await run(stop)`` until ``stop`` is set."""
+
+    def __init__(
+        self,
+        settings: ServiceSettings,
+        runner: JobRunner,
+        backend: VehicleBackend,
+        prepare: Prepare,
+        measure: Measure,
+        archive: Archive | None = None,
+        events: EventOutbox | None = None,
+    ) -> None:
+        self.settings = settings
+        self.runner = runner
+        self.backend = backend
+        self._prepare = prepare
+        self._measure = measure
+        self._archive = archive
+        self.keys = ShowKeys(settings.show_id)
+        self.vehicle_id = runner.config.vehicle_id
+        self.events = events if events is not None else EventOutbox(self.vehicle_id)
+        """Events to publish; give its ``autopilot_text`` to the backend as ``on_text``."""
+        self.clock = TickClock(
+            period_s=backend.control_period_s,
+            time_scale=settings.time_scale,
+            skip_when_late=settings.skip_when_late,
+        )
+        self._prepared: dict[str, PreparedJob] = {}
+        self._reports: deque[AgentReport] = deque()
+        self._report_ready = asyncio.Event()
+        self._status_sent: VehicleStatus | None = None
+        self._tasks: set[asyncio.Task[None]] = set()
+
+    async def run(self, stop: asyncio.Event) -> None:
+        """Join the bus, fly until ``stop`` is set, then leave it cleanly."""
+        with open_session(self.settings.zenoh, role="client") as session:
+            self._session = session
+            declare_token(session, self.keys.vehicle_alive(self.vehicle_id))
+            presence: FifoChannel[bool] = FifoChannel()
+            watch_liveliness(
+                session, self.keys.orchestrator_alive, lambda _key, alive: presence.push(alive)
+            )
+            serve_async(
+                session,
+                self.keys.vehicle_command(self.vehicle_id),
+                VehicleCommand,
+                self._on_command,
+                on_error=_error_reply,
+            )
+            self._telemetry = MessagePublisher(session, self.keys.telemetry(self.vehicle_id))
+            snapshot = await self.backend.start()
+            log.info("vehicle %s ready on show %s", self.vehicle_id, self.settings.show_id)
+            workers = [
+                asyncio.create_task(self._control_loop(snapshot)),
+                asyncio.create_task(self._send_reports()),
+                asyncio.create_task(self._follow_presence(presence)),
+                asyncio.create_task(self._status_heartbeat()),
+            ]
+            stopping = asyncio.create_task(stop.wait())
+            await asyncio.wait([stopping, *workers], return_when=asyncio.FIRST_COMPLETED)
+            for task in [*workers, *self._tasks, stopping]:
+                task.cancel()
+            results = await asyncio.gather(*workers, *self._tasks, return_exceptions=True)
+            await self.backend.close()
+            for result in results:
+                if isinstance(result, Exception):
+                    raise result
+
+    # --- inputs --------------------------------------------------------------------------------
+    async def _on_command(self, command: VehicleCommand) -> CommandReply:
+        reply = self.runner.handle_command(command, self.clock.now_s)
+        log.info("%s %s -> %s", self.vehicle_id, command.command, reply.message)
+        self._publish_status()
+        return reply
+
+    async def _follow_presence(self, presence: FifoChannel[bool]) -> None:
+        async for alive in presence:
+            log.info("%s: orchestrator %s", self.vehicle_id, "present" if alive else "lost")
+            self.runner.set_orchestrator_alive(alive, self.clock.now_s)
+            self._publish_status()
+
+    # --- the control loop ----------------------------------------------------------------------
+    async def _control_loop(self, snapshot: VehicleSnapshot) -> None:
+        while True:
+            await asyncio.sleep(self.clock.delay_s())
+            now_s = self.clock.now_s
+            actions = self.runner.step(snapshot, now_s)
+            snapshot = await self._fly(actions, snapshot, now_s)
+            self.clock.advance()
+            self._carry_out(actions)
+
+    async def _fly(
+        self, actions: TickActions, snapshot: VehicleSnapshot, now_s: float
+    ) -> VehicleSnapshot:
+        try:
+            if actions.backend_command is not None:
+                name, hover = actions.backend_command
+                if name == "takeoff" and hover is not None:
+                    await self._takeoff(hover, now_s)
+                elif name == "land":
+                    await self.backend.land()
+                elif name == "estop":
+                    await self.backend.estop()
+            return await self.backend.tick(actions.setpoint, now_s)
+        except BackendError as exc:
+            log.error("%s: backend fault: %s", self.vehicle_id, exc)
+            return _with_fault(snapshot, str(exc))
+
+    async def _takeoff(self, hover: Vec3, now_s: float) -> None:
+        """Take off; a refusal (pre-arm checks) hands the job back, any other error is a fault."""
+        try:
+            await self.backend.takeoff(hover)
+        except CommandRefusedError as exc:
+            job_id = self.runner.job_id
+            log.warning("%s: take-off refused: %s", self.vehicle_id, exc)
+            self.runner.takeoff_refused(str(exc), now_s)
+            message = f"{self.vehicle_id} take-off refused: {exc}"
+            self.events.push("warning", "takeoff_refused", message, job_id=job_id)
+
+    def _carry_out(self, actions: TickActions) -> None:
+        if actions.plan_request is not None:
+            self._spawn(self._plan(actions.plan_request))
+        for report in actions.reports:
+            self._queue_report(report)
+        if actions.finished is not None:
+            self._spawn(self._finish(actions.finished))
+        if actions.telemetry is not None:
+            self._telemetry.put(actions.telemetry)
+        for event in self.events.drain():
+            publish(self._session, self.keys.vehicle_events(self.vehicle_id), event)
+        self._publish_status(only_if_changed=True)
+
+    def _spawn(self, coro: object) -> None:
+        task: asyncio.Task[None] = asyncio.create_task(coro)  # type: ignore[arg-type]
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    async def _plan(self, assignment: JobAssignment) -> None:
+        try:
+            prepared = await asyncio.to_thread(self._prepare, assignment)
+        except Exception as exc:
+            log.warning("%s: cannot plan job %s: %s", self.vehicle_id, assignment.job_id, exc)
+            self.runner.plan_failed(assignment.job_id, error_info_from_exception(exc))
+            return
+        self._prepared = {assignment.job_id: prepared}
+        self.runner.plan_ready(prepared)
+
+    async def _finish(self, trace: FlownTrace) -> None:
+        prepared = self._prepared[trace.job_id]
+        metrics = None
+        try:
+            metrics = await asyncio.to_thread(self._measure, prepared, trace)
+        except Exception:  # written all the same: report it done, without metrics
+            log.exception("%s: metrics of %s failed", self.vehicle_id, trace.job_id)
+        self._queue_report(done_report(self.vehicle_id, trace, metrics))
+        if self._archive is not None:
+            try:
+                where = await asyncio.to_thread(self._archive, prepared, trace, metrics)
+                log.info("%s: job %s recorded in %s", self.vehicle_id, trace.job_id, where)
+            except Exception:
+                log.exception("%s: cannot record job %s", self.vehicle_id, trace.job_id)
+
+    # --- outputs -------------------------------------------------------------------------------
+    def _publish_status(self, *, only_if_changed: bool = False) -> None:
+        status = self.runner.status()
+        if only_if_changed and status == self._status_sent:
+            return
+        self._status_sent = status
+        publish(self._session, self.keys.vehicle_status(self.vehicle_id), status)
+
+    async def _status_heartbeat(self) -> None:
+        while True:
+            self._publish_status()
+            await asyncio.sleep(self.settings.status_period_s)
+
+    def _queue_report(self, report: AgentReport) -> None:
+        last = self._reports[-1] if self._reports else None
+        if last is not None and last.event == "progress" and last.job_id == report.job_id:
+            self._reports.pop()  # a newer report supersedes a progress not yet sent
+        self._reports.append(report)
+        self._report_ready.set()
+
+    async def _send_reports(self) -> None:
+        while True:
+            await self._report_ready.wait()
+            while self._reports:
+                report = self._reports[0]
+                delivered = await self._deliver(report)
+                if delivered or report.event == "progress":
+                    if self._reports and self._reports[0] is report:
+                        self._reports.popleft()
+                else:
+                    await asyncio.sleep(self.settings.report_retry_s)
+            self._report_ready.clear()
+
+    async def _deliver(self, report: AgentReport) -> bool:
+        try:
+            reply = await aquery_one(
+                self._session,
+                self.keys.report,
+                report,
+                CommandReply,
+                timeout_s=self.settings.report_timeout_s,
+            )
+        except NoReplyError:
+            return False
+        except RemoteError as exc:
+            if exc.info.code in RETRY_CODES:
+                return False
+            log.warning("%s: report %s refused: %s", self.vehicle_id, report.event, exc)
+            return True  # the orchestrator answered: it has seen the report
+        except Exception as exc:
+            log.warning("%s: report %s refused: %s", self.vehicle_id, report.event, exc)
+            return True  # the orchestrator answered: it has seen the report
+        if not reply.ok:
+            log.warning(
+                "%s: report %s not accepted: %s", self.vehicle_id, report.event, reply.message
+            )
+        return True
+
+
+def _error_reply(info: ErrorInfo) -> CommandReply:
+    return CommandReply(ok=False, message=info.message, error=info)
+
+
+def _with_fault(snapshot: VehicleSnapshot, fault: str) -> VehicleSnapshot:
+    return replace(snapshot, fault=fault)
+
+
+async def run_until_signalled(service: AgentService) -> None:
+    """Run ``service`` until SIGINT or SIGTERM."""
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        with contextlib.suppress(NotImplementedError):
+            loop.add_signal_handler(sig, stop.set)
+    await service.run(stop)
