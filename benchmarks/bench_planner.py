@@ -2,6 +2,7 @@
 
     python benchmarks/bench_planner.py            # Latin A-Z a-z + 120 common Chinese characters
     python benchmarks/bench_planner.py --quick    # a handful of characters (smoke run)
+    python benchmarks/bench_planner.py --clearance 0.05   # pen-up hop of the shows
 
 Characters are laid out on a 1 m x 1 m area (5 cm margin) with the default limits. Each stage is
 timed once per character after a warm-up; printed: median and worst [ms] per character.
@@ -114,6 +115,7 @@ class _Results:
         self.pairs: list[tuple[float, float]] = []  # (plan_strokes ms, MinSnap ms)
         self.numeric: list[tuple[float, float, float, float, float]] = []
         self.failures: list[str] = []
+        self.refine_rounds: list[int] = []
 
     def add(self, name: str, ms: float) -> None:
         self.stages.setdefault(name, []).append(ms)
@@ -127,6 +129,7 @@ def _measure(char: str, options: PlanOptions, res: _Results, peer: bool, numeric
         res.failures.append(f"{char}: {exc}")
         return
     res.add("plan_strokes (everything)", plan_ms)
+    res.refine_rounds.append(int(traj.info.get("refine_rounds", 0)))
     prep = prepare(strokes, options)
     problem, limits = prep.problem, prep.qp_limits
     res.add("closed-form fit, fixed times (eq. 43)", _timed(lambda: fit_closed_form(problem))[1])
@@ -177,12 +180,18 @@ def _report(res: _Results, n_chars: int) -> None:
             f"    speed-up {speedup:.0f}x; numerical reaches {100 * share:.2f} % of the analytic"
             f" cost reduction (its final cost is {gap:.1e} relative above)"
         )
+    if res.refine_rounds:
+        needed = sum(1 for r in res.refine_rounds if r > 0)
+        print(
+            f"  safety net (planner.refine): {needed} of {len(res.refine_rounds)} characters"
+            f" re-solved, at most {max(res.refine_rounds)} rounds"
+        )
     for failure in res.failures:
         print(f"  failed: {failure}")
 
 
-def run(quick: bool, numerical_subset: int, peer_subset: int) -> None:
-    options = PlanOptions()
+def run(quick: bool, numerical_subset: int, peer_subset: int, clearance_m: float | None) -> None:
+    options = PlanOptions() if clearance_m is None else PlanOptions(clearance_m=clearance_m)
     chars = _corpus(quick)
     plan_strokes(_strokes("A"), options)  # warm-up: imports, caches
     numeric, peers = _subset(chars, numerical_subset), _subset(chars, peer_subset)
@@ -214,10 +223,13 @@ def main() -> int:
         "--numerical", type=int, help="characters for the numerical-gradient run (6; quick 1)"
     )
     parser.add_argument("--peer", type=int, help="characters for RotorPy MinSnap (20; quick 2)")
+    parser.add_argument(
+        "--clearance", type=float, help="pen-up hop height [m] (default: PlanOptions default)"
+    )
     args = parser.parse_args()
     numerical = args.numerical if args.numerical is not None else (1 if args.quick else 6)
     peer = args.peer if args.peer is not None else (2 if args.quick else 20)
-    run(args.quick, numerical, peer)
+    run(args.quick, numerical, peer, args.clearance)
     return 0
 
 

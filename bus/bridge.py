@@ -109,14 +109,6 @@ class _Channel(_LoopBound, Generic[T]):
     def closed(self) -> bool:
         return self._closed
 
-    def get_nowait(self) -> T:
-        """The oldest item; raises ``asyncio.QueueEmpty`` (or ChannelClosedError once closed)."""
-        if self._items:
-            return self._items.popleft()
-        if self._closed:
-            raise ChannelClosedError
-        raise asyncio.QueueEmpty
-
     def drain(self) -> list[T]:
         """Every item held now, oldest first (loop thread)."""
         items = list(self._items)

@@ -22,6 +22,8 @@ NAME = "demo"
 HELP = "Run the simulated Airshow show with a few characters and print how well they were written."
 
 DEFAULT_TEXTS = ("永", "光", "马", "A")
+PICTURE_TIMEOUT_S = 30.0
+"""How long in [s] to wait for the agents to draw the last jobs' report.png."""
 SHOW = Path(__file__).resolve().parent.parent / "shows" / "airshow-2014.yaml"
 
 
@@ -72,6 +74,8 @@ def run(args: argparse.Namespace) -> int:
         except TimeoutError as exc:
             print(f"skyquill demo: {exc}; logs in {out_dir / 'logs'}", file=sys.stderr)
             return 1
+        reports_dir = show.database_path.parent / "jobs"
+        pictures = _wait_for_pictures(reports_dir, [j.job_id for j in jobs if j.state == "done"])
     print()
     print(_table(texts, jobs))
     print()
@@ -80,10 +84,24 @@ def run(args: argparse.Namespace) -> int:
         f"{time.monotonic() - started:.0f} s"
     )
     print(f"recording: {show.recordings_dir}/  (MCAP; read it with the mcap Python package)")
-    print(f"reports:   {show.database_path.parent / 'jobs'}/  (per job: metrics, plan, flight)")
+    print(f"reports:   {reports_dir}/  (per job: metrics, plan, flight, report.png)")
+    for picture in pictures:
+        print(f"  {picture}")
     print(f"database:  {show.database_path}")
     print(f"logs:      {out_dir / 'logs'}/")
     return 0 if all(j.state == "done" for j in jobs) else 1
+
+
+def _wait_for_pictures(
+    reports_dir: Path, job_ids: list[str], timeout_s: float = PICTURE_TIMEOUT_S
+) -> list[Path]:
+    """The ``report.png`` of each job, waiting a little for the agents still drawing them."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        found = [sorted(reports_dir.glob(f"{job_id}-*/report.png")) for job_id in job_ids]
+        if all(found) or time.monotonic() > deadline:
+            return [path for paths in found for path in paths]
+        time.sleep(0.2)
 
 
 class _Progress:

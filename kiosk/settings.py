@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from kiosk.limits import SubmissionLimits
-from planner.pipeline import BoardFrame, PlanOptions, VehicleLimits
+from planner.pipeline import BoardFrame, PlanOptions
+from showfile.planning import plan_options
 
 
 @dataclass(frozen=True)
@@ -53,23 +54,9 @@ def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
         max_text_chars=kiosk.max_text_chars,
         blocklist=tuple(kiosk.blocklist),
     )
-    lim = show.limits
-    plan = PlanOptions(
-        limits=VehicleLimits(
-            a_max_mps2=tuple(lim.a_max_mps2),
-            v_max_mps=lim.v_max_mps,
-            mass_kg=lim.mass_kg,
-            thrust_max_n=lim.thrust_max_n,
-            body_rate_max_radps=lim.body_rate_max_radps,
-        ),
-        board=BoardFrame(center_m_enu=(0.0, 0.0, 0.0)),
-        write_height_m=planning.write_height_m,
-        clearance_m=max(planning.clearance_m, 1e-3),
-        total_time_s=planning.total_time_s,
-        split_threshold_m=planning.split_threshold_m,
-        resegment=planning.resegment,
-        solver=planning.solver,
-    )
+    frame = BoardFrame(center_m_enu=(0.0, 0.0, 0.0))
+    plan = plan_options(planning, show.limits, frame)
+    plan = replace(plan, clearance_m=max(planning.clearance_m, 1e-3))
     width_m, height_m = board.writing_area_m
     return KioskSettings(
         show_id=show.show_id,

@@ -65,8 +65,3 @@ def quaternion_to_euler(q: tuple[float, float, float, float]) -> Vec3:
     pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
     yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
     return (roll, pitch, yaw)
-
-
-def wrap_pi(angle: float) -> float:
-    """Angle wrapped to [-pi, pi)."""
-    return (angle + math.pi) % (2 * math.pi) - math.pi

@@ -15,8 +15,10 @@ import numpy as np
 
 from bus.messages import ErrorInfo, SubmitRequest
 from planner.errors import PlannerError
-from planner.glyphs import Glyph, fit_to_area, parse_strokes_json, text_glyph
+from planner.glyphs import Glyph, parse_strokes_json, text_glyph
+from planner.pipeline import plan_strokes
 from showfile import Show
+from showfile.planning import fit_to_board, vehicle_plan_options
 
 MAX_CLIENT_ID_CHARS = 100
 PRIORITY_RANGE = (-10, 10)
@@ -106,9 +108,7 @@ def validate_submission(request: SubmitRequest, show: Show) -> Accepted:
 
 
 def _fitted(glyph: Glyph, show: Show) -> Glyph:
-    board = show.boards[0]
-    width, height = board.writing_area_m
-    return fit_to_area(glyph, width_m=width, height_m=height, margin_m=show.planning.margin_m)
+    return fit_to_board(glyph, show.boards[0], show.planning)
 
 
 def rough_duration_s(glyph: Glyph, show: Show) -> float:
@@ -127,33 +127,7 @@ def rough_duration_s(glyph: Glyph, show: Show) -> float:
 def planned_duration_s(glyph: Glyph, show: Show) -> float | None:
     """Duration of the real plan on the first vehicle's board, or None if planning fails."""
     try:
-        from planner.board import BoardFrame
-        from planner.limits import VehicleLimits
-        from planner.pipeline import PlanOptions, plan_strokes
-    except ImportError:  # planner pipeline not available
-        return None
-    vehicle = show.vehicles[0]
-    board = show.board(vehicle.board)
-    limits = show.vehicle_limits(vehicle.id)
-    planning = show.planning
-    try:
-        options = PlanOptions(
-            limits=VehicleLimits(
-                a_max_mps2=limits.a_max_mps2,
-                v_max_mps=limits.v_max_mps,
-                mass_kg=limits.mass_kg,
-                thrust_max_n=limits.thrust_max_n,
-                body_rate_max_radps=limits.body_rate_max_radps,
-            ),
-            board=BoardFrame(center_m_enu=board.center_m_enu, yaw_rad=board.yaw_rad),
-            write_height_m=planning.write_height_m,
-            clearance_m=planning.clearance_m,
-            total_time_s=planning.total_time_s,
-            split_threshold_m=planning.split_threshold_m,
-            resegment=planning.resegment,
-            solver=planning.solver,
-            sample_rate_hz=planning.sample_rate_hz,
-        )
+        options = vehicle_plan_options(show, show.vehicles[0].id)
         duration = plan_strokes(list(_fitted(glyph, show).strokes), options).duration_s
     except PlannerError:
         return None

@@ -255,11 +255,11 @@ def jerk_gram_banded(n_spans: int) -> FloatArray:
     ``G = alpha**5 * G_u`` is eq. (34): ``int (d^3 S/dt^3)^2 dt = tau^T G tau``. Each span has
     unit length in ``u``, so the integral of the squared constant jerk is the plain sum.
     """
-    gram = (jerk_operator(n_spans).T @ jerk_operator(n_spans)).toarray()
+    gram = (jerk_operator(n_spans).T @ jerk_operator(n_spans)).todia()
     n = gram.shape[0]
     ab = np.zeros((4, n))
     for k in range(4):
-        ab[3 - k, k:] = np.diagonal(gram, offset=k)
+        ab[3 - k, k:] = gram.diagonal(k)
     ab.setflags(write=False)
     return ab
 

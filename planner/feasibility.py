@@ -264,12 +264,33 @@ def path_errors(
     polylines_xy_m: tuple[FloatArray, ...],
 ) -> tuple[float, ...]:
     """Per stroke: largest horizontal distance of pen-down samples from the stroke's polyline."""
-    errors = []
+    located = located_path_errors(
+        positions_m, times_s, pen_down, stroke_intervals_s, polylines_xy_m
+    )
+    return tuple(error for error, _ in located)
+
+
+def located_path_errors(
+    positions_m: FloatArray,
+    times_s: FloatArray,
+    pen_down: NDArray[np.bool_],
+    stroke_intervals_s: tuple[tuple[float, float], ...],
+    polylines_xy_m: tuple[FloatArray, ...],
+) -> tuple[tuple[float, float], ...]:
+    """Per stroke: (largest pen-down distance from its polyline [m], time of it [s]).
+
+    A stroke without pen-down samples gives ``(0.0, t0)`` (``t0``: start of its interval).
+    """
+    located = []
     for (t0, t1), polyline in zip(stroke_intervals_s, polylines_xy_m, strict=True):
         mask = pen_down & (times_s >= t0) & (times_s <= t1)
+        if not np.any(mask):
+            located.append((0.0, t0))
+            continue
         dist = distance_to_polyline(positions_m[mask, :2], polyline)
-        errors.append(float(np.max(dist, initial=0.0)))
-    return tuple(errors)
+        worst = int(np.argmax(dist))
+        located.append((float(dist[worst]), float(times_s[mask][worst])))
+    return tuple(located)
 
 
 def _tuple3(values: FloatArray) -> tuple[float, float, float]:

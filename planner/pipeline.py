@@ -8,7 +8,10 @@ Stages (each timed in ``PlannedTrajectory.timing_ms``):
 3. ``resegment`` (optional): optimal time re-segmentation (planner.retime);
 4. ``fit`` (without re-segmentation): the QP with acceleration, speed and floor limits (or the
    closed form); with re-segmentation its last solve is the final fit;
-5. ``feasibility``: report, and :class:`InfeasibleTrajectoryError` if any limit is exceeded.
+5. ``refine``: the pen-down path is measured against the strokes; where it strays beyond
+   ``fit_tolerance_m`` the fit is tightened locally and solved again (planner.refine);
+6. ``feasibility``: report, and :class:`InfeasibleTrajectoryError` if any limit is exceeded or
+   the path still strays (naming the limit that pulls it off the strokes, if one does).
 
 Spline size: uniform knots ``knot_spacing_s`` apart (default 0.2 s: 5 control points per second
 per axis, finer than the shortest leg time ``min_leg_time_s`` of the path), at least 8 spans.
@@ -20,19 +23,27 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from planner.board import BoardFrame
-from planner.bspline import ClampedCubicSpline, FloatArray
-from planner.errors import InfeasibleTrajectoryError, PlannerError
-from planner.feasibility import assess, check, path_errors
-from planner.fit_qp import SPEED_POLYTOPE_APOTHEM, QpFitter, QpLimits, diagnose_infeasible
+from planner.bspline import FloatArray
+from planner.errors import PlannerError
+from planner.feasibility import FeasibilityReport, assess, check
+from planner.fit_qp import SPEED_POLYTOPE_APOTHEM, QpFitter, QpLimits
 from planner.limits import VehicleLimits
 from planner.minjerk import EndState, FitProblem, SplineFit, fit_closed_form
 from planner.qp_solvers import SOLVERS
+from planner.refine import (
+    Refinement,
+    StrokeErrors,
+    measure,
+    refine,
+    stray_error,
+    stroke_intervals,
+)
 from planner.retime import SegmentCost, descend_analytic, descend_numerical
 from planner.trajectory import PlannedTrajectory
 from planner.waypoints import KIND_TURNING, PathSettings, WritingPath, build_path
@@ -97,8 +108,9 @@ class PlanOptions:
     """Pen counts as down within this height above writing height, [m]."""
     fit_tolerance_m: float | None = 0.025
     """Largest allowed distance of the written path from the strokes (at turning points and
-    along the pen-down path), [m]; otherwise the limits would be met silently by writing a
-    different shape. ``None`` disables the check."""
+    along the pen-down path), [m]; where the fit strays further it is tightened locally and
+    solved again (planner.refine), and only then is the plan refused -- otherwise the limits
+    would be met silently by writing a different shape. ``None`` disables the check."""
 
     def __post_init__(self) -> None:
         if self.solver not in SOLVERS:
@@ -275,55 +287,84 @@ def resegment(
     return problem.with_durations(T), fit, info
 
 
-def _path_errors(
-    spline: ClampedCubicSpline,
+def _rebuild(options: PlanOptions) -> Callable[[FitProblem, FloatArray, FloatArray], FitProblem]:
+    """The problem with new weights and durations (spline size following the new total time)."""
+
+    def rebuild(problem: FitProblem, weights: FloatArray, durations: FloatArray) -> FitProblem:
+        total = float(np.sum(durations))
+        n_spans = max(MIN_PLAN_SPANS, math.ceil(total / options.knot_spacing_s))
+        return replace(problem.with_durations(durations), weights=weights, n_spans=n_spans)
+
+    return rebuild
+
+
+def _within_tolerance(
     path: WritingPath,
-    intervals: tuple[tuple[float, float], ...],
+    problem: FitProblem,
+    fit: SplineFit,
+    fitter: QpFitter | None,
     options: PlanOptions,
-) -> tuple[float, ...]:
-    """Pen-down deviation from each stroke's turning-point polyline, sampled at 100 Hz."""
-    t = np.arange(0.0, spline.duration_s, 0.01)
-    p = spline.evaluate(t)
-    pen = p[:, 2] <= path.write_z_m + options.pen_contact_tolerance_m
-    polylines = tuple(options.board.to_world(tp)[:, :2] for tp in path.turning_points_board_m)
-    return path_errors(p, t, pen, intervals, polylines)
+) -> Refinement:
+    """Measure the path errors; beyond the tolerance, tighten and re-solve (planner.refine)."""
 
-
-def _fit_error(
-    problem: FitProblem, limits: QpLimits, error_m: float, tolerance_m: float
-) -> InfeasibleTrajectoryError:
-    """Why the path strays from the turning points: the limit the free fit would break."""
-    cause = diagnose_infeasible(problem, limits)
-    shape = (
-        f"the path strays {error_m * 1e3:.0f} mm from the strokes (> {tolerance_m * 1e3:.0f} mm)"
-    )
-    if abs(cause.value) > abs(cause.bound):  # the free fit breaks a limit: that is the cause
-        return InfeasibleTrajectoryError(
-            f"{shape}: writing it needs {cause.message}",
-            limit=cause.limit,
-            axis=cause.axis,
-            t_s=cause.t_s,
-            value=cause.value,
-            bound=cause.bound,
+    def errors_of(prob: FitProblem, f: SplineFit) -> StrokeErrors:
+        return measure(
+            f.spline, prob, f.residuals_m, path, options.board, options.pen_contact_tolerance_m
         )
-    return InfeasibleTrajectoryError(
-        f"{shape}; allow more time or lower the jerk weight",
-        limit="fit_error",
-        axis=None,
-        t_s=0.0,
-        value=error_m,
-        bound=tolerance_m,
+
+    if options.fit_tolerance_m is None:
+        return Refinement(problem, fit, errors_of(problem, fit), 0)
+    return refine(
+        problem,
+        fit,
+        errors_of,
+        fitter.fit if fitter is not None else fit_closed_form,
+        _rebuild(options),
+        tolerance_m=options.fit_tolerance_m,
+        fixed_total=options.total_time_s is not None,
+        min_duration_s=options.min_segment_time_s,
     )
+
+
+MAX_INPUT_STROKES = 200
+"""Most strokes one job may have (same as the strokes JSON limit)."""
+MAX_INPUT_POINTS = 20_000
+"""Most input points one job may have, over all strokes (same as the strokes JSON limit)."""
+MAX_DATA_POINTS = 3_000
+"""Most data points (turning points, approach and lift points) one trajectory is fitted to."""
+
+
+def _check_size(strokes_board_m: Sequence[FloatArray]) -> None:
+    """Refuse oversized input before any heavy work, naming the limit."""
+    if len(strokes_board_m) > MAX_INPUT_STROKES:
+        raise PlannerError(
+            f"{len(strokes_board_m)} strokes; at most {MAX_INPUT_STROKES}", field="strokes"
+        )
+    total = 0
+    for index, stroke in enumerate(strokes_board_m):
+        total += int(np.shape(stroke)[0]) if np.ndim(stroke) >= 1 else 0
+        if total > MAX_INPUT_POINTS:
+            raise PlannerError(
+                f"more than {MAX_INPUT_POINTS} points in all", stroke_index=index, field="strokes"
+            )
 
 
 def plan_strokes(strokes_board_m: Sequence[FloatArray], options: PlanOptions) -> PlannedTrajectory:
     """Plan the trajectory writing ``strokes_board_m`` (board-local [m], y up) on ``options.board``.
 
     Raises :class:`PlannerError` for bad input (naming stroke and point) and
-    :class:`InfeasibleTrajectoryError` when the limits cannot be met (naming limit, axis, time).
+    :class:`InfeasibleTrajectoryError` when the limits cannot be met (naming limit, axis, time)
+    or the path cannot be kept within ``fit_tolerance_m`` of the strokes.
     """
     clock = _Clock()
+    _check_size(strokes_board_m)
     path = build_path(strokes_board_m, options.board, options.path_settings())
+    if path.points_m_enu.shape[0] > MAX_DATA_POINTS:
+        raise PlannerError(
+            f"{path.points_m_enu.shape[0]} turning points; at most {MAX_DATA_POINTS} can be "
+            "written in one job (simplify the drawing)",
+            field="strokes",
+        )
     clock.lap("path")
     limits = options.qp_limits(path.write_z_m)
     problem = _problem(path, _initial_durations(path, options, limits), options)
@@ -337,10 +378,11 @@ def plan_strokes(strokes_board_m: Sequence[FloatArray], options: PlanOptions) ->
     else:
         fit = fitter.fit(problem) if fitter is not None else fit_closed_form(problem)
         clock.lap("fit")
+    refined = _within_tolerance(path, problem, fit, fitter, options)
+    problem, fit, errors = refined.problem, refined.fit, refined.errors
+    info["refine_rounds"] = refined.rounds
+    clock.lap("refine")
     turning = path.kinds == KIND_TURNING
-    intervals = tuple(
-        (float(problem.times_s[a]), float(problem.times_s[b])) for a, b in path.pen_windows
-    )
     report = assess(
         fit.spline,
         options.limits,
@@ -348,13 +390,24 @@ def plan_strokes(strokes_board_m: Sequence[FloatArray], options: PlanOptions) ->
         turning_stroke_index=path.stroke_of_point[turning],
         n_strokes=len(path.stroke_ranges),
         board_surface_z_m=options.board.surface_z_m,
-        path_error_per_stroke_m=_path_errors(fit.spline, path, intervals, options),
+        path_error_per_stroke_m=errors.path_m,
     )
     check(report)
-    worst = max(report.fit_error_max_m, report.path_error_max_m)
-    if options.fit_tolerance_m is not None and worst > options.fit_tolerance_m:
-        raise _fit_error(problem, limits, worst, options.fit_tolerance_m)
+    if options.fit_tolerance_m is not None and errors.worst_m > options.fit_tolerance_m:
+        raise stray_error(problem, limits, errors, options.fit_tolerance_m)
     clock.lap("feasibility")
+    return _planned(path, problem, fit, report, clock, info, options)
+
+
+def _planned(
+    path: WritingPath,
+    problem: FitProblem,
+    fit: SplineFit,
+    report: FeasibilityReport,
+    clock: _Clock,
+    info: dict[str, float | str],
+    options: PlanOptions,
+) -> PlannedTrajectory:
     times = problem.times_s
     info.update(
         method=fit.method,
@@ -368,7 +421,7 @@ def plan_strokes(strokes_board_m: Sequence[FloatArray], options: PlanOptions) ->
         spline=fit.spline,
         feasibility=report,
         timing_ms=clock.total(),
-        stroke_intervals_s=intervals,
+        stroke_intervals_s=stroke_intervals(path, times),
         write_z_m=path.write_z_m,
         pen_contact_tolerance_m=options.pen_contact_tolerance_m,
         turning_points_board_m=path.turning_points_board_m,

@@ -5,6 +5,11 @@ at writing height (pen down), a lift point above its end; between strokes a stra
 Long straight pieces are densified with extra (lighter) data points so the regression keeps them
 straight. At sharp corners (turning by more than 60 degrees) the brush pauses briefly (a repeated
 data point, 0.1 s) and extra points 2 cm before and after the corner keep it from overshooting.
+The vertical hop between writing height and pen-up height (approach and lift) is split into at
+least three pieces whatever the clearance: its intermediate points, directly above the stroke
+end, hold the brush there while it sinks or rises. Without them a low hop (clearance <= the
+densify spacing) is one plain segment, the brush reaches the stroke end at speed and slides on
+past it (or arrives sideways) while still within the pen-contact height: a smear of 2-6 cm.
 The initial time of each leg (turning point to turning point, or to a corner's extra point) is
 ``max(d / v_nom, 2 sqrt(d / a_nom), t_min)`` -- rest-to-rest time with nominal speed and
 acceleration -- spread over its densified pieces in proportion to length.
@@ -34,6 +39,8 @@ KIND_DENSE = 2
 """Extra point on a straight piece of a stroke (pen down)."""
 KIND_TRAVEL = 3
 """Extra point on a pen-up travel between strokes."""
+KIND_HOP = 4
+"""Extra point on the vertical hop above a stroke end (approach / lift)."""
 
 
 @dataclass(frozen=True)
@@ -66,6 +73,10 @@ class PathSettings:
     """Initial time the brush rests on a sharp corner (a repeated data point), [s]."""
     corner_offset_m: float = 0.02
     """Extra data points this far before and after a sharp corner along its legs, [m]."""
+    hop_pieces: int = 3
+    """Least number of pieces of each vertical hop (approach / lift), whatever the clearance."""
+    weight_hop: float = 0.5
+    """Weight of the intermediate hop points (they keep the brush above the stroke end)."""
 
 
 @dataclass(frozen=True)
@@ -160,6 +171,18 @@ class _Builder:
         self._append(p, kind, stroke, self.s.weight_turning if end_w is None else end_w)
         self.durations.extend([leg_time / pieces] * pieces)
 
+    def hop(self, p: FloatArray, kind: int, stroke: int) -> None:
+        """Vertical hop from the last point to ``p`` (approach or lift), >= ``hop_pieces``."""
+        s = self.s
+        a = self.points[-1]
+        dist = float(np.linalg.norm(p - a))
+        pieces = max(s.hop_pieces, math.ceil(dist / s.densify_spacing_m - 1e-9), 1)
+        leg_time = _leg_time(dist, s)
+        for j in range(1, pieces):
+            self._append(a + (p - a) * (j / pieces), KIND_HOP, stroke, s.weight_hop)
+        self._append(p, kind, stroke, s.weight_turning)
+        self.durations.extend([leg_time / pieces] * pieces)
+
     def stroke_leg(self, p: FloatArray, stroke: int, from_corner: bool, to_corner: bool) -> None:
         """A pen-down leg; near sharp corners extra points keep the brush from overshooting."""
         s = self.s
@@ -206,13 +229,13 @@ def build_path(
         else:
             b.leg(above, KIND_PEN_UP, -1, KIND_TRAVEL, settings.weight_travel)
         approach = len(b.points) - 1
-        b.leg(world[0], KIND_TURNING, k, KIND_TRAVEL, settings.weight_travel)
+        b.hop(world[0], KIND_TURNING, k)
         first = len(b.points) - 1
         sharp = _sharp_corners(world[:, :2], settings.corner_angle_deg)
         for i in range(1, world.shape[0]):
             b.stroke_leg(world[i], k, sharp[i - 1], sharp[i])
         ranges.append((first, len(b.points) - 1))
-        b.leg(world[-1] + lift, KIND_PEN_UP, -1, KIND_TRAVEL, settings.weight_travel)
+        b.hop(world[-1] + lift, KIND_PEN_UP, -1)
         windows.append((approach, len(b.points) - 1))
     return WritingPath(
         points_m_enu=np.array(b.points),

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +12,14 @@ import pytest
 from bus.messages import JobAssignment
 from planner.errors import PlannerError
 from showfile import load_show
-from vehicle_agent.agent import job_metrics, prepare_job, vehicle_setup, write_job_report
+from vehicle_agent.agent import (
+    job_metrics,
+    prepare_job,
+    vehicle_setup,
+    write_job_picture,
+    write_job_report,
+)
+from vehicle_agent.job_picture import PictureWorker
 from vehicle_agent.trace import FlownTrace
 
 SHOWS = Path(__file__).resolve().parent.parent / "shows"
@@ -124,3 +132,33 @@ def test_a_flown_job_is_recorded_next_to_the_database(tmp_path: Path) -> None:
     with np.load(out / "flight.npz") as flight:
         np.testing.assert_array_equal(flight["position_m_enu"], s.position_m_enu)
         assert "pen_contact" not in flight
+
+
+def test_a_flown_job_gets_a_report_picture_and_none_without_brush_data(tmp_path: Path) -> None:
+    setup = vehicle_setup(load_show(SHOWS / "solo.yaml"), "uav1")
+    prepared = prepare_job(setup, JobAssignment(job_id="j1", text="一"))
+    s = prepared.samples
+    tip = s.position_m_enu - np.array([0.0, 0.0, 0.25])
+    width = np.where(s.pen_down, 0.02, 0.0)
+    args = ("j1", 1, s.t_s, s.position_m_enu, s.velocity_mps_enu, s.position_m_enu, s.pen_down)
+    trace = FlownTrace(*args, s.pen_down.copy(), tip, width)
+    path = write_job_picture(setup, prepared, trace, tmp_path)
+    assert path == tmp_path / "report.png"
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["report.png"]  # no partial file left
+    assert write_job_picture(setup, prepared, FlownTrace(*args, None), tmp_path / "x") is None
+
+
+def test_the_picture_worker_skips_while_busy_and_survives_a_failing_drawing() -> None:
+    worker = PictureWorker("uav1")
+    release = threading.Event()
+    drawn: list[str] = []
+    assert worker.submit(lambda: release.wait(10.0) and drawn.append("first"))
+    assert not worker.submit(lambda: drawn.append("second"))  # skipped, not queued
+    release.set()
+    assert worker.wait(10.0)
+    assert worker.submit(lambda: 1 / 0)
+    assert worker.wait(10.0)
+    assert worker.submit(lambda: drawn.append("third"))
+    assert worker.wait(10.0)
+    assert drawn == ["first", "third"]

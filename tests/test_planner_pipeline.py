@@ -213,3 +213,23 @@ def test_plot_has_path_and_limit_panels(planned: object) -> None:
     assert {round(float(ln.get_ydata()[0]), 6) for ln in horizontal} == {0.8, -0.8, 0.5, -0.5}
     speed_lines = [ln for ln in axes[2].get_lines() if ln.get_label() == "v_max"]
     assert float(speed_lines[0].get_ydata()[0]) == 0.5
+
+
+def test_oversized_input_is_refused_quickly_and_named() -> None:
+    rng = np.random.default_rng(0)
+    with pytest.raises(PlannerError, match="20000 points") as million:
+        plan_strokes([rng.random((1_000_000, 2)) * 0.5], PlanOptions())
+    assert million.value.field == "strokes" and million.value.stroke_index == 0
+    with pytest.raises(PlannerError, match="strokes; at most 200"):
+        plan_strokes([np.array([[0.0, 0.0], [0.1, 0.0]])] * 201, PlanOptions())
+    # Few enough points, but a scribble with far more turning points than one job can write.
+    with pytest.raises(PlannerError, match="turning points; at most 3000"):
+        plan_strokes([rng.random((15_000, 2)) * 0.5], PlanOptions())
+
+
+def test_consecutive_duplicate_points_plan_like_the_deduplicated_stroke() -> None:
+    stroke = np.array([[0.0, 0.0], [0.2, 0.0], [0.2, 0.2]])
+    doubled = np.repeat(stroke, 2, axis=0)
+    plain = plan_strokes([stroke], PlanOptions())
+    repeated = plan_strokes([doubled], PlanOptions())
+    assert repeated.duration_s == pytest.approx(plain.duration_s, rel=1e-6)

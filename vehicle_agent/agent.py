@@ -23,16 +23,21 @@ from bus.messages import JobAssignment, JobMetrics
 from planner.board import BoardFrame
 from planner.errors import PlannerError
 from planner.glyphs import Glyph, fit_to_area, parse_strokes_json, text_glyph
-from planner.limits import VehicleLimits
 from planner.pipeline import PlanOptions, plan_strokes
 from planner.samples import TrajectorySamples
 from showfile import Show
+from showfile.planning import board_frame, plan_options
 from sim.params import BrushParams, WorldParams
 from vehicle_agent.backends.base import Vec3, VehicleBackend
 from vehicle_agent.backends.sim import SimBackend, SimVehicle
-from vehicle_agent.control.controller import DEFAULT_CONFIG, PAPER_CONFIG, ControllerConfig
-from vehicle_agent.control.tip import body_reference_for_tip, lag_compensated
+from vehicle_agent.control.controller import (
+    DEFAULT_CONFIG,
+    PAPER_CONFIG,
+    ControllerConfig,
+    body_reference,
+)
 from vehicle_agent.flight import FlightLog
+from vehicle_agent.job_picture import PICTURE_NAME, PictureWorker, job_figure, save_png
 from vehicle_agent.job_runner import JobRunner, PreparedJob, RunnerConfig
 from vehicle_agent.metrics import flight_metrics
 from vehicle_agent.service import (
@@ -51,6 +56,8 @@ PROGRESS_PERIOD_S = 1.0
 """Wall time in [s] between progress reports while writing."""
 METRICS_PIXEL_M = 0.002
 """Pixel size in [m] of the ink rasters compared for the IoU (2 mm: cheap for 1 m characters)."""
+PICTURE_WAIT_S = 3.0
+"""On shutdown, how long in [s] the agent waits for a job's report.png still being drawn."""
 
 
 @dataclass(frozen=True)
@@ -88,24 +95,8 @@ def vehicle_setup(show: Show, vehicle_id: str, *, time_scale: float | None = Non
     scale = float(time_scale if time_scale is not None else show.time_scale)
     if vehicle.backend != "sim":
         scale = 1.0  # an autopilot lives in real time
-    frame = BoardFrame(center_m_enu=board.center_m_enu, yaw_rad=board.yaw_rad)
-    options = PlanOptions(
-        limits=VehicleLimits(
-            a_max_mps2=limits.a_max_mps2,
-            v_max_mps=limits.v_max_mps,
-            mass_kg=limits.mass_kg,
-            thrust_max_n=limits.thrust_max_n,
-            body_rate_max_radps=limits.body_rate_max_radps,
-        ),
-        board=frame,
-        write_height_m=planning.write_height_m,
-        clearance_m=planning.clearance_m,
-        total_time_s=planning.total_time_s,
-        split_threshold_m=planning.split_threshold_m,
-        resegment=planning.resegment,
-        solver=planning.solver,
-        sample_rate_hz=planning.sample_rate_hz,
-    )
+    frame = board_frame(board)
+    options = plan_options(planning, limits, frame)
     runner = RunnerConfig(
         vehicle_id=vehicle.id,
         kind=vehicle.kind,
@@ -159,27 +150,23 @@ def prepare_job(setup: VehicleSetup, assignment: JobAssignment) -> PreparedJob:
     plan = plan_strokes(list(fitted.strokes), setup.plan_options)
     samples = plan.sample(setup.plan_options.sample_rate_hz)
     layout = JobLayout(strokes_board_m=fitted.strokes, planned_duration_s=plan.duration_s)
-    commands = body_reference(samples, controller_config(setup))
+    commands = command_samples(samples, controller_config(setup))
     return PreparedJob(assignment.job_id, samples, command_samples=commands, context=layout)
 
 
-def body_reference(samples: TrajectorySamples, config: ControllerConfig) -> TrajectorySamples:
+def command_samples(samples: TrajectorySamples, config: ControllerConfig) -> TrajectorySamples:
     """The vehicle reference that puts the brush tip on ``samples``, with the acceleration
-    feed-forward led by the inner loop's lag: the preprocessing ``flight.Flight`` applies to a whole
-    reference (both need it in advance), so that agent and batch flights fly the same."""
+    feed-forward led by the inner loop's lag: the same preprocessing ``flight.Flight`` applies
+    (:func:`vehicle_agent.control.controller.body_reference`), so agent and batch flights fly the
+    same."""
     dt_s = float(np.mean(np.diff(samples.t_s)))
-    p, v, a = body_reference_for_tip(
+    p, v, a = body_reference(
+        config,
         samples.position_m_enu,
         samples.velocity_mps_enu,
         samples.acceleration_mps2_enu,
         dt_s,
-        config.brush_lever_m,
-        config.gravity_mps2,
-        config.estimator.drag_per_s[:2],
     )
-    lead = np.asarray(config.feedforward_lead_s, dtype=np.float64)
-    second = np.asarray(config.feedforward_second_order_s2, dtype=np.float64)
-    a = lag_compensated(a, dt_s, lead, second)
     return TrajectorySamples(samples.t_s, p, v, a, samples.pen_down)
 
 
@@ -268,6 +255,41 @@ def write_job_report(
     return out
 
 
+def write_job_picture(
+    setup: VehicleSetup, prepared: PreparedJob, trace: FlownTrace, out: Path
+) -> Path | None:
+    """Draw ``report.png`` of a flown job into ``out`` (slow: seconds); None for a backend that
+    does not know its brush (nothing to draw the writing from)."""
+    flight = flight_log(setup, trace)
+    if flight is None:
+        return None
+    layout = prepared.context if isinstance(prepared.context, JobLayout) else None
+    figure = job_figure(
+        flight,
+        prepared.samples,
+        None if layout is None else layout.strokes_board_m,
+        setup.board_frame,
+        pixel_m=METRICS_PIXEL_M,
+        title=f"job {trace.job_id} on {setup.vehicle_id}, attempt {trace.attempt}",
+    )
+    path = out / PICTURE_NAME
+    save_png(figure, path)
+    return path
+
+
+def archive_job(
+    setup: VehicleSetup,
+    pictures: PictureWorker,
+    prepared: PreparedJob,
+    trace: FlownTrace,
+    metrics: JobMetrics | None,
+) -> Path:
+    """:func:`write_job_report`, then ``report.png`` drawn by ``pictures`` in the background."""
+    out = write_job_report(setup, prepared, trace, metrics)
+    pictures.submit(lambda: write_job_picture(setup, prepared, trace, out))
+    return out
+
+
 def controller_config(setup: VehicleSetup) -> ControllerConfig:
     """The position controller of the show's preset, aiming the brush at this show's height."""
     if setup.show.controller.preset == "paper":
@@ -329,6 +351,7 @@ async def run_agent(
     """Run this vehicle's agent until SIGINT/SIGTERM (the ``skyquill agent`` process);
     ``events``: the outbox the backend's ``on_text`` was given."""
     vehicle = setup.show.vehicle(setup.vehicle_id)
+    pictures = PictureWorker(setup.vehicle_id)
     settings = ServiceSettings(
         show_id=setup.show.show_id,
         zenoh=setup.show.zenoh,
@@ -341,10 +364,13 @@ async def run_agent(
         backend,
         prepare=lambda assignment: prepare_job(setup, assignment),
         measure=lambda prepared, trace: job_metrics(setup, prepared, trace),
-        archive=lambda prepared, trace, metrics: write_job_report(setup, prepared, trace, metrics),
+        archive=lambda prepared, trace, metrics: archive_job(
+            setup, pictures, prepared, trace, metrics
+        ),
         events=events,
     )
     await run_until_signalled(service)
+    await asyncio.to_thread(pictures.wait, PICTURE_WAIT_S)
 
 
 def run_agent_blocking(

@@ -34,15 +34,13 @@ with the agent's ``VehicleSetup`` (show, vehicle id, board frame, runner config,
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal, Protocol, runtime_checkable
+from typing import Generic, Literal, Protocol, TypeVar, runtime_checkable
 
 Vec3 = tuple[float, float, float]
 """A 3-vector in the world frame ENU."""
 
 BackendMode = Literal["idle", "takeoff", "hold", "offboard", "landing", "estop"]
 """What the vehicle is doing, as its autopilot (or the simulator) sees it."""
-
-AIRBORNE_MODES: frozenset[str] = frozenset({"takeoff", "hold", "offboard", "landing"})
 
 
 class BackendError(RuntimeError):
@@ -128,3 +126,53 @@ class VehicleBackend(Protocol):
     async def close(self) -> None:
         """Release the vehicle; safe to call twice."""
         ...
+
+
+class SynchronousVehicle(Protocol):
+    """A vehicle stepped in-process, one control period per ``tick`` (kinematic, simulated)."""
+
+    dt_s: float
+    """Length of one tick in [s]."""
+
+    def snapshot(self) -> VehicleSnapshot: ...
+
+    def takeoff(self, hover_m_enu: Vec3) -> None: ...
+
+    def tick(self, setpoint: Setpoint | None) -> VehicleSnapshot: ...
+
+    def land(self) -> None: ...
+
+    def estop(self) -> None: ...
+
+
+V = TypeVar("V", bound=SynchronousVehicle)
+
+
+class SynchronousBackend(Generic[V]):
+    """A :class:`SynchronousVehicle` behind the async :class:`VehicleBackend` protocol (the
+    vehicle's own time advances per ``tick``; ``now_s`` is ignored)."""
+
+    def __init__(self, vehicle: V) -> None:
+        self.vehicle = vehicle
+
+    @property
+    def control_period_s(self) -> float:
+        return self.vehicle.dt_s
+
+    async def start(self) -> VehicleSnapshot:
+        return self.vehicle.snapshot()
+
+    async def takeoff(self, hover_m_enu: Vec3) -> None:
+        self.vehicle.takeoff(hover_m_enu)
+
+    async def tick(self, setpoint: Setpoint | None, now_s: float) -> VehicleSnapshot:
+        return self.vehicle.tick(setpoint)
+
+    async def land(self) -> None:
+        self.vehicle.land()
+
+    async def estop(self) -> None:
+        self.vehicle.estop()
+
+    async def close(self) -> None:
+        return None

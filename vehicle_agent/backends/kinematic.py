@@ -9,7 +9,14 @@ from __future__ import annotations
 
 import math
 
-from vehicle_agent.backends.base import BackendError, BackendMode, Setpoint, Vec3, VehicleSnapshot
+from vehicle_agent.backends.base import (
+    BackendError,
+    BackendMode,
+    Setpoint,
+    SynchronousBackend,
+    Vec3,
+    VehicleSnapshot,
+)
 
 
 class KinematicVehicle:
@@ -91,30 +98,8 @@ class KinematicVehicle:
             self.mode = "hold" if self.mode == "takeoff" else "idle"
 
 
-class KinematicBackend:
+class KinematicBackend(SynchronousBackend[KinematicVehicle]):
     """:class:`KinematicVehicle` behind the async backend protocol."""
 
     def __init__(self, home_m_enu: Vec3, *, control_period_s: float = 0.01) -> None:
-        self.vehicle = KinematicVehicle(home_m_enu, dt_s=control_period_s)
-
-    @property
-    def control_period_s(self) -> float:
-        return self.vehicle.dt_s
-
-    async def start(self) -> VehicleSnapshot:
-        return self.vehicle.snapshot()
-
-    async def takeoff(self, hover_m_enu: Vec3) -> None:
-        self.vehicle.takeoff(hover_m_enu)
-
-    async def tick(self, setpoint: Setpoint | None, now_s: float) -> VehicleSnapshot:
-        return self.vehicle.tick(setpoint)
-
-    async def land(self) -> None:
-        self.vehicle.land()
-
-    async def estop(self) -> None:
-        self.vehicle.estop()
-
-    async def close(self) -> None:
-        return None
+        super().__init__(KinematicVehicle(home_m_enu, dt_s=control_period_s))

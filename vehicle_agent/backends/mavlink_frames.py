@@ -33,11 +33,6 @@ def yaw_enu_to_ned(yaw_rad: float) -> float:
     return _wrap(math.pi / 2 - yaw_rad)
 
 
-def yaw_ned_to_enu(yaw_rad: float) -> float:
-    """Heading from north clockwise -> heading from east counter-clockwise, in [-pi, pi)."""
-    return _wrap(math.pi / 2 - yaw_rad)
-
-
 def _wrap(angle: float) -> float:
     return (angle + math.pi) % (2 * math.pi) - math.pi
 

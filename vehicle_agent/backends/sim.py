@@ -18,7 +18,14 @@ import numpy as np
 from sim.params import WorldParams
 from sim.quadrotor import InnerLoopCommand
 from sim.world import World
-from vehicle_agent.backends.base import BackendError, BackendMode, Setpoint, Vec3, VehicleSnapshot
+from vehicle_agent.backends.base import (
+    BackendError,
+    BackendMode,
+    Setpoint,
+    SynchronousBackend,
+    Vec3,
+    VehicleSnapshot,
+)
 from vehicle_agent.control.controller import (
     DEFAULT_CONFIG,
     ControllerConfig,
@@ -200,30 +207,5 @@ def _vec(row: np.ndarray) -> Vec3:
     return (float(row[0]), float(row[1]), float(row[2]))
 
 
-class SimBackend:
+class SimBackend(SynchronousBackend[SimVehicle]):
     """:class:`SimVehicle` behind the async backend protocol."""
-
-    def __init__(self, vehicle: SimVehicle) -> None:
-        self.vehicle = vehicle
-
-    @property
-    def control_period_s(self) -> float:
-        return self.vehicle.dt_s
-
-    async def start(self) -> VehicleSnapshot:
-        return self.vehicle.snapshot()
-
-    async def takeoff(self, hover_m_enu: Vec3) -> None:
-        self.vehicle.takeoff(hover_m_enu)
-
-    async def tick(self, setpoint: Setpoint | None, now_s: float) -> VehicleSnapshot:
-        return self.vehicle.tick(setpoint)
-
-    async def land(self) -> None:
-        self.vehicle.land()
-
-    async def estop(self) -> None:
-        self.vehicle.estop()
-
-    async def close(self) -> None:
-        return None

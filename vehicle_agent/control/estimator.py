@@ -10,7 +10,6 @@ the latency to the current tick.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -94,11 +93,6 @@ class MocapEstimator:
         """Estimated external acceleration in [m/s^2], shape (N, 3)."""
         return self._d
 
-    @property
-    def achieved_accel_mps2_enu(self) -> FloatArray:
-        """Modelled acceleration the inner loop is delivering, shape (N, 3)."""
-        return self._a
-
     def update(self, measured_m_enu: FloatArray, last_command_mps2_enu: FloatArray) -> None:
         """Fuse a frame and advance: ``last_command`` is what was applied since the last tick."""
         dt = self.dt_s
@@ -115,12 +109,3 @@ class MocapEstimator:
         acc = self._a + self._d - self._drag * self._v
         self.position_m_enu = self._p + self._v * lat + (0.5 * lat * lat) * acc
         self.velocity_mps_enu = self._v + acc * lat
-
-
-def observer_bandwidth_radps(config: EstimatorConfig, dt_s: float) -> float:
-    """Largest magnitude among the continuous-equivalent filter poles in [rad/s] (diagnostic)."""
-    f = np.array([[1.0, dt_s, 0.5 * dt_s**2], [0.0, 1.0, dt_s], [0.0, 0.0, 1.0]])
-    k = steady_state_gain(config, dt_s)
-    closed = (np.eye(3) - np.outer(k, [1.0, 0.0, 0.0])) @ f
-    poles = np.linalg.eigvals(closed)
-    return float(max(abs(math.log(abs(z))) / dt_s if abs(z) > 0 else math.inf for z in poles))
