@@ -75,6 +75,8 @@ class _Job:
     recorder: TraceRecorder = field(default_factory=TraceRecorder)
     progress: float = 0.0
     next_progress_s: float = 0.0
+    planned_now: Setpoint | None = None
+    """The plan's sample at this tick: set by ``_write_setpoint``, recorded by ``_write_tick``."""
 
 
 class JobRunner:
@@ -391,23 +393,23 @@ class JobRunner:
         job = self._job
         assert job is not None and job.prepared is not None and job.started_s is not None
         prepared = job.prepared
-        commands = prepared.command_samples or prepared.samples
-        setpoint = sample_at(commands, now_s - job.started_s)
-        if commands is not prepared.samples:  # the pen state is the plan's
-            planned = sample_at(prepared.samples, now_s - job.started_s)
-            setpoint = replace(setpoint, pen_down=planned.pen_down)
-        return setpoint
+        t_rel_s = now_s - job.started_s
+        job.planned_now = sample_at(prepared.samples, t_rel_s)
+        if prepared.command_samples is None:
+            return job.planned_now
+        # The body is commanded along the prepared reference; the pen state is the plan's.
+        commanded = sample_at(prepared.command_samples, t_rel_s)
+        return replace(commanded, pen_down=job.planned_now.pen_down)
 
     def _write_tick(
         self, snap: VehicleSnapshot, now_s: float, setpoint: Setpoint | None
     ) -> FlownTrace | None:
         job = self._job
         assert job is not None and job.prepared is not None and job.started_s is not None
-        assert setpoint is not None
+        assert setpoint is not None and job.planned_now is not None
         t_rel = now_s - job.started_s
         duration = job.prepared.samples.duration_s
-        planned = setpoint if job.prepared.command_samples is None else None
-        job.recorder.add(t_rel, snap, planned or sample_at(job.prepared.samples, t_rel))
+        job.recorder.add(t_rel, snap, job.planned_now)
         job.progress = min(t_rel / duration, 1.0) if duration > 0 else 1.0
         if now_s >= job.next_progress_s and t_rel < duration:
             job.next_progress_s = now_s + self.config.progress_period_s
