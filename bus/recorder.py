@@ -11,6 +11,7 @@ Thread-safe: Zenoh callbacks may call :meth:`McapRecorder.record` from any threa
 from __future__ import annotations
 
 import json
+import queue
 import threading
 import time
 from pathlib import Path
@@ -78,8 +79,16 @@ def message_type_for_topic(keys: ShowKeys, topic: str) -> type[msgspec.Struct] |
     return None
 
 
+_FLUSH = "flush"
+"""Queue marker: push completed chunks to the disk."""
+
+
 class McapRecorder:
-    """Writes one MCAP file; use as a context manager (the file is finished on exit)."""
+    """Writes one MCAP file; use as a context manager (the file is finished on exit).
+
+    :meth:`record` only queues: it is called on Zenoh's callback threads, so checking the JSON,
+    compressing chunks and writing the file happen on the recorder's own writer thread.
+    """
 
     def __init__(self, path: str | Path, keys: ShowKeys) -> None:
         self.path = Path(path)
@@ -90,7 +99,7 @@ class McapRecorder:
             self._file, chunk_size=CHUNK_SIZE_BYTES, compression=CompressionType.ZSTD
         )
         self._writer.start(profile="", library="skyquill")
-        self._lock = threading.Lock()
+        self._queue: queue.SimpleQueue[tuple[str, bytes, int] | str | None] = queue.SimpleQueue()
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, int] = {}
         self._sequence = 0
@@ -99,6 +108,10 @@ class McapRecorder:
         """Messages written so far."""
         self.skipped = 0
         """Payloads dropped because they were not JSON."""
+        self._thread = threading.Thread(
+            target=self._write_queued, name="mcap-recorder", daemon=True
+        )
+        self._thread.start()
 
     def _schema_id(self, message_type: type[msgspec.Struct] | None) -> int:
         name = message_type.__name__ if message_type is not None else "unknown"
@@ -121,20 +134,28 @@ class McapRecorder:
         return self._channels[topic]
 
     def record(self, topic: str, payload: bytes, *, time_ns: int | None = None) -> None:
-        """Record one JSON payload on ``topic``; non-JSON payloads are counted in ``skipped``."""
+        """Queue one JSON payload for ``topic``; non-JSON payloads are counted in ``skipped``."""
+        if not self._closed:
+            self._queue.put((topic, payload, time_ns if time_ns is not None else time.time_ns()))
+
+    def _write_queued(self) -> None:
+        while (item := self._queue.get()) is not None:
+            if item == _FLUSH:
+                self._file.flush()
+            elif isinstance(item, tuple):
+                self._write(*item)
+
+    def _write(self, topic: str, payload: bytes, stamp_ns: int) -> None:
         try:
             json.loads(payload)
         except (ValueError, UnicodeDecodeError):
             self.skipped += 1
             return
-        stamp = time_ns if time_ns is not None else time.time_ns()
-        with self._lock:
-            if self._closed:
-                return
-            channel = self._channel_id(topic)
-            self._sequence += 1
-            self._writer.add_message(channel, stamp, payload, stamp, self._sequence)
-            self.messages += 1
+        self._sequence += 1
+        self._writer.add_message(
+            self._channel_id(topic), stamp_ns, payload, stamp_ns, self._sequence
+        )
+        self.messages += 1
 
     def record_message(self, topic: str, message: msgspec.Struct) -> None:
         """Record a message struct."""
@@ -145,19 +166,19 @@ class McapRecorder:
         self.record_message(f"{key}#liveliness", LivelinessChange(key=key, alive=alive))
 
     def flush(self) -> None:
-        """Push completed chunks to the disk."""
-        with self._lock:
-            if not self._closed:
-                self._file.flush()
+        """Push completed chunks to the disk (after what is queued so far)."""
+        if not self._closed:
+            self._queue.put(_FLUSH)
 
     def close(self) -> None:
-        """Write the summary and close the file."""
-        with self._lock:
-            if self._closed:
-                return
-            self._closed = True
-            self._writer.finish()  # type: ignore[no-untyped-call]
-            self._file.close()
+        """Write what is queued, the summary, and close the file."""
+        if self._closed:
+            return
+        self._closed = True
+        self._queue.put(None)
+        self._thread.join()
+        self._writer.finish()  # type: ignore[no-untyped-call]
+        self._file.close()
 
     def __enter__(self) -> McapRecorder:
         return self
