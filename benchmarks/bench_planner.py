@@ -7,11 +7,17 @@
 Characters are laid out on a 1 m x 1 m area (5 cm margin) with the default limits. Each stage is
 timed once per character after a warm-up; printed: median and worst [ms] per character.
 Stages: fixed-time closed-form fit (eq. 43) at the initial times; acceleration-constrained QP
-(lazy working set, PIQP); the full QP for PIQP / Clarabel / OSQP; full re-segmentation
-(analytic gradient, closed-form then QP phase); the paper's numerical-gradient re-segmentation
-on a subset (it needs one solve per segment per step); the whole ``plan_strokes``; and RotorPy's
-``MinSnap`` on the same 3-D waypoints (the data points of the path, repeats merged) with the same
-mean speed, on a subset (it takes seconds per character).
+(lazy working set, PIQP); the full QP for PIQP / Clarabel / OSQP; full re-segmentation (the
+default: per-segment re-timing at the limits, planner.timescale, then the QP); the paper's
+numerical-gradient re-segmentation on a subset (it needs one solve per segment per step); the
+whole ``plan_strokes``; and RotorPy's ``MinSnap`` on the same 3-D waypoints (the data points of
+the path, repeats merged) with the same mean speed, on a subset (it takes seconds per character).
+
+Time-optimality: each default plan's duration against the time-optimal duration of the same
+geometric path under the same limits (per-axis acceleration bounds, speed), computed by TOPP-RA
+(PyPI ``toppra``, planner.timeopt_reference), printed per character with median and worst
+(target <= 1.25), beside the duration of the ``"nominal"`` pace (the planner before issue 15).
+The limits are also checked on the plan sampled at 1 kHz (largest share of its bound).
 """
 
 from __future__ import annotations
@@ -30,6 +36,7 @@ import statistics  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 from collections.abc import Callable  # noqa: E402
+from dataclasses import replace  # noqa: E402
 from functools import partial  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
@@ -38,12 +45,25 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np  # noqa: E402
 
+try:
+    import toppra  # noqa: F401
+
+    _HAVE_TOPPRA = True
+except ImportError:  # a dev dependency; the time-optimality check is skipped without it
+    _HAVE_TOPPRA = False
+
 from planner.errors import PlannerError  # noqa: E402
 from planner.fit_qp import QpFitter  # noqa: E402
 from planner.glyphs import fit_to_area, has_glyph, text_glyph  # noqa: E402
 from planner.minjerk import fit_closed_form  # noqa: E402
 from planner.pipeline import PlanOptions, plan_strokes, prepare, resegment  # noqa: E402
 from planner.retime import SegmentCost, descend_analytic, descend_numerical  # noqa: E402
+from planner.timeopt_reference import toppra_duration_s  # noqa: E402
+from planner.timing import point_tolerances_m  # noqa: E402
+from planner.trajectory import PlannedTrajectory  # noqa: E402
+
+TIME_OPTIMAL_TARGET = 1.25
+"""Largest accepted duration / TOPP-RA duration of the same path."""
 
 LATIN = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
 # Common characters, roughly by frequency of use (modern corpora); the first 120 available are used.
@@ -116,6 +136,10 @@ class _Results:
         self.numeric: list[tuple[float, float, float, float, float]] = []
         self.failures: list[str] = []
         self.refine_rounds: list[int] = []
+        self.optimality: list[tuple[str, float, float, float]] = []
+        """(char, plan [s], TOPP-RA [s], nominal pace [s])."""
+        self.dense_share = 0.0
+        """Largest |a| / bound or |v| / v_max of any plan sampled at 1 kHz."""
 
     def add(self, name: str, ms: float) -> None:
         self.stages.setdefault(name, []).append(ms)
@@ -137,8 +161,9 @@ def _measure(char: str, options: PlanOptions, res: _Results, peer: bool, numeric
     for solver in ("piqp", "clarabel", "osqp"):
         full = QpFitter(limits, solver, strategy="full")
         res.add(f"QP, all rows, {solver}", _timed(partial(full.fit, problem))[1])
-    reseg_ms = _timed(lambda: resegment(problem, options, QpFitter(limits)))[1]
-    res.add("re-segmentation, analytic (full)", reseg_ms)
+    tolerances = point_tolerances_m(prep.path, options)
+    reseg_ms = _timed(lambda: resegment(problem, options, QpFitter(limits), tolerances))[1]
+    res.add("re-segmentation at the limits (full)", reseg_ms)
     if peer:
         points = prep.path.points_m_enu
         length = float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1)))
@@ -149,6 +174,45 @@ def _measure(char: str, options: PlanOptions, res: _Results, peer: bool, numeric
             res.pairs.append((plan_ms, peer_ms))
     if numeric:
         res.numeric.append(_compare_numerical(problem, options))
+    res.dense_share = max(res.dense_share, _dense_share(traj))
+    if _HAVE_TOPPRA:
+        lower, upper = options.limits.accel_bounds_mps2()
+        optimal = toppra_duration_s(traj.spline, lower, upper, options.limits.v_max_mps)
+        nominal = plan_strokes(strokes, replace(options, pace="nominal")).duration_s
+        res.optimality.append((char, traj.duration_s, optimal, nominal))
+
+
+def _dense_share(traj: PlannedTrajectory) -> float:
+    """Largest share of its bound of any acceleration or speed sample at 1 kHz."""
+    _, v, a, _ = traj.evaluate(traj.sample_times(1000.0))
+    lower, upper = traj.limits.accel_bounds_mps2()
+    share_a = np.maximum(a / np.asarray(upper), a / np.asarray(lower))
+    share_v = np.linalg.norm(v, axis=1) / traj.limits.v_max_mps
+    return float(max(np.max(share_a), np.max(share_v)))
+
+
+def _report_optimality(res: _Results) -> None:
+    print(f"  limits sampled at 1 kHz: largest share of a bound {res.dense_share:.4f} (<= 1)")
+    if not res.optimality:
+        print("  time-optimality: TOPP-RA not installed (pip install toppra), skipped")
+        return
+    print(
+        "  time-optimality: duration against TOPP-RA on the same path and limits"
+        f" (target <= {TIME_OPTIMAL_TARGET}), nominal pace beside:"
+    )
+    for char, plan_s, optimal_s, nominal_s in res.optimality:
+        print(
+            f"    {char}  plan {plan_s:6.2f} s  TOPP-RA {optimal_s:6.2f} s  ratio"
+            f" {plan_s / optimal_s:5.3f}   nominal pace {nominal_s:6.2f} s"
+            f" (ratio {nominal_s / optimal_s:5.3f})"
+        )
+    ratios = [p / o for _, p, o, _ in res.optimality]
+    worst = max(res.optimality, key=lambda r: r[1] / r[2])
+    print(
+        f"    ratio median {statistics.median(ratios):.3f}, worst {max(ratios):.3f} ({worst[0]});"
+        f" plan duration median {statistics.median(r[1] for r in res.optimality):.1f} s,"
+        f" nominal pace {statistics.median(r[3] for r in res.optimality):.1f} s"
+    )
 
 
 def _report(res: _Results, n_chars: int) -> None:
@@ -186,6 +250,7 @@ def _report(res: _Results, n_chars: int) -> None:
             f"  safety net (planner.refine): {needed} of {len(res.refine_rounds)} characters"
             f" re-solved, at most {max(res.refine_rounds)} rounds"
         )
+    _report_optimality(res)
     for failure in res.failures:
         print(f"  failed: {failure}")
 

@@ -16,6 +16,7 @@ HERE = Path(__file__).parent
 
 FULL: dict[str, list[str]] = {
     "bench_planner.py": [],
+    "bench_show.py": [],
     "bench_sim.py": [],
     "bench_bus.py": [],
     "bench_fleet.py": [],
@@ -24,6 +25,7 @@ FULL: dict[str, list[str]] = {
 }
 QUICK: dict[str, list[str]] = {
     "bench_planner.py": ["--quick"],
+    "bench_show.py": ["--quick"],
     "bench_sim.py": ["--quick"],
     "bench_bus.py": ["--seconds", "2", "--submissions", "50"],
     "bench_fleet.py": ["--skip-show"],

@@ -43,10 +43,15 @@ class ShowKeys:
         """Queryable (orchestrator): OperatorCommand -> CommandReply."""
         return f"{self.prefix}/orchestrator/command"
 
+    def report(self, vehicle_id: str) -> str:
+        """Queryable (orchestrator): AgentReport -> CommandReply from one vehicle's agent; the
+        vehicle is the one in the key (access control lets only that agent query it)."""
+        return f"{self.prefix}/orchestrator/report/{_check_chunk(vehicle_id, 'vehicle_id')}"
+
     @property
-    def report(self) -> str:
-        """Queryable (orchestrator): AgentReport -> CommandReply; agents retry until acked."""
-        return f"{self.prefix}/orchestrator/report"
+    def reports_all(self) -> str:
+        """What the orchestrator declares to answer every vehicle's reports."""
+        return f"{self.prefix}/orchestrator/report/*"
 
     @property
     def snapshot(self) -> str:
@@ -111,8 +116,14 @@ class ShowKeys:
         return f"{self.prefix}/vehicles/*/events"
 
     def vehicle_command(self, vehicle_id: str) -> str:
-        """Queryable (agent): VehicleCommand -> CommandReply."""
+        """Queryable (agent): VehicleCommand (``cancel``, ``land``, ``estop``, ``clear_fault``)
+        -> CommandReply; the orchestrator and operators may query it."""
         return f"{self.prefix}/vehicles/{_check_chunk(vehicle_id, 'vehicle_id')}/command"
+
+    def vehicle_assign(self, vehicle_id: str) -> str:
+        """Queryable (agent): VehicleCommand ``assign`` -> CommandReply; only the orchestrator
+        may query it."""
+        return f"{self.prefix}/vehicles/{_check_chunk(vehicle_id, 'vehicle_id')}/assign"
 
 
 def vehicle_id_from_key(key: str) -> str:

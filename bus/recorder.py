@@ -58,14 +58,14 @@ def message_type_for_topic(keys: ShowKeys, topic: str) -> type[msgspec.Struct] |
         (keys.submit, "reply"): SubmitReply,
         (keys.command, "request"): OperatorCommand,
         (keys.command, "reply"): CommandReply,
-        (keys.report, "request"): AgentReport,
-        (keys.report, "reply"): CommandReply,
         (keys.snapshot, "reply"): ShowSnapshot,
         (keys.events, ""): Event,
         (keys.fleet, ""): ShowSnapshot,
     }
     if (key, suffix) in table:
         return table[(key, suffix)]
+    if len(parts) == 3 and parts[:2] == ["orchestrator", "report"] and suffix:
+        return AgentReport if suffix == "request" else CommandReply
     if len(parts) == 2 and parts[0] == "jobs" and not suffix:
         return JobState
     if len(parts) == 3 and parts[0] == "vehicles":
@@ -74,6 +74,8 @@ def message_type_for_topic(keys: ShowKeys, topic: str) -> type[msgspec.Struct] |
             ("status", ""): VehicleStatus,
             ("command", "request"): VehicleCommand,
             ("command", "reply"): CommandReply,
+            ("assign", "request"): VehicleCommand,
+            ("assign", "reply"): CommandReply,
         }
         return by_leaf.get((parts[2], suffix))
     return None

@@ -2,9 +2,11 @@
 
 A service declares a queryable with :func:`serve` (handler on Zenoh's thread) or
 :func:`serve_async` (handler in the asyncio loop). The request is decoded before the handler sees
-it; a payload that is not a valid request gets an error reply (``on_error(info)`` when given,
-otherwise a Zenoh error reply whose payload is an ErrorInfo) and the handler never runs. A handler
-that raises produces an ``internal`` error reply; the queryable keeps serving.
+it; a payload that is not a valid request (whatever its bytes: bad JSON or UTF-8, too large, too
+deep, wrong types) gets an error reply (``on_error(info)`` when given, otherwise a Zenoh error
+reply whose payload is an ErrorInfo) and the handler never runs. A handler that raises, or whose
+reply cannot be encoded, produces an ``internal`` error reply. Every query gets exactly one reply
+and the queryable keeps serving.
 
 Clients call :func:`query` / :func:`aquery` (all replies, decoded) or :func:`query_one` /
 :func:`aquery_one` (first good reply or an exception).
@@ -15,6 +17,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import re
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar, overload
@@ -22,7 +25,7 @@ from typing import Any, Generic, TypeVar, overload
 import msgspec
 import zenoh
 
-from bus.messages import ErrorInfo, MessageError, decode, encode
+from bus.messages import ErrorInfo, MessageError, Request, decode, encode
 from bus.session import BusError
 
 M = TypeVar("M", bound=msgspec.Struct)
@@ -60,16 +63,28 @@ class QueryReply(Generic[M]):
     """Error reply from the queryable, or why the reply could not be decoded."""
 
 
-def error_info_from_exception(exc: BaseException) -> ErrorInfo:
-    """ErrorInfo of an exception, keeping ``stroke_index``/``point_index``/``field`` if set."""
+_CODE = re.compile(r"[a-z][a-z0-9_]{0,63}")
+"""What a stable error code looks like: short snake_case."""
+
+
+def error_info_from_exception(exc: BaseException, *, default_code: str = "internal") -> ErrorInfo:
+    """ErrorInfo of an exception, keeping ``stroke_index``/``point_index``/``field`` if set.
+
+    The code is the exception's ``code`` attribute when it is a snake_case word (e.g.
+    ``plan_failed`` for a planner error), otherwise ``default_code``: never a class name.
+    """
     if isinstance(exc, MessageError):
         return exc.info
+    code = getattr(exc, "code", None)
+    field = getattr(exc, "field", None)
+    stroke_index = getattr(exc, "stroke_index", None)
+    point_index = getattr(exc, "point_index", None)
     return ErrorInfo(
-        code=str(getattr(exc, "code", "") or type(exc).__name__),
+        code=code if isinstance(code, str) and _CODE.fullmatch(code) else default_code,
         message=str(exc) or type(exc).__name__,
-        field=getattr(exc, "field", None),
-        stroke_index=getattr(exc, "stroke_index", None),
-        point_index=getattr(exc, "point_index", None),
+        field=field if isinstance(field, str) else None,
+        stroke_index=stroke_index if type(stroke_index) is int else None,
+        point_index=point_index if type(point_index) is int else None,
     )
 
 
@@ -192,9 +207,32 @@ def _send_error(query: zenoh.Query, key: str, info: ErrorInfo, on_error: ErrorRe
         query.reply_err(encode(info), encoding=JSON)
 
 
-def _reply(query: zenoh.Query, key: str, reply: msgspec.Struct) -> None:
+def _send_error_and_drop(
+    query: zenoh.Query, key: str, info: ErrorInfo, on_error: ErrorReply | None
+) -> None:
     try:
-        query.reply(key, encode(reply), encoding=JSON)
+        _send_error(query, key, info, on_error)
+    except Exception as exc:  # e.g. the querier is gone, or the session closed
+        log.warning("could not send error reply on %s: %s", key, exc)
+    finally:
+        query.drop()  # type: ignore[no-untyped-call]
+
+
+def _internal(key: str, exc: Exception) -> ErrorInfo:
+    log.error("handler of %s failed", key, exc_info=exc)
+    return ErrorInfo(code="internal", message=f"internal error: {str(exc) or type(exc).__name__}")
+
+
+def _reply(
+    query: zenoh.Query, key: str, reply: msgspec.Struct, on_error: ErrorReply | None
+) -> None:
+    try:
+        payload = encode(reply)
+    except Exception as exc:  # a reply that cannot be encoded still gets an answer
+        _send_error_and_drop(query, key, _internal(key, exc), on_error)
+        return
+    try:
+        query.reply(key, payload, encoding=JSON)
     except Exception as exc:  # e.g. the querier is gone, or the session closed
         log.warning("could not reply on %s: %s", key, exc)
     finally:
@@ -202,10 +240,23 @@ def _reply(query: zenoh.Query, key: str, reply: msgspec.Struct) -> None:
 
 
 def _decode_request(query: zenoh.Query, request_type: type[Any] | None) -> Any:
-    if request_type is None:
-        return None
-    payload = query.payload
-    return decode(payload.to_bytes() if payload is not None else b"", request_type)
+    """The request of a query; raises :class:`MessageError` only (whatever the payload).
+
+    ``request_type=None``: the key takes no request; no payload, ``{}`` or ``{"v": 1}`` only.
+    """
+    try:
+        payload = query.payload
+        raw = payload.to_bytes() if payload is not None else b""
+        if request_type is None:
+            if raw.strip():
+                decode(raw, Request)
+            return None
+        return decode(raw, request_type)
+    except MessageError:
+        raise
+    except Exception as exc:
+        info = ErrorInfo(code="bad_json", message=f"unreadable request: {type(exc).__name__}")
+        raise MessageError(info) from None
 
 
 @overload
@@ -236,35 +287,24 @@ def serve(
 ) -> zenoh.Queryable[None]:
     """Answer queries on ``key`` with ``handler(request)`` run on Zenoh's thread.
 
-    ``request_type=None`` ignores any payload and calls ``handler(None)`` (e.g. snapshots).
+    ``request_type=None``: the key takes no request (e.g. snapshots); ``handler(None)`` runs for
+    a query without payload, ``{}`` or ``{"v": 1}``, anything else gets an error reply.
     """
 
     def callback(query: zenoh.Query) -> None:
         try:
             request = _decode_request(query, request_type)
+        except MessageError as exc:
+            _send_error_and_drop(query, key, exc.info, on_error)
+            return
+        try:
             reply = handler(request)
         except Exception as exc:
-            if not isinstance(exc, MessageError):
-                log.exception("handler of %s failed", key)
-            info = error_info_from_exception(exc)
-            if not isinstance(exc, MessageError):
-                info = ErrorInfo(code="internal", message=f"internal error: {info.message}")
-            _send_error_and_drop(query, key, info, on_error)
+            _send_error_and_drop(query, key, _internal(key, exc), on_error)
             return
-        _reply(query, key, reply)
+        _reply(query, key, reply, on_error)
 
     return session.declare_queryable(key, callback, complete=True)
-
-
-def _send_error_and_drop(
-    query: zenoh.Query, key: str, info: ErrorInfo, on_error: ErrorReply | None
-) -> None:
-    try:
-        _send_error(query, key, info, on_error)
-    except Exception as exc:
-        log.warning("could not send error reply on %s: %s", key, exc)
-    finally:
-        query.drop()  # type: ignore[no-untyped-call]
 
 
 @overload
@@ -306,12 +346,9 @@ def serve_async(
         try:
             reply = await handler(request)
         except Exception as exc:
-            log.exception("handler of %s failed", key)
-            info = error_info_from_exception(exc)
-            info = ErrorInfo(code="internal", message=f"internal error: {info.message}")
-            _send_error_and_drop(query, key, info, on_error)
+            _send_error_and_drop(query, key, _internal(key, exc), on_error)
             return
-        _reply(query, key, reply)
+        _reply(query, key, reply, on_error)
 
     def callback(query: zenoh.Query) -> None:
         try:

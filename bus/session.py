@@ -124,9 +124,29 @@ def build_config(
     acl = _opt(settings, "access_control", None)
     if acl:
         conf.insert_json5("access_control", json.dumps(dict(acl)))
+    _insert_resilience(conf)
     for path, value in dict(_opt(settings, "extra", {})).items():
         conf.insert_json5(path, json.dumps(value))
     return conf
+
+
+# --- resilience (same on the router and every client, so both sides agree) ---------------------
+
+LINK_LEASE_MS = 2000
+"""Zenoh link lease of every show session, [ms] (Zenoh's default: 10 s). A process silent this
+long (frozen, cut off) is dropped by the other side of its link, and its liveliness tokens with
+it; SIGKILL or a closed socket is noticed at once. ``extra`` may override it."""
+LINK_KEEP_ALIVES = 4
+"""Keep-alive messages per lease on an idle link (one every 500 ms)."""
+RECONNECT_RETRY = {"period_init_ms": 100, "period_max_ms": 1000, "period_increase_factor": 2.0}
+"""How clients and peers retry a lost router: after 0.1 s, then doubling, at least every 1 s.
+Zenoh replays the session's subscribers, queryables and liveliness tokens on the new link."""
+
+
+def _insert_resilience(conf: zenoh.Config) -> None:
+    conf.insert_json5("transport/link/tx/lease", json.dumps(LINK_LEASE_MS))
+    conf.insert_json5("transport/link/tx/keep_alive", json.dumps(LINK_KEEP_ALIVES))
+    conf.insert_json5("connect/retry", json.dumps(RECONNECT_RETRY))
 
 
 def open_session(

@@ -2,7 +2,11 @@
 
 Actions: ``pause [VEHICLE]``, ``resume [VEHICLE]``, ``cancel JOB``, ``approve JOB``,
 ``reject JOB``, ``prioritize JOB --priority N``, ``land VEHICLE``, ``land-all``,
-``estop [VEHICLE]`` (no vehicle: every vehicle).
+``estop [VEHICLE]`` (no vehicle: every vehicle), ``clear_fault VEHICLE`` (the vehicle leaves
+``fault`` if it is landed and disarmed), ``release VEHICLE`` (a held vehicle may take jobs
+again), ``fresh-sheet BOARD`` (a half-written board got a new sheet). A vehicle may also be named
+with ``--vehicle ID``.
+``land-all`` is the bus command ``land_all``; either spelling is accepted (also ``clear-fault``).
 """
 
 from __future__ import annotations
@@ -12,17 +16,20 @@ import sys
 from pathlib import Path
 
 NAME = "command"
-HELP = "Operator command: pause/resume/cancel/approve/reject/prioritize/land/land-all/estop."
+HELP = "Operator command: pause/resume/cancel/approve/reject/prioritize/land/land-all/estop/..."
 
 JOB_ACTIONS = ("cancel", "approve", "reject", "prioritize")
-VEHICLE_ACTIONS = ("pause", "resume", "land", "estop")
-ACTIONS = (*JOB_ACTIONS, *VEHICLE_ACTIONS, "land-all")
+VEHICLE_ACTIONS = ("pause", "resume", "land", "estop", "clear_fault", "clear-fault", "release")
+NEEDS_VEHICLE = ("land", "clear_fault", "clear-fault", "release")
+BOARD_ACTIONS = ("fresh_sheet", "fresh-sheet")
+ACTIONS = (*JOB_ACTIONS, *VEHICLE_ACTIONS, *BOARD_ACTIONS, "land-all", "land_all")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("show", type=Path, help="show file (YAML)")
     parser.add_argument("action", choices=ACTIONS, help="what to do")
-    parser.add_argument("target", nargs="?", help="job id (job actions) or vehicle id")
+    parser.add_argument("target", nargs="?", help="job id, vehicle id or board id (fresh-sheet)")
+    parser.add_argument("--vehicle", metavar="ID", help="the vehicle (vehicle actions)")
     parser.add_argument("--priority", type=int, help="new priority (prioritize)")
     parser.add_argument("--reason", default="", help="why (kept in the event log)")
     parser.add_argument("--operator", default="operator", help="name recorded in the event log")
@@ -66,9 +73,15 @@ def run(args: argparse.Namespace) -> int:
                 return 2
             fields["priority"] = args.priority
     elif args.action in VEHICLE_ACTIONS:
-        if args.action == "land" and not args.target:
-            print("skyquill command: land needs a vehicle id (or use land-all)", file=sys.stderr)
+        vehicle = args.vehicle or args.target
+        if args.action in NEEDS_VEHICLE and not vehicle:
+            print(f"skyquill command: {args.action} needs a vehicle id", file=sys.stderr)
             return 2
-        if args.target:
-            fields["vehicle_id"] = args.target
+        if vehicle:
+            fields["vehicle_id"] = vehicle
+    elif args.action in BOARD_ACTIONS:
+        if not args.target:
+            print(f"skyquill command: {args.action} needs a board id", file=sys.stderr)
+            return 2
+        fields["board_id"] = args.target
     return send(args.show, action, **fields)

@@ -1,4 +1,9 @@
-"""``skyquill fly``: plan a character, fly it in the simulator, score and picture the writing."""
+"""``skyquill fly``: plan a character, fly it in the simulator, score and picture the writing.
+
+Exit status: 0 when the writing met its bounds (the defaults of a show file's ``safety`` section:
+pen-down RMSE, ink IoU; ``--rmse-max``, ``--iou-min``), 1 when it did not or the flight was
+aborted (tracking error above ``--deviation-bound`` for longer than its window), with the reason on
+stderr; 2 for bad input."""
 
 from __future__ import annotations
 
@@ -29,12 +34,44 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--stroke-width", type=float, default=0.02, help="nominal stroke width [m] (0.02)"
     )
+    add_bound_arguments(parser)
     parser.add_argument(
         "--gains",
         choices=("default", "paper"),
         default="default",
         help="controller: shipped default or the paper's published set",
     )
+
+
+def add_bound_arguments(parser: argparse.ArgumentParser) -> None:
+    """The writing and tracking bounds, defaulting to a show file's ``safety`` section."""
+    from showfile.safety import SafetySettings
+
+    d = SafetySettings()
+    add = parser.add_argument
+    add(
+        "--rmse-max",
+        type=float,
+        default=d.rmse_pen_down_max_m,
+        metavar="M",
+        help=f"largest pen-down RMSE [m] of a good writing ({d.rmse_pen_down_max_m})",
+    )
+    add(
+        "--iou-min",
+        type=float,
+        default=d.iou_min,
+        metavar="X",
+        help=f"smallest ink IoU of a good writing ({d.iou_min})",
+    )
+    add(
+        "--deviation-bound",
+        type=float,
+        default=d.deviation_bound_m,
+        metavar="M",
+        help=f"abort when the tracking error stays above this [m] ({d.deviation_bound_m}) ...",
+    )
+    add("--deviation-window", type=float, default=d.deviation_window_s, metavar="S",
+        help=f"... for longer than this [s] ({d.deviation_window_s})")  # fmt: skip
 
 
 def _glyph(args: argparse.Namespace) -> Any:
@@ -55,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
     from vehicle_agent.control.controller import DEFAULT_CONFIG, PAPER_CONFIG
     from vehicle_agent.flight import FlightConfig, fly, plan_glyph
     from vehicle_agent.metrics import flight_metrics, ink_result
+    from vehicle_agent.safety import DeviationLimit, WritingBounds, writing_verdict
 
     brush = dataclasses.replace(BrushParams(), nominal_width_m=args.stroke_width)
     wind = WindParams.from_speed(args.wind, heading_rad=math.radians(args.wind_heading_deg))
@@ -63,14 +101,18 @@ def run(args: argparse.Namespace) -> int:
     try:
         glyph = _glyph(args)
         fitted, plan = plan_glyph(glyph, world, height_m=args.height)
-    except (PlannerError, OSError) as exc:
+        deviation = DeviationLimit(args.deviation_bound, args.deviation_window)
+    except (PlannerError, OSError, ValueError) as exc:
         print(f"skyquill fly: {exc}", file=sys.stderr)
         return 2
     start = time.perf_counter()
-    log = fly([plan.sample(world.control_rate_hz)], FlightConfig(world, controller), seed=args.seed)
+    config = FlightConfig(world, controller, deviation=deviation)
+    log = fly([plan.sample(world.control_rate_hz)], config, seed=args.seed)
     wall_s = time.perf_counter() - start
     ink = ink_result(log)
     scores = flight_metrics(log, ink=ink)
+    bounds = WritingBounds(args.rmse_max, args.iou_min)
+    problem = log.abort_reason or writing_verdict(scores.rmse_pen_down_m, scores.iou, bounds)
     doc: dict[str, Any] = {
         **scores.to_json_dict(),
         "wall_time_s": wall_s,
@@ -85,7 +127,12 @@ def run(args: argparse.Namespace) -> int:
         "nominal_width_m": brush.nominal_width_m,
         "label": glyph.label,
         "planned_duration_s": plan.duration_s,
-    }
+        "aborted": log.abort_reason,
+        "within_bounds": problem is None,
+        "bounds": {"rmse_pen_down_max_m": args.rmse_max, "iou_min": args.iou_min,
+                   "deviation_bound_m": args.deviation_bound,
+                   "deviation_window_s": args.deviation_window},
+    }  # fmt: skip
     print(json.dumps({k: doc[k] for k in ("rmse_pen_down_m", "rmse_m", "max_error_m", "iou",
                                            "sim_time_s", "wall_time_s")}))  # fmt: skip
     if args.report:
@@ -103,4 +150,7 @@ def run(args: argparse.Namespace) -> int:
             f"seed {args.seed}",
         )
         save_report(fig, out / "report.png")
+    if problem is not None:
+        print(f"skyquill fly: writing out of bounds: {problem}", file=sys.stderr)
+        return 1
     return 0

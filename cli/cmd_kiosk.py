@@ -37,6 +37,7 @@ def run(args: argparse.Namespace) -> int:
     from kiosk.service import run_kiosk
     from kiosk.settings import settings_from_show
     from showfile import ShowError, load_show
+    from trust.settings import session_settings
 
     try:
         show = load_show(args.show)
@@ -52,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         run_kiosk(
             settings,
-            show.zenoh,
+            session_settings(show, "kiosk"),
             role=args.role,
             connect=args.connect,
             on_started=lambda url: print(url, flush=True),

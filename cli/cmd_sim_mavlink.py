@@ -8,7 +8,7 @@ import sys
 import threading
 
 NAME = "sim-mavlink"
-HELP = "Serve the show's MAVLink vehicles as simulated ArduCopters (one UDP endpoint each)"
+HELP = "Serve the show's MAVLink vehicles as simulated ArduCopters or PX4s (one UDP endpoint each)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -28,6 +28,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=3.0,
         metavar="S",
         help="GUID_TIMEOUT: the vehicle stops when setpoints stop this long (default 3)",
+    )
+    add(
+        "--autopilot",
+        choices=("ardupilot", "px4"),
+        default="ardupilot",
+        help="which autopilot the vehicles answer like (default ardupilot)",
+    )
+    add(
+        "--param",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="a parameter's value at boot, e.g. GUID_OPTIONS=8 (repeatable; mavsim/params.py)",
     )
     add(
         "--refuse-arm",
@@ -63,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
         show = load_show(args.show)
         gains = PositionGains.from_poles(args.gains_eps)
         refusals = dict(_pair(text) for text in args.refuse_arm)
+        params = tuple((name, float(value)) for name, value in map(_param, args.param))
         configs = vehicle_configs(
             show,
             only=set(args.vehicle) if args.vehicle else None,
@@ -70,6 +84,8 @@ def run(args: argparse.Namespace) -> int:
             arm_refusals=refusals,
             position_source_delay_s=args.position_source_delay,
             guided_timeout_s=args.guided_timeout,
+            autopilot=args.autopilot,
+            params=params,
         )
         if not configs:
             print(f"{args.show}: no vehicle with backend: mavlink", file=sys.stderr)
@@ -89,6 +105,17 @@ def run(args: argparse.Namespace) -> int:
     finally:
         server.close()
     return 0
+
+
+def _param(text: str) -> tuple[str, str]:
+    name, sep, value = text.partition("=")
+    if not sep or not name:
+        raise ValueError(f"--param {text!r}: expected NAME=VALUE")
+    try:
+        float(value)
+    except ValueError:
+        raise ValueError(f"--param {text!r}: {value!r} is not a number") from None
+    return name, value
 
 
 def _pair(text: str) -> tuple[str, str]:

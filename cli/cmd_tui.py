@@ -38,6 +38,7 @@ def run(args: argparse.Namespace) -> int:
     from bus.keys import ShowKeys
     from bus.session import SessionOpenError, open_session
     from showfile import ShowError, load_show
+    from trust.settings import session_settings
     from tui.app import ConsoleApp
     from tui.link import ConsoleLink
     from tui.settings import settings_from_show
@@ -57,11 +58,14 @@ def run(args: argparse.Namespace) -> int:
         ConsoleApp(settings, model=demo_model(settings), clock=lambda: DEMO_TIME_S).run()
         return 0
     try:
-        session = open_session(show.zenoh, role=args.role, connect=args.connect)
+        session = open_session(
+            session_settings(show, "operator"), role=args.role, connect=args.connect
+        )
     except SessionOpenError as exc:
         print(f"skyquill tui: {exc}", file=sys.stderr)
         return 1
     with session:
         link = ConsoleLink(session, ShowKeys(show.show_id))
-        ConsoleApp(settings, link=link).run()
-    return 0
+        app = ConsoleApp(settings, link=link)
+        app.run()
+    return app.return_code or 0  # non-zero after a crash: `skyquill up` reopens the console

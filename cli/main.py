@@ -1,8 +1,9 @@
 """Entry point of the ``skyquill`` command.
 
-Every module ``cli/cmd_*.py`` is a subcommand. It defines ``NAME`` (the subcommand), ``HELP`` (one
-line), ``add_arguments(parser)`` and ``run(args) -> int`` (the exit status). Modules are imported
-only when their subcommand runs, so a heavy dependency of one command never slows another.
+Every module ``cli/cmd_*.py`` is a subcommand. It defines ``NAME`` (the subcommand), optionally
+``ALIASES`` (other names, space-separated), ``HELP`` (one line), ``add_arguments(parser)`` and
+``run(args) -> int`` (the exit status). Modules are imported only when their subcommand runs, so
+a heavy dependency of one command never slows another.
 """
 
 from __future__ import annotations
@@ -36,6 +37,8 @@ def _discover() -> dict[str, tuple[str, str]]:
                 constants[node.targets[0].id] = node.value.value
         name = constants.get("NAME", info.name.removeprefix("cmd_").replace("_", "-"))
         commands[name] = (f"cli.{info.name}", constants.get("HELP", ""))
+        for alias in constants.get("ALIASES", "").split():  # e.g. ``stop`` for ``down``
+            commands[alias] = (f"cli.{info.name}", f"same as {name}")
     return dict(sorted(commands.items()))
 
 

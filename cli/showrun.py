@@ -1,13 +1,13 @@
 """A whole show run from one Python process: the demo command and the multi-process tests.
 
 :func:`derived_show` writes a copy of a show file on a free loopback port with its own storage;
-:class:`ShowRun` runs the Zenoh router in-process and supervises the orchestrator and agents;
-:func:`submit_texts` and :func:`wait_for_jobs` talk to the orchestrator like any client.
+:class:`ShowRun` supervises the router, the orchestrator and the agents as child processes;
+:func:`submit_texts` and :func:`wait_for_jobs` talk to the orchestrator like any client;
+:class:`Stagehand` puts a fresh sheet on boards left half-written, as the show's crew would.
 """
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import threading
 import time
@@ -18,11 +18,20 @@ from types import TracebackType
 from typing import Any
 
 from bus.keys import ShowKeys
-from bus.messages import ErrorInfo, JobState, ShowSnapshot, SubmitReply, SubmitRequest
+from bus.messages import (
+    CommandReply,
+    ErrorInfo,
+    JobState,
+    OperatorCommand,
+    ShowSnapshot,
+    SubmitReply,
+    SubmitRequest,
+)
 from bus.rpc import NoReplyError, RemoteError, query_one
 from bus.session import Session, free_tcp_endpoint, open_session
 from cli.supervisor import ChildSpec, RestartPolicy, Supervisor, child_env, show_children
 from showfile import Show, dump_show, load_show
+from trust.settings import ensure_show_keys, session_settings
 
 FINAL_STATES = frozenset({"done", "failed", "cancelled", "rejected"})
 
@@ -41,7 +50,13 @@ def derived_show(
     storage = show.storage.model_copy(
         update={"database": out_dir / "show.sqlite3", "recordings_dir": out_dir / "recordings"}
     )
-    changes: dict[str, Any] = {"zenoh": zenoh, "storage": storage, **updates}
+    security = show.security.model_copy(update={"keys_dir": out_dir / "keys"})
+    changes: dict[str, Any] = {
+        "zenoh": zenoh,
+        "storage": storage,
+        "security": security,
+        **updates,
+    }
     if time_scale is not None:
         changes["time_scale"] = time_scale
     derived = show.model_copy(update=changes)
@@ -52,7 +67,8 @@ def derived_show(
 
 @dataclass
 class ShowRun:
-    """Router in this process + supervised children; a context manager that stops everything."""
+    """The show's processes, router included, supervised from a thread of this process; a
+    context manager that stops everything (the children also die with this process)."""
 
     show_path: Path
     """The show file the children read."""
@@ -75,15 +91,14 @@ class ShowRun:
         self.supervisor = Supervisor(self.specs, env=child_env(), say=self.say, policy=self.policy)
         self._stop = threading.Event()
         self._watcher: threading.Thread | None = None
-        self._stack = contextlib.ExitStack()
         self.keys = ShowKeys(self.show.show_id)
 
     def __enter__(self) -> ShowRun:
-        self._stack.enter_context(open_session(self.show.zenoh, role="router"))
+        ensure_show_keys(self.show)
         try:
             self.supervisor.start()
         except BaseException:
-            self._stack.close()
+            self.supervisor.stop()
             raise
         self._watcher = threading.Thread(target=self._watch, daemon=True)
         self._watcher.start()
@@ -102,11 +117,12 @@ class ShowRun:
         if self._watcher is not None:
             self._watcher.join()
         self.supervisor.stop()
-        self._stack.close()
 
-    def client(self) -> Session:
-        """A client session on the show's router (use it in a ``with`` block)."""
-        return open_session(self.show.zenoh, role="client")
+    def client(self, open_timeout_s: float = 30.0) -> Session:
+        """An operator's client session on the show's router (use it in a ``with`` block);
+        waits up to ``open_timeout_s`` for the router process to listen."""
+        settings = session_settings(self.show, "operator")
+        return open_session(settings, role="client", open_timeout_s=open_timeout_s)
 
 
 def submit_texts(
@@ -141,6 +157,39 @@ def _retry(call: Callable[[], Any], timeout_s: float) -> Any:
 def snapshot(session: Session, keys: ShowKeys, *, timeout_s: float = 5.0) -> ShowSnapshot:
     """The orchestrator's current view of the show."""
     return query_one(session, keys.snapshot, None, ShowSnapshot, timeout_s=timeout_s)
+
+
+class Stagehand:
+    """Replaces the sheet of every board a lost or stopped vehicle left half-written (the
+    operator's ``fresh_sheet``), as the crew would at a show; a thread, for tests and the demo.
+    ``replaced`` lists the boards in order."""
+
+    def __init__(self, session: Session, keys: ShowKeys, *, period_s: float = 0.3) -> None:
+        self._session, self._keys, self._period_s = session, keys, period_s
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="stagehand", daemon=True)
+        self.replaced: list[str] = []
+
+    def __enter__(self) -> Stagehand:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self._stop.set()
+        self._thread.join()
+
+    def _run(self) -> None:
+        while not self._stop.wait(self._period_s):
+            try:
+                for board_id in snapshot(self._session, self._keys, timeout_s=2.0).dirty_boards:
+                    command = OperatorCommand(
+                        command="fresh_sheet", board_id=board_id, operator="stagehand"
+                    )
+                    reply = query_one(self._session, self._keys.command, command, CommandReply)
+                    if reply.ok:
+                        self.replaced.append(board_id)
+            except (NoReplyError, RemoteError):
+                continue  # the orchestrator is restarting
 
 
 def wait_for_jobs(

@@ -2,8 +2,14 @@
 
 :class:`RestartPolicy` decides (pure); :class:`Supervisor` carries it out with ``subprocess``.
 Children run in their own session, so a Ctrl-C in the terminal reaches only the supervisor, which
-then stops them in order (SIGTERM, then SIGKILL after a grace period). On Linux each child also
-gets SIGTERM if the supervisor itself dies (``PR_SET_PDEATHSIG``), so nothing is left behind.
+then stops them group by group (``ChildSpec.stop_group``: agents and kiosk, then the
+orchestrator, then simulated autopilots, then the router): each child of a group gets SIGTERM and
+its own grace period, and only a child that outlives its own grace gets SIGKILL.
+
+Whether children outlive the supervisor is a choice (``die_with_supervisor``): ``ShowRun`` (the
+demo, tests) has them get SIGTERM when it dies (``PR_SET_PDEATHSIG``), so nothing is left behind;
+``skyquill up`` lets them run on, so that vehicles in the air never depend on the supervisor
+process, and a restarted ``up`` adopts them (:meth:`Supervisor.adopt`, ``cli/runstate.py``).
 """
 
 from __future__ import annotations
@@ -17,7 +23,9 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO
+from typing import IO, Protocol
+
+from cli.runstate import AdoptedProcess
 
 PR_SET_PDEATHSIG = 1
 
@@ -42,6 +50,27 @@ class RestartPolicy:
         return min(self.max_delay_s, previous_delay_s * self.factor)
 
 
+ROUTER_RESTART = RestartPolicy(
+    initial_delay_s=0.1, factor=2.0, max_delay_s=1.0, stable_after_s=10.0
+)
+"""The router comes back fast: every client is waiting to reconnect to it."""
+
+
+class ProcessHandle(Protocol):
+    """What the supervisor needs of a process: ``subprocess.Popen`` or an adopted one."""
+
+    pid: int
+    returncode: int | None
+
+    def poll(self) -> int | None: ...
+
+    def send_signal(self, sig: int) -> None: ...
+
+    def wait(self, timeout: float | None = None) -> int: ...
+
+    def kill(self) -> None: ...
+
+
 @dataclass(frozen=True)
 class ChildSpec:
     """One process of the show."""
@@ -52,12 +81,18 @@ class ChildSpec:
     """Command line."""
     log_path: Path | None = None
     """Where its stdout and stderr go (None: the supervisor's own stderr)."""
+    restart: RestartPolicy | None = None
+    """Its own restart backoff (None: the supervisor's)."""
+    stop_grace_s: float = 5.0
+    """How long in [s] it may take to stop after SIGTERM before it alone gets SIGKILL."""
+    stop_group: int = 0
+    """Lower groups are stopped first; the children of one group are stopped together."""
 
 
 @dataclass
 class _Child:
     spec: ChildSpec
-    process: subprocess.Popen[bytes] | None = None
+    process: ProcessHandle | None = None
     started_s: float = 0.0
     delay_s: float | None = None
     restart_at_s: float | None = None
@@ -89,13 +124,30 @@ class Supervisor:
         env: Mapping[str, str] | None = None,
         say: Callable[[str], None] | None = None,
         clock: Callable[[], float] = time.monotonic,
+        die_with_supervisor: bool = True,
+        on_spawn: Callable[[str, int], None] | None = None,
     ) -> None:
         self.policy = policy or RestartPolicy()
         self._children = {spec.name: _Child(spec) for spec in specs}
         self._env = dict(env) if env is not None else None
         self._say = say or (lambda line: print(f"skyquill up: {line}", file=sys.stderr, flush=True))
         self._clock = clock
+        self._die_with_supervisor = die_with_supervisor
+        self._on_spawn = on_spawn
         self.stopping = False
+
+    @property
+    def names(self) -> list[str]:
+        """The children's names, in start order."""
+        return list(self._children)
+
+    def adopt(self, name: str, process: ProcessHandle) -> None:
+        """Supervise ``process``, already running, as the child ``name`` (not started again)."""
+        child = self._children[name]
+        if child.process is not None:
+            raise ValueError(f"{name} is running already")
+        child.process = process
+        child.started_s = self._clock()
 
     def start(self) -> None:
         """Start every child that is not running."""
@@ -109,7 +161,8 @@ class Supervisor:
             spec.log_path.parent.mkdir(parents=True, exist_ok=True)
             child.log = spec.log_path.open("ab")
         out = child.log if child.log is not None else sys.stderr
-        preexec = _die_with_parent if sys.platform.startswith("linux") else None
+        linux = sys.platform.startswith("linux")
+        preexec = _die_with_parent if linux and self._die_with_supervisor else None
         child.process = subprocess.Popen(
             spec.argv,
             env=self._env,
@@ -121,6 +174,8 @@ class Supervisor:
         )
         child.started_s = self._clock()
         child.restart_at_s = None
+        if self._on_spawn is not None:
+            self._on_spawn(spec.name, child.process.pid)
 
     def pid(self, name: str) -> int | None:
         """Process id of a running child."""
@@ -141,10 +196,11 @@ class Supervisor:
                 if self.stopping:
                     continue
                 ran_for = now - child.started_s
-                child.delay_s = self.policy.delay_s(child.delay_s, ran_for)
+                policy = child.spec.restart or self.policy
+                child.delay_s = policy.delay_s(child.delay_s, ran_for)
                 child.restart_at_s = now + child.delay_s
                 self._say(
-                    f"{name} exited ({_describe(process.returncode)}) after "
+                    f"{name} exited ({_describe(process)}) after "
                     f"{ran_for:.1f} s; restarting in {child.delay_s:.1f} s"
                 )
             due = child.restart_at_s is not None and now >= child.restart_at_s
@@ -153,27 +209,36 @@ class Supervisor:
                 self._spawn(child)
                 self._say(f"{name} restarted (pid {self.pid(name)})")
 
-    def stop(self, grace_s: float = 5.0) -> None:
-        """SIGTERM every child, SIGKILL those still alive after ``grace_s``; agents first."""
+    def stop(self, grace_s: float | None = None) -> None:
+        """Stop every child, group by group (``ChildSpec.stop_group``): SIGTERM, then wait for
+        each child its own grace (``grace_s`` if given, else its ``stop_grace_s``), then SIGKILL
+        only the children that outlived theirs."""
         self.stopping = True
-        running = [c for c in reversed(self._children.values()) if c.process is not None]
-        for child in running:
-            assert child.process is not None
-            if child.process.poll() is None:
-                child.process.send_signal(signal.SIGTERM)
-        deadline = self._clock() + grace_s
-        for child in running:
-            assert child.process is not None
-            try:
-                child.process.wait(timeout=max(0.0, deadline - self._clock()))
-            except subprocess.TimeoutExpired:
-                self._say(f"{child.spec.name} did not stop in {grace_s:.0f} s; killing it")
-                child.process.kill()
-                child.process.wait()
+        for group in sorted({c.spec.stop_group for c in self._children.values()}):
+            members = [c for c in self._children.values() if c.spec.stop_group == group]
+            self._stop_group([c for c in members if c.process is not None], grace_s)
         for child in self._children.values():
             if child.log is not None:
                 child.log.close()
                 child.log = None
+
+    def _stop_group(self, members: Sequence[_Child], grace_s: float | None) -> None:
+        deadlines: dict[str, tuple[float, float]] = {}
+        for child in members:
+            assert child.process is not None
+            if child.process.poll() is None:
+                child.process.send_signal(signal.SIGTERM)
+            grace = child.spec.stop_grace_s if grace_s is None else grace_s
+            deadlines[child.spec.name] = (grace, time.monotonic() + grace)
+        for child in members:
+            assert child.process is not None
+            grace, deadline = deadlines[child.spec.name]
+            try:
+                child.process.wait(timeout=max(0.0, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                self._say(f"{child.spec.name} did not stop in {grace:.0f} s; killing it")
+                child.process.kill()
+                child.process.wait()
 
     def run_until(self, done: Callable[[], bool], period_s: float = 0.1) -> None:
         """Poll until ``done()`` is true."""
@@ -182,7 +247,11 @@ class Supervisor:
             time.sleep(period_s)
 
 
-def _describe(returncode: int) -> str:
+def _describe(process: ProcessHandle) -> str:
+    if isinstance(process, AdoptedProcess):
+        return "status unknown: started by an earlier skyquill up"
+    returncode = process.returncode
+    assert returncode is not None
     if returncode < 0:
         try:
             return f"killed by {signal.Signals(-returncode).name}"
@@ -221,24 +290,33 @@ def show_children(
     time_scale: float | None = None,
     kiosk: bool = False,
     mavlink_sim: bool = False,
+    router: bool = True,
     log_dir: Path | None = None,
     verbose: bool = False,
 ) -> list[ChildSpec]:
-    """Optionally the simulated MAVLink vehicles (``skyquill sim-mavlink``), the orchestrator,
-    one agent per vehicle, then optionally the kiosk (stopped in the reverse order)."""
+    """The show's Zenoh router (``skyquill router``), optionally the simulated MAVLink vehicles
+    (``skyquill sim-mavlink``), the orchestrator, one agent per vehicle, then optionally the
+    kiosk; stopped agents and kiosk first, the router last."""
     show = str(show_path)
 
     def log(name: str) -> Path | None:
         return None if log_dir is None else log_dir / f"{name}.log"
 
     specs = []
+    if router:
+        router_argv = skyquill_argv("router", show)
+        specs.append(ChildSpec("router", router_argv, log("router"), ROUTER_RESTART, stop_group=3))
     if mavlink_sim:
         argv = ["sim-mavlink", show]
         if time_scale is not None:
             argv += ["--time-scale", repr(time_scale)]
-        specs.append(ChildSpec("sim-mavlink", skyquill_argv(*argv), log("sim-mavlink")))
+        specs.append(
+            ChildSpec("sim-mavlink", skyquill_argv(*argv), log("sim-mavlink"), stop_group=2)
+        )
     specs.append(
-        ChildSpec("orchestrator", skyquill_argv("orchestrator", show), log("orchestrator"))
+        ChildSpec(
+            "orchestrator", skyquill_argv("orchestrator", show), log("orchestrator"), stop_group=1
+        )
     )
     for vehicle_id in vehicle_ids:
         argv = ["agent", show, "--vehicle", vehicle_id]
@@ -246,7 +324,10 @@ def show_children(
             argv += ["--time-scale", repr(time_scale)]
         if verbose:
             argv.append("--verbose")
-        specs.append(ChildSpec(f"agent {vehicle_id}", skyquill_argv(*argv), log(vehicle_id)))
+        spec = ChildSpec(
+            f"agent {vehicle_id}", skyquill_argv(*argv), log(vehicle_id), stop_grace_s=8.0
+        )
+        specs.append(spec)
     if kiosk:
         specs.append(ChildSpec("kiosk", skyquill_argv("kiosk", show), log("kiosk")))
     return specs

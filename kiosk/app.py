@@ -4,9 +4,13 @@ Routes
     GET  /                          the page
     GET  /api/config                limits the page needs (text length, strokes, points, area)
     POST /api/preview               ``{"text": ...}`` or ``{"strokes": {...}}`` -> planned path
-    POST /api/submit                same body -> job id, token, queue place, ETA, planned path
-    GET  /api/jobs/{id}?token=T     the job's state (only with the token returned on submit)
-    GET  /api/jobs/{id}/events?token=T   server-sent events of the job's state until it is final
+    POST /api/submit                same body -> ticket, token, job id, queue place, ETA, path
+                                    (202 with a pending ticket when the queue did not answer yet)
+    GET  /api/jobs/{id}?token=T     the ticket's state (id: ticket or job id; token from submit)
+    GET  /api/jobs/{id}/events?token=T   server-sent events of the ticket until it is final
+    GET  /api/jobs/{id}/qr.svg?token=T   QR code of the ticket's ``/t/<code>`` link
+    GET  /t/{code}                  the page, following the ticket of a short code
+    GET  /api/t/{code}              the ticket (id, token) a short code opens (rate limited)
 
 Every refusal is ``{"ok": false, "error": {"code": ..., "message": ...}}`` with a message for the
 public; nothing a visitor sends can stop the service.
@@ -31,11 +35,13 @@ from starlette.staticfiles import StaticFiles
 
 from bus.messages import JobState, SubmitReply, SubmitRequest
 from kiosk import wording
+from kiosk.addresses import proxy_networks
 from kiosk.errors import RejectedError
 from kiosk.http import Client, SecurityHeaders, identify, read_capped, remember
-from kiosk.jobs import job_view
+from kiosk.jobs import KioskJob
 from kiosk.limits import Submission, check_submission, decode_json_body
 from kiosk.link import OrchestratorLink, OrchestratorUnavailableError
+from kiosk.qr import qr_svg
 from kiosk.ratelimit import SlidingWindowLimiter
 from kiosk.settings import KioskSettings
 from kiosk.sse import job_events
@@ -66,19 +72,19 @@ class Kiosk:
         self.previewer = previewer
         self.has_glyph = has_glyph
         self.clock = clock
-        rate = settings.rate_limit_per_minute
-        self.submit_limiter = SlidingWindowLimiter(rate)
-        self.address_limiter = SlidingWindowLimiter(rate * settings.clients_per_address)
+        self.proxies = proxy_networks(settings.trusted_proxies)
+        """Peers whose ``X-Forwarded-For`` is believed."""
+        self.submit_limiter = SlidingWindowLimiter(settings.rate_limit_per_minute)
         self.preview_limiter = SlidingWindowLimiter(settings.preview_rate_per_minute)
 
+    def identify(self, request: Request) -> Client:
+        """Who sent ``request`` (see :func:`kiosk.http.identify`)."""
+        return identify(request, self.proxies)
+
     def check_rate(self, client: Client, *, preview: bool) -> None:
-        now = self.clock()
-        if preview:
-            wait = self.preview_limiter.hit(client.key, now)
-        else:
-            wait = self.submit_limiter.hit(client.key, now)
-            if wait is None:
-                wait = self.address_limiter.hit(client.address, now)
+        """Count a request of ``client``'s address; RejectedError (429) over the limit."""
+        limiter = self.preview_limiter if preview else self.submit_limiter
+        wait = limiter.hit(client.rate_key, self.clock())
         if wait is not None:
             seconds = max(1, round(wait))
             raise RejectedError(
@@ -93,14 +99,25 @@ class Kiosk:
         data = decode_json_body(raw)
         return check_submission(data, self.settings.limits, self.has_glyph)
 
-    def job_for(self, request: Request) -> str:
-        job_id = str(request.path_params["job_id"])
+    def job_for(self, request: Request) -> KioskJob:
+        ref = str(request.path_params["job_id"])
         token = request.query_params.get("token") or request.headers.get("x-job-token")
-        if self.link.book.get(job_id) is None:
+        if self.link.book.get(ref) is None:
             raise RejectedError("unknown_job", wording.UNKNOWN_JOB, status=404)
-        if self.link.book.authorised(job_id, token) is None:
+        job = self.link.book.authorised(ref, token)
+        if job is None:
             raise RejectedError("not_your_job", wording.NOT_YOUR_JOB, status=403)
-        return job_id
+        return job
+
+    def on_late_reply(self, ticket: str, reply: SubmitReply, request: SubmitRequest) -> None:
+        """The answer to a pending submission arrived (after a retry)."""
+        book = self.link.book
+        if reply.ok and reply.job_id is not None:
+            job = book.bind(ticket, reply.job_id)
+            if job is not None:
+                self.link.apply(_initial_state(reply, job.label, request))
+        else:
+            book.refuse(ticket, _reply_rejection(reply).message)
 
 
 def _ok(payload: dict[str, Any], client: Client | None = None, *, secure: bool = False) -> Response:
@@ -136,7 +153,7 @@ def _reply_rejection(reply: SubmitReply) -> RejectedError:
 async def page(request: Request) -> Response:
     kiosk: Kiosk = request.app.state.kiosk
     response = FileResponse(STATIC_DIR / "index.html", headers={"Cache-Control": "no-cache"})
-    return remember(response, identify(request), secure=kiosk.settings.secure_cookie)
+    return remember(response, kiosk.identify(request), secure=kiosk.settings.secure_cookie)
 
 
 async def config(request: Request) -> Response:
@@ -149,12 +166,14 @@ async def config(request: Request) -> Response:
         "max_points": lim.max_points,
         "max_payload_bytes": lim.max_payload_bytes,
         "writing_area_m": list(s.settings.writing_area_m),
+        "max_flight_s": s.settings.max_flight_s,
+        "idle_reset_s": s.settings.idle_reset_s,
     }})  # fmt: skip
 
 
 async def preview(request: Request) -> Response:
     kiosk: Kiosk = request.app.state.kiosk
-    client = identify(request)
+    client = kiosk.identify(request)
     kiosk.check_rate(client, preview=True)
     submission = await kiosk.checked_body(request)
     result = await run_in_threadpool(kiosk.previewer, submission)
@@ -163,46 +182,57 @@ async def preview(request: Request) -> Response:
 
 async def submit(request: Request) -> Response:
     kiosk: Kiosk = request.app.state.kiosk
-    client = identify(request)
+    client = kiosk.identify(request)
     kiosk.check_rate(client, preview=False)
     submission = await kiosk.checked_body(request)
     planned = await run_in_threadpool(kiosk.previewer, submission)
+    book = kiosk.link.book
+    if book.pending_count() >= kiosk.settings.max_pending:  # refused before anything is sent
+        raise RejectedError("unavailable", wording.PENDING_FULL, status=503, retry_after_s=30.0)
+    job = book.add(session_id=client.session_id, label=submission.label, preview=planned)
     bus_request = SubmitRequest(
-        text=submission.text, strokes=submission.strokes, client_id=client.public_id
+        text=submission.text,
+        strokes=submission.strokes,
+        client_id=client.public_id,
+        idempotency_key=job.key,
     )
+    status = 200
     try:
         reply = await kiosk.link.submit(bus_request)
     except OrchestratorUnavailableError:
-        raise RejectedError(
-            "unavailable", wording.NO_ORCHESTRATOR, status=503, retry_after_s=30.0
-        ) from None
-    if not reply.ok or reply.job_id is None:
-        raise _reply_rejection(reply)
-    book = kiosk.link.book
-    job = book.add(
-        reply.job_id, session_id=client.session_id, label=submission.label, preview=planned
-    )
-    kiosk.link.apply(_initial_state(reply, submission, client))
-    state = book.state(reply.job_id)
+        # It may still be queued late: keep the ticket and ask again with the same key.
+        kiosk.link.follow_up(
+            job.ticket, bus_request, lambda t, r: kiosk.on_late_reply(t, r, bus_request)
+        )
+        status = 202
+    else:
+        if not reply.ok or reply.job_id is None:
+            book.drop(job.ticket)
+            raise _reply_rejection(reply)
+        book.bind(job.ticket, reply.job_id)
+        kiosk.link.apply(_initial_state(reply, submission.label, bus_request))
     payload = {
+        "ticket": job.ticket,
+        "code": job.code,
         "job_id": job.job_id,
         "token": job.token,
         "label": submission.label,
-        "job": job_view(state) if state is not None else None,
+        "job": book.view(job, kiosk.settings.places),
         "preview": planned,
     }
-    return _ok(payload, client, secure=kiosk.settings.secure_cookie)
+    response = JSONResponse({"ok": True, **payload}, status)
+    return remember(response, client, secure=kiosk.settings.secure_cookie)
 
 
-def _initial_state(reply: SubmitReply, submission: Submission, client: Client) -> JobState:
+def _initial_state(reply: SubmitReply, label: str, request: SubmitRequest) -> JobState:
     """What the submit reply says, stamped older than anything the orchestrator publishes."""
     assert reply.job_id is not None
     return JobState(
         job_id=reply.job_id,
         state=reply.state or "submitted",
-        label=submission.label,
-        kind="text" if submission.text is not None else "strokes",
-        client_id=client.public_id,
+        label=label,
+        kind="text" if request.text is not None else "strokes",
+        client_id=request.client_id,
         created_at_s=time.time(),
         updated_at_s=0.0,
         queue_position=reply.queue_position,
@@ -212,29 +242,58 @@ def _initial_state(reply: SubmitReply, submission: Submission, client: Client) -
 
 async def job_status(request: Request) -> Response:
     kiosk: Kiosk = request.app.state.kiosk
-    job_id = kiosk.job_for(request)
-    state = kiosk.link.book.state(job_id) or await kiosk.link.fetch(job_id)
-    job = kiosk.link.book.get(job_id)
+    job = kiosk.job_for(request)
+    if job.job_id is not None and kiosk.link.book.state(job.job_id) is None:
+        await kiosk.link.fetch(job.job_id)
     return _ok({
-        "job": job_view(state) if state is not None else None,
-        "preview": job.preview if job is not None else None,
+        "ticket": job.ticket,
+        "code": job.code,
+        "job": kiosk.link.book.view(job, kiosk.settings.places),
+        "preview": job.preview,
+        "stale": kiosk.link.stale(kiosk.settings.stale_after_s),
     })  # fmt: skip
 
 
 async def job_stream(request: Request) -> Response:
     kiosk: Kiosk = request.app.state.kiosk
-    job_id = kiosk.job_for(request)
+    job = kiosk.job_for(request)
     if kiosk.link.watcher_count >= MAX_STREAMS:
         raise RejectedError("busy", wording.NO_ORCHESTRATOR, status=503, retry_after_s=30.0)
     headers = {"Cache-Control": "no-store", "X-Accel-Buffering": "no"}
-    return StreamingResponse(
-        job_events(kiosk.link, job_id), media_type="text/event-stream", headers=headers
+    events = job_events(
+        kiosk.link,
+        job.ticket,
+        stale_after_s=kiosk.settings.stale_after_s,
+        places=kiosk.settings.places,
     )
+    return StreamingResponse(events, media_type="text/event-stream", headers=headers)
+
+
+async def by_code(request: Request) -> Response:
+    """What the page needs to follow the ticket of a short code typed or scanned elsewhere."""
+    kiosk: Kiosk = request.app.state.kiosk
+    kiosk.check_rate(kiosk.identify(request), preview=True)  # bounds guessing
+    job = kiosk.link.book.by_code(str(request.path_params["code"]))
+    if job is None:
+        raise RejectedError("unknown_job", wording.UNKNOWN_CODE, status=404)
+    return _ok({
+        "ticket": job.ticket, "token": job.token, "code": job.code, "label": job.label,
+        "preview": job.preview, "job": kiosk.link.book.view(job, kiosk.settings.places),
+    })  # fmt: skip
+
+
+async def ticket_qr(request: Request) -> Response:
+    kiosk: Kiosk = request.app.state.kiosk
+    job = kiosk.job_for(request)
+    url = f"{str(request.base_url).rstrip('/')}/t/{job.code}"
+    headers = {"Cache-Control": "private, max-age=3600"}
+    return Response(qr_svg(url), media_type="image/svg+xml", headers=headers)
 
 
 async def health(request: Request) -> Response:
     kiosk: Kiosk = request.app.state.kiosk
-    return _ok({"streams": kiosk.link.watcher_count})
+    stale = kiosk.link.stale(kiosk.settings.stale_after_s)
+    return _ok({"streams": kiosk.link.watcher_count, "stale": stale})
 
 
 def create_app(
@@ -263,6 +322,9 @@ def create_app(
         Route("/api/submit", submit, methods=["POST"]),
         Route("/api/jobs/{job_id}", job_status),
         Route("/api/jobs/{job_id}/events", job_stream),
+        Route("/api/jobs/{job_id}/qr.svg", ticket_qr),
+        Route("/t/{code}", page),
+        Route("/api/t/{code}", by_code),
         Mount("/static", StaticFiles(directory=STATIC_DIR), name="static"),
     ]
     app = Starlette(

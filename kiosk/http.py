@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import re
 import secrets
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from starlette.requests import Request
@@ -12,6 +13,7 @@ from starlette.responses import Response
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from kiosk import wording
+from kiosk.addresses import IPNetwork, client_address, rate_key
 from kiosk.errors import RejectedError
 
 SESSION_COOKIE = "skyquill_kiosk"
@@ -29,19 +31,19 @@ _HEADERS = [
 
 @dataclass(frozen=True)
 class Client:
-    """Who is asking: the peer address and the browser's session cookie."""
+    """Who is asking: the client's address and the browser's session cookie."""
 
     address: str
-    """Peer IP address as seen by the server."""
+    """Client IP address: the peer's, or the one a trusted proxy forwarded (see kiosk.addresses)."""
     session_id: str
     """Value of the session cookie (fresh when the browser had none)."""
     new_session: bool
     """True when the cookie must be set on the response."""
 
     @property
-    def key(self) -> str:
-        """Rate-limit key of this browser."""
-        return f"{self.address}|{self.session_id}"
+    def rate_key(self) -> str:
+        """Rate-limit key: the address alone (cookies can be dropped); an IPv6 client's /64."""
+        return rate_key(self.address)
 
     @property
     def public_id(self) -> str:
@@ -50,15 +52,17 @@ class Client:
         return f"kiosk-{digest[:12]}"
 
 
-def identify(request: Request) -> Client:
+def identify(request: Request, proxies: Sequence[IPNetwork] = ()) -> Client:
     """The client of ``request``; a missing or malformed cookie gets a fresh session id.
 
-    The answer is kept on ``request.state`` so refusals set the same new cookie.
+    ``X-Forwarded-For`` counts only when the peer is one of ``proxies``. The answer is kept on
+    ``request.state`` so refusals set the same new cookie.
     """
     known = getattr(request.state, "kiosk_client", None)
     if isinstance(known, Client):
         return known
-    address = request.client.host if request.client is not None else "unknown"
+    peer = request.client.host if request.client is not None else "unknown"
+    address = client_address(peer, request.headers.getlist("x-forwarded-for"), proxies)
     cookie = request.cookies.get(SESSION_COOKIE, "")
     if _SESSION_RE.match(cookie):
         client = Client(address, cookie, False)

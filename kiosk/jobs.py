@@ -1,4 +1,8 @@
-"""The kiosk's own jobs: who may read them (a token per job) and how they look to the page.
+"""The kiosk's own tickets: who may read them (a token each) and how they look to the page.
+
+A ticket is made before the submission is sent. It carries the submission's idempotency key, so
+the kiosk can send it again until the orchestrator answers; the orchestrator's job id is bound to
+it when the answer comes (at once, or late after a hang). Pages follow the ticket, not the job.
 
 Pure bookkeeping: no I/O. The bus link feeds :class:`JobState` messages in; the app reads views out.
 """
@@ -8,6 +12,7 @@ from __future__ import annotations
 import hmac
 import secrets
 from collections import OrderedDict
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -16,26 +21,55 @@ from kiosk import wording
 
 FINAL_STATES = frozenset({"done", "failed", "cancelled", "rejected"})
 """Job states after which nothing changes."""
+CODE_ALPHABET = "ABCDEFGHJKMNPQRSTUVWXYZ23456789"
+"""Letters and digits of short codes, without look-alikes (0/O, 1/I/L)."""
+CODE_LENGTH = 8
+"""Characters of a short code (31**8: about 40 bits; lookups are rate limited)."""
 
 
-@dataclass(frozen=True)
+def new_code() -> str:
+    """A short code to follow a ticket from another device (``/t/<code>``)."""
+    return "".join(secrets.choice(CODE_ALPHABET) for _ in range(CODE_LENGTH))
+
+
+def normal_code(text: str) -> str:
+    """A typed code as stored: upper case, without spaces and dashes."""
+    return "".join(ch for ch in text.upper() if ch not in " -")[: CODE_LENGTH + 4]
+
+
+@dataclass
 class KioskJob:
-    """A job handed in through this kiosk."""
+    """A submission handed in through this kiosk (its ticket)."""
 
-    job_id: str
-    """Orchestrator's job id."""
+    ticket: str
+    """This kiosk's id of the submission (in the page's URLs)."""
     token: str
-    """Secret returned to the submitting page; required to read the job."""
+    """Secret returned to the submitting page; required to read the ticket."""
     session_id: str
     """Cookie session of the submitting browser."""
     label: str
     """The typed text or ``drawing (N strokes)``."""
     preview: dict[str, Any] | None
     """The planned path shown before submitting (the picture of the result)."""
+    key: str
+    """Idempotency key sent with every try of this submission."""
+    code: str = ""
+    """Short code that opens this ticket on another device (like the token, it grants reading)."""
+    job_id: str | None = None
+    """Orchestrator's job id, once it acknowledged the submission."""
+    refusal: str | None = None
+    """What to tell the visitor when a late answer refused the submission."""
+
+    @property
+    def pending(self) -> bool:
+        """Sent, but not answered yet."""
+        return self.job_id is None and self.refusal is None
 
 
-def job_view(state: JobState) -> dict[str, Any]:
-    """What the page is told about a job: public fields and a sentence to show."""
+def job_view(state: JobState, places: Mapping[str, str] | None = None) -> dict[str, Any]:
+    """What the page is told about a job: public fields and a sentence to show.
+
+    ``places``: vehicle id -> where its board is, in the visitor's words."""
     metrics = None
     if state.metrics is not None:
         m = state.metrics
@@ -45,6 +79,7 @@ def job_view(state: JobState) -> dict[str, Any]:
             "iou": m.iou,
             "duration_s": m.duration_s,
         }
+    place = (places or {}).get(state.vehicle_id or "")
     return {
         "job_id": state.job_id,
         "state": state.state,
@@ -53,6 +88,8 @@ def job_view(state: JobState) -> dict[str, Any]:
         "queue_position": state.queue_position,
         "eta_s": state.eta_s,
         "vehicle_id": state.vehicle_id,
+        "place": place,
+        "attempts": state.attempts,
         "progress": state.progress,
         "metrics": metrics,
         "updated_at_s": state.updated_at_s,
@@ -62,39 +99,117 @@ def job_view(state: JobState) -> dict[str, Any]:
             eta_s=state.eta_s,
             vehicle_id=state.vehicle_id,
             progress=state.progress,
+            attempts=state.attempts,
+            place=place,
         ),
     }
 
 
+def ticket_view(job: KioskJob) -> dict[str, Any]:
+    """The view of a ticket without a job state: still sending, refused late, or accepted but
+    its state not known here yet (looked up from the orchestrator)."""
+    refused = job.refusal is not None
+    if refused:
+        name, text = "refused", job.refusal
+    elif job.job_id is not None:
+        name, text = "checking", wording.CHECKING
+    else:
+        name, text = "sending", wording.SENDING
+    return {
+        "job_id": job.job_id,
+        "state": name,
+        "final": refused,
+        "label": job.label,
+        "queue_position": None,
+        "eta_s": None,
+        "vehicle_id": None,
+        "place": None,
+        "attempts": 0,
+        "progress": 0.0,
+        "metrics": None,
+        "updated_at_s": 0.0,
+        "status_text": text,
+    }
+
+
 class JobBook:
-    """Jobs of this kiosk and the latest state seen of any job, both bounded (oldest dropped)."""
+    """Tickets of this kiosk and the latest state seen of any job, both bounded (oldest dropped)."""
 
     def __init__(self, *, max_jobs: int = 5_000, max_states: int = 5_000) -> None:
         self._jobs: OrderedDict[str, KioskJob] = OrderedDict()
+        self._tickets_of: dict[str, str] = {}
+        """Orchestrator job id -> ticket."""
+        self._codes: dict[str, str] = {}
+        """Short code -> ticket."""
         self._states: OrderedDict[str, JobState] = OrderedDict()
         self._max_jobs = max_jobs
         self._max_states = max_states
 
-    def add(
-        self, job_id: str, *, session_id: str, label: str, preview: dict[str, Any] | None
-    ) -> KioskJob:
-        """Record a job this kiosk submitted; returns it with a fresh token."""
-        job = KioskJob(job_id, secrets.token_urlsafe(24), session_id, label, preview)
-        self._jobs[job_id] = job
-        self._jobs.move_to_end(job_id)
+    def add(self, *, session_id: str, label: str, preview: dict[str, Any] | None) -> KioskJob:
+        """A new ticket with a fresh token and idempotency key."""
+        job = KioskJob(
+            ticket="t" + secrets.token_hex(8),
+            token=secrets.token_urlsafe(24),
+            session_id=session_id,
+            label=label,
+            preview=preview,
+            key=secrets.token_urlsafe(24),
+            code=new_code(),
+        )
+        while job.code in self._codes:
+            job.code = new_code()
+        self._jobs[job.ticket] = job
+        self._codes[job.code] = job.ticket
         while len(self._jobs) > self._max_jobs:
-            self._jobs.popitem(last=False)
+            _, old = self._jobs.popitem(last=False)
+            self._tickets_of.pop(old.job_id or "", None)
+            self._codes.pop(old.code, None)
         return job
 
-    def get(self, job_id: str) -> KioskJob | None:
-        return self._jobs.get(job_id)
+    def by_code(self, code: str) -> KioskJob | None:
+        """The ticket a short code opens (any case, dashes and spaces ignored)."""
+        ticket = self._codes.get(normal_code(code))
+        return self._jobs.get(ticket) if ticket is not None else None
 
-    def authorised(self, job_id: str, token: str | None) -> KioskJob | None:
-        """The job when ``token`` is its token, else None (compared in constant time)."""
-        job = self._jobs.get(job_id)
+    def bind(self, ticket: str, job_id: str) -> KioskJob | None:
+        """The orchestrator accepted ``ticket`` as ``job_id``."""
+        job = self._jobs.get(ticket)
+        if job is not None:
+            job.job_id = job_id
+            self._tickets_of[job_id] = ticket
+        return job
+
+    def refuse(self, ticket: str, message: str) -> None:
+        """The orchestrator refused ``ticket`` (answer to a later try)."""
+        job = self._jobs.get(ticket)
+        if job is not None:
+            job.refusal = message
+
+    def drop(self, ticket: str) -> None:
+        """Forget a ticket whose refusal the page was told directly."""
+        job = self._jobs.pop(ticket, None)
+        if job is not None:
+            self._codes.pop(job.code, None)
+
+    def get(self, ref: str) -> KioskJob | None:
+        """A ticket by its own id or by its orchestrator job id."""
+        job = self._jobs.get(ref)
+        if job is None and ref in self._tickets_of:
+            job = self._jobs.get(self._tickets_of[ref])
+        return job
+
+    def ticket_of(self, job_id: str) -> str | None:
+        return self._tickets_of.get(job_id)
+
+    def authorised(self, ref: str, token: str | None) -> KioskJob | None:
+        """The ticket when ``token`` is its token, else None (compared in constant time)."""
+        job = self.get(ref)
         if job is None or token is None:
             return None
         return job if hmac.compare_digest(job.token.encode(), token.encode()) else None
+
+    def pending_count(self) -> int:
+        return sum(1 for job in self._jobs.values() if job.pending)
 
     def update(self, state: JobState) -> bool:
         """Remember ``state`` unless an older one; True when it changed what we knew."""
@@ -112,5 +227,7 @@ class JobBook:
     def state(self, job_id: str) -> JobState | None:
         return self._states.get(job_id)
 
-    def is_ours(self, job_id: str) -> bool:
-        return job_id in self._jobs
+    def view(self, job: KioskJob, places: Mapping[str, str] | None = None) -> dict[str, Any]:
+        """What the page shows of ``job`` now."""
+        state = self._states.get(job.job_id) if job.job_id is not None else None
+        return job_view(state, places) if state is not None else ticket_view(job)

@@ -14,6 +14,10 @@ from typing import Any
 from kiosk import wording
 from kiosk.errors import RejectedError
 
+FORWARDED_STROKES_FIELDS = ("strokes", "units", "y_axis", "canvas")
+"""What the kiosk passes on of a drawing: its geometry. A ``label`` or ``device`` the page never
+sets would reach the operator's screens as free text that the blocklist never saw."""
+
 
 @dataclass(frozen=True)
 class SubmissionLimits:
@@ -38,7 +42,7 @@ class Submission:
     text: str | None
     """Typed text, NFC-normalised and stripped."""
     strokes: dict[str, Any] | None
-    """The strokes document as sent (see docs/formats.md)."""
+    """The strokes document as sent, only its ``FORWARDED_STROKES_FIELDS`` (docs/formats.md)."""
     label: str = field(default="")
     """A short description for people: the text, or ``drawing (N strokes)``."""
 
@@ -126,4 +130,5 @@ def _check_strokes(doc: Any, limits: SubmissionLimits) -> Submission:
             raise RejectedError("short_stroke", wording.SHORT_STROKE, stroke_index=i)
     n = len(strokes)
     label = f"drawing ({n} stroke{'s' if n != 1 else ''})"
-    return Submission(text=None, strokes=dict(doc), label=label)
+    drawn = {key: doc[key] for key in FORWARDED_STROKES_FIELDS if key in doc}
+    return Submission(text=None, strokes=drawn, label=label)

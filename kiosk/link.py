@@ -2,7 +2,12 @@
 
 Job states arrive on ``jobs/*`` (every change) and in the 1 Hz ``fleet`` snapshot (queue positions
 and ETAs that move as other jobs finish). Zenoh's threads push them into a FIFO channel; one task in
-the event loop applies them to the :class:`JobBook` and wakes the pages watching those jobs.
+the event loop applies them to the :class:`JobBook` and wakes the pages watching those tickets.
+The time of the last ``fleet`` snapshot says whether what the pages show is current.
+
+A submission whose first try gets no answer stays pending: :meth:`OrchestratorLink.follow_up`
+sends it again with the same idempotency key (so it becomes at most one job) until the
+orchestrator answers, then binds the job to the ticket or records the refusal.
 """
 
 from __future__ import annotations
@@ -10,7 +15,8 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-from collections.abc import Iterator
+import time
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from bus.bridge import ChannelClosedError, FifoChannel, RingChannel
@@ -24,6 +30,9 @@ from kiosk.jobs import JobBook
 
 log = logging.getLogger(__name__)
 
+RETRY_DELAYS_S = (0.5, 1.0, 2.0, 4.0, 8.0)
+"""Pauses between tries of a pending submission; the last one repeats until an answer."""
+
 
 class OrchestratorUnavailableError(KioskError):
     """The orchestrator did not answer (not running, or the bus is down)."""
@@ -33,21 +42,32 @@ class OrchestratorLink:
     """Submits to the orchestrator's ``submit`` queryable and follows ``jobs/<id>``."""
 
     def __init__(
-        self, session: Session, keys: ShowKeys, book: JobBook, *, timeout_s: float = 5.0
+        self,
+        session: Session,
+        keys: ShowKeys,
+        book: JobBook,
+        *,
+        timeout_s: float = 5.0,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self._session = session
         self._keys = keys
         self.book = book
-        """Jobs of this kiosk and the newest state seen of each job."""
+        """Tickets of this kiosk and the newest state seen of each job."""
         self._timeout_s = timeout_s
-        self._watchers: dict[str, set[RingChannel[JobState]]] = {}
-        self._inbox: FifoChannel[JobState] | None = None
+        self._clock = clock
+        self.fleet_seen_s: float | None = None
+        """``clock()`` when the last ``fleet`` snapshot arrived (None: never)."""
+        self._watchers: dict[str, set[RingChannel[str]]] = {}
+        """Ticket -> channels of the pages following it (woken with the ticket)."""
+        self._follow_ups: set[asyncio.Task[None]] = set()
+        self._inbox: FifoChannel[JobState | None] | None = None
         self._subscribers: list[Any] = []
         self._task: asyncio.Task[None] | None = None
 
     async def start(self) -> None:
         """Subscribe to job states; call inside the running event loop."""
-        inbox: FifoChannel[JobState] = FifoChannel()
+        inbox: FifoChannel[JobState | None] = FifoChannel()
         self._inbox = inbox
 
         def on_job(_key: str, state: JobState) -> None:
@@ -56,6 +76,7 @@ class OrchestratorLink:
         def on_fleet(_key: str, snapshot: ShowSnapshot) -> None:
             for state in snapshot.jobs:
                 inbox.push(state)
+            inbox.push(None)  # marks the snapshot's arrival (fresh news of the orchestrator)
 
         self._subscribers = [
             subscribe(self._session, self._keys.jobs_all, JobState, on_job),
@@ -71,37 +92,53 @@ class OrchestratorLink:
         self._subscribers = []
         if self._inbox is not None:
             self._inbox.close()
+        for task in list(self._follow_ups):
+            task.cancel()
         if self._task is not None:
             with contextlib.suppress(asyncio.CancelledError):
                 await self._task
 
-    async def _pump(self, inbox: FifoChannel[JobState]) -> None:
+    async def _pump(self, inbox: FifoChannel[JobState | None]) -> None:
         while True:
             try:
                 state = await inbox.get()
             except ChannelClosedError:
                 return
-            self.apply(state)
+            if state is None:
+                self.fleet_seen_s = self._clock()
+            else:
+                self.apply(state)
+
+    def stale(self, max_age_s: float) -> bool:
+        """No ``fleet`` snapshot for ``max_age_s``: the orchestrator or the bus is down."""
+        seen = self.fleet_seen_s
+        return seen is None or self._clock() - seen > max_age_s
 
     def apply(self, state: JobState) -> None:
         """Record a job state and wake the pages watching it (event-loop thread)."""
         if self.book.update(state):
-            for channel in self._watchers.get(state.job_id, ()):
-                channel.push(state)
+            ticket = self.book.ticket_of(state.job_id)
+            if ticket is not None:
+                self.wake(ticket)
+
+    def wake(self, ticket: str) -> None:
+        """Tell the pages following ``ticket`` that it changed."""
+        for channel in self._watchers.get(ticket, ()):
+            channel.push(ticket)
 
     @contextlib.contextmanager
-    def watch(self, job_id: str) -> Iterator[RingChannel[JobState]]:
-        """A channel of this job's new states while the ``with`` block lasts."""
-        channel: RingChannel[JobState] = RingChannel(8)
-        self._watchers.setdefault(job_id, set()).add(channel)
+    def watch(self, ticket: str) -> Iterator[RingChannel[str]]:
+        """A channel woken at each change of the ticket while the ``with`` block lasts."""
+        channel: RingChannel[str] = RingChannel(8)
+        self._watchers.setdefault(ticket, set()).add(channel)
         try:
             yield channel
         finally:
-            watchers = self._watchers.get(job_id)
+            watchers = self._watchers.get(ticket)
             if watchers is not None:
                 watchers.discard(channel)
                 if not watchers:
-                    del self._watchers[job_id]
+                    del self._watchers[ticket]
 
     def end_streams(self) -> None:
         """Close every watcher channel so open status streams finish (server shutdown)."""
@@ -123,7 +160,32 @@ class OrchestratorLink:
         except NoReplyError as exc:
             raise OrchestratorUnavailableError(str(exc)) from exc
         except RemoteError as exc:
-            return SubmitReply(ok=False, error=exc.info)
+            # The orchestrator answers refusals as SubmitReply; an error reply comes from the
+            # transport (e.g. Zenoh's "Timeout"): the request may still be processed later.
+            raise OrchestratorUnavailableError(str(exc)) from exc
+
+    def follow_up(
+        self, ticket: str, request: SubmitRequest, on_reply: Callable[[str, SubmitReply], None]
+    ) -> None:
+        """Send ``request`` again (same idempotency key) until answered; then ``on_reply``."""
+        task = asyncio.create_task(self._retry(ticket, request, on_reply), name=f"retry-{ticket}")
+        self._follow_ups.add(task)
+        task.add_done_callback(self._follow_ups.discard)
+
+    async def _retry(
+        self, ticket: str, request: SubmitRequest, on_reply: Callable[[str, SubmitReply], None]
+    ) -> None:
+        tries = 0
+        while self.book.get(ticket) is not None:
+            await asyncio.sleep(RETRY_DELAYS_S[min(tries, len(RETRY_DELAYS_S) - 1)])
+            tries += 1
+            try:
+                reply = await self.submit(request)
+            except OrchestratorUnavailableError:
+                continue
+            on_reply(ticket, reply)
+            self.wake(ticket)
+            return
 
     async def fetch(self, job_id: str) -> JobState | None:
         """The job's state from the orchestrator's snapshot; None if absent or no answer."""
@@ -134,6 +196,7 @@ class OrchestratorLink:
         except (NoReplyError, RemoteError) as exc:
             log.warning("snapshot query failed: %s", exc)
             return None
+        self.fleet_seen_s = self._clock()
         for job in snapshot.jobs:
             self.apply(job)
         return self.book.state(job_id)

@@ -18,6 +18,7 @@ from kiosk.limits import Submission
 from kiosk.settings import KioskSettings
 from planner.errors import PlannerError
 from planner.glyphs import Glyph, fit_to_area, parse_strokes_json, text_glyph
+from planner.glyphs.layout import MIN_INK_FRACTION, ink_fraction
 from planner.pipeline import plan_strokes
 
 PATH_POINTS_MAX = 800
@@ -49,11 +50,19 @@ def plan_preview(submission: Submission, settings: KioskSettings) -> dict[str, A
     """Turning points, path and duration of the submission as the vehicle will write it."""
     width_m, height_m = settings.writing_area_m
     glyph = glyph_of(submission)
+    fraction = ink_fraction(glyph)
+    if fraction is not None and fraction < MIN_INK_FRACTION:
+        raise RejectedError("too_small", wording.TOO_SMALL, status=422)
     try:
         fitted = fit_to_area(glyph, width_m=width_m, height_m=height_m, margin_m=settings.margin_m)
         planned = plan_strokes(fitted.strokes, settings.plan)
     except PlannerError:
         raise RejectedError("unplannable", wording.UNPLANNABLE, status=422) from None
+    if planned.duration_s > settings.max_flight_s:
+        message = wording.TOO_LONG_FLIGHT.format(
+            seconds=round(planned.duration_s), limit=round(settings.max_flight_s)
+        )
+        raise RejectedError("too_long", message, status=422)
     samples = planned.sample(PATH_RATE_HZ)
     board_xy = settings.plan.board.to_board(samples.position_m_enu)
     step = max(1, int(np.ceil(board_xy.shape[0] / PATH_POINTS_MAX)))

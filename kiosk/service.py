@@ -84,9 +84,12 @@ class KioskServer:
         """The page's address."""
         self.ready = threading.Event()
         """Set once uvicorn accepts connections."""
+        # proxy_headers off: the kiosk alone decides whose X-Forwarded-For to believe
+        # (kiosk.addresses); uvicorn's default believes any loopback peer.
         config = uvicorn.Config(
-            app, log_level=log_level, lifespan="on", access_log=False, timeout_graceful_shutdown=2
-        )
+            app, log_level=log_level, lifespan="on", access_log=False,
+            timeout_graceful_shutdown=2, proxy_headers=False,
+        )  # fmt: skip
         self._server = _Server(config, self._started, app.state.kiosk.link.end_streams)
         self._on_started = on_started
         self._thread: threading.Thread | None = None

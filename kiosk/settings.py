@@ -6,6 +6,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from kiosk.limits import SubmissionLimits
+from kiosk.wording import board_places
 from planner.pipeline import BoardFrame, PlanOptions
 from showfile.planning import plan_options
 
@@ -23,11 +24,12 @@ class KioskSettings:
     limits: SubmissionLimits = field(default_factory=SubmissionLimits)
     """Bounds on one submission and the blocklist."""
     rate_limit_per_minute: int = 6
-    """Submissions per minute per client (address + session cookie)."""
+    """Submissions per minute per client address, whatever its cookies (see kiosk.addresses)."""
     preview_rate_per_minute: int = 60
-    """Previews per minute per client (each runs the planner)."""
-    clients_per_address: int = 10
-    """A single address (a venue's shared Wi-Fi) may submit this many times the client rate."""
+    """Previews per minute per client address (each runs the planner)."""
+    trusted_proxies: tuple[str, ...] = ()
+    """Reverse proxies (addresses or networks) whose ``X-Forwarded-For`` names the client; none
+    by default, so the header is ignored."""
     writing_area_m: tuple[float, float] = (1.2, 1.2)
     """Width and height of the writing area the preview fits the glyph into, in [m]."""
     margin_m: float = 0.05
@@ -38,6 +40,17 @@ class KioskSettings:
     """How long to wait for the orchestrator's answer to a submission, in [s]."""
     secure_cookie: bool = False
     """Mark the session cookie Secure (when served over HTTPS behind a proxy)."""
+    places: dict[str, str] = field(default_factory=dict)
+    """Vehicle id -> where its board is, in the visitors' words ("board 2 from the left")."""
+    max_pending: int = 200
+    """Submissions waiting for the orchestrator's first answer at once; beyond, new ones are
+    refused before they are sent."""
+    max_flight_s: float = 90.0
+    """Longest planned flight of one character, [s]; longer previews and submissions are refused."""
+    idle_reset_s: float = 60.0
+    """The page goes back to the start after this long without a touch, [s] (0: never)."""
+    stale_after_s: float = 2.0
+    """The status is stale when the orchestrator's 1 Hz fleet snapshot is older than this, [s]."""
 
 
 def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
@@ -64,7 +77,14 @@ def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
         port=kiosk.port if port is None else port,
         limits=limits,
         rate_limit_per_minute=kiosk.rate_limit_per_minute,
+        trusted_proxies=tuple(str(network) for network in kiosk.trusted_proxies),
         writing_area_m=(float(width_m), float(height_m)),
         margin_m=min(planning.margin_m, 0.45 * min(width_m, height_m)),
         plan=plan,
+        max_flight_s=kiosk.max_flight_s,
+        idle_reset_s=kiosk.idle_reset_s,
+        places=board_places(
+            {vehicle.id: vehicle.board for vehicle in show.vehicles},
+            [b.id for b in show.boards],
+        ),
     )

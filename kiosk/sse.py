@@ -1,19 +1,22 @@
-"""Server-sent events of one job: its state now, then every change, until it is final."""
+"""Server-sent events of one ticket: its view now, then every change, until it is final.
+
+Between changes a ``live`` frame every ``beat_s`` says whether the information is current
+(``{"stale": true}`` when the orchestrator's 1 Hz fleet snapshot stopped arriving), so the page
+can say "connection lost, retrying" within seconds, and notice a silent stream itself.
+"""
 
 from __future__ import annotations
 
 import asyncio
 import json
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Mapping
 from typing import Any
 
 from bus.bridge import ChannelClosedError
-from bus.messages import JobState
-from kiosk.jobs import FINAL_STATES, job_view
 from kiosk.link import OrchestratorLink
 
-KEEPALIVE_S = 15.0
-"""Comment line sent when nothing happened for this long, so proxies keep the stream open."""
+BEAT_S = 0.5
+"""Period of the ``live`` frames, [s] (the page calls the stream lost after 2.5 s of silence)."""
 
 
 def sse_event(event: str, data: dict[str, Any]) -> str:
@@ -24,30 +27,32 @@ def sse_event(event: str, data: dict[str, Any]) -> str:
 
 
 async def job_events(
-    link: OrchestratorLink, job_id: str, *, keepalive_s: float = KEEPALIVE_S
+    link: OrchestratorLink,
+    ticket: str,
+    *,
+    stale_after_s: float,
+    places: Mapping[str, str] | None = None,
+    beat_s: float = BEAT_S,
 ) -> AsyncIterator[str]:
-    """Frames for one job's page; ends after the first final state."""
-    with link.watch(job_id) as channel:
-        state = link.book.state(job_id)
-        if state is None:
-            state = await link.fetch(job_id)
-        last: JobState | None = None
-        if state is not None:
-            yield sse_event("job", job_view(state))
-            last = state
-            if state.state in FINAL_STATES:
-                return
+    """Frames for one ticket's page; ends after the first final view."""
+    with link.watch(ticket) as channel:
+        job = link.book.get(ticket)
+        if job is None:
+            return
+        if job.job_id is not None and link.book.state(job.job_id) is None:
+            await link.fetch(job.job_id)
+        last: dict[str, Any] | None = None
         while True:
+            view = link.book.view(job, places)
+            if view != last:
+                last = view
+                yield sse_event("job", view)
+                if view["final"]:
+                    return
+            yield sse_event("live", {"stale": link.stale(stale_after_s)})
             try:
-                state = await asyncio.wait_for(channel.get(), timeout=keepalive_s)
+                await asyncio.wait_for(channel.get(), timeout=beat_s)
             except TimeoutError:
-                yield ": keepalive\n\n"
                 continue
             except ChannelClosedError:  # the server is stopping; the page reconnects later
-                return
-            if state == last:
-                continue
-            last = state
-            yield sse_event("job", job_view(state))
-            if state.state in FINAL_STATES:
                 return

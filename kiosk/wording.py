@@ -25,9 +25,27 @@ RATE_LIMITED = (
     "You are sending characters very quickly! Please wait about {seconds} seconds and try again."
 )
 UNPLANNABLE = "The drones cannot fly this one. Please try a simpler character."
+TOO_SMALL = (
+    "That is just a tap. Please draw your character with lines, as big as you like it "
+    "on the board: the drones keep its size and place."
+)
+TOO_LONG_FLIGHT = (
+    "This one would take the drone about {seconds} seconds to write; the show allows "
+    "{limit} seconds per character. Please draw it with fewer or shorter strokes."
+)
 NO_ORCHESTRATOR = "The drones' queue is not answering right now. Please try again in a minute."
 QUEUE_FULL = "The queue is full right now. Please try again in a few minutes."
 ORCHESTRATOR_REFUSED = "Sorry, this character could not be accepted. Please try another one."
+SENDING = (
+    "Your character is on its way: the drones' queue has not confirmed it yet. We keep trying, "
+    "and it will be queued only once (this page updates by itself)."
+)
+CHECKING = "Your character is in the queue. Looking up where it is now..."
+PENDING_FULL = (
+    "The drones' queue is not answering right now, so your character was not sent. "
+    "Please try again in a minute."
+)
+UNKNOWN_CODE = "We do not know this code. Please check it, or ask at the kiosk."
 UNKNOWN_JOB = "We do not know this job. It may be from an earlier session."
 NOT_YOUR_JOB = "You can only follow the characters you sent from this page."
 
@@ -49,22 +67,36 @@ def status_text(
     eta_s: float | None = None,
     vehicle_id: str | None = None,
     progress: float = 0.0,
+    attempts: int = 0,
+    place: str | None = None,
 ) -> str:
-    """What the page says about a job in ``state`` (a bus JobStateName)."""
+    """What the page says about a job in ``state`` (a bus JobStateName).
+
+    ``attempts``: assignments so far (a requeued job was assigned before); ``place``: where the
+    writing vehicle's board is ("board 2 from the left")."""
     if state in ("submitted", "awaiting_approval"):
         return "Waiting for the show's operator to approve your character."
     if state == "queued":
+        again = (
+            "The drone had to land before finishing; your character is back in the queue. "
+            if attempts >= 1
+            else ""
+        )
         if queue_position is None:
-            return "In the queue."
-        place = "next in line" if queue_position <= 1 else f"number {queue_position} in the queue"
-        return f"You are {place}. Your character should start in {duration_words(eta_s)}."
+            return again + "In the queue."
+        line = "next in line" if queue_position <= 1 else f"number {queue_position} in the queue"
+        return again + f"You are {line}. Your character should start in {duration_words(eta_s)}."
     drone = f"drone {vehicle_id}" if vehicle_id else "a drone"
+    where = f" at {place}" if place else ""
+    if state in ("assigned", "writing") and attempts >= 2:
+        done = f" ({_percent(progress)} done)" if state == "writing" else ""
+        return f"The first drone had to land; another drone, {drone}, is writing it{where}{done}."
     if state == "assigned":
-        return f"Getting ready: {drone} is taking off to write your character."
+        return f"Getting ready: {drone} is taking off to write your character{where}."
     if state == "writing":
-        return f"Being written by {drone}: {round(100.0 * max(0.0, min(1.0, progress)))}% done."
+        return f"Being written by {drone}{where}: {_percent(progress)} done."
     if state == "done":
-        return f"Done! Your character was written by {drone}."
+        return f"Done! Your character was written by {drone}{where}."
     if state == "failed":
         return "Sorry, something went wrong while writing your character. The crew has been told."
     if state == "cancelled":
@@ -72,3 +104,16 @@ def status_text(
     if state == "rejected":
         return "Sorry, the show's operator did not approve this character."
     return "Please wait..."
+
+
+def _percent(fraction: float) -> str:
+    return f"{round(100.0 * max(0.0, min(1.0, fraction)))}%"
+
+
+def board_places(board_of_vehicle: dict[str, str], board_order: list[str]) -> dict[str, str]:
+    """Vehicle id -> "board N from the left" (the show file lists boards left to right)."""
+    places = {}
+    for vehicle_id, board_id in board_of_vehicle.items():
+        if board_id in board_order:
+            places[vehicle_id] = f"board {board_order.index(board_id) + 1} from the left"
+    return places

@@ -7,8 +7,11 @@ What it reproduces, where it matters for a companion computer (measured on ArduC
   ArduCopter does), armed GUIDED/LOITER/RTL need the position too;
 - GUIDED (custom mode 4) is entered with MAV_CMD_DO_SET_MODE; MAV_CMD_NAV_TAKEOFF climbs to param 7
   metres above home; SET_POSITION_TARGET_LOCAL_NED and SET_ATTITUDE_TARGET are honoured only in
-  GUIDED and armed; with no setpoint for ``guided_timeout_s`` (GUID_TIMEOUT) the vehicle stops where
-  it is (this one also says so in a STATUSTEXT);
+  GUIDED and armed, read as ArduCopter reads them (:mod:`mavsim.wire`; an invalid one stops the
+  vehicle where it is) and flown as :mod:`mavsim.guided` says (GUID_TIMEOUT, yaw, thrust);
+- parameters (:mod:`mavsim.params`) are set and read over MAVLink and change the behaviour;
+- its fence (FENCE_ENABLE, circle and maximum altitude around home) switches to FENCE_ACTION's mode
+  on a breach;
 - LAND descends at ``land_speed_mps`` and disarms on touchdown; LOITER/BRAKE/STABILIZE/ALT_HOLD
   hold position (no pilot sticks in a simulator); RTL returns home, then lands;
 - armed on the ground without taking off for ``disarm_delay_s`` -> auto-disarm.
@@ -20,18 +23,32 @@ origin is ``home_m_enu``, at its boundary.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from enum import IntEnum
 from typing import Literal
 
 from mavsim.airframe import Airframe, AttitudeThrust
+from mavsim.auto_modes import climb, descend, go_home
 from mavsim.config import VehicleConfig
 from mavsim.control import PositionController, Target
+from mavsim.fence import fence_action, fence_breach
+from mavsim.guided import (
+    GUID_OPTIONS_THRUST_AS_THRUST,
+    AttitudeHold,
+    Heading,
+    attitude_command,
+    climb_rate_mps,
+    heading_of,
+    merge,
+    propagate,
+    timed_out,
+)
 from mavsim.modes import HOLDING_MODES, NEEDS_POSITION, NOT_ARMABLE, CopterMode, mode_name
+from mavsim.params import Flavor, ParamTable
+from mavsim.wire import AttitudeSetpoint, Control, GuidedSetpoint
 
 Vec3 = tuple[float, float, float]
-Submode = Literal["ground", "takeoff", "track", "attitude", "stopped"]
+Submode = Literal["ground", "takeoff", "track", "attitude"]
 
 SEVERITY_CRITICAL = 2
 SEVERITY_WARNING = 4
@@ -50,21 +67,17 @@ class Result(IntEnum):
     FAILED = 4
 
 
-@dataclass(frozen=True)
-class AttitudeTarget:
-    """A SET_ATTITUDE_TARGET as the inner loop takes it."""
-
-    command: AttitudeThrust
-    """Attitude (ENU) and thrust per unit mass."""
-    received_s: float
-    """Vehicle time of receipt in [s]."""
-
-
 class Autopilot:
     """Modes, arming, takeoff, guided setpoints, land and failsafes of one vehicle."""
 
+    flavor: Flavor = "ardupilot"
+    timeout_param = "GUID_TIMEOUT"
+    """The parameter that holds the setpoint timeout in [s]."""
+
     def __init__(self, config: VehicleConfig) -> None:
         self.config = config
+        boot = {self.timeout_param: config.guided_timeout_s, **dict(config.params)}
+        self.params = ParamTable(self.flavor, boot, frozen=config.frozen_params)
         self.airframe = Airframe(config)
         self.controller = PositionController(
             config.gains,
@@ -76,8 +89,12 @@ class Autopilot:
         self.armed = False
         self.submode: Submode = "ground"
         self.target = Target(position_m_enu=config.home_m_enu)
-        self.attitude_target: AttitudeTarget | None = None
+        self.control: Control = "pos"
+        """Which guided controller flies ``target`` (see mavsim.wire)."""
+        self.heading = Heading()
+        self.attitude_hold: AttitudeHold | None = None
         self.takeoff_alt_m: float | None = None
+        self.fence_breached = False
         self.last_setpoint_s = -math.inf
         self.setpoint_stamp_ms = 0
         """``time_boot_ms`` of the setpoint being tracked, echoed in POSITION_TARGET_LOCAL_NED."""
@@ -91,6 +108,11 @@ class Autopilot:
         """STATUSTEXTs (severity, text) waiting to be sent; the endpoint drains this list."""
 
     # --- state as telemetry sees it ------------------------------------------------------------
+    @property
+    def guided_timeout_s(self) -> float:
+        """The setpoint timeout in [s] (GUID_TIMEOUT; PX4 COM_OF_LOSS_T)."""
+        return self.params[self.timeout_param]
+
     @property
     def position_source_ready(self) -> bool:
         """The estimator has a position source (arming and GUIDED allowed)."""
@@ -156,7 +178,7 @@ class Autopilot:
     def _disarm(self) -> None:
         self.armed = False
         self.submode = "ground"
-        self.attitude_target = None
+        self.attitude_hold = None
         self.say(SEVERITY_INFO, "Disarming motors")
 
     def set_mode(self, custom_mode: int) -> Result:
@@ -179,7 +201,7 @@ class Autopilot:
         """Hold where the vehicle is; LAND and RTL start from here too."""
         here = self.airframe.position_m_enu
         self.target = Target(position_m_enu=here, yaw_rad=self.target.yaw_rad)
-        self.attitude_target = None
+        self.control, self.heading, self.attitude_hold = "pos", Heading(), None
         self.controller.reset()
         if self.submode != "ground" or not self.on_ground:
             self.submode = "track"
@@ -214,31 +236,58 @@ class Autopilot:
         """GUIDED, armed and flying (or taking off): setpoints are honoured."""
         return self.mode == CopterMode.GUIDED and self.armed and self.submode != "ground"
 
-    def position_target(self, target: Target, stamp_ms: int) -> bool:
-        """A SET_POSITION_TARGET_LOCAL_NED (already in ENU); False when ignored."""
+    def guided_setpoint(self, sp: GuidedSetpoint, stamp_ms: int) -> bool:
+        """A decoded SET_POSITION_TARGET_LOCAL_NED; False when ignored (not GUIDED, not flying)."""
         if not self.accepts_setpoints():
             return False
-        if self.submode == "stopped":
-            self.say(SEVERITY_INFO, "Guided: setpoints resumed")
-        self.target = target
-        self.submode = "track"
-        self.takeoff_alt_m = None
-        self.last_setpoint_s = self.now_s
-        self.setpoint_stamp_ms = stamp_ms
-        self.setpoints_received += 1
+        self.target = merge(sp, self.target, self.hold_position_m_enu())
+        self.heading = heading_of(sp, self.wp_yaw_behavior)
+        self.control = sp.control
+        self._took_setpoint(stamp_ms, "track")
         return True
 
-    def attitude_target_in(self, command: AttitudeThrust, stamp_ms: int) -> bool:
-        """A SET_ATTITUDE_TARGET (already ENU, thrust per unit mass); False when ignored."""
+    def position_target(self, target: Target, stamp_ms: int) -> bool:
+        """Position, velocity, acceleration and heading at once (mask ``0x0800``)."""
+        sp = GuidedSetpoint("posvelaccel", target.position_m_enu, target.velocity_mps_enu,
+                            target.acceleration_mps2_enu, target.yaw_rad, None)  # fmt: skip
+        return self.guided_setpoint(sp, stamp_ms)
+
+    def attitude_setpoint(self, sp: AttitudeSetpoint, stamp_ms: int) -> bool:
+        """A decoded SET_ATTITUDE_TARGET; False when ignored."""
         if not self.accepts_setpoints():
             return False
-        self.attitude_target = AttitudeTarget(command, self.now_s)
-        self.submode = "attitude"
+        use_thrust = self.thrust_is_thrust
+        z = self.airframe.position_m_enu[2]
+        if self.attitude_hold is not None and not self.attitude_hold.use_thrust:
+            z = self.attitude_hold.climb_z_m
+        self.attitude_hold = AttitudeHold(sp, use_thrust, z)
+        self._took_setpoint(stamp_ms, "attitude")
+        return True
+
+    @property
+    def wp_yaw_behavior(self) -> float:
+        """WP_YAW_BEHAVIOR: 0 never turns the vehicle on its own."""
+        return self.params["WP_YAW_BEHAVIOR"]
+
+    @property
+    def thrust_is_thrust(self) -> bool:
+        """SET_ATTITUDE_TARGET's thrust is thrust (GUID_OPTIONS bit 3), not a climb rate."""
+        return bool(int(self.params["GUID_OPTIONS"]) & GUID_OPTIONS_THRUST_AS_THRUST)
+
+    def _took_setpoint(self, stamp_ms: int, submode: Submode) -> None:
+        self.submode = submode
         self.takeoff_alt_m = None
         self.last_setpoint_s = self.now_s
         self.setpoint_stamp_ms = stamp_ms
         self.setpoints_received += 1
-        return True
+
+    def stop_here(self) -> None:
+        """An invalid setpoint in GUIDED: brake and hold where the vehicle is (ArduCopter)."""
+        if not self.accepts_setpoints():
+            return
+        self.target = Target(self.airframe.position_m_enu, yaw_rad=self.airframe.attitude_rad[2])
+        self.control, self.heading, self.attitude_hold = "pos", Heading(), None
+        self.submode = "track"
 
     # --- the loop --------------------------------------------------------------------------------
     def step(self, now_s: float) -> None:
@@ -250,6 +299,7 @@ class Autopilot:
         if self.armed:
             self.flight_time_s += dt
         self._after_step()
+        self._check_fence()
 
     def _command(self, dt: float) -> AttitudeThrust:
         yaw = self.target.yaw_rad
@@ -259,8 +309,8 @@ class Autopilot:
             self._guided_failsafe()
             if self.submode == "takeoff":
                 self._advance_takeoff(dt)
-            elif self.submode == "attitude" and self.attitude_target is not None:
-                return self.attitude_target.command
+            elif self.submode == "attitude" and self.attitude_hold is not None:
+                return self._attitude_command(dt)
         elif self.mode == CopterMode.LAND:
             self._advance_descent(dt)
         elif self.mode == CopterMode.RTL:
@@ -268,83 +318,92 @@ class Autopilot:
         elif self.mode not in HOLDING_MODES:
             return AttitudeThrust(0.0, 0.0, yaw, 0.0)
         if self.mode == CopterMode.GUIDED and self.submode == "track":
-            self._propagate_target(dt)
+            self.target = propagate(self.target, self.heading, self.airframe.position_m_enu, dt)
         p, v = self.airframe.position_m_enu, self.airframe.velocity_mps_enu
         return self.controller.update(self.target, p, v, dt)
 
+    def _attitude_command(self, dt: float) -> AttitudeThrust:
+        hold = self.attitude_hold
+        assert hold is not None
+        climb = 0.0
+        if not hold.use_thrust:
+            up, down = self.params["WPNAV_SPEED_UP"], self.params["WPNAV_SPEED_DN"]
+            climb = climb_rate_mps(hold.setpoint.thrust, up, down)
+            hold = replace(hold, climb_z_m=hold.climb_z_m + climb * dt)
+            self.attitude_hold = hold
+        g = self.config.gains
+        return attitude_command(
+            hold, z_m=self.airframe.position_m_enu[2], vz_mps=self.airframe.velocity_mps_enu[2],
+            thrust_max_mps2=self.airframe.max_thrust_mps2, gravity_mps2=self.airframe.gravity_mps2,
+            kp_z=g.kp_z, kd_z=g.kd_z, climb_mps=climb,
+        )  # fmt: skip
+
     def _guided_failsafe(self) -> None:
-        """GUID_TIMEOUT: no setpoint for too long -> stop where the vehicle is."""
+        """GUID_TIMEOUT: velocity and acceleration targets zeroed (the vehicle stops), attitude
+        targets levelled at the heading with the height held; position targets hold anyway."""
         if self.submode not in ("track", "attitude") or self.last_setpoint_s == -math.inf:
             return
-        silent_s = self.now_s - self.last_setpoint_s
-        if silent_s <= self.config.guided_timeout_s:
+        if self.now_s - self.last_setpoint_s <= self.guided_timeout_s:
             return
-        self.submode = "stopped"
-        self.attitude_target = None
-        self.target = Target(
-            position_m_enu=self.airframe.position_m_enu, yaw_rad=self.target.yaw_rad
-        )
-        self.say(SEVERITY_WARNING, f"Guided failsafe: no setpoint for {silent_s:.1f}s, stopping")
+        if self.submode == "attitude" and self.attitude_hold is not None:
+            hold = self.attitude_hold
+            level = AttitudeSetpoint(0.0, 0.0, self.airframe.attitude_rad[2], 0.5)
+            z = hold.climb_z_m if not hold.use_thrust else self.airframe.position_m_enu[2]
+            self.attitude_hold = AttitudeHold(level, False, z)
+        elif self.submode == "track":
+            self.target = timed_out(self.control, self.target)
+            if self.heading.mode == "rate":
+                self.heading = Heading()
+
+    def _check_fence(self) -> None:
+        """The autopilot's own fence (:mod:`mavsim.fence`): on a breach in flight, its action,
+        once per breach."""
+        breach = fence_breach(self.params, self.airframe.position_m_enu, self.config.home_m_enu)
+        if breach is None or not self.armed or self.on_ground:
+            self.fence_breached = breach is not None and self.fence_breached
+            return
+        if self.fence_breached:
+            return
+        self.fence_breached = True
+        action = fence_action(self.params)
+        if action is None:
+            return
+        self.say(SEVERITY_CRITICAL, f"Fence Breached: {breach}")
+        if action == "terminate":
+            self.terminate()
+        elif action != "report" and action != self.mode:
+            self.mode = action
+            self._enter_mode()
 
     def _advance_takeoff(self, dt: float) -> None:
-        alt = (
-            self.takeoff_alt_m if self.takeoff_alt_m is not None else self.target.position_m_enu[2]
-        )
-        x, y, z = self.target.position_m_enu
-        speed = self.config.takeoff_speed_mps
-        z_next = min(z + speed * dt, alt)
-        vz = speed if z_next < alt else 0.0
-        self.target = replace(
-            self.target, position_m_enu=(x, y, z_next), velocity_mps_enu=(0, 0, vz)
-        )
-        if abs(self.airframe.position_m_enu[2] - alt) < 0.05 and z_next >= alt:
+        alt = self.takeoff_alt_m
+        alt = alt if alt is not None else self.target.position_m_enu[2]
+        self.target = climb(self.target, alt, self.config.takeoff_speed_mps, dt)
+        reached = self.target.position_m_enu[2] >= alt
+        if reached and abs(self.airframe.position_m_enu[2] - alt) < 0.05:
             self.submode = "track"
             self.takeoff_alt_m = None
             self.target = replace(self.target, velocity_mps_enu=(0.0, 0.0, 0.0))
 
     def _advance_descent(self, dt: float) -> None:
-        x, y, z = self.target.position_m_enu
         speed = self.config.land_speed_mps
-        z_next = max(z - speed * dt, self.airframe.ground_z_m - 0.3)
-        self.target = replace(
-            self.target, position_m_enu=(x, y, z_next), velocity_mps_enu=(0.0, 0.0, -speed),
-            acceleration_mps2_enu=(0.0, 0.0, 0.0),
-        )  # fmt: skip
+        self.target = descend(self.target, speed, self.airframe.ground_z_m, dt)
 
     def _advance_return(self, dt: float) -> None:
         home = self.config.home_m_enu
-        x, y, z = self.target.position_m_enu
-        dx, dy = home[0] - x, home[1] - y
-        distance = math.hypot(dx, dy)
-        step = self.config.land_speed_mps * dt
-        if distance <= step:
-            self.target = Target(position_m_enu=(home[0], home[1], z), yaw_rad=self.target.yaw_rad)
-            if math.dist(self.airframe.position_m_enu[:2], home[:2]) < 0.1:
-                self.mode = CopterMode.LAND
-            return
-        self.target = replace(
-            self.target, position_m_enu=(x + dx * step / distance, y + dy * step / distance, z),
-            velocity_mps_enu=(0.0, 0.0, 0.0), acceleration_mps2_enu=(0.0, 0.0, 0.0),
-        )  # fmt: skip
-
-    def _propagate_target(self, dt: float) -> None:
-        """Between setpoints the target moves on with its velocity and acceleration (ArduPilot's
-        position controller does the same), so 50 Hz setpoints drive a 100+ Hz loop smoothly."""
-        t = self.target
-        p, v, a = t.position_m_enu, t.velocity_mps_enu, t.acceleration_mps2_enu
-        if v == (0.0, 0.0, 0.0) and a == (0.0, 0.0, 0.0):
-            return
-        self.target = replace(
-            t,
-            position_m_enu=_vec(p[i] + v[i] * dt + 0.5 * a[i] * dt * dt for i in range(3)),
-            velocity_mps_enu=_vec(v[i] + a[i] * dt for i in range(3)),
-        )
+        self.target = go_home(self.target, home, self.config.land_speed_mps, dt)
+        if math.dist(self.airframe.position_m_enu[:2], home[:2]) < 0.1:
+            self.mode = CopterMode.LAND
 
     def hold_position_m_enu(self) -> Vec3:
         """Where a setpoint without a position keeps the vehicle: the current target in flight."""
         if self.submode == "track":
             return self.target.position_m_enu
         return self.airframe.position_m_enu
+
+    def _landed(self) -> None:
+        """LAND touched down and dwelt: disarm."""
+        self._disarm()
 
     def _after_step(self) -> None:
         """Landing detection, auto-disarm, leaving the ground."""
@@ -360,18 +419,13 @@ class Autopilot:
         if self._on_ground_since_s is None:
             self._on_ground_since_s = now
         if self.mode == CopterMode.LAND and now - self._on_ground_since_s >= LANDED_DWELL_S:
-            self._disarm()
+            self._landed()
             return
         if self.submode in ("takeoff", "attitude"):
             self._armed_idle_since_s = now
         elif now - self._armed_idle_since_s >= self.config.disarm_delay_s:
             self.say(SEVERITY_INFO, "Auto disarm: no takeoff")
             self._disarm()
-
-
-def _vec(values: Iterable[float]) -> Vec3:
-    x, y, z = values
-    return (float(x), float(y), float(z))
 
 
 def describe(autopilot: Autopilot) -> str:

@@ -101,6 +101,12 @@ class VehicleConfig:
     """Flight time in [s] from full to empty (linear model)."""
     gains: PositionGains = field(default_factory=PositionGains)
     """Position controller gains."""
+    params: tuple[tuple[str, float], ...] = ()
+    """Parameter values at boot besides the defaults (mavsim.params), e.g. ``(("GUID_OPTIONS",
+    1),)``."""
+    frozen_params: tuple[str, ...] = ()
+    """Parameters that refuse every PARAM_SET (answered with the value kept): a misconfigured or
+    locked vehicle, for tests and rehearsals."""
 
     def __post_init__(self) -> None:
         if not 1 <= self.system_id <= 254:

@@ -2,7 +2,10 @@
 
 The endpoint binds ``host:port`` and answers every peer that sent it a packet in the last
 ``PEER_TIMEOUT_S`` (a companion computer, a pilot's ground station). Bytes are MAVLink 2 with the
-``ardupilotmega`` dialect; the vehicle's system id is ``config.system_id``, component 1.
+``ardupilotmega`` dialect; the vehicle's system id is ``config.system_id``, component 1. It speaks
+the parameter protocol (PARAM_SET / PARAM_REQUEST_READ / PARAM_REQUEST_LIST -> PARAM_VALUE) for
+the parameters of :mod:`mavsim.params`; as PX4 does, a PX4 vehicle sends STATUSTEXT only to peers
+whose ground-station heartbeat (MAV_TYPE_GCS) it heard within ``GCS_HEARTBEAT_TIMEOUT_S``.
 
 Deviation from ArduPilot, on purpose: POSITION_TARGET_LOCAL_NED carries the ``time_boot_ms`` of the
 setpoint being tracked (the sender's stamp), so a companion computer can measure the latency from
@@ -24,13 +27,22 @@ from mavsim.config import VehicleConfig
 from mavsim.errors import MavsimError
 from mavsim.frames import attitude_enu_to_ned, enu_to_ned
 from mavsim.modes import CopterMode, from_px4, px4_custom_mode
+from mavsim.params import ParamTable
 from mavsim.px4 import Px4Autopilot
-from mavsim.wire import attitude_target_from_message, position_target_from_message
+from mavsim.wire import (
+    Pose,
+    Stop,
+    decode_attitude_target,
+    decode_position_target,
+    px4_view,
+)
 
 PEER_TIMEOUT_S = 10.0
 """A peer that sent nothing for this long (wall time) no longer receives telemetry."""
 FORCE_DISARM_MAGIC = 21196.0
 """MAV_CMD_COMPONENT_ARM_DISARM param2 that forces disarming in the air."""
+GCS_HEARTBEAT_TIMEOUT_S = 2.5
+"""PX4 counts a link as having a ground station for this long after its heartbeat (vehicle time)."""
 BATTERY_FULL_V = 16.8
 BATTERY_EMPTY_V = 14.0
 
@@ -57,6 +69,8 @@ class VehicleEndpoint:
         self._parser = mavlink.MAVLink(None)
         self._parser.robust_parsing = True
         self._peers: dict[tuple[str, int], float] = {}
+        self._gcs_heard_s: dict[tuple[str, int], float] = {}
+        """Vehicle time of each peer's last MAV_TYPE_GCS heartbeat."""
         telemetry_s = 1.0 / config.telemetry_rate_hz
         self.intervals_s: dict[int, float] = {
             mavlink.MAVLINK_MSG_ID_HEARTBEAT: 1.0,
@@ -104,6 +118,8 @@ class VehicleEndpoint:
             self.bytes_in += len(data)
             self._peers[address] = self._wall_clock()
             for message in self._parser.parse_buffer(data) or ():
+                if message.get_type() == "HEARTBEAT" and message.type == mavlink.MAV_TYPE_GCS:
+                    self._gcs_heard_s[address] = self.autopilot.now_s
                 if message.get_type() != "BAD_DATA":
                     self.handle(message)
         self._flush_texts()
@@ -127,15 +143,62 @@ class VehicleEndpoint:
             result = self._set_mode(custom, main, sub) if ok else Result.UNSUPPORTED
             self._ack(mavlink.MAVLINK_MSG_ID_SET_MODE, result, message)
         elif kind == "SET_POSITION_TARGET_LOCAL_NED":
-            target = position_target_from_message(message, ap, self.config.home_m_enu)
-            if target is not None and ap.position_target(target, int(message.time_boot_ms)):
-                self._setpoint_arrived(int(message.time_boot_ms))
+            self._position_setpoint(message)
         elif kind == "SET_ATTITUDE_TARGET":
-            command = attitude_target_from_message(message, ap.airframe.max_thrust_mps2)
-            if command is not None and ap.attitude_target_in(command, int(message.time_boot_ms)):
-                self._setpoint_arrived(int(message.time_boot_ms))
+            self._attitude_setpoint(message)
+        elif kind in ("PARAM_SET", "PARAM_REQUEST_READ", "PARAM_REQUEST_LIST"):
+            self._param(kind, message)
         elif kind in ("VISION_POSITION_ESTIMATE", "ATT_POS_MOCAP"):
             ap.mocap_received += 1
+
+    def _position_setpoint(self, message: mavlink.MAVLink_message) -> None:
+        ap = self.autopilot
+        if ap.mode != CopterMode.GUIDED and not self.px4:
+            return  # ArduCopter ignores it outside GUIDED; PX4 takes it as proof of life
+        pose = Pose(self.config.home_m_enu, ap.airframe.position_m_enu, ap.airframe.attitude_rad[2])
+        decoded = px4_view(message, pose) if self.px4 else decode_position_target(message, pose)
+        stamp = int(message.time_boot_ms)
+        if isinstance(decoded, Stop):
+            ap.stop_here()
+        elif decoded is not None and ap.guided_setpoint(decoded, stamp):
+            self._setpoint_arrived(stamp)
+
+    def _attitude_setpoint(self, message: mavlink.MAVLink_message) -> None:
+        ap = self.autopilot
+        if ap.mode != CopterMode.GUIDED and not self.px4:
+            return
+        decoded = decode_attitude_target(message)
+        stamp = int(message.time_boot_ms)
+        if isinstance(decoded, Stop):
+            if not self.px4:
+                ap.stop_here()
+        elif ap.attitude_setpoint(decoded, stamp):
+            self._setpoint_arrived(stamp)
+
+    def _param(self, kind: str, message: mavlink.MAVLink_message) -> None:
+        """The parameter protocol; an unknown name gets no answer (as on the autopilots)."""
+        table: ParamTable = self.autopilot.params
+        if kind == "PARAM_REQUEST_LIST":
+            for name in table.names:
+                self._param_value(name)
+            return
+        if kind == "PARAM_REQUEST_READ" and message.param_index >= 0:
+            names = table.names
+            if message.param_index < len(names):
+                self._param_value(names[message.param_index])
+            return
+        name = _param_name(message.param_id)
+        if name not in table:
+            return
+        if kind == "PARAM_SET":
+            table.set_from_link(name, float(message.param_value))
+        self._param_value(name)
+
+    def _param_value(self, name: str) -> None:
+        table = self.autopilot.params
+        value, kind = table.encode(name)
+        index = table.names.index(name)
+        self.send(self._mav.param_value_encode(name.encode(), value, kind, len(table.names), index))
 
     def _setpoint_arrived(self, stamp_ms: int) -> None:
         self._fresh_stamp_ms = stamp_ms
@@ -198,14 +261,18 @@ class VehicleEndpoint:
         )
 
     # --- output ----------------------------------------------------------------------------------
-    def send(self, message: mavlink.MAVLink_message) -> None:
-        """Pack once and send to every live peer."""
+    def send(
+        self, message: mavlink.MAVLink_message, *, only: set[tuple[str, int]] | None = None
+    ) -> None:
+        """Pack once and send to every live peer (``only``: to those of them)."""
         data = message.pack(self._mav)
         self._mav.seq = (self._mav.seq + 1) % 256
         now = self._wall_clock()
         for address, seen in list(self._peers.items()):
             if now - seen > PEER_TIMEOUT_S:
                 del self._peers[address]
+                continue
+            if only is not None and address not in only:
                 continue
             try:
                 self.sock.sendto(data, address)
@@ -216,7 +283,16 @@ class VehicleEndpoint:
     def _flush_texts(self) -> None:
         texts, self.autopilot.texts = self.autopilot.texts, []
         for severity, text in texts:
-            self.send(self._mav.statustext_encode(severity, text.encode()))
+            message = self._mav.statustext_encode(severity, text.encode())
+            if self.px4:
+                self.send(message, only=self._ground_stations())
+            else:
+                self.send(message)
+
+    def _ground_stations(self) -> set[tuple[str, int]]:
+        """Peers whose MAV_TYPE_GCS heartbeat was heard lately (PX4 texts go only there)."""
+        now = self.autopilot.now_s
+        return {a for a, t in self._gcs_heard_s.items() if now - t <= GCS_HEARTBEAT_TIMEOUT_S}
 
     def step(self) -> None:
         """One autopilot period at ``next_step_s``."""
@@ -278,7 +354,7 @@ class VehicleEndpoint:
 
     def _position_target(self) -> mavlink.MAVLink_message | None:
         ap = self.autopilot
-        if ap.mode != CopterMode.GUIDED or ap.submode not in ("track", "stopped"):
+        if ap.mode != CopterMode.GUIDED or ap.submode != "track":
             return None
         home = self.config.home_m_enu
         t = ap.target
@@ -309,6 +385,11 @@ class VehicleEndpoint:
                 int(amps * 100), -1, -1, remaining,
             )  # fmt: skip
         return None
+
+
+def _param_name(raw: object) -> str:
+    text = raw.decode(errors="replace") if isinstance(raw, bytes) else str(raw)
+    return text.rstrip("\x00")
 
 
 def _age_ms(stamp_ms: int) -> float:

@@ -14,6 +14,7 @@ from bus.session import Role, open_session
 from orchestrator.service import OrchestratorService, recording_path
 from orchestrator.store import JobStore
 from showfile import Show
+from trust.settings import session_settings
 
 log = logging.getLogger(__name__)
 
@@ -32,7 +33,8 @@ async def serve_show(
     """
     stop = stop or asyncio.Event()
     with contextlib.ExitStack() as stack:
-        session = stack.enter_context(open_session(show.zenoh, role=role))
+        identity = "router" if role == "router" else "orchestrator"
+        session = stack.enter_context(open_session(session_settings(show, identity), role=role))
         store = stack.enter_context(JobStore(show.database_path))
         recorder = None
         if show.storage.record:

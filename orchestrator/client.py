@@ -1,6 +1,7 @@
 """Blocking client calls to a show's orchestrator, for the command line (and scripts).
 
-Each call opens a Zenoh client session to the show's router endpoints, asks, and closes it.
+Each call opens a Zenoh client session to the show's router endpoints as the show's
+``operator`` identity, asks, and closes it.
 Errors: :class:`bus.rpc.NoReplyError` (no orchestrator answered), :class:`bus.rpc.RemoteError`
 (it answered with an error), :class:`bus.session.SessionOpenError` (no router).
 """
@@ -20,6 +21,7 @@ from bus.messages import (
 from bus.rpc import query_one
 from bus.session import open_session
 from showfile import Show
+from trust.settings import session_settings
 
 DEFAULT_TIMEOUT_S = 5.0
 
@@ -35,7 +37,7 @@ def submit(
 ) -> SubmitReply:
     """Hand in a character (text or a strokes document); the reply carries the job id or error."""
     request = SubmitRequest(text=text, strokes=strokes, client_id=client_id, priority=priority)
-    with open_session(show.zenoh, role="client") as session:
+    with open_session(session_settings(show, "operator"), role="client") as session:
         return query_one(
             session, ShowKeys(show.show_id).submit, request, SubmitReply, timeout_s=timeout_s
         )
@@ -45,7 +47,7 @@ def command(
     show: Show, operator_command: OperatorCommand, *, timeout_s: float = DEFAULT_TIMEOUT_S
 ) -> CommandReply:
     """Send an operator command; the reply says what happened."""
-    with open_session(show.zenoh, role="client") as session:
+    with open_session(session_settings(show, "operator"), role="client") as session:
         return query_one(
             session,
             ShowKeys(show.show_id).command,
@@ -57,7 +59,7 @@ def command(
 
 def snapshot(show: Show, *, timeout_s: float = DEFAULT_TIMEOUT_S) -> ShowSnapshot:
     """The orchestrator's current view: every job (latest finished ones too) and vehicle."""
-    with open_session(show.zenoh, role="client") as session:
+    with open_session(session_settings(show, "operator"), role="client") as session:
         return query_one(
             session, ShowKeys(show.show_id).snapshot, None, ShowSnapshot, timeout_s=timeout_s
         )

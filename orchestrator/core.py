@@ -12,6 +12,7 @@ duplicated; at most one active job per vehicle and per board; jobs are assigned 
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Iterable, Sequence
 
 import msgspec
@@ -28,13 +29,16 @@ from bus.messages import (
     VehicleCommand,
     VehicleStatus,
 )
-from orchestrator import presence, reports
+from orchestrator import positions, presence, reports
 from orchestrator.core_types import CoreConfig, Effects, Level
 from orchestrator.fleet import VehicleView, queue_etas, ready_for_job
 from orchestrator.jobs import WAITING_STATES, Job, to_state, transition, update
 from orchestrator.operator import apply_operator
 
 __all__ = ["Book", "CoreConfig", "Effects", "Level"]
+
+RECENT_EVENTS = 50
+"""Events kept in memory for the ``snapshot`` reply."""
 
 
 class Book:
@@ -59,6 +63,17 @@ class Book:
         for job in jobs:  # restart: active jobs must be confirmed by their vehicle again
             self.jobs[job.job_id] = update(job, now_s, assigned_at_s=now_s) if job.active else job
         self.next_seq = max((j.seq for j in self.jobs.values()), default=0) + 1
+        self.by_key: dict[tuple[str, str], str] = {
+            (j.client_id, j.idempotency_key): j.job_id
+            for j in self.jobs.values()
+            if j.idempotency_key is not None
+        }
+        """(client_id, idempotency_key) -> job id of every keyed submission."""
+        self._announced: positions.Announced = {}
+        self.recent_events: deque[Event] = deque(maxlen=RECENT_EVENTS)
+        self.dirty_boards: set[str] = set()
+        """Boards left half-written: no job there until the operator's ``fresh_sheet``."""
+        """The latest events, for the ``snapshot`` reply (a late console shows recent history)."""
 
     # --- views ------------------------------------------------------------------------------
     def queue(self) -> list[Job]:
@@ -83,7 +98,11 @@ class Book:
         """Queue position (1 = next) and ETA in [s] of every queued job."""
         queue = self.queue()
         active = {j.vehicle_id: j for j in self.jobs.values() if j.active and j.vehicle_id}
-        usable = [v.info.vehicle_id for v in self.vehicles.values() if v.alive and not v.paused]
+        usable = [
+            v.info.vehicle_id
+            for v in self.vehicles.values()
+            if v.alive and not (v.paused or v.held)
+        ]
         etas = (
             {} if self.queue_paused else queue_etas(queue, active, usable, now_s, self.config.eta)
         )
@@ -126,6 +145,8 @@ class Book:
             queue_paused=self.queue_paused,
             jobs=jobs,
             vehicles=vehicles,
+            events=list(self.recent_events) if include_final else [],
+            dirty_boards=sorted(self.dirty_boards),
         )
 
     # --- helpers ----------------------------------------------------------------------------
@@ -140,16 +161,25 @@ class Book:
         vehicle_id: str | None = None,
         job_id: str | None = None,
     ) -> None:
-        eff.events.append(
-            Event(
-                time_s=now_s,
-                level=level,
-                kind=kind,
-                message=message,
-                vehicle_id=vehicle_id,
-                job_id=job_id,
-            )
+        event = Event(
+            time_s=now_s,
+            level=level,
+            kind=kind,
+            message=message,
+            vehicle_id=vehicle_id,
+            job_id=job_id,
         )
+        eff.events.append(event)
+        self.recent_events.append(event)
+
+    def settle(self, eff: Effects, now_s: float) -> Effects:
+        """Add to ``eff.moved`` every other queued job whose position or ETA the decision changed
+        (the protocol publishes a JobState on every change); returns ``eff``."""
+        current = self.etas(now_s)
+        eff.moved |= positions.announce(
+            self._announced, current, eff.jobs.keys(), now_s, self.config.eta_tolerance_s
+        )
+        return eff
 
     def put(self, eff: Effects, job: Job) -> Job:
         self.jobs[job.job_id] = job
@@ -159,6 +189,18 @@ class Book:
     def requeue(self, eff: Effects, job: Job, now_s: float, reason: str, *, lost: bool) -> None:
         """Take an active job back: queued again, or failed after too many lost attempts."""
         info = ErrorInfo(code="vehicle_lost" if lost else "requeued", message=reason)
+        if job.board_id is not None and (job.state == "writing" or job.progress > 0):
+            self.dirty_boards.add(job.board_id)
+            eff.settings_changed = True
+            self.event(
+                eff,
+                now_s,
+                "alert",
+                "board_dirty",
+                f"{job.board_id} half-written by {job.label}: fresh sheet needed",
+                vehicle_id=job.vehicle_id,
+                job_id=job.job_id,
+            )
         if lost and job.attempts >= self.config.max_attempts:
             self.put(eff, transition(job, "failed", now_s, error=info, progress=0.0))
             self.event(
@@ -189,8 +231,15 @@ class Book:
     def submit(
         self, job_id: str, request: SubmitRequest, *, label: str, estimate_s: float, now_s: float
     ) -> tuple[SubmitReply, Effects]:
-        """Accept a validated submission (the caller parsed its glyph); refuse when full."""
+        """Accept a validated submission (the caller parsed its glyph); refuse when full.
+
+        A repeated ``idempotency_key`` of the same client answers with the job it made first
+        (and ``job_id`` is not used)."""
         eff = Effects()
+        key = request.idempotency_key
+        first = self.by_key.get((request.client_id, key)) if key is not None else None
+        if first is not None and first in self.jobs:
+            return self.submit_reply(first, now_s), eff
         if job_id in self.jobs:
             raise ValueError(f"duplicate job id {job_id}")
         if self.waiting_count() >= self.config.max_queue:
@@ -212,19 +261,27 @@ class Book:
             created_at_s=now_s,
             updated_at_s=now_s,
             estimate_s=estimate_s,
+            idempotency_key=key,
         )
         self.next_seq += 1
+        if key is not None:
+            self.by_key[(request.client_id, key)] = job_id
         job = transition(job, "awaiting_approval" if self.config.moderation else "queued", now_s)
         self.put(eff, job)
         self.event(
             eff, now_s, "info", "job_submitted", f"{label} from {request.client_id}", job_id=job_id
         )
         self.assign(eff, now_s)
+        self.settle(eff, now_s)
+        return self.submit_reply(job_id, now_s), eff
+
+    def submit_reply(self, job_id: str, now_s: float) -> SubmitReply:
+        """The ``ok`` reply naming an accepted job, with its current state, place and ETA."""
         job = self.jobs[job_id]
         position, eta = self.etas(now_s).get(job_id, (None, None))
         return SubmitReply(
             ok=True, job_id=job_id, state=job.state, queue_position=position, eta_s=eta
-        ), eff
+        )
 
     def set_estimate(self, job_id: str, estimate_s: float, now_s: float) -> Effects:
         """A better duration estimate (from the planner) for a job."""
@@ -232,7 +289,7 @@ class Book:
         job = self.jobs.get(job_id)
         if job is not None and not job.final:
             self.put(eff, update(job, now_s, estimate_s=estimate_s))
-        return eff
+        return self.settle(eff, now_s)
 
     # --- assignment ---------------------------------------------------------------------------
     def assign(self, eff: Effects, now_s: float) -> None:
@@ -249,6 +306,8 @@ class Book:
                 break
             vid = view.info.vehicle_id
             if vid in busy_vehicles or view.info.board_id in busy_boards:
+                continue
+            if view.info.board_id in self.dirty_boards:
                 continue
             if not ready_for_job(view, now_s):
                 continue
@@ -307,38 +366,40 @@ class Book:
                 lost=False,
             )
         self.assign(eff, now_s)
-        return eff
+        return self.settle(eff, now_s)
 
     # --- vehicles and reports (orchestrator/presence.py, orchestrator/reports.py) ----------------
     def liveliness(self, vehicle_id: str, alive: bool, now_s: float) -> Effects:
         """A vehicle's token appeared or disappeared."""
-        return presence.liveliness(self, vehicle_id, alive, now_s)
+        return self.settle(presence.liveliness(self, vehicle_id, alive, now_s), now_s)
 
     def status(self, status: VehicleStatus, now_s: float) -> Effects:
         """A vehicle's published status."""
-        return presence.status(self, status, now_s)
+        return self.settle(presence.status(self, status, now_s), now_s)
 
     def telemetry(
         self, vehicle_id: str, tracking_error_m: float, job_id: str | None, now_s: float
     ) -> Effects:
-        """A telemetry sample: liveness, and an alert (at most every 5 s) on large errors."""
+        """A telemetry sample: liveness, and an alert (at most every 5 s) on large errors.
+
+        Not settled (the service applies these effects only when they hold events)."""
         return presence.telemetry(self, vehicle_id, tracking_error_m, job_id, now_s)
 
     def vehicle_event(self, vehicle_id: str, event: Event, now_s: float) -> Effects:
         """An event an agent published about its vehicle: into the show's log (rate-limited)."""
-        return presence.vehicle_event(self, vehicle_id, event, now_s)
+        return self.settle(presence.vehicle_event(self, vehicle_id, event, now_s), now_s)
 
     def tick(self, now_s: float) -> Effects:
         """Time passed: lost vehicles, unconfirmed jobs, then assignment."""
         eff = Effects()
         presence.tick_into(self, eff, now_s)
-        return eff
+        return self.settle(eff, now_s)
 
     def report(self, rep: AgentReport, now_s: float) -> tuple[CommandReply, Effects]:
         """An agent's report; idempotent (agents retry until acknowledged)."""
         eff = Effects()
         reply = reports.apply_report(self, rep, eff, now_s)
-        return reply, eff
+        return reply, self.settle(eff, now_s)
 
     # --- operator -----------------------------------------------------------------------------
     def operator(self, command: object, now_s: float) -> tuple[CommandReply, Effects]:
@@ -346,7 +407,7 @@ class Book:
         eff = Effects()
         reply = apply_operator(self, command, eff, now_s)
         self.assign(eff, now_s)
-        return reply, eff
+        return reply, self.settle(eff, now_s)
 
     def vehicle_ids(self, vehicle_id: str | None) -> Sequence[str]:
         """One vehicle (validated by the caller) or all."""

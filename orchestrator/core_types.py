@@ -34,6 +34,8 @@ class CoreConfig:
     """Tracking error that raises an alert, [m]."""
     eta: EtaModel = field(default_factory=EtaModel)
     """ETA assumptions."""
+    eta_tolerance_s: float = 2.0
+    """A queued job whose expected start moved by more than this is published again, [s]."""
 
 
 @dataclass
@@ -42,6 +44,8 @@ class Effects:
 
     jobs: dict[str, Job] = field(default_factory=dict)
     """Changed jobs (latest version): store, then publish."""
+    moved: set[str] = field(default_factory=set)
+    """Other queued jobs whose queue position or ETA changed: publish them again (no store)."""
     events: list[Event] = field(default_factory=list)
     """Event log lines to store and publish."""
     commands: list[tuple[str, VehicleCommand]] = field(default_factory=list)

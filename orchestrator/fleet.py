@@ -31,11 +31,11 @@ class VehicleView:
     info: VehicleInfo
     """Declaration from the show file."""
     alive: bool = False
-    """Its liveliness token is present."""
+    """Its liveliness token is present (not enough to be taken as present: see ``heard_at_s``)."""
     state: VehicleStateName = "lost"
     """Last state the vehicle reported."""
     lost: bool = True
-    """Absent for longer than the grace period (or never seen): shown as ``lost``."""
+    """Token gone, or silent, for ``lost_after_s`` (or never heard): shown as ``lost``."""
     reported_job_id: str | None = None
     """Job the vehicle last said it works on."""
     status_at_s: float | None = None
@@ -44,10 +44,22 @@ class VehicleView:
     """Orchestrator time of its last status, telemetry or liveliness change, [s]."""
     gone_since_s: float | None = None
     """Orchestrator time its token disappeared (or the orchestrator started), [s]."""
+    heard_at_s: float | None = None
+    """Orchestrator time of the last message it sent itself (status or telemetry, on its own
+    keys), [s]: the heartbeat; a token alone (which anyone may fake) keeps no vehicle present."""
+    token_at_s: float | None = None
+    """Orchestrator time its token last appeared, [s] (its first status is due from then)."""
+    checked_at_s: float | None = None
+    """Orchestrator time its presence was last checked, [s]; a long gap means the orchestrator
+    itself stalled, and heartbeats that queued up meanwhile are waited for once."""
+    resumed_at_s: float | None = None
+    """Orchestrator time it last resumed after such a stall, [s]."""
     was_seen: bool = False
     """It has been alive at least once since the orchestrator started."""
     paused: bool = False
     """The operator stopped giving it jobs (pause, land, estop)."""
+    held: bool = False
+    """Landed or stopped by the operator: no job until an explicit ``release`` (not ``resume``)."""
     refused_until_s: float = 0.0
     """No new assignment before this time, [s] (after a refused or unanswered assignment)."""
     mismatch_since_s: float | None = None
@@ -71,7 +83,8 @@ class VehicleView:
             board_id=self.info.board_id,
             job_id=job_id,
             last_seen_s=self.last_seen_s,
-            message=self.message + (" (paused)" if self.paused else ""),
+            message=self.message + (" (paused)" if self.paused and not self.held else ""),
+            held=self.held,
         )
 
 
@@ -79,7 +92,9 @@ def ready_for_job(view: VehicleView, now_s: float) -> bool:
     """Healthy and idle by its own account, not paused, not backing off."""
     return (
         view.alive
+        and not view.lost
         and not view.paused
+        and not view.held
         and view.status_at_s is not None
         and view.state in READY_STATES
         and view.reported_job_id is None

@@ -83,6 +83,8 @@ class Job(msgspec.Struct, frozen=True, kw_only=True):
     """Result metrics from the vehicle (done)."""
     error: ErrorInfo | None = None
     """Why it failed, was rejected or requeued last."""
+    idempotency_key: str | None = None
+    """The submitter's key for this submission (a repeat with it gets this job, not a new one)."""
 
     @property
     def final(self) -> bool:

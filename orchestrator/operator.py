@@ -4,12 +4,17 @@
 approve        job awaiting approval -> queued
 reject         job awaiting approval -> rejected (``reason`` kept)
 pause          no new assignments: the whole queue, or one vehicle (``vehicle_id``)
-resume         undo pause / land / estop: the queue and every vehicle, or one vehicle
+resume         undo pause: the queue and every vehicle not held, or one vehicle
+release        a vehicle held by land / estop may take jobs again (``vehicle_id``)
 cancel         job -> cancelled; a vehicle writing it is told to stop
-land           vehicle lands and takes no new job; its job goes back to the queue
-land_all       every vehicle lands; the queue is paused; jobs go back to the queue
-estop          motors off at once: one vehicle, or all (then the queue is paused too)
+land           vehicle lands and is held (no new job until ``release``); its job is requeued
+land_all       every vehicle lands and is held; the queue is paused; jobs go back to the queue
+estop          motors off at once, vehicles held: one, or all (then the queue is paused too);
+               the job goes back to the queue (not failed: the character was not at fault)
+clear_fault    ask a vehicle's agent to leave ``fault`` (``vehicle_id``); it does only when its
+               backend reports it on the ground and disarmed; it stays held until ``release``
 prioritize     set a waiting job's ``priority`` (higher first)
+fresh_sheet    a half-written board (``board_id``) has a new sheet: jobs may be assigned there again
 =============  ===========================================================================
 """
 
@@ -64,7 +69,7 @@ def _stop_vehicles(
     everyone = cmd.command == "land_all" or cmd.vehicle_id is None
     vids = list(book.vehicle_ids(None if everyone else cmd.vehicle_id))
     for vid in vids:
-        book.vehicles[vid].paused = True
+        book.vehicles[vid].paused = book.vehicles[vid].held = True
         eff.commands.append((vid, VehicleCommand(command=order)))
         job = book.active_job_of(vid)
         if job is not None:
@@ -84,7 +89,8 @@ def _moderate(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> C
     else:
         info = ErrorInfo(code="rejected", message=cmd.reason or "rejected by the operator")
         book.put(eff, transition(job, "rejected", now_s, error=info))
-    return CommandReply(ok=True, message=f"{job.job_id} {cmd.command}d")
+    done = "approved" if cmd.command == "approve" else "rejected"
+    return CommandReply(ok=True, message=f"{job.job_id} {done}")
 
 
 def _cancel(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> CommandReply:
@@ -116,16 +122,54 @@ def _prioritize(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) ->
 def _pause_resume(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandReply:
     paused = cmd.command == "pause"
     if cmd.vehicle_id is not None:
-        book.vehicles[cmd.vehicle_id].paused = paused
+        view = book.vehicles[cmd.vehicle_id]
+        view.paused = paused or view.held
         what = cmd.vehicle_id
     else:
         book.queue_paused = paused
         if not paused:
             for view in book.vehicles.values():
-                view.paused = False
+                view.paused = view.held
         what = "queue"
     eff.settings_changed = eff.fleet_changed = True
-    return CommandReply(ok=True, message=f"{what} {'paused' if paused else 'resumed'}")
+    held = sorted(v for v, view in book.vehicles.items() if view.held and what in ("queue", v))
+    note = f" ({', '.join(held)} held: release to fly)" if held and not paused else ""
+    return CommandReply(ok=True, message=f"{what} {'paused' if paused else 'resumed'}{note}")
+
+
+def _release(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandReply:
+    """The only way out of a hold: one vehicle, named."""
+    assert cmd.vehicle_id is not None  # checked by _vehicle_ok
+    view = book.vehicles[cmd.vehicle_id]
+    if not view.held:
+        return _error("bad_state", f"{cmd.vehicle_id} is not held", "vehicle_id")
+    view.held = view.paused = False
+    eff.settings_changed = eff.fleet_changed = True
+    return CommandReply(ok=True, message=f"{cmd.vehicle_id} released")
+
+
+def _clear_fault(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandReply:
+    """Forward to the agent, which alone knows whether its vehicle is safe (it answers in the
+    event log: ``fault_cleared``, or ``fault_kept`` with the reason)."""
+    assert cmd.vehicle_id is not None  # checked by _vehicle_ok
+    eff.commands.append((cmd.vehicle_id, VehicleCommand(command="clear_fault")))
+    return CommandReply(
+        ok=True,
+        message=f"{cmd.vehicle_id}: clear_fault sent (cleared only if landed and disarmed)",
+    )
+
+
+def _fresh_sheet(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandReply:
+    boards = sorted({view.info.board_id for view in book.vehicles.values()})
+    if cmd.board_id is None:
+        return _error("missing_field", "fresh_sheet needs board_id", "board_id")
+    if cmd.board_id not in boards:
+        return _error("unknown_board", f"no board {cmd.board_id}; boards: {boards}", "board_id")
+    if cmd.board_id not in book.dirty_boards:
+        return _error("bad_state", f"{cmd.board_id} is not waiting for a fresh sheet", "board_id")
+    book.dirty_boards.discard(cmd.board_id)
+    eff.settings_changed = eff.fleet_changed = True
+    return CommandReply(ok=True, message=f"{cmd.board_id}: fresh sheet")
 
 
 def apply_operator(book: Book, command: object, eff: Effects, now_s: float) -> CommandReply:
@@ -133,7 +177,7 @@ def apply_operator(book: Book, command: object, eff: Effects, now_s: float) -> C
     if not isinstance(command, OperatorCommand):
         return _error("invalid", "not an operator command")
     cmd = command
-    needs_vehicle = cmd.command == "land"
+    needs_vehicle = cmd.command in ("land", "release", "clear_fault")
     if bad := _vehicle_ok(book, cmd, needs_vehicle):
         return bad
     if cmd.command in ("approve", "reject"):
@@ -144,6 +188,12 @@ def apply_operator(book: Book, command: object, eff: Effects, now_s: float) -> C
         reply = _prioritize(book, cmd, eff, now_s)
     elif cmd.command in ("pause", "resume"):
         reply = _pause_resume(book, cmd, eff)
+    elif cmd.command == "release":
+        reply = _release(book, cmd, eff)
+    elif cmd.command == "clear_fault":
+        reply = _clear_fault(book, cmd, eff)
+    elif cmd.command == "fresh_sheet":
+        reply = _fresh_sheet(book, cmd, eff)
     elif cmd.command in ("land", "land_all"):
         vids = _stop_vehicles(book, cmd, eff, now_s, "land")
         if cmd.command == "land_all":
@@ -156,7 +206,7 @@ def apply_operator(book: Book, command: object, eff: Effects, now_s: float) -> C
         reply = CommandReply(ok=True, message=f"emergency stop {', '.join(vids)}")
     if reply.ok:
         level: Level = "alert" if cmd.command == "estop" else "info"
-        target = cmd.job_id or cmd.vehicle_id or ""
+        target = cmd.job_id or cmd.vehicle_id or cmd.board_id or ""
         book.event(
             eff,
             now_s,

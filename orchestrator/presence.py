@@ -1,7 +1,13 @@
 """Vehicle presence decisions (pure): liveliness, status, telemetry, and the passing of time.
 
-A vehicle whose liveliness token has been gone for ``lost_after_s`` is lost and its job goes back
-to the queue; a vehicle whose status has not mentioned the job it was given for
+A vehicle is present while its liveliness token is there *and* it speaks: its agent publishes
+its status at least every ``lost_after_s / 4`` (the heartbeat; telemetry counts too). A vehicle
+whose token has been gone for ``lost_after_s``, or that has been silent for ``lost_after_s``
+although its token remains (a frozen process, a token held by someone else), is lost and its job
+goes back to the queue; it is present again with its next status, and a job of its own that is
+still queued is its own again if that status names it (it finished writing it meanwhile, or is
+writing it still). A vehicle whose status has not
+mentioned the job it was given for
 ``confirm_grace_s`` gives it back too (it restarted, or refused silently). After an orchestrator
 restart, jobs that were active wait for the same confirmation. Events the agents publish about
 their vehicles (autopilot messages, refused take-offs) join the show's event log here.
@@ -13,6 +19,8 @@ from typing import TYPE_CHECKING
 
 from bus.messages import Event, VehicleStatus
 from orchestrator.core_types import Effects
+from orchestrator.fleet import VehicleView
+from orchestrator.jobs import transition
 
 RELAY_BURST = 10.0
 """Events of one vehicle relayed at once before the rate limit applies."""
@@ -44,16 +52,8 @@ def liveliness(book: Book, vehicle_id: str, alive: bool, now_s: float) -> Effect
         return eff
     view.alive, view.last_seen_s = alive, now_s
     if alive:
-        view.gone_since_s, view.was_seen, view.message = None, True, ""
-        view.lost = False
-        book.event(
-            eff,
-            now_s,
-            "info",
-            "vehicle_appeared",
-            f"{vehicle_id} is here",
-            vehicle_id=vehicle_id,
-        )
+        view.gone_since_s, view.token_at_s = None, now_s
+        _maybe_back(book, eff, view, now_s)
     else:
         view.gone_since_s, view.message = now_s, "liveliness token gone"
     eff.fleet_changed = True
@@ -69,8 +69,10 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
         return eff
     changed = (view.state, view.reported_job_id) != (status.state, status.job_id)
     view.state, view.reported_job_id = status.state, status.job_id
-    view.status_at_s = view.last_seen_s = now_s
+    view.status_at_s = view.last_seen_s = view.heard_at_s = now_s
     view.message = status.message
+    changed = _maybe_back(book, eff, view, now_s) or changed
+    _reclaim(book, eff, view, status.job_id, now_s)
     job = book.active_job_of(status.vehicle_id)
     if job is not None and status.job_id != job.job_id:
         view.mismatch_since_s = view.mismatch_since_s or now_s
@@ -81,6 +83,28 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
     return eff
 
 
+def _reclaim(book: Book, eff: Effects, view: VehicleView, job_id: str | None, now_s: float) -> None:
+    """A vehicle back from a loss (e.g. the router restarted) that still holds the job it had:
+    writing it, or written with the report on its way. Queued again meanwhile and not given to
+    anyone else, the job is its own again, rather than written a second time elsewhere."""
+    vid = view.info.vehicle_id
+    job = book.jobs.get(job_id) if job_id is not None else None
+    if job is None or job.state != "queued" or job.vehicle_id != vid:
+        return  # only the last holder, only while nobody else has it
+    if view.lost or not view.alive or book.active_job_of(vid) is not None:
+        return
+    if view.info.board_id in book.busy_boards():
+        return
+    board = view.info.board_id
+    book.put(
+        eff,
+        transition(job, "assigned", now_s, board_id=board, assigned_at_s=now_s, error=None),
+    )
+    message = f"{vid} still has {job.label}"
+    book.event(eff, now_s, "info", "job_reclaimed", message, vehicle_id=vid, job_id=job.job_id)
+    eff.fleet_changed = True
+
+
 def telemetry(
     book: Book, vehicle_id: str, tracking_error_m: float, job_id: str | None, now_s: float
 ) -> Effects:
@@ -89,7 +113,7 @@ def telemetry(
     view = book.vehicles.get(vehicle_id)
     if view is None:
         return eff
-    view.last_seen_s = now_s
+    view.last_seen_s = view.heard_at_s = now_s
     limit = book.config.tracking_error_alert_m
     if tracking_error_m > limit and now_s - view.last_alert_s >= 5.0:
         view.last_alert_s = now_s
@@ -130,17 +154,53 @@ def vehicle_event(book: Book, vehicle_id: str, event: Event, now_s: float) -> Ef
     return eff
 
 
+def _maybe_back(book: Book, eff: Effects, view: VehicleView, now_s: float) -> bool:
+    """A lost vehicle with its token that spoke within ``lost_after_s`` is present again."""
+    heard = view.heard_at_s
+    fresh = heard is not None and now_s - heard < book.config.lost_after_s
+    if not (view.lost and view.alive and fresh):
+        return False
+    view.lost, view.was_seen = False, True
+    vid = view.info.vehicle_id
+    book.event(eff, now_s, "info", "vehicle_appeared", f"{vid} is here", vehicle_id=vid)
+    eff.fleet_changed = True
+    return True
+
+
+def silent_for_s(view: VehicleView, now_s: float) -> float | None:
+    """How long a vehicle with a token has said nothing, [s]: since its last status or telemetry,
+    its token's appearance or the orchestrator's last stall, whichever is latest."""
+    marks = [t for t in (view.heard_at_s, view.token_at_s, view.resumed_at_s) if t is not None]
+    return now_s - max(marks) if marks else None
+
+
+def _why_lost(book: Book, view: VehicleView, now_s: float) -> str | None:
+    """Why the vehicle is to be taken as lost now (None: it is not)."""
+    lost_after = book.config.lost_after_s
+    checked, view.checked_at_s = view.checked_at_s, now_s
+    if checked is not None and now_s - checked > lost_after / 2:
+        view.resumed_at_s = now_s  # we were not looking: wait for the queued heartbeats
+    if not view.alive:
+        gone = view.gone_since_s
+        return "its token is gone" if gone is not None and now_s - gone >= lost_after else None
+    silent = silent_for_s(view, now_s)
+    if silent is not None and silent >= lost_after:
+        return f"silent for {silent:.1f} s although its token remains"
+    return None
+
+
 def tick_into(book: Book, eff: Effects, now_s: float) -> None:
     """Lost vehicles give their job back; so do vehicles that do not confirm it; then assign."""
     for vid, view in book.vehicles.items():
-        gone = view.gone_since_s
-        if not view.alive and gone is not None and now_s - gone >= book.config.lost_after_s:
+        why = _why_lost(book, view, now_s)
+        if why is not None:
             if not view.lost:
                 view.lost, view.reported_job_id = True, None
+                view.message = why
                 eff.fleet_changed = True
                 if view.was_seen:
                     book.event(
-                        eff, now_s, "alert", "vehicle_lost", f"{vid} is lost", vehicle_id=vid
+                        eff, now_s, "alert", "vehicle_lost", f"{vid} is lost: {why}", vehicle_id=vid
                     )
             job = book.active_job_of(vid)
             if job is not None:

@@ -1,9 +1,12 @@
 """Agent reports (pure): started / progress / done / failed, idempotent because agents retry.
 
-A report from a vehicle that no longer owns the job: ``done`` is accepted (the character is
-written; a vehicle that took it over is told to stop); ``started``/``progress`` reclaim a job that
-is back in the queue and not yet given to another vehicle (a liveliness flap), otherwise the
-vehicle is told to stop (``not_assigned``); ``failed`` is acknowledged and ignored. A ``failed``
+A report counts only from the vehicle the job was last given to (the service has already checked
+that the report came on that vehicle's own key): ``done`` from any other vehicle is refused
+(``not_assigned``), so no agent can finish another's job; from the last holder it is accepted
+even after a requeue (the character is written) and whoever took the job over is told to stop.
+``started``/``progress`` from the last holder reclaim a job that is back in the queue and not yet
+given to another vehicle (a liveliness flap), otherwise the vehicle is told to stop
+(``not_assigned``); ``failed`` is acknowledged and ignored. A ``failed``
 report with ``retry_after_s`` hands the job back to the queue instead of failing it.
 """
 
@@ -28,6 +31,8 @@ def apply_report(book: Book, rep: AgentReport, eff: Effects, now_s: float) -> Co
         )
     if job.final:
         return CommandReply(ok=True, message=f"job already {job.state}")
+    if rep.vehicle_id != job.vehicle_id:
+        return _not_assigned(job, rep, eff)
     if rep.event == "done":
         return _done(book, job, rep, eff, now_s)
     owner = job.vehicle_id if job.active else None
@@ -35,18 +40,19 @@ def apply_report(book: Book, rep: AgentReport, eff: Effects, now_s: float) -> Co
         if rep.event == "failed":
             return CommandReply(ok=True, message="ignored: the job is not yours any more")
         if not _reclaim(book, eff, job, rep, now_s):
-            eff.commands.append(
-                (rep.vehicle_id, VehicleCommand(command="cancel", job_id=job.job_id))
-            )
-            info = ErrorInfo(
-                code="not_assigned",
-                message=f"{rep.job_id} is not assigned to {rep.vehicle_id}; stop it",
-            )
-            return CommandReply(ok=False, error=info)
+            return _not_assigned(job, rep, eff)
         job = book.jobs[job.job_id]
     if rep.event == "failed":
         return _failed(book, job, rep, eff, now_s)
     return _writing(book, job, rep, eff, now_s)
+
+
+def _not_assigned(job: Job, rep: AgentReport, eff: Effects) -> CommandReply:
+    eff.commands.append((rep.vehicle_id, VehicleCommand(command="cancel", job_id=job.job_id)))
+    info = ErrorInfo(
+        code="not_assigned", message=f"{rep.job_id} is not assigned to {rep.vehicle_id}; stop it"
+    )
+    return CommandReply(ok=False, error=info)
 
 
 def _done(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import functools
 import logging
 import os
 import time
@@ -26,6 +27,7 @@ from bus.keys import ShowKeys, vehicle_id_from_key
 from bus.messages import (
     AgentReport,
     CommandReply,
+    ErrorInfo,
     Event,
     OperatorCommand,
     ShowSnapshot,
@@ -84,6 +86,15 @@ def recording_path(show: Show, now_s: float) -> Path:
     return show.recordings_dir / f"{show.show_id}-{stamp}-{os.getpid()}.mcap"
 
 
+def _own_key(key: str, vehicle_id: str) -> bool:
+    """Whether a vehicle's message came on that vehicle's own key (access control lets each
+    agent publish only under its own keys, so the key, not the payload, says who sent it)."""
+    try:
+        return vehicle_id_from_key(key) == vehicle_id
+    except ValueError:
+        return False
+
+
 class OrchestratorService:
     """One show's orchestrator on an open session; :meth:`run` until ``stop`` is set."""
 
@@ -136,14 +147,18 @@ class OrchestratorService:
                 self._stop.set()
             raise
         now = self.clock()
-        etas = self.book.etas(now) if eff.jobs else {}
-        for job in eff.jobs.values():
+        etas = self.book.etas(now) if eff.jobs or eff.moved else {}
+        moved = [
+            self.book.jobs[j] for j in sorted(eff.moved - eff.jobs.keys()) if j in self.book.jobs
+        ]
+        for job in [*eff.jobs.values(), *moved]:  # moved: only their position/ETA changed
             position, eta = etas.get(job.job_id, (None, None))
-            state = to_state(job, queue_position=position, eta_s=eta, with_strokes=True)
+            with_strokes = job.job_id in eff.jobs
+            state = to_state(job, queue_position=position, eta_s=eta, with_strokes=with_strokes)
             self._publish(self.keys.job(job.job_id), state)
         for event in eff.events:
             self._publish(self.keys.events, event)
-        if eff.fleet_changed or eff.jobs:
+        if eff.fleet_changed or eff.jobs or eff.moved:
             self._publish(self.keys.fleet, self.book.snapshot(now, include_final=False))
         for vehicle_id, command in eff.commands:
             self._spawn(self._send(vehicle_id, command))
@@ -160,7 +175,10 @@ class OrchestratorService:
         task.add_done_callback(self._tasks.discard)
 
     async def _send(self, vehicle_id: str, command: VehicleCommand) -> None:
-        key = self.keys.vehicle_command(vehicle_id)
+        if command.command == "assign":
+            key = self.keys.vehicle_assign(vehicle_id)
+        else:
+            key = self.keys.vehicle_command(vehicle_id)
         self._record(key + "#request", command)
         reply: CommandReply | None
         try:
@@ -236,11 +254,21 @@ class OrchestratorService:
         self._record(self.keys.command + "#reply", reply)
         return reply
 
-    async def on_report(self, report: AgentReport) -> CommandReply:
-        self._record(self.keys.report + "#request", report)
-        reply, eff = self.book.report(report, self.clock())
-        self.apply(eff)
-        self._record(self.keys.report + "#reply", reply)
+    async def on_report(self, vehicle_id: str, report: AgentReport) -> CommandReply:
+        """A report on ``vehicle_id``'s own key (only that agent may query it)."""
+        key = self.keys.report(vehicle_id)
+        self._record(key + "#request", report)
+        if report.vehicle_id != vehicle_id:
+            info = ErrorInfo(
+                code="forbidden",
+                message=f"a report on {vehicle_id}'s key names {report.vehicle_id!r}",
+                field="vehicle_id",
+            )
+            reply = CommandReply(ok=False, message=info.message, error=info)
+        else:
+            reply, eff = self.book.report(report, self.clock())
+            self.apply(eff)
+        self._record(key + "#reply", reply)
         return reply
 
     async def on_snapshot(self, _: None) -> ShowSnapshot:
@@ -300,9 +328,17 @@ class OrchestratorService:
             declared.append(watch_liveliness(s, f"{keys.prefix}/**", rec.record_liveliness))
         declared += [
             watch_liveliness(s, keys.vehicles_alive_all, lambda k, a: presence.push((k, a))),
-            subscribe(s, keys.vehicle_status_all, VehicleStatus, lambda _, m: statuses.push(m)),
             subscribe(
-                s, keys.telemetry_all, Telemetry, lambda _, m: telemetry.push(m.vehicle_id, m)
+                s,
+                keys.vehicle_status_all,
+                VehicleStatus,
+                lambda k, m: statuses.push(m) if _own_key(k, m.vehicle_id) else None,
+            ),
+            subscribe(
+                s,
+                keys.telemetry_all,
+                Telemetry,
+                lambda k, m: telemetry.push(m.vehicle_id, m) if _own_key(k, m.vehicle_id) else None,
             ),
             subscribe(s, keys.vehicle_events_all, Event, lambda k, m: vehicle_events.push((k, m))),
             serve_async(
@@ -319,12 +355,15 @@ class OrchestratorService:
                 self.on_command,
                 on_error=lambda e: CommandReply(ok=False, message=e.message, error=e),
             ),
-            serve_async(
-                s,
-                keys.report,
-                AgentReport,
-                self.on_report,
-                on_error=lambda e: CommandReply(ok=False, message=e.message, error=e),
+            *(
+                serve_async(
+                    s,
+                    keys.report(vehicle.id),
+                    AgentReport,
+                    functools.partial(self.on_report, vehicle.id),
+                    on_error=lambda e: CommandReply(ok=False, message=e.message, error=e),
+                )
+                for vehicle in self.show.vehicles
             ),
             serve_async(s, keys.snapshot, None, self.on_snapshot),
             declare_token(s, keys.orchestrator_alive),

@@ -25,7 +25,9 @@ import msgspec
 from bus.messages import Event
 from orchestrator.jobs import Job
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+"""1: jobs, events, settings. 2: ``jobs.idempotency_key`` (client id and key of a submission,
+unique), added in place to a version-1 database."""
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS jobs (
@@ -45,6 +47,11 @@ CREATE TABLE IF NOT EXISTS settings (
     value TEXT NOT NULL
 );
 """
+
+_KEY_INDEX = (
+    "CREATE UNIQUE INDEX IF NOT EXISTS jobs_idempotency_key ON jobs (idempotency_key) "
+    "WHERE idempotency_key IS NOT NULL"
+)
 
 _job_decoder = msgspec.json.Decoder(Job)
 _event_decoder = msgspec.json.Decoder(Event)
@@ -78,14 +85,23 @@ class JobStore:
             self._db.execute("PRAGMA synchronous=FULL")
             self._db.execute("PRAGMA busy_timeout=5000")
             version = self._db.execute("PRAGMA user_version").fetchone()[0]
-            if version not in (0, SCHEMA_VERSION):
+            if version not in (0, 1, SCHEMA_VERSION):  # 0: new file; 1: migrated below
                 raise StoreError(
                     f"{self.path}: schema version {version}, expected {SCHEMA_VERSION}"
                 )
             self._db.executescript(_SCHEMA)
+            self._migrate()
             self._db.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
         except sqlite3.Error as exc:
             raise StoreError(f"{self.path}: {exc}") from exc
+
+    def _migrate(self) -> None:
+        """Bring a version-1 (or new) jobs table to the current columns, in one transaction."""
+        columns = {row[1] for row in self._db.execute("PRAGMA table_info(jobs)")}
+        with _Transaction(self._db):
+            if "idempotency_key" not in columns:
+                self._db.execute("ALTER TABLE jobs ADD COLUMN idempotency_key TEXT")
+            self._db.execute(_KEY_INDEX)
 
     def __enter__(self) -> JobStore:
         return self
@@ -110,7 +126,9 @@ class JobStore:
         paused_vehicles: Iterable[str] | None = None,
     ) -> None:
         """Write changed jobs, new events and settings in one durable transaction."""
-        job_rows = [(j.job_id, j.seq, j.state, msgspec.json.encode(j)) for j in jobs]
+        job_rows = [
+            (j.job_id, j.seq, j.state, msgspec.json.encode(j), _scoped_key(j)) for j in jobs
+        ]
         event_rows = [(e.time_s, msgspec.json.encode(e)) for e in events]
         settings: list[tuple[str, str]] = []
         if queue_paused is not None:
@@ -126,13 +144,14 @@ class JobStore:
 
     def _write(
         self,
-        job_rows: Sequence[tuple[str, int, str, bytes]],
+        job_rows: Sequence[tuple[str, int, str, bytes, str | None]],
         event_rows: Sequence[tuple[float, bytes]],
         settings: Sequence[tuple[str, str]],
     ) -> None:
         with _Transaction(self._db):
             self._db.executemany(
-                "INSERT INTO jobs (job_id, seq, state, data) VALUES (?, ?, ?, ?) "
+                "INSERT INTO jobs (job_id, seq, state, data, idempotency_key) "
+                "VALUES (?, ?, ?, ?, ?) "
                 "ON CONFLICT(job_id) DO UPDATE SET state=excluded.state, data=excluded.data",
                 job_rows,
             )
@@ -167,6 +186,13 @@ class JobStore:
             "SELECT data FROM events ORDER BY id DESC LIMIT ?", (limit,)
         ).fetchall()
         return [_event_decoder.decode(r[0]) for r in reversed(rows)]
+
+
+def _scoped_key(job: Job) -> str | None:
+    """The unique column value: a key is unique per client (``client_id``, unit separator, key)."""
+    if job.idempotency_key is None:
+        return None
+    return f"{job.client_id}\x1f{job.idempotency_key}"
 
 
 class _Transaction:

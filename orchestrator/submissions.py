@@ -99,12 +99,25 @@ def validate_submission(request: SubmitRequest, show: Show) -> Accepted:
             )
         )
     glyph = _glyph(request)
+    _check_fits(glyph, request, show)
     if request.text is not None:
         label = request.text.strip()
     else:
         named = glyph.label if glyph.label and glyph.label != "submission" else ""
         label = named or f"drawing ({len(glyph.strokes)} strokes)"
     return Accepted(label=label[:80], glyph=glyph, estimate_s=rough_duration_s(glyph, show))
+
+
+def _check_fits(glyph: Glyph, request: SubmitRequest, show: Show) -> None:
+    """Refuse at submission what no vehicle could lay out on its board (e.g. no extent)."""
+    code, field = (
+        ("invalid_text", "text") if request.text is not None else ("invalid_strokes", "strokes")
+    )
+    for board in show.boards:
+        try:
+            fit_to_board(glyph, board, show.planning)
+        except PlannerError as exc:
+            raise _planner_error(exc, code, field) from None
 
 
 def _fitted(glyph: Glyph, show: Show) -> Glyph:

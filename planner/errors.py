@@ -9,6 +9,9 @@ class PlannerError(ValueError):
     Subclasses ``ValueError`` so callers that only know the standard library can catch it.
     """
 
+    code = "plan_failed"
+    """Stable error code on the bus (``bus.rpc.error_info_from_exception``)."""
+
     def __init__(
         self,
         message: str,

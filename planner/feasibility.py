@@ -2,7 +2,11 @@
 
 Peaks are exact where the spline structure allows it: acceleration is piecewise linear (extremes
 at knots), jerk piecewise constant, thrust ``m ||a - g||`` convex in ``a`` (maximum at knots).
-Speed is a quartic per span and is sampled 33 times per span (relative error < 1e-4).
+Speed is a quartic per span and is sampled 33 times per span (relative error < 1e-4). Besides,
+acceleration and speed are sampled at ``SAMPLED_RATE_HZ`` (every span, both ends included) and
+their largest share of the bounds is reported and checked: the limits hold densely, not only
+where the QP imposes them (the QP's speed polytope is inscribed in the ``v_max`` ball, so it
+holds with up to 11 % to spare; acceleration bounds are exact).
 """
 
 from __future__ import annotations
@@ -22,6 +26,8 @@ from planner.limits import GRAVITY_MPS2, VehicleLimits
 AXES = ("x", "y", "z")
 RELATIVE_TOLERANCE = 1e-6
 """Slack allowed over a limit for solver round-off (relative to the bound)."""
+SAMPLED_RATE_HZ = 1000.0
+"""Rate of the dense check of the acceleration and speed limits, [Hz]."""
 
 _GRAVITY = np.array([0.0, 0.0, -GRAVITY_MPS2])
 
@@ -73,6 +79,12 @@ class FeasibilityReport:
     path_error_max_per_stroke_m: tuple[float, ...] = ()
     """Per stroke: largest horizontal distance of the pen-down path from the polyline through
     its turning points, in [m] (what the brush actually draws, not only at the data times)."""
+    sampled_rate_hz: float = 0.0
+    """Rate the reference was also sampled at to check acceleration and speed, [Hz] (0: not)."""
+    sampled_accel_share: float = 0.0
+    """Largest ``a_i / upper_i`` or ``a_i / lower_i`` over those samples (<= 1: within)."""
+    sampled_speed_share: float = 0.0
+    """Largest ``||v|| / v_max`` over those samples (<= 1: within)."""
 
     @property
     def path_error_max_m(self) -> float:
@@ -122,6 +134,10 @@ def _violations(r: FeasibilityReport) -> list[InfeasibleTrajectoryError]:
                     bound=bound,
                 )
             )
+    if _over(r.sampled_accel_share, 1.0) and not found:
+        found.append(_sampled_violation(r, "a_max", r.sampled_accel_share))
+    if _over(r.sampled_speed_share, 1.0) and not _over(r.peak_speed_mps, r.v_max_mps):
+        found.append(_sampled_violation(r, "v_max", r.sampled_speed_share))
     if _over(r.peak_speed_mps, r.v_max_mps):
         found.append(
             InfeasibleTrajectoryError(
@@ -160,18 +176,57 @@ def _violations(r: FeasibilityReport) -> list[InfeasibleTrajectoryError]:
     return found
 
 
-def _speed_peak(spline: ClampedCubicSpline, samples_per_span: int = 33) -> tuple[float, float]:
+def _sampled_violation(r: FeasibilityReport, limit: str, share: float) -> InfeasibleTrajectoryError:
+    what = "acceleration" if limit == "a_max" else "speed"
+    return InfeasibleTrajectoryError(
+        f"{what} limit: sampled at {r.sampled_rate_hz:.0f} Hz it reaches {share:.4f} of its bound",
+        limit=limit,
+        axis=None,
+        t_s=0.0,
+        value=share,
+        bound=1.0,
+    )
+
+
+def _span_polynomials(spline: ClampedCubicSpline) -> FloatArray:
+    """Position polynomial of every span in ``x = u - span`` in [0, 1], shape (m, 4, 3)."""
     m = spline.n_spans
     table = span_coefficients(m)  # (m, 4 bases, 4 powers)
     idx = np.arange(m)[:, None] + np.arange(4)[None, :]
-    ctrl = spline.control_points[idx]  # (m, 4, 3)
-    poly = np.einsum("sap,sad->spd", table, ctrl)  # position polynomial per span (m, 4, 3)
+    return np.asarray(np.einsum("sap,sad->spd", table, spline.control_points[idx]))
+
+
+def _span_derivatives(
+    poly: FloatArray, x: FloatArray, alpha: float
+) -> tuple[FloatArray, FloatArray]:
+    """Velocity and acceleration (m, K, 3) at ``x`` (K,) on every span, in time units."""
+    zero, one = np.zeros_like(x), np.ones_like(x)
+    vel = np.einsum("spd,pk->skd", poly, np.stack([zero, one, 2 * x, 3 * x**2])) * alpha
+    acc = np.einsum("spd,pk->skd", poly, np.stack([zero, zero, 2 * one, 6 * x])) * alpha**2
+    return vel, acc
+
+
+def _speed_peak(spline: ClampedCubicSpline, samples_per_span: int = 33) -> tuple[float, float]:
     x = np.linspace(0.0, 1.0, samples_per_span)
-    dpow = np.stack([np.zeros_like(x), np.ones_like(x), 2 * x, 3 * x**2])  # (4, K)
-    vel = np.einsum("spd,pk->skd", poly, dpow) * spline.alpha
+    vel, _ = _span_derivatives(_span_polynomials(spline), x, spline.alpha)
     speed = np.linalg.norm(vel, axis=2)
     s, k = np.unravel_index(int(np.argmax(speed)), speed.shape)
     return float(speed[s, k]), float((s + x[k]) / spline.alpha)
+
+
+def sampled_shares(
+    spline: ClampedCubicSpline, limits: VehicleLimits, rate_hz: float = SAMPLED_RATE_HZ
+) -> tuple[float, float]:
+    """Largest share of its bound of the acceleration (per axis) and of the speed, sampled at
+    ``rate_hz`` or faster (every span from end to end)."""
+    per_span = max(2, math.ceil(rate_hz * spline.duration_s / spline.n_spans) + 1)
+    vel, acc = _span_derivatives(
+        _span_polynomials(spline), np.linspace(0.0, 1.0, per_span), spline.alpha
+    )
+    lower, upper = limits.accel_bounds_mps2()
+    share_a = np.maximum(acc / np.asarray(upper), acc / np.asarray(lower))
+    speed = np.linalg.norm(vel, axis=2)
+    return float(np.max(share_a)), float(np.max(speed)) / limits.v_max_mps
 
 
 def _min_norm_on_segments(a0: FloatArray, a1: FloatArray) -> float:
@@ -212,6 +267,7 @@ def assess(
     max_jerk_sq = float(np.sum(np.max(jerk**2, axis=0)))
     body_rate = math.sqrt(max_jerk_sq / min_sq) if min_sq > 0.0 else math.inf
     speed, speed_t = _speed_peak(spline)
+    share_a, share_v = sampled_shares(spline, limits)
     dist = np.linalg.norm(turning_residuals_m, axis=1)
     per_stroke = tuple(
         float(np.max(dist[turning_stroke_index == k], initial=0.0)) for k in range(n_strokes)
@@ -240,6 +296,9 @@ def assess(
         fit_error_max_per_stroke_m=per_stroke,
         min_height_above_board_m=float(np.min(z_dense)) - board_surface_z_m,
         path_error_max_per_stroke_m=path_error_per_stroke_m,
+        sampled_rate_hz=SAMPLED_RATE_HZ,
+        sampled_accel_share=share_a,
+        sampled_speed_share=share_v,
     )
 
 

@@ -26,6 +26,7 @@ from showfile.models import (
     Vehicle,
     ZenohSettings,
 )
+from showfile.security import SecuritySettings
 
 __all__ = [
     "Board",
@@ -35,6 +36,7 @@ __all__ = [
     "MavlinkSimSettings",
     "PlanningSettings",
     "PolicySettings",
+    "SecuritySettings",
     "Show",
     "ShowError",
     "ShowFileError",

@@ -10,7 +10,11 @@ import math
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic.networks import IPvAnyNetwork
+
+from showfile.safety import SafetySettings
+from showfile.security import RESERVED_IDS, SecuritySettings
 
 Vec3 = tuple[float, float, float]
 Size2 = tuple[float, float]
@@ -36,10 +40,6 @@ class ZenohSettings(_Model):
     """Other routers the show's router links to (ground station <-> companion computers)."""
     peer_listen: tuple[str, ...] = ()
     """Endpoints a peer-mode process listens on (none: peers go through the router)."""
-    tls: dict[str, Any] | None = None
-    """Zenoh ``transport/link/tls`` section, passed through verbatim (certificate paths...)."""
-    access_control: dict[str, Any] | None = None
-    """Zenoh ``access_control`` section, passed through verbatim."""
     extra: dict[str, Any] = Field(default_factory=dict)
     """Further Zenoh settings as ``{"path/in/config": value}``."""
     open_timeout_s: float = Field(default=5.0, ge=0.0)
@@ -82,7 +82,10 @@ class KioskSettings(_Model):
     port: int = Field(default=8765, ge=1, le=65535)
     """TCP port of the kiosk."""
     rate_limit_per_minute: int = Field(default=6, ge=1)
-    """Submissions accepted per client per minute."""
+    """Submissions accepted per client address per minute (whatever its cookies)."""
+    trusted_proxies: tuple[IPvAnyNetwork, ...] = ()
+    """Reverse proxies (addresses or networks, e.g. ``["127.0.0.1"]``) whose ``X-Forwarded-For``
+    names the client; none by default: the header is then ignored."""
     max_payload_bytes: int = Field(default=200_000, ge=1)
     """Largest request body, in bytes."""
     max_strokes: int = Field(default=60, ge=1)
@@ -93,6 +96,11 @@ class KioskSettings(_Model):
     """Longest typed text, in characters (1: one letter or one Chinese character)."""
     blocklist: tuple[str, ...] = ()
     """Texts refused by the kiosk (compared after Unicode normalisation, case-folded)."""
+    max_flight_s: float = Field(default=90.0, gt=0.0)
+    """Longest planned writing flight of one character, in [s]; longer ones are refused with
+    the reason before they are sent."""
+    idle_reset_s: float = Field(default=60.0, ge=0.0)
+    """A page left alone this long goes back to the start (shared tablets), in [s]; 0: never."""
 
 
 class Board(_Model):
@@ -169,7 +177,12 @@ class PlanningSettings(_Model):
     split_threshold_m: float = Field(default=0.01, gt=0.0)
     """Split-and-merge tolerance for turning points, in [m]."""
     resegment: bool = True
-    """Apply the paper's time re-segmentation."""
+    """Re-time the segments (with ``pace: limits``, at the limits; with ``nominal``, the paper's
+    re-segmentation from a conservative start)."""
+    pace: Literal["limits", "nominal"] = "limits"
+    """``limits``: as fast as the limits allow (within ~1.25x of time-optimal); ``nominal``: the
+    earlier, slower default (about 2x), for vehicles that track less tightly (an autopilot's own
+    position loop behind MAVLink)."""
     solver: Literal["piqp", "clarabel"] = "piqp"
     """QP solver of the acceleration-limited fit."""
     sample_rate_hz: float = Field(default=100.0, ge=100.0)
@@ -193,6 +206,17 @@ class Vehicle(_Model):
     """One vehicle and the board it writes on."""
 
     id: Identifier = Field(pattern=_ID_PATTERN)
+
+    @field_validator("id")
+    @classmethod
+    def _not_a_role(cls, value: str) -> str:
+        if value in RESERVED_IDS:
+            raise ValueError(
+                f"vehicle id {value!r} is reserved (a role or key folder: "
+                f"{', '.join(sorted(RESERVED_IDS))})"
+            )
+        return value
+
     """Vehicle identifier (also in its Zenoh keys)."""
     kind: VehicleKind = "quadrotor-brush"
     """What kind of vehicle it is."""
@@ -246,6 +270,8 @@ class Show(_Model):
     """Simulation speed-up: sim backends run this many times faster than real time (tests)."""
     zenoh: ZenohSettings = Field(default_factory=ZenohSettings)
     """Transport settings."""
+    security: SecuritySettings = Field(default_factory=SecuritySettings)
+    """Identities and access control on the bus (mutual TLS by default)."""
     storage: StorageSettings = Field(default_factory=StorageSettings)
     """Durable state and recordings."""
     policy: PolicySettings = Field(default_factory=PolicySettings)
@@ -262,6 +288,8 @@ class Show(_Model):
     """Planner settings."""
     controller: ControllerSettings = Field(default_factory=ControllerSettings)
     """Controller settings."""
+    safety: SafetySettings = Field(default_factory=SafetySettings)
+    """Tracking, geofence and writing bounds, and the abort policy (``showfile/safety.py``)."""
     mavlink_sim: MavlinkSimSettings = Field(default_factory=MavlinkSimSettings)
     """Rehearsal: simulate the MAVLink vehicles alongside the show."""
 
@@ -272,6 +300,11 @@ class Show(_Model):
     def database_path(self) -> Path:
         """SQLite file of the orchestrator."""
         return self.storage.database or Path("out") / self.show_id / "show.sqlite3"
+
+    @property
+    def keys_dir(self) -> Path:
+        """The show's CA, certificates and private keys (see ``security.keys_dir``)."""
+        return self.security.keys_dir or Path("out") / self.show_id / "keys"
 
     @property
     def recordings_dir(self) -> Path:

@@ -42,6 +42,7 @@ def plan_options(planning: PlanningSettings, limits: Limits, board: BoardFrame) 
         resegment=planning.resegment,
         solver=planning.solver,
         sample_rate_hz=planning.sample_rate_hz,
+        pace=planning.pace,
     )
 
 

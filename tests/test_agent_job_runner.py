@@ -222,8 +222,8 @@ def test_estop_cuts_motors_abandons_the_job_and_refuses_new_ones() -> None:
 def test_a_refused_takeoff_hands_the_job_back_and_backs_off_twice_as_long_each_time() -> None:
     run = Run(refuse_takeoffs=2)
     assert run.assign("j1")
-    run.tick()
-    run.tick()
+    for _ in range(3):  # plan on the ground, take off (refused), report
+        run.tick()
     (report,) = run.reports
     assert (report.event, report.job_id, report.retry_after_s) == ("failed", "j1", 5.0)
     assert report.error is not None and report.error.code == "takeoff_refused"
@@ -262,13 +262,15 @@ def test_assign_while_busy_is_refused_but_a_repeat_is_accepted() -> None:
     assert run.assign("j1")
 
 
-def test_plan_failure_reports_and_comes_back() -> None:
+def test_plan_failure_reports_and_never_takes_off() -> None:
     run = Run(auto_plan=False)
     run.assign()
-    run.until(lambda: run.runner.phase == "wait_plan")
+    for _ in range(50):  # planning takes a while: the vehicle waits on the ground
+        run.tick()
+    assert (run.runner.phase, run.vehicle.mode, run.commands) == ("preflight", "idle", [])
     run.runner.plan_failed("j1", ErrorInfo(code="invalid_strokes", message="bad", stroke_index=2))
-    run.until(lambda: run.runner.phase == "ground")
-    assert run.runner.state == "idle"
+    run.tick()
+    assert (run.runner.phase, run.runner.state, run.commands) == ("ground", "idle", [])
     (report,) = run.reports
     assert report.event == "failed" and report.error is not None
     assert report.error.stroke_index == 2

@@ -46,7 +46,7 @@ class FakeOrchestrator:
         self.statuses: list[VehicleStatus] = []
         self._lock = threading.Lock()
         self.token = declare_token(session, KEYS.orchestrator_alive)
-        self.queryable = serve(session, KEYS.report, AgentReport, self._on_report)
+        self.queryable = serve(session, KEYS.report("uav1"), AgentReport, self._on_report)
         self.subscribers = [
             subscribe(
                 session, KEYS.telemetry_all, Telemetry, lambda _k, m: self.telemetry.append(m)
@@ -69,7 +69,10 @@ class FakeOrchestrator:
             return [r.event for r in self.reports if r.event != "progress"]
 
     async def command(self, command: VehicleCommand) -> CommandReply:
-        key = KEYS.vehicle_command("uav1")
+        if command.command == "assign":
+            key = KEYS.vehicle_assign("uav1")
+        else:
+            key = KEYS.vehicle_command("uav1")
         return await aquery_one(self.session, key, command, CommandReply, timeout_s=5.0)
 
 
@@ -181,7 +184,7 @@ def test_reports_are_retried_until_acknowledged_and_plan_errors_reported(
             await wait_for(lambda: service.runner.state == "idle" and service.runner.job_id is None)
             await asyncio.sleep(0.3)
             assert orch.reports == []
-            orch.queryable = serve(orch.session, KEYS.report, AgentReport, orch._on_report)
+            orch.queryable = serve(orch.session, KEYS.report("uav1"), AgentReport, orch._on_report)
             await wait_for(lambda: orch.events() == ["failed"])
             error = orch.reports[0].error
             assert error is not None and "cannot write that" in error.message

@@ -13,6 +13,7 @@ import pytest
 
 from bus.keys import ShowKeys
 from bus.session import open_session
+from cli.runstate import AdoptedProcess, ProcessRecord, RunFile, RunFileError, run_file_path
 from cli.showrun import derived_show, submit_texts, wait_for_jobs
 from cli.supervisor import (
     ChildSpec,
@@ -22,6 +23,7 @@ from cli.supervisor import (
     show_children,
     skyquill_argv,
 )
+from trust.settings import ensure_show_keys, session_settings
 
 SHOWS = Path(__file__).resolve().parent.parent / "shows"
 
@@ -41,12 +43,15 @@ def python(code: str) -> tuple[str, ...]:
     return (sys.executable, "-c", code)
 
 
-@pytest.mark.multiprocess
-def test_a_show_with_simulated_mavlink_vehicles_starts_them_first_and_stops_them_last() -> None:
+def test_the_router_starts_first_and_stops_last_and_restarts_fast() -> None:
     specs = show_children(Path("r.yaml"), ["uav1"], time_scale=2.0, mavlink_sim=True, kiosk=True)
     names = [spec.name for spec in specs]
-    assert names == ["sim-mavlink", "orchestrator", "agent uav1", "kiosk"]
-    assert specs[0].argv[-4:] == ("sim-mavlink", "r.yaml", "--time-scale", "2.0")
+    assert names == ["router", "sim-mavlink", "orchestrator", "agent uav1", "kiosk"]
+    assert specs[0].argv[-2:] == ("router", "r.yaml")
+    assert specs[1].argv[-4:] == ("sim-mavlink", "r.yaml", "--time-scale", "2.0")
+    stop_order = sorted(specs, key=lambda spec: spec.stop_group)
+    assert [s.name for s in stop_order][-3:] == ["orchestrator", "sim-mavlink", "router"]
+    assert specs[0].restart is not None and specs[0].restart.delay_s(None, 0.0) <= 0.2
     assert "sim-mavlink" not in [s.name for s in show_children(Path("r.yaml"), ["uav1"])]
 
 
@@ -76,6 +81,77 @@ def test_a_child_that_dies_is_restarted_and_the_supervisor_says_so() -> None:
         "short exited (exit status 0)" in line and "restarting in 0.1 s" in line for line in said
     )
     assert any(line.startswith("short restarted (pid ") for line in said)
+
+
+@pytest.mark.multiprocess
+def test_each_child_gets_its_own_grace_and_only_a_stubborn_one_is_killed(tmp_path: Path) -> None:
+    """SIGTERM, then per child its own grace; groups in order: agents, then the router."""
+    said: list[str] = []
+    record = tmp_path / "stopped.txt"
+
+    def child(name: str, linger_s: float) -> tuple[str, ...]:
+        return python(
+            "import signal, sys, time\n"
+            f"def bye(*_):\n    time.sleep({linger_s})\n"
+            f"    open({str(record)!r}, 'a').write('{name}\\n')\n    sys.exit(0)\n"
+            "signal.signal(signal.SIGTERM, bye)\n"
+            "time.sleep(60)\n"
+        )
+
+    specs = [
+        ChildSpec("router", child("router", 0.0), stop_group=3),
+        ChildSpec("agent slow", child("agent slow", 1.0), stop_grace_s=3.0),
+        ChildSpec("agent stuck", child("agent stuck", 30.0), stop_grace_s=0.5),
+    ]
+    supervisor = Supervisor(specs, say=said.append)
+    supervisor.start()
+    time.sleep(1.0)  # let the children install their handlers
+    started = time.monotonic()
+    supervisor.stop()
+    elapsed = time.monotonic() - started
+    assert record.read_text().split("\n")[:2] == ["agent slow", "router"]  # router last
+    assert said == ["agent stuck did not stop in 0 s; killing it"]  # the slow one was not killed
+    assert 1.0 <= elapsed < 3.0  # the slow agent's 1 s, not its 3 s grace, nor the router's 5 s
+
+
+def test_an_adopted_process_is_supervised_and_replaced_when_it_dies() -> None:
+    """A process a previous supervisor started: watched through /proc, restarted as ours."""
+    stray = subprocess.Popen(python("import time; time.sleep(60)"))
+    record = ProcessRecord.of(stray.pid)
+    assert record is not None and record.alive()
+    assert not ProcessRecord(stray.pid, record.ticks + 1).alive()  # a reused pid is not it
+    said: list[str] = []
+    policy = RestartPolicy(initial_delay_s=0.05)
+    spec = ChildSpec("worker", python("import time; time.sleep(60)"))
+    supervisor = Supervisor([spec], policy=policy, say=said.append)
+    supervisor.adopt("worker", AdoptedProcess(record))
+    supervisor.start()  # adopted: not started again
+    assert supervisor.pid("worker") == stray.pid
+    try:
+        stray.kill()
+        stray.wait()
+        deadline = time.monotonic() + 10.0
+        while supervisor.restarts("worker") < 1:
+            assert time.monotonic() < deadline
+            supervisor.poll()
+            time.sleep(0.02)
+        assert supervisor.pid("worker") not in (None, stray.pid)
+    finally:
+        supervisor.stop(grace_s=2.0)
+    assert said[0].startswith("worker exited (status unknown: started by an earlier skyquill up)")
+
+
+def test_the_run_file_round_trips_and_refuses_garbage(tmp_path: Path) -> None:
+    path = run_file_path(tmp_path / "show.sqlite3")
+    assert RunFile.load(path) is None
+    me = ProcessRecord.of(os.getpid())
+    assert me is not None
+    RunFile(path, "solo", me, {"router": me}).save()
+    loaded = RunFile.load(path)
+    assert loaded is not None and loaded.up == me and loaded.children == {"router": me}
+    path.write_text("{not json")
+    with pytest.raises(RunFileError, match=str(path)):
+        RunFile.load(path)
 
 
 @pytest.mark.multiprocess
@@ -125,6 +201,7 @@ def _alive(pid: int) -> bool:
 @pytest.mark.skipif(not Path("/proc").is_dir(), reason="reads /proc")
 def test_skyquill_up_runs_a_show_and_stops_every_process_on_ctrl_c(tmp_path: Path) -> None:
     show_path, show = derived_show(SHOWS / "solo.yaml", tmp_path, time_scale=6.0)
+    ensure_show_keys(show)  # `up` would make them too, but this test's session needs them first
     up = subprocess.Popen(
         skyquill_argv("up", str(show_path), "--headless", "--no-kiosk"),
         env=child_env(),
@@ -132,18 +209,23 @@ def test_skyquill_up_runs_a_show_and_stops_every_process_on_ctrl_c(tmp_path: Pat
         text=True,
     )
     try:
-        with open_session(show.zenoh, role="client", open_timeout_s=20.0) as session:
+        operator = session_settings(show, "operator")
+        with open_session(operator, role="client", open_timeout_s=20.0) as session:
             keys = ShowKeys(show.show_id)
             (reply,) = submit_texts(session, keys, ["一"], timeout_s=60.0)
             (job,) = wait_for_jobs(session, keys, [str(reply.job_id)], timeout_s=60.0)
         assert job.state == "done" and job.metrics is not None
         children = _children_of(up.pid)
-        assert len(children) == 2  # orchestrator and one agent
+        assert len(children) == 3  # router, orchestrator and one agent
         up.send_signal(signal.SIGINT)
         _, stderr = up.communicate(timeout=30.0)
     finally:
         if up.poll() is None:
             up.kill()
+            up.wait()
+            # its children outlive a killed `up` by design: never leave them to the next test
+            subprocess.run(skyquill_argv("down", str(show_path)), env=child_env(), timeout=60)
     assert up.returncode == 0, stderr
-    assert "skyquill up: stopping" in stderr
+    assert "skyquill up: stopping" in stderr and "killing" not in stderr
     assert not [pid for pid in children if _alive(pid)]
+    assert not run_file_path(show.database_path).exists()

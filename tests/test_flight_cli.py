@@ -36,3 +36,24 @@ def test_fly_reports_a_bad_strokes_file(tmp_path: Path, capsys: pytest.CaptureFi
     bad.write_text('{"strokes": "nope"}', encoding="utf-8")
     assert main(["fly", "--strokes", str(bad)]) == 2
     assert "skyquill fly:" in capsys.readouterr().err
+
+
+def test_fly_in_a_gale_aborts_on_deviation_and_exits_non_zero(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "gale"
+    status = main(["fly", "--strokes", str(DATA / "l_tick_m_up.json"), "--wind", "50",
+                   "--height", "0.5", "--report", str(out)])  # fmt: skip
+    assert status == 1
+    err = capsys.readouterr().err
+    assert "deviation abort of vehicle 0" in err and "above the bound 0.150 m for 0.30 s" in err
+    metrics = json.loads((out / "metrics.json").read_text(encoding="utf-8"))
+    assert metrics["within_bounds"] is False and "deviation" in metrics["aborted"]
+    assert metrics["sim_time_s"] < 1.0  # stopped at once, not flown to the end
+
+
+def test_fly_below_its_ink_bound_exits_non_zero(capsys: pytest.CaptureFixture[str]) -> None:
+    status = main(["fly", "--strokes", str(DATA / "l_tick_m_up.json"), "--height", "0.5",
+                   "--iou-min", "0.99"])  # fmt: skip
+    assert status == 1
+    assert "writing out of bounds: ink IoU" in capsys.readouterr().err

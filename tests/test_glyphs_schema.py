@@ -22,7 +22,7 @@ SCHEMA: dict[str, Any] = json.loads((DOCS / "strokes.schema.json").read_text(enc
 ANNOTATIONS = {"$schema", "$id", "title", "description", "$defs"}
 ASSERTIONS = {
     "$ref", "type", "enum", "required", "properties", "additionalProperties", "items",
-    "prefixItems", "minItems", "maxItems", "minimum", "exclusiveMinimum", "maxLength",
+    "prefixItems", "minItems", "maxItems", "minimum", "maximum", "exclusiveMinimum", "maxLength",
 }  # fmt: skip
 TYPES = {
     "object": lambda v: isinstance(v, dict),
@@ -62,6 +62,8 @@ def schema_errors(value: Any, schema: dict[str, Any], path: str = "$") -> list[s
     if TYPES["number"](value):
         if value < schema.get("minimum", -1e308):
             errors.append(f"{path}: below minimum")
+        if value > schema.get("maximum", 1e308):
+            errors.append(f"{path}: above maximum")
         if "exclusiveMinimum" in schema and value <= schema["exclusiveMinimum"]:
             errors.append(f"{path}: not above exclusiveMinimum")
     return errors
@@ -101,6 +103,7 @@ SCHEMA_VALID = [
     base(label="马", device="phone", canvas={"width": 300, "height": 200.5}, extra={"any": 1}),
     base(strokes=[[[0, 0], [1, 1]]] * 200),
     base(strokes=[[[0, 0], [0, 0], [1, 1]]]),
+    base(strokes=[[[-1e6, 1e6], [1e6, -1e6]]], canvas={"width": 1e6, "height": 1}),
 ]
 SCHEMA_INVALID = [
     base(strokes=None),
@@ -124,6 +127,9 @@ SCHEMA_INVALID = [
     base(canvas={"width": 0, "height": 3}),
     base(canvas={"width": 10}),
     base(canvas="10x10"),
+    base(strokes=[[[0, 0], [1e308, 1]]]),
+    base(strokes=[[[0, 0], [1, -1_000_001]]]),
+    base(canvas={"width": 1e7, "height": 3}),
 ]
 # valid by the schema, rejected by rules the schema cannot express (see docs/formats.md)
 SEMANTICALLY_INVALID = [

@@ -9,6 +9,7 @@ import http.client
 import json
 import time
 from collections.abc import Callable, Iterator
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +27,7 @@ from test_kiosk_support import (
 from bus.keys import ShowKeys
 from bus.session import BusSettings, loopback_settings, open_session
 from kiosk.limits import SubmissionLimits
+from kiosk.qr import qr_svg
 from kiosk.service import serving
 from kiosk.settings import KioskSettings, settings_from_show
 from showfile import load_show
@@ -59,7 +61,6 @@ def kiosk(bus: tuple[BusSettings, FakeOrchestrator]) -> Iterator[str]:
             blocklist=BLOCKLIST,
         ),
         rate_limit_per_minute=6,
-        clients_per_address=100,
         submit_timeout_s=1.0,
     )  # fmt: skip
     with serving(settings, zenoh_settings, role="client") as server:
@@ -112,7 +113,11 @@ def test_page_is_served_with_a_session_cookie_and_a_strict_policy(visitor: Brows
     assert reply.body["config"]["max_text_chars"] == 4
     assert reply.body["config"]["writing_area_m"] == [1.2, 1.2]
     with visitor._opener.open(visitor.base_url + "/static/kiosk.js", timeout=WAIT_S) as resp:
-        assert "setPointerCapture" in resp.read().decode()
+        script = resp.read().decode()
+    assert "setPointerCapture" in script
+    # what the server says (labels, messages) goes into the page as text, never as HTML
+    assert "textContent" in script
+    assert not any(sink in script for sink in ("innerHTML", "outerHTML", "insertAdjacentHTML"))
 
 
 # --- preview --------------------------------------------------------------------------------------
@@ -144,6 +149,28 @@ def test_preview_of_a_drawing_keeps_its_shape(visitor: Browser) -> None:
     # drawn top-down then right, y down on screen: in the preview (y up) it starts high
     assert tps[0][1] > tps[-1][1]
     assert tps[-1][0] > tps[0][0]
+
+
+def test_a_small_drawing_in_a_corner_keeps_its_size_and_place(visitor: Browser) -> None:
+    # a T about 1/6 of the 300 px canvas, in its top-left corner (y down on screen)
+    small_t = drawing([
+        [[20.0, 20.0, 0.0], [70.0, 20.0, 0.2]],
+        [[45.0, 20.0, 0.4], [45.0, 70.0, 0.6]],
+    ])  # fmt: skip
+    reply = visitor.post("/api/preview", small_t)
+    assert reply.status == 200, reply.body
+    points = [p for stroke in reply.body["preview"]["turning_points"] for p in stroke]
+    xs, ys = [x for x, _ in points], [y for _, y in points]
+    area = 1.2 - 2 * 0.05  # the writing area less its margins, [m]
+    assert max(xs) - min(xs) == pytest.approx(area * 50 / 300, rel=0.1)  # not blown up
+    corner = (-area / 2 + area * 20 / 300, area / 2 - area * 20 / 300)
+    assert (min(xs), max(ys)) == pytest.approx(corner, abs=0.01)  # still top left (y up)
+
+
+def test_a_single_tap_is_refused_not_blown_up(visitor: Browser) -> None:
+    tap = drawing([[[150.0, 150.0, 0.0], [152.0, 152.0, 0.0]]])  # what the page makes of a tap
+    message = assert_refused(visitor.post("/api/preview", tap), 422, "too_small")
+    assert "tap" in message
 
 
 def test_preview_of_a_drawing_with_a_zero_length_stroke_is_refused(visitor: Browser) -> None:
@@ -231,7 +258,8 @@ def test_rate_limit_per_client(kiosk: str, fake: FakeOrchestrator) -> None:
     message = assert_refused(reply, 429, "rate_limited")
     assert "wait" in message
     assert 1 <= int(reply.headers["retry-after"]) <= 60
-    # another visitor from the same address is not affected
+    # a fresh cookie from the same address does not help; another address is not affected
+    assert Browser(kiosk, source=walker.source).post("/api/submit", {}).status == 429
     assert Browser(kiosk).post("/api/submit", {}).status == 400
 
 
@@ -243,14 +271,69 @@ def test_orchestrator_refusal_and_absence_get_plain_messages(
         visitor.post("/api/submit", {"text": "A"}), 503, "queue_full"
     )
     fake.mode = "accept"
-    fake.stop()
-    try:
-        message = assert_refused(visitor.post("/api/submit", {"text": "A"}), 503, "unavailable")
-        assert "try again" in message
-    finally:
-        fake.start()
     # the service kept running and accepts again
     assert visitor.post("/api/submit", {"text": "A"}).status == 200
+
+
+def _follow(visitor: Browser, reply: Any) -> Callable[[], dict[str, Any]]:
+    path = f"/api/jobs/{reply.body['ticket']}?token={reply.body['token']}"
+    return lambda: visitor.get(path).body
+
+
+def test_absent_orchestrator_keeps_the_ticket_pending_until_it_answers(
+    visitor: Browser, fake: FakeOrchestrator
+) -> None:
+    fake.stop()
+    try:
+        reply = visitor.post("/api/submit", {"text": "Z"})
+        assert reply.status == 202, reply.body
+        job = reply.body["job"]
+        assert job["state"] == "sending" and not job["final"] and reply.body["job_id"] is None
+        assert "not confirmed" in job["status_text"] and "could not be accepted" not in str(job)
+        status = _follow(visitor, reply)
+        assert status()["job"]["state"] == "sending"
+    finally:
+        fake.start()
+    body = wait_for(lambda: (b := status())["job"]["state"] == "queued" and b, "the late answer")
+    tries = [r for r in fake.requests if r.text == "Z"]
+    assert tries and len({r.idempotency_key for r in tries}) == 1
+    assert [j.job_id for j in fake.jobs.values() if j.label == "Z"] == [body["job"]["job_id"]]
+
+
+def test_hung_orchestrator_answers_late_once_and_the_status_says_it_is_stale(
+    visitor: Browser, fake: FakeOrchestrator
+) -> None:
+    sent = len(fake.requests)
+    wait_for(lambda: not visitor.get("/healthz").body["stale"], "fresh fleet news")
+    fake.thawed.clear()
+    try:
+        started = time.monotonic()
+        reply = visitor.post("/api/submit", {"text": "B"})
+        assert reply.status == 202 and reply.body["job"]["state"] == "sending", reply.body
+        status = _follow(visitor, reply)
+        wait_for(lambda: status()["stale"], "the stale flag")
+        assert time.monotonic() - started < 3.0 + 1.0  # submit timeout 1 s, stale within 3 s
+    finally:
+        fake.thawed.set()
+    body = wait_for(lambda: (b := status())["job"]["state"] == "queued" and b, "the late answer")
+    wait_for(lambda: not status()["stale"], "fresh news again")
+    mine = [r for r in fake.requests[sent:] if r.text == "B"]
+    assert len({r.idempotency_key for r in mine}) == 1  # every try carried the same key
+    assert len([j for j in fake.jobs.values() if j.label == "B"]) == 1
+    assert body["job"]["job_id"] in fake.jobs
+
+
+def test_late_refusal_is_shown_on_the_ticket(visitor: Browser, fake: FakeOrchestrator) -> None:
+    fake.stop()
+    try:
+        reply = visitor.post("/api/submit", {"text": "C"})
+        assert reply.status == 202
+        fake.mode = "invalid_text"
+    finally:
+        fake.start()
+    status = _follow(visitor, reply)
+    job = wait_for(lambda: (j := status()["job"])["final"] and j, "the late refusal")
+    assert job["state"] == "refused" and "could not be accepted" in job["status_text"]
 
 
 def test_unknown_job_and_other_clients_job(kiosk: str, fake: FakeOrchestrator) -> None:
@@ -267,6 +350,21 @@ def test_unknown_job_and_other_clients_job(kiosk: str, fake: FakeOrchestrator) -
     assert_refused(other.get(f"/api/jobs/{job_id}/events?token=wrong"), 403, "not_your_job")
     mine = owner.get(f"/api/jobs/{job_id}?token={token}")
     assert mine.status == 200 and mine.body["job"]["job_id"] == job_id
+    code = submitted.body["code"]
+    assert len(code) == 8 and code.isalnum() and code.isupper()
+    typed = f"{code[:4].lower()}-{code[4:]}"  # as a visitor might type it
+    opened = other.get(f"/api/t/{typed}")
+    assert opened.status == 200 and opened.body["token"] == token
+    assert opened.body["job"]["job_id"] == job_id
+    assert_refused(other.get("/api/t/AAAA2222"), 404, "unknown_job")
+    assert other.request_raw(f"/t/{code}")[:2] == (200, "text/html; charset=utf-8")  # the page
+    qr = owner.request_raw(f"/api/jobs/{job_id}/qr.svg?token={token}")
+    assert qr[0] == 200 and qr[1].startswith("image/svg+xml")
+    assert qr[2] == qr_svg(f"{kiosk.rstrip('/')}/t/{code}")
+    assert other.request_raw(f"/api/jobs/{job_id}/qr.svg?token=x")[0] == 403
+    by_ticket = owner.get(f"/api/jobs/{submitted.body['ticket']}?token={token}")
+    assert by_ticket.status == 200 and by_ticket.body["job"]["job_id"] == job_id
+    assert_refused(other.get(f"/api/jobs/{submitted.body['ticket']}?token=x"), 403, "not_your_job")
 
 
 # --- submitting and following a job ---------------------------------------------------------------
@@ -294,14 +392,22 @@ def test_submit_reaches_the_orchestrator_and_status_follows_the_bus(
     )
     assert "number 2" in job["status_text"] and "about 2 minutes" in job["status_text"]
 
-    events = sse_events(kiosk, f"/api/jobs/{job_id}/events?token={token}")
+    frames = sse_events(kiosk, f"/api/jobs/{job_id}/events?token={token}")
+    events = ((n, d) for n, d in frames if n == "job")
     name, first = next(events)
     assert name == "job" and first["state"] == "queued" and not first["final"]
+    assert next(frames)[0] == "live"  # between changes, the stream says whether it is current
     fake.set_state(job_id, "writing", vehicle_id="uav3", progress=0.4, queue_position=None)
     _, writing = next(events)
     assert writing["state"] == "writing" and "uav3" in writing["status_text"]
     assert "40%" in writing["status_text"]
-    fake.set_state(job_id, "done", vehicle_id="uav3", progress=1.0, metrics=done_metrics())
+    fake.set_state(job_id, "queued", vehicle_id="uav3", attempts=1, queue_position=1)
+    _, requeued = next(events)
+    assert "had to land" in requeued["status_text"] and "next in line" in requeued["status_text"]
+    fake.set_state(job_id, "writing", vehicle_id="uav4", attempts=2, progress=0.1)
+    _, again = next(events)
+    assert "another drone, drone uav4" in again["status_text"]
+    fake.set_state(job_id, "done", vehicle_id="uav4", progress=1.0, metrics=done_metrics())
     _, done = next(events)
     assert done["final"] and done["metrics"]["rmse_pen_down_m"] == pytest.approx(0.012)
     assert "Done" in done["status_text"]
@@ -313,6 +419,27 @@ def test_submit_reaches_the_orchestrator_and_status_follows_the_bus(
 def test_the_show_files_kiosk_section_sets_the_limits() -> None:
     show = load_show(Path(__file__).resolve().parents[1] / "shows" / "solo.yaml")
     assert settings_from_show(show).limits.max_text_chars == 1
-    kiosk = show.kiosk.model_copy(update={"max_text_chars": 4, "max_strokes": 7})
+    assert settings_from_show(show).trusted_proxies == ()  # X-Forwarded-For ignored by default
+    kiosk = type(show.kiosk).model_validate(
+        {**show.kiosk.model_dump(), "max_text_chars": 4, "max_strokes": 7,
+         "trusted_proxies": ["127.0.0.1", "10.0.0.0/8"]}
+    )  # fmt: skip
     settings = settings_from_show(show.model_copy(update={"kiosk": kiosk}), port=0)
     assert (settings.limits.max_text_chars, settings.limits.max_strokes, settings.port) == (4, 7, 0)
+    assert settings.trusted_proxies == ("127.0.0.1/32", "10.0.0.0/8")
+
+
+def test_a_flight_longer_than_the_shows_limit_is_refused_with_the_reason() -> None:
+    from kiosk.errors import RejectedError
+    from kiosk.limits import Submission
+    from kiosk.preview import plan_preview
+
+    text = Submission(text="L", strokes=None, label="L")
+    settings = KioskSettings(show_id="t")
+    allowed = plan_preview(text, settings)["duration_s"]
+    assert 1.0 < allowed <= settings.max_flight_s == 90.0
+    with pytest.raises(RejectedError) as err:
+        plan_preview(text, replace(settings, max_flight_s=allowed / 2))
+    assert err.value.code == "too_long" and f"{round(allowed)} seconds" in err.value.message
+    show = load_show(Path(__file__).resolve().parents[1] / "shows" / "solo.yaml")
+    assert settings_from_show(show).max_flight_s == show.kiosk.max_flight_s == 90.0

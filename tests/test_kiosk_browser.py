@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import itertools
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -57,6 +58,7 @@ show_id: kiosk-e2e
 zenoh: {{router_listen: ["{endpoint}"], connect: ["{endpoint}"], multicast_scouting: false}}
 storage: {{database: "{tmp}/show.sqlite3", recordings_dir: "{tmp}/recordings", record: false}}
 policy: {{moderation: true}}
+security: {{mode: none}}
 kiosk: {{port: 8765, rate_limit_per_minute: 6, blocklist: ["bad"]}}
 boards:
   - {{id: b1, center_m_enu: [0, 0, 0.75], size_m: [1.4, 1.4], writing_area_m: [1.2, 1.2]}}
@@ -72,6 +74,8 @@ class Show:
     bus: Session
     """A client session of the test (observer, operator, stand-in for agents' progress)."""
     keys: ShowKeys
+    proc: subprocess.Popen[bytes]
+    """The orchestrator process (frozen with SIGSTOP to play a hung orchestrator)."""
 
     def snapshot(self) -> ShowSnapshot:
         return query_one(self.bus, self.keys.snapshot, None, ShowSnapshot, timeout_s=5.0)
@@ -119,7 +123,7 @@ def show(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Show]:
         with open_session(show.zenoh, role="client", open_timeout_s=START_WAIT_S) as bus:
             _wait_for_orchestrator(bus, keys, proc)
             with serving(settings_from_show(show, port=0), show.zenoh, role="client") as server:
-                yield Show(server.url, bus, keys)
+                yield Show(server.url, bus, keys, proc)
     finally:
         proc.terminate()
         try:
@@ -227,7 +231,8 @@ def test_draw_preview_submit_and_follow_on_a_phone(browser: object, show: Show) 
     show.relay(job_id, "done", vehicle_id="uav1", progress=1.0, metrics=done_metrics())
     status.filter(has_text="Done!").wait_for(timeout=UI_WAIT_MS)
     page.wait_for_selector("#result:not([hidden])", timeout=UI_WAIT_MS)
-    assert "1.2 cm" in page.inner_text("#result-facts")
+    facts = page.inner_text("#result-facts")
+    assert "1.2 cm" in facts and "close to" in facts and "board 1 from the left" in facts
     page.screenshot(path=str(SHOTS_DIR / "phone-done.png"))
 
     page.click("#again")
@@ -249,12 +254,158 @@ def test_tablet_layout_and_a_friendly_refusal(browser: object, show: Show) -> No
     preview_button = page.locator("#preview").bounding_box()
     assert pad["height"] <= 768 and pad["width"] >= 400
     assert preview_button["y"] + preview_button["height"] <= 768  # no scrolling to submit
+    box = page.locator("#pad").bounding_box()
+    page.mouse.click(box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"])  # a tap
+    page.click("#preview")
+    message = page.locator("#message")
+    message.filter(has_text="just a tap").wait_for(timeout=UI_WAIT_MS)  # not a full-board slash
+    page.click("#clear")
     draw_stroke(page, [(0.3, 0.3), (0.7, 0.7)])
     page.screenshot(path=str(SHOTS_DIR / "tablet-draw.png"))
     page.click("#tab-type")
     page.fill("#text", "AB")  # this show allows one character only
     page.click("#preview")
-    message = page.locator("#message")
-    message.wait_for(state="visible", timeout=UI_WAIT_MS)
+    message.filter(has_text="just one").wait_for(timeout=UI_WAIT_MS)
     assert "just one character" in message.inner_text()
+    context.close()
+
+
+def _eventually_job(show: Show, label: str) -> list[JobState]:
+    """Jobs with ``label`` once the orchestrator answers again (its clients reconnect)."""
+    deadline = time.monotonic() + START_WAIT_S
+    while True:
+        try:
+            return [j for j in show.snapshot().jobs if j.label == label]
+        except NoReplyError:
+            assert time.monotonic() < deadline, "the orchestrator did not come back"
+            time.sleep(0.2)
+
+
+def test_hung_orchestrator_keeps_the_ticket_and_says_the_news_is_stale(
+    browser: object, show: Show
+) -> None:
+    context = browser.new_context(  # type: ignore[attr-defined]
+        viewport={"width": 320, "height": 568}, is_mobile=True, has_touch=True
+    )
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    page.goto(show.url)
+    page.wait_for_selector("body[data-ready='1']", timeout=UI_WAIT_MS)
+    page.tap("#tab-type")
+    page.fill("#text", "十")
+    page.tap("#preview")
+    page.wait_for_selector("#confirm:not([hidden])", timeout=UI_WAIT_MS)
+    status, stale = page.locator("#status-text"), page.locator("#stale")
+    show.proc.send_signal(signal.SIGSTOP)
+    try:
+        page.tap("#submit")
+        # no acknowledgement within the kiosk's 5 s: pending, never "could not be accepted"
+        status.filter(has_text="not confirmed").wait_for(timeout=UI_WAIT_MS)
+        assert page.evaluate("document.activeElement.id") == "status-title"
+        stale.wait_for(state="visible", timeout=3_000)
+        assert page.inner_text("#message") == "" and page.inner_text("#job-id") == "-"
+        page.screenshot(path=str(SHOTS_DIR / "small-phone-pending.png"))
+    finally:
+        show.proc.send_signal(signal.SIGCONT)
+    # the late acknowledgement reaches the page: one job, the one the page follows
+    status.filter(has_text="approve").wait_for(timeout=30_000)
+    stale.wait_for(state="hidden", timeout=UI_WAIT_MS)
+    jobs = _eventually_job(show, "十")
+    assert len(jobs) == 1 and page.inner_text("#job-id").strip() == jobs[0].job_id
+    job_id = jobs[0].job_id
+
+    # a new tab (and a reopened browser: localStorage) follows the same ticket
+    other = context.new_page()
+    other.goto(show.url)
+    other.wait_for_selector("#status:not([hidden])", timeout=UI_WAIT_MS)
+    assert other.inner_text("#job-id").strip() == job_id
+    other.close()
+    # another device: the short code's /t/<code> link (as the QR code says) follows it too
+    code = page.inner_text("#code").replace("-", "")
+    assert page.evaluate("document.getElementById('qr').naturalWidth") > 0
+    assert f"/t/{code}" in (page.get_attribute("#qr", "alt") or "")
+    phone = browser.new_context(is_mobile=True, has_touch=True)  # type: ignore[attr-defined]
+    elsewhere = phone.new_page()
+    elsewhere.goto(f"{show.url.rstrip('/')}/t/{code}")
+    elsewhere.wait_for_selector("#status:not([hidden])", timeout=UI_WAIT_MS)
+    assert elsewhere.inner_text("#job-id").strip() == job_id
+    phone.close()
+
+    # the show stops mid-job: the progress is marked stale within 3 s, not shown as current
+    assert show.command(command="approve", job_id=job_id).ok
+    show.relay(job_id, "writing", vehicle_id="uav1", progress=0.1, queue_position=None)
+    status.filter(has_text="10% done").wait_for(timeout=UI_WAIT_MS)
+    show.proc.send_signal(signal.SIGSTOP)
+    try:
+        stale.wait_for(state="visible", timeout=3_000)
+    finally:
+        show.proc.send_signal(signal.SIGCONT)
+    stale.wait_for(state="hidden", timeout=30_000)
+    _eventually_job(show, "十")
+    show.relay(job_id, "queued", vehicle_id="uav1", attempts=1, queue_position=1)
+    status.filter(has_text="had to land").wait_for(timeout=UI_WAIT_MS)
+    show.relay(job_id, "writing", vehicle_id="uav1", attempts=2, progress=0.2)
+    status.filter(has_text="board 1 from the left").wait_for(timeout=UI_WAIT_MS)
+    page.tap("#again")  # the list of my characters stays
+    assert "十" in page.inner_text("#mine-list")
+    assert errors == []
+    context.close()
+
+
+@pytest.mark.parametrize("viewport", [(320, 568), (568, 320)], ids=["small-phone", "landscape"])
+def test_small_screens_keyboard_tabs_focus_and_idle_reset(
+    browser: object, show: Show, viewport: tuple[int, int]
+) -> None:
+    width, height = viewport
+    context = browser.new_context(  # type: ignore[attr-defined]
+        viewport={"width": width, "height": height}, is_mobile=True, has_touch=True
+    )
+    page = context.new_page()
+    page.goto(show.url)
+    page.wait_for_selector("body[data-ready='1']", timeout=UI_WAIT_MS)
+    button = page.locator("#preview")
+    box = button.bounding_box()
+    assert box["y"] + box["height"] <= height and page.evaluate("window.scrollY") == 0
+    assert button.is_disabled() and button.get_attribute("aria-describedby") == "preview-why"
+    assert "first" in page.inner_text("#preview-why")  # a disabled button says why
+
+    # Draw/Type tabs: one tab stop, arrow keys, Home and End (WAI-ARIA tabs pattern)
+    page.focus("#tab-draw")
+    page.keyboard.press("ArrowRight")
+    focused = "document.activeElement.id"
+    assert page.evaluate(focused) == "tab-type"
+    assert page.get_attribute("#tab-type", "aria-selected") == "true"
+    assert page.get_attribute("#tab-draw", "tabindex") == "-1"
+    assert page.is_visible("#type-pane") and not page.is_visible("#draw-pane")
+    page.keyboard.press("ArrowRight")  # wraps around
+    assert page.evaluate(focused) == "tab-draw" and page.is_visible("#draw-pane")
+    page.keyboard.press("End")
+    assert page.evaluate(focused) == "tab-type"
+    page.keyboard.press("Home")
+    assert page.evaluate(focused) == "tab-draw"
+
+    touch_stroke(page, [(0.2, 0.3), (0.8, 0.35)])
+    touch_stroke(page, [(0.5, 0.1), (0.5, 0.9)])
+    assert page.inner_text("#stroke-count") == "2 strokes" and not page.is_visible("#preview-why")
+    page.wait_for_timeout(600)  # Chromium drops a tap that follows a synthetic touch at once
+    page.tap("#preview")
+    page.wait_for_selector("#confirm:not([hidden]), #message:not([hidden])", timeout=UI_WAIT_MS)
+    assert page.inner_text("#message") == ""
+    assert page.evaluate(focused) == "confirm-title"  # focus follows the new content
+    canvas = page.locator("#preview-canvas")
+    assert canvas.get_attribute("data-drawn") == "0"  # the writing order plays, then stays
+    page.wait_for_selector("#preview-canvas[data-drawn='1']", timeout=UI_WAIT_MS)
+    label = page.get_attribute("#preview-canvas", "aria-label") or ""
+    assert "2 strokes" in label and "seconds" in label  # the picture's text alternative
+    page.screenshot(path=str(SHOTS_DIR / f"{width}x{height}-preview.png"))
+
+    # left alone for a minute (the show's kiosk.idle_reset_s), the page starts afresh
+    page.clock.install()  # (the minute passes at once)
+    page.locator("#confirm-title").tap()  # the last touch, timed by the installed clock
+    page.clock.run_for(59_000)
+    assert page.is_visible("#confirm")
+    page.clock.run_for(2_000)
+    page.wait_for_selector("#compose:not([hidden])", timeout=UI_WAIT_MS)
+    assert page.inner_text("#stroke-count") == "" and button.is_disabled()
     context.close()

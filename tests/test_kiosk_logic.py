@@ -10,6 +10,13 @@ from hypothesis import strategies as st
 
 from bus.messages import JobState, JobStateName
 from kiosk import wording
+from kiosk.addresses import (
+    BadProxySettingError,
+    client_address,
+    parse_address,
+    proxy_networks,
+    rate_key,
+)
 from kiosk.errors import RejectedError
 from kiosk.jobs import JobBook, job_view
 from kiosk.limits import SubmissionLimits, check_submission, decode_json_body, is_blocked
@@ -51,6 +58,41 @@ def test_limiter_forgets_idle_clients_when_many() -> None:
     assert len(limiter._events) == 1
 
 
+# --- client addresses ---------------------------------------------------------------------------
+
+PROXIES = proxy_networks(["127.0.0.1", "10.0.0.0/8", "::1"])
+
+
+@pytest.mark.parametrize(
+    ("peer", "forwarded", "client"),
+    [
+        ("192.0.2.1", ["198.51.100.1"], "192.0.2.1"),  # not a proxy: the header is ignored
+        ("127.0.0.1", [], "127.0.0.1"),  # a proxy's own request
+        ("127.0.0.1", ["198.51.100.1"], "198.51.100.1"),
+        ("127.0.0.1", ["6.6.6.6, 198.51.100.1"], "198.51.100.1"),  # left part is the client's
+        ("127.0.0.1", ["6.6.6.6", "198.51.100.1, 10.0.0.7"], "198.51.100.1"),  # two lines
+        ("127.0.0.1", ["198.51.100.1:4711"], "198.51.100.1"),
+        ("::1", ["[2001:db8::5]:443"], "2001:db8::5"),
+        ("::ffff:127.0.0.1", ["198.51.100.1"], "198.51.100.1"),
+        ("127.0.0.1", ["198.51.100.1, not-an-address"], "127.0.0.1"),
+        ("127.0.0.1", ["10.0.0.8, 10.0.0.7"], "10.0.0.8"),  # all trusted: the left-most
+    ],
+)
+def test_client_address_believes_only_trusted_proxies(
+    peer: str, forwarded: list[str], client: str
+) -> None:
+    assert client_address(peer, forwarded, PROXIES) == client
+    assert client_address(peer, forwarded, ()) == str(parse_address(peer))  # no proxies: the peer
+
+
+def test_rate_key_groups_an_ipv6_clients_network() -> None:
+    assert rate_key("2001:db8:1:2::1") == rate_key("2001:db8:1:2:ffff::9") == "2001:db8:1:2::/64"
+    assert rate_key("2001:db8:1:3::1") != rate_key("2001:db8:1:2::1")
+    assert rate_key("203.0.113.9") == "203.0.113.9"
+    with pytest.raises(BadProxySettingError, match=r"trusted_proxies: 'proxy\.local'"):
+        proxy_networks(["proxy.local"])
+
+
 # --- blocklist and submission checks --------------------------------------------------------------
 
 
@@ -74,6 +116,11 @@ def test_check_submission_text_and_strokes() -> None:
     }
     sub = check_submission({"strokes": doc}, limits, lambda c: True)
     assert sub.text is None and sub.label == "drawing (2 strokes)"
+    # a label or device the page never sends is not passed on (free text past the blocklist)
+    sub = check_submission(
+        {"strokes": {**doc, "label": "[/x]", "device": "\x1b[31m"}}, limits, bool
+    )
+    assert sub.strokes == doc and sub.label == "drawing (2 strokes)"
     with pytest.raises(RejectedError) as err:
         check_submission({"strokes": {**doc, "strokes": doc["strokes"] * 2}}, limits, bool)
     assert err.value.code == "too_many_strokes"
@@ -102,21 +149,30 @@ def test_decode_json_body_refuses_anything_but_an_object(raw: bytes) -> None:
 
 def test_job_book_tokens_and_state_order() -> None:
     book = JobBook(max_jobs=2)
-    job = book.add("j1", session_id="s", label="A", preview=None)
+    job = book.add(session_id="s", label="A", preview=None)
+    assert job.pending and book.view(job)["state"] == "sending" and book.pending_count() == 1
+    assert book.authorised(job.ticket, job.token) is job
+    book.bind(job.ticket, "j1")
+    assert not job.pending and book.pending_count() == 0
+    assert book.view(job)["state"] == "checking"  # accepted: never "sending" again
     assert book.authorised("j1", job.token) is job
     assert book.authorised("j1", job.token + "x") is None
     assert book.authorised("j1", None) is None
     assert book.authorised("j2", job.token) is None
+    other = book.add(session_id="s", label="B", preview=None)
+    assert other.key != job.key and other.ticket != job.ticket and len(other.key) <= 64
+    book.refuse(other.ticket, "no")
+    assert book.view(other)["final"] and book.view(other)["status_text"] == "no"
     assert book.update(state("j1", "queued", 0.0))
     assert book.update(state("j1", "writing", 5.0))
     assert not book.update(state("j1", "queued", 4.0))  # older news is ignored
     assert not book.update(state("j1", "writing", 5.0))  # same news is not a change
     assert book.update(state("j1", "done", 6.0))
     assert not book.update(state("j1", "writing", 7.0))  # nothing comes after a final state
-    assert book.state("j1").state == "done"  # type: ignore[union-attr]
-    book.add("j2", session_id="s", label="B", preview=None)
-    book.add("j3", session_id="s", label="C", preview=None)
-    assert book.get("j1") is None and book.is_ours("j3")  # bounded, oldest dropped
+    assert getattr(book.state("j1"), "state", None) == "done"
+    assert book.view(job)["state"] == "done"
+    newest = book.add(session_id="s", label="C", preview=None)
+    assert book.get("j1") is None and book.get(newest.ticket) is newest  # bounded, oldest dropped
 
 
 # --- words ----------------------------------------------------------------------------------------
@@ -131,5 +187,14 @@ def test_status_text_says_what_happens_in_plain_words() -> None:
     assert "uav2" in wording.status_text("writing", vehicle_id="uav2", progress=0.5)
     assert "50%" in wording.status_text("writing", vehicle_id="uav2", progress=0.5)
     assert wording.status_text("done", vehicle_id="uav2").startswith("Done!")
+    requeued = wording.status_text("queued", attempts=1, queue_position=2, eta_s=10.0)
+    assert "had to land" in requeued and "number 2" in requeued
+    again = wording.status_text(
+        "writing", attempts=2, vehicle_id="uav2", progress=0.3, place="board 2 from the left"
+    )
+    assert "another drone" in again and "board 2 from the left" in again and "30%" in again
+    assert wording.board_places({"u1": "b1", "u2": "b2"}, ["b2", "b1"]) == {
+        "u1": "board 2 from the left", "u2": "board 1 from the left"
+    }  # fmt: skip
     view = job_view(state("j", "rejected", 1.0))
     assert view["final"] and "not approve" in view["status_text"]

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import http.client
 import http.cookiejar
+import itertools
 import json
 import threading
 import time
@@ -44,27 +45,53 @@ class FakeOrchestrator:
     """``accept`` or an error code to reply with (e.g. ``queue_full``)."""
     requests: list[SubmitRequest] = field(default_factory=list)
     jobs: dict[str, JobState] = field(default_factory=dict)
+    by_key: dict[tuple[str, str], str] = field(default_factory=dict)
+    """(client id, idempotency key) -> job id, as the orchestrator keeps it."""
+    thawed: threading.Event = field(default_factory=threading.Event)
+    """Cleared: the fake is hung (submissions wait, no fleet snapshots); set: it runs."""
     _queryables: list[Any] = field(default_factory=list)
     _lock: threading.Lock = field(default_factory=threading.Lock)
+    _stop: threading.Event = field(default_factory=threading.Event)
 
     def start(self) -> FakeOrchestrator:
+        self.thawed.set()
         self._queryables = [
             serve(self.session, self.keys.submit, SubmitRequest, self._on_submit),
             serve(self.session, self.keys.snapshot, None, self._on_snapshot),
         ]
+        self._stop.clear()
+        threading.Thread(target=self._fleet_loop, daemon=True).start()
         return self
 
     def stop(self) -> None:
+        self._stop.set()
         for q in self._queryables:
             q.undeclare()
         self._queryables = []
 
+    def _fleet_loop(self) -> None:
+        """Publish the 1 Hz fleet snapshot like the orchestrator (not while hung or stopped)."""
+        while not self._stop.wait(1.0):
+            if self.thawed.is_set():
+                publish(self.session, self.keys.fleet, self._on_snapshot(None))
+
     def _on_submit(self, request: SubmitRequest) -> SubmitReply:
+        self.thawed.wait()  # a hung orchestrator answers late (after the kiosk gave up waiting)
         with self._lock:
             self.requests.append(request)
             if self.mode != "accept":
                 return SubmitReply(ok=False, error=ErrorInfo(code=self.mode, message=self.mode))
+            key = request.idempotency_key
+            first = self.by_key.get((request.client_id, key)) if key else None
+            if first is not None:
+                old = self.jobs[first]
+                return SubmitReply(
+                    ok=True, job_id=first, state=old.state,
+                    queue_position=old.queue_position, eta_s=old.eta_s,
+                )  # fmt: skip
             job_id = f"job-{len(self.requests)}"
+            if key:
+                self.by_key[(request.client_id, key)] = job_id
             queued = [j for j in self.jobs.values() if j.state == "queued"]
             now = time.time()
             state = JobState(
@@ -123,25 +150,65 @@ class Reply:
     headers: dict[str, str]
 
 
-class Browser:
-    """An HTTP client with its own cookie jar (one visitor)."""
+_addresses = (f"127.1.{n // 250}.{n % 250 + 1}" for n in itertools.count())
 
-    def __init__(self, base_url: str) -> None:
+
+def fresh_address() -> str:
+    """A loopback address no other visitor of this test run connects from (Linux: 127/8)."""
+    return next(_addresses)
+
+
+class _FromAddress(urllib.request.HTTPHandler):
+    """Connects from a chosen local address, so each visitor is its own client address."""
+
+    def __init__(self, source: str) -> None:
+        super().__init__()
+        self.source = source
+
+    def http_open(self, req: urllib.request.Request) -> http.client.HTTPResponse:
+        return self.do_open(http.client.HTTPConnection, req, source_address=(self.source, 0))
+
+
+class Browser:
+    """An HTTP client with its own cookie jar (one visitor) and its own address.
+
+    ``source``: the local address it connects from (default: a fresh loopback address, as the
+    kiosk limits each address); ``forwarded_for``: an ``X-Forwarded-For`` header to send.
+    """
+
+    def __init__(
+        self, base_url: str, *, source: str | None = None, forwarded_for: str | None = None
+    ) -> None:
         self.base_url = base_url.rstrip("/")
+        self.source = source or fresh_address()
+        self.forwarded_for = forwarded_for
         self.cookies = http.cookiejar.CookieJar()
-        self._opener = urllib.request.build_opener(urllib.request.HTTPCookieProcessor(self.cookies))
+        self._opener = urllib.request.build_opener(
+            _FromAddress(self.source), urllib.request.HTTPCookieProcessor(self.cookies)
+        )
 
     def request(self, method: str, path: str, body: bytes | dict[str, Any] | None = None) -> Reply:
         data = json.dumps(body).encode() if isinstance(body, dict) else body
         req = urllib.request.Request(self.base_url + path, data=data, method=method)
         if data is not None:
             req.add_header("Content-Type", "application/json")
+        if self.forwarded_for is not None:
+            req.add_header("X-Forwarded-For", self.forwarded_for)
         try:
             with self._opener.open(req, timeout=WAIT_S) as resp:
                 return Reply(resp.status, json.loads(resp.read()), dict(resp.headers))
         except urllib.error.HTTPError as err:
             with err:
                 return Reply(err.code, json.loads(err.read()), dict(err.headers))
+
+    def request_raw(self, path: str) -> tuple[int, str, bytes]:
+        """GET a non-JSON resource: status, content type, body."""
+        try:
+            with self._opener.open(self.base_url + path, timeout=WAIT_S) as resp:
+                return resp.status, resp.headers["content-type"], resp.read()
+        except urllib.error.HTTPError as err:
+            with err:
+                return err.code, err.headers["content-type"], err.read()
 
     def post(self, path: str, body: bytes | dict[str, Any] | None) -> Reply:
         return self.request("POST", path, body)

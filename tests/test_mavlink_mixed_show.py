@@ -50,6 +50,8 @@ def mixed_show(out: Path) -> tuple[Path, Show]:
         time_scale=TIME_SCALE,
         vehicles=tuple(vehicles),
         controller=base.controller.model_copy(update={"preset": "default"}),
+        # as shows/rehearsal-mavlink.yaml: behind an autopilot's position loop, the nominal pace
+        planning=base.planning.model_copy(update={"pace": "nominal"}),
     )
     dump_show(show, path)
     return path, load_show(path)

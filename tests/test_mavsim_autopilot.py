@@ -100,7 +100,7 @@ def test_guided_follows_pva_setpoints_closely() -> None:
     assert math.dist(sim.ap.airframe.position_m_enu, move.end_m_enu) < 0.005
 
 
-def test_guided_timeout_stops_the_vehicle_and_says_so() -> None:
+def test_guided_timeout_stops_a_velocity_target_silently_as_arducopter_does() -> None:
     sim = Sim(position_source_delay_s=0.0, guided_timeout_s=1.0)
     sim.airborne()
     here = sim.ap.airframe.position_m_enu
@@ -108,16 +108,27 @@ def test_guided_timeout_stops_the_vehicle_and_says_so() -> None:
     sim.ap.position_target(Target(here, (0.3, 0.0, 0.0)), 0)
     sim.texts()
     sim.run(0.9)
-    before = sim.ap.submode
+    moving = sim.ap.target.velocity_mps_enu
     sim.run(0.3)
-    assert (before, sim.ap.submode) == ("track", "stopped")
-    assert any(text.startswith("Guided failsafe") for text in sim.texts())
-    stopped_at = sim.ap.airframe.position_m_enu
+    assert moving == (0.3, 0.0, 0.0) and sim.ap.target.velocity_mps_enu == (0.0, 0.0, 0.0)
+    assert sim.ap.submode == "track" and sim.texts() == []  # ArduCopter says nothing
     sim.run(3.0)
-    assert math.dist(sim.ap.airframe.position_m_enu, stopped_at) < 0.1
+    stopped_at = sim.ap.airframe.position_m_enu
+    assert 0.25 < stopped_at[0] - here[0] < 0.5  # about 1 s at 0.3 m/s, then braked
+    sim.run(1.0)
+    assert math.dist(sim.ap.airframe.position_m_enu, stopped_at) < 0.01
     assert np.linalg.norm(sim.ap.airframe.velocity_mps_enu) < 0.01
     assert sim.ap.position_target(Target(here), 0)  # setpoints resume following
-    assert sim.ap.submode == "track"
+
+
+def test_a_position_only_target_never_times_out() -> None:
+    sim = Sim(position_source_delay_s=0.0, guided_timeout_s=0.5)
+    sim.airborne()
+    here = sim.ap.airframe.position_m_enu
+    goal = (here[0] + 0.5, here[1], here[2])
+    assert sim.ap.position_target(Target(goal), 0)
+    sim.run(5.0)
+    assert math.dist(sim.ap.airframe.position_m_enu, goal) < 0.01
 
 
 def test_setpoints_are_ignored_outside_guided_and_a_pilot_mode_holds() -> None:

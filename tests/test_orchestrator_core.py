@@ -241,12 +241,44 @@ def test_operator_commands() -> None:
     book.operator(OperatorCommand(command="cancel", job_id="j1"), 2.0)
     assert book.jobs["j1"].state == "cancelled"
     reply, eff = book.operator(OperatorCommand(command="resume"), 3.0)
+    assert _assigned(eff) == []  # landed: held until released
+    reply, eff = book.operator(OperatorCommand(command="release", vehicle_id="uav1"), 3.0)
     assert _assigned(eff) == [("uav1", "j2")]
     reply, eff = book.operator(OperatorCommand(command="estop"), 4.0)
     assert book.queue_paused and all(v.paused for v in book.vehicles.values())
     assert {c.command for _, c in eff.commands} == {"estop"}
     assert book.jobs["j2"].state == "queued"
     assert eff.events[-1].level == "alert"
+
+
+def test_positions_of_other_jobs_are_published_after_prioritize_cancel_and_assign() -> None:
+    book = Book(_config(), now_s=0.0)
+    for i in range(1, 5):
+        eff = _submit(book, f"j{i}", float(i))
+        assert eff.jobs.keys() == {f"j{i}"} and not eff.moved  # appended: nobody else moved
+    reply, eff = book.operator(OperatorCommand(command="prioritize", job_id="j3", priority=5), 5)
+    assert reply.ok and eff.jobs.keys() == {"j3"}
+    assert eff.moved == {"j1", "j2"}  # j4 stays 4th
+    assert [j.job_id for j in book.queue()] == ["j3", "j1", "j2", "j4"]
+    reply, eff = book.operator(OperatorCommand(command="cancel", job_id="j1"), 6.0)
+    assert reply.ok and eff.jobs.keys() == {"j1"} and eff.moved == {"j2", "j4"}
+    eff = _online(book, "uav1", 7.0)  # j3 assigned; j2, j4 move up and get an ETA
+    assert _assigned(eff) == [("uav1", "j3")]
+    more = book.status(VehicleStatus(vehicle_id="uav1", kind="q", state="idle"), 7.0)
+    assert not more.moved  # nothing changed since the last decision
+    assert book.tick(7.5).moved == set()  # an ETA that only counts down is not a change
+    reply, eff = book.operator(OperatorCommand(command="reject", job_id="j4"), 8.0)
+    assert reply.error is not None and reply.error.code == "bad_state" and not eff.moved
+
+
+def test_approve_and_reject_replies_say_what_happened() -> None:
+    book = Book(_config(moderation=True), now_s=0.0)
+    _submit(book, "j1", 0.0)
+    _submit(book, "j2", 0.0)
+    reply, _ = book.operator(OperatorCommand(command="approve", job_id="j1"), 1.0)
+    assert reply.message == "j1 approved"
+    reply, _ = book.operator(OperatorCommand(command="reject", job_id="j2"), 1.0)
+    assert reply.message == "j2 rejected"
 
 
 def test_queue_full_is_refused() -> None:
@@ -270,8 +302,18 @@ class FleetMachine(RuleBasedStateMachine):
         self.submitted: list[str] = []
         self.agent_job: dict[str, str | None] = {v.vehicle_id: None for v in VEHICLES}
         self.final_seen: dict[str, object] = {}
+        self.seen_placing: dict[str, tuple[int, float | None]] = {}
+        """What a subscriber of jobs/* knows: queue position and expected start time [s]."""
 
     def _apply(self, eff: Effects, queued_before: list[str] | None = None) -> None:
+        placings = self.book.etas(self.now)
+        assert not eff.moved & eff.jobs.keys()
+        for job_id in eff.jobs.keys() | eff.moved:  # what the service publishes
+            if job_id in placings:
+                position, eta = placings[job_id]
+                self.seen_placing[job_id] = (position, None if eta is None else self.now + eta)
+            else:
+                self.seen_placing.pop(job_id, None)
         for vid, cmd in eff.commands:
             if cmd.command == "assign" and cmd.job is not None:
                 if self.book.vehicles[vid].alive:
@@ -305,7 +347,9 @@ class FleetMachine(RuleBasedStateMachine):
 
     @rule(
         vid=st.sampled_from([v.vehicle_id for v in VEHICLES]),
-        command=st.sampled_from(["pause", "resume", "resume", "land", "estop", "land_all"]),
+        command=st.sampled_from(
+            ["pause", "resume", "resume", "land", "estop", "land_all", "release"]
+        ),
         whole=st.booleans(),
     )
     def fleet_command(self, vid: str, command: str, whole: bool) -> None:
@@ -371,6 +415,20 @@ class FleetMachine(RuleBasedStateMachine):
         assert sorted(self.book.jobs) == sorted(self.submitted)
         seqs = [j.seq for j in self.book.jobs.values()]
         assert len(seqs) == len(set(seqs))
+
+    @invariant()
+    def subscribers_know_every_queue_position_and_eta(self) -> None:
+        if not hasattr(self, "book"):
+            return
+        tolerance_s = self.book.config.eta_tolerance_s
+        for job_id, (position, eta) in self.book.etas(self.now).items():
+            seen = self.seen_placing.get(job_id)
+            assert seen is not None and seen[0] == position, (job_id, seen, position)
+            start = None if eta is None else self.now + eta
+            if start is None or seen[1] is None:
+                assert start is seen[1], (job_id, seen, start)
+            else:
+                assert abs(start - seen[1]) <= tolerance_s + 1e-9, (job_id, seen, start)
 
     @invariant()
     def one_job_per_vehicle_and_board(self) -> None:

@@ -35,7 +35,7 @@ from bus.session import BusSettings, Session, free_tcp_endpoint, open_session
 from cli.main import main as skyquill
 from orchestrator.app import serve_show
 from orchestrator.store import JobStore
-from showfile import Show, dump_show, load_show
+from showfile import SecuritySettings, Show, dump_show, load_show
 
 SHOWS = Path(__file__).resolve().parents[1] / "shows"
 DATA = Path(__file__).resolve().parent / "data"
@@ -64,6 +64,8 @@ def make_show(tmp_path: Path, show_id: str, endpoint: str, **updates: Any) -> tu
                 update={"database": tmp_path / "show.sqlite3", "recordings_dir": tmp_path / "rec"}
             ),
             "policy": policy,
+            # The service alone, on a plain router: trust is tested in test_trust_*.py.
+            "security": SecuritySettings(mode="none"),
             **updates,
         }
     )
@@ -119,9 +121,22 @@ class FakeAgent:
         self.commands: list[VehicleCommand] = []
         self.job_id: str | None = None
         self.accept = True
-        self.queryable = serve(session, keys.vehicle_command(vehicle_id), VehicleCommand, self._on)
+        self.queryables = [
+            serve(session, keys.vehicle_command(vehicle_id), VehicleCommand, self._on),
+            serve(session, keys.vehicle_assign(vehicle_id), VehicleCommand, self._on),
+        ]
         self.token: Token | None = declare_token(session, keys.vehicle_alive(vehicle_id))
         self.status()
+        # the heartbeat every agent sends (a token alone does not keep a vehicle present)
+        threading.Thread(target=self._heartbeat, daemon=True).start()
+
+    def _heartbeat(self, period_s: float = 0.05) -> None:
+        while True:
+            time.sleep(period_s)
+            try:
+                self.status()
+            except Exception:  # the session closed: the test is over
+                return
 
     def _on(self, cmd: VehicleCommand) -> CommandReply:
         self.commands.append(cmd)
@@ -143,7 +158,7 @@ class FakeAgent:
     def report(self, event: str, **kw: Any) -> CommandReply:
         assert self.job_id is not None
         rep = AgentReport(vehicle_id=self.vehicle_id, job_id=self.job_id, event=event, **kw)
-        return query_one(self.session, self.keys.report, rep, CommandReply)
+        return query_one(self.session, self.keys.report(self.vehicle_id), rep, CommandReply)
 
     def write_job(self) -> str:
         job_id = eventually(lambda: self.job_id, f"a job for {self.vehicle_id}")
@@ -330,8 +345,8 @@ def test_bus_is_recorded_to_a_readable_mcap(tmp_path: Path, endpoint: str, clien
         keys.events: "Event",
         keys.fleet: "ShowSnapshot",
         keys.vehicle_status("uav4"): "VehicleStatus",
-        keys.vehicle_command("uav4") + "#request": "VehicleCommand",
-        keys.report + "#request": "AgentReport",
+        keys.vehicle_assign("uav4") + "#request": "VehicleCommand",
+        keys.report("uav4") + "#request": "AgentReport",
         keys.vehicle_alive("uav4") + "#liveliness": "LivelinessChange",
     }
     for topic, name in expected.items():

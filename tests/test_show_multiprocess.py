@@ -20,14 +20,14 @@ import pytest
 from bus.messages import Event, JobState
 from bus.pubsub import subscribe
 from bus.session import Session
-from cli.showrun import ShowRun, derived_show, snapshot, submit_texts, wait_for_jobs
+from cli.showrun import ShowRun, Stagehand, derived_show, snapshot, submit_texts, wait_for_jobs
 from showfile import load_show
 
 pytestmark = [pytest.mark.multiprocess, pytest.mark.slow, pytest.mark.timeout(240)]
 
 AIRSHOW = Path(__file__).resolve().parent.parent / "shows" / "airshow-2014.yaml"
 TIME_SCALE = 6.0
-LOST_AFTER_S = 0.5
+LOST_AFTER_S = 1.0
 JOB_TIMEOUT_S = 90.0
 
 
@@ -89,7 +89,8 @@ def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveShow]:
                 live.events.append(event)
 
         subscriber = subscribe(session, run.keys.events, Event, on_event)
-        yield live
+        with Stagehand(session, run.keys):  # fresh sheets on boards left half-written
+            yield live
         subscriber.undeclare()  # type: ignore[no-untyped-call]
 
 

@@ -193,7 +193,7 @@ def test_late_joiner_approves_a_submission_and_sees_it_queued(router: Any) -> No
         await until(pilot, lambda: app.model.job("j-1").state == "queued", "j-1 queued")
         await until(pilot, lambda: "queued" in app._header.last_reply, "the answer")
         await until(
-            pilot, lambda: "ETA" in str(app._queue.get_row("j-1")[2]), "j-1's ETA in the queue"
+            pilot, lambda: "ETA" in str(app._queue.get_row("j-1")[3]), "j-1's ETA in the queue"
         )
         assert str(app._queue.get_row("j-1")[0]) == "queued"
 
@@ -227,6 +227,9 @@ def test_lands_the_selected_vehicle_and_draws_its_path(router: Any) -> None:
         )
         assert "一" in board.title
         await pilot.press("l")
+        await until(pilot, lambda: isinstance(app.screen, ConfirmScreen), "a confirmation")
+        assert fake.sent("land") == []  # not before the operator says yes
+        await pilot.press("y")
         await until(pilot, lambda: fake.sent("land"), "a land command")
         assert fake.sent("land")[0].vehicle_id == "uav1"
         await until(pilot, lambda: app._fleet.cell_texts("uav1")[1:2] == ("landing",), "landing")

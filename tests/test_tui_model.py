@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import threading
 
+import msgspec
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
@@ -19,6 +20,7 @@ from bus.messages import (
     VehicleStatus,
     VehicleSummary,
 )
+from tui import format as fmt
 from tui.inbox import Inbox
 from tui.inputs import BadPayload, OrchestratorPresence, VehiclePresence
 from tui.model import ConsoleModel
@@ -328,3 +330,60 @@ def test_inbox_loses_nothing_undroppable_across_threads() -> None:
     for k in range(4):  # each producer's items stay in its order
         mine = [n for n in got if k * 10_000 <= n < (k + 1) * 10_000]
         assert mine == sorted(mine)
+
+
+def ev(time_s: float, message: str) -> Event:
+    return Event(time_s=time_s, level="info", kind="operator", message=message)
+
+
+def test_a_late_joiner_gets_recent_history_from_the_snapshot_once() -> None:
+    m = ConsoleModel(SETTINGS)
+    m.note(5.0, "info", "console", "console's own note")  # never hides the show's history
+    with_history = msgspec.structs.replace(snapshot([]), events=[ev(1.0, "a"), ev(2.0, "b")])
+    m.apply_snapshot(with_history, 10.0, full=True)
+    m.apply(ev(3.0, "c"), 10.5)  # live
+    m.apply_snapshot(  # asked again (the orchestrator came back): nothing twice
+        msgspec.structs.replace(snapshot([]), events=[ev(2.0, "b"), ev(3.0, "c"), ev(4.0, "d")]),
+        11.0,
+        full=True,
+    )
+    m.apply_snapshot(msgspec.structs.replace(snapshot([]), events=[ev(9.0, "x")]), 12, full=False)
+    shown = [e.message for _, e in m.events_after(0)]
+    assert shown == ["console's own note", "a", "b", "c", "d"]  # fleet publications add none
+
+
+def test_held_faulted_and_flying_vehicles_are_counted_for_the_header_and_quit() -> None:
+    m = ConsoleModel(SETTINGS)
+    m.apply(tm("uav1", state="writing"), 1.0)
+    m.apply(tm("uav2", state="idle", job_id=None), 1.0)
+    assert (m.airborne_count(), m.can_fly_count()) == (1, 2)
+    held = VehicleSummary(vehicle_id="uav2", kind="q", state="landed", alive=True, held=True)
+    m.apply_snapshot(snapshot([], [held]), 1.0, full=False)
+    assert m.vehicle_row("uav2", 1.0).held and m.can_fly_count() == 1  # type: ignore[union-attr]
+    m.apply(tm("uav1", state="fault"), 2.0)
+    assert m.can_fly_count() == 0 and m.fault_ids() == ["uav1"] and m.airborne_count() == 0
+    assert "uav1 fault" in [a.message for a in m.alerts()]
+
+
+def test_waiting_submissions_alert_and_a_new_one_alerts_again_after_acknowledging() -> None:
+    m = ConsoleModel(SETTINGS)
+    m.apply(job("j1", "awaiting_approval", 1.0), 1.0)
+    assert [a.message for a in m.alerts()] == ["1 submission(s) awaiting approval"]
+    assert m.acknowledge_alerts() == 1 and m.alerts() == []
+    m.apply(job("j2", "awaiting_approval", 2.0), 2.0)
+    assert [a.message for a in m.alerts()] == ["2 submission(s) awaiting approval"]
+    assert m.awaiting_count() == 2
+
+
+def test_rejected_and_cancelled_jobs_read_as_such_not_as_failed() -> None:
+    m = ConsoleModel(SETTINGS)
+    reason = ErrorInfo(code="rejected", message="not a letter")
+    m.apply(job("j1", "rejected", 1.0, error=reason), 1.0)
+    m.apply(job("j2", "cancelled", 2.0), 1.0)
+    m.apply(job("j3", "failed", 3.0), 1.0)
+    labels = {r.job.job_id: (fmt.section_text(r).plain, fmt.job_detail(r)) for r in m.queue_rows()}
+    assert labels == {
+        "j1": ("rejected", "not a letter"),
+        "j2": ("cancelled", "cancelled"),
+        "j3": ("failed", "failed"),
+    }

@@ -65,3 +65,25 @@ def test_emergency_stop_confirmation(snap_compare: SnapCompare) -> None:
         await pilot.pause()
 
     assert snap_compare(demo_app(), terminal_size=(80, 24), run_before=ask)
+
+
+def test_main_screen_200x60(snap_compare: SnapCompare) -> None:
+    assert snap_compare(demo_app(), terminal_size=(200, 60), run_before=settle)
+
+
+def test_help_screen_80x24(snap_compare: SnapCompare) -> None:
+    async def ask(pilot: Any) -> None:
+        await settle(pilot)
+        await pilot.press("question_mark")
+        await pilot.pause()
+
+    assert snap_compare(demo_app(), terminal_size=(80, 24), run_before=ask)
+
+
+def test_reject_asks_with_a_reason_80x24(snap_compare: SnapCompare) -> None:
+    async def ask(pilot: Any) -> None:
+        await settle(pilot)
+        await pilot.press("tab", "r", *"not a letter")
+        await pilot.pause()
+
+    assert snap_compare(demo_app(), terminal_size=(80, 24), run_before=ask)

@@ -11,31 +11,44 @@ import time
 from collections.abc import Callable
 from typing import ClassVar
 
+import msgspec
 from textual import work
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
+from textual.events import Resize
 from textual.message import Message
 from textual.widgets import Footer
 
-from bus.messages import CommandReply, ErrorInfo, OperatorCommand, Telemetry
+from bus.messages import CommandReply, ErrorInfo, JobState, OperatorCommand, Telemetry
+from tui import commands as cmd
 from tui.inbox import Inbox
 from tui.inputs import BusInput, OrchestratorPresence
 from tui.link import ConsoleLink
 from tui.model import ConsoleModel
+from tui.safe_text import clean
 from tui.settings import ConsoleSettings
 from tui.throttle import RedrawThrottle
 from tui.widgets.alert_bar import AlertBar
 from tui.widgets.board_grid import BoardGrid
+from tui.widgets.board_strip import BoardStrip
 from tui.widgets.board_view import BoardView
 from tui.widgets.confirm_screen import ConfirmScreen
 from tui.widgets.event_log import EventLog
 from tui.widgets.fleet_table import FleetTable
 from tui.widgets.header_bar import HeaderBar
+from tui.widgets.help_screen import HelpScreen
 from tui.widgets.preview_pane import PreviewPane
+from tui.widgets.preview_screen import PreviewScreen
 from tui.widgets.queue_table import QueueTable
 from tui.widgets.vehicle_detail_screen import VehicleDetailScreen
 
+JOB_ACTIONS = frozenset({"approve", "reject", "cancel_job", "priority", "preview"})
+"""Act on the job selected in the queue: only while the queue has the focus."""
+VEHICLE_ACTIONS = frozenset({"vehicle", "detail", "fresh_sheet"})
+"""Act on the vehicle selected in the fleet table: only while the fleet has the focus."""
+PREVIEW_MIN_WIDTH = 100
+"""Narrowest terminal, in cells, that shows the small preview next to the queue."""
 TABLE_HZ = 5.0
 """Highest update rate of the fleet table's numbers, in [Hz]."""
 
@@ -49,13 +62,21 @@ class ConsoleApp(App[None]):
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("a", "approve", "approve"),
         Binding("r", "reject", "reject"),
-        Binding("p", "toggle_pause", "pause"),
         Binding("c", "cancel_job", "cancel"),
-        Binding("l", "land", "land"),
+        Binding("plus", "priority('raise')", "prio+"),
+        Binding("minus", "priority('lower')", "prio-"),
+        Binding("v", "preview", "view"),
+        Binding("l", "vehicle('land')", "land"),
+        Binding("u", "vehicle('release')", "release"),
+        Binding("f", "vehicle('clear_fault')", "reset fault"),
+        Binding("F", "clear_all", "reset all", show=False),
+        Binding("s", "fresh_sheet", "fresh sheet", show=False),
+        Binding("d", "detail", "detail", show=False),
+        Binding("p", "toggle_pause", "pause"),
         Binding("L", "land_all", "land all"),
         Binding("e", "estop", "E-STOP"),
-        Binding("d", "detail", "detail", show=False),
-        Binding("x", "acknowledge", "ack alerts", show=False),
+        Binding("x", "acknowledge", "ack", show=False),
+        Binding("question_mark,f1", "help", "help"),
         Binding("q", "quit", "quit", show=False),
     ]
 
@@ -107,6 +128,8 @@ class ConsoleApp(App[None]):
         self._event_log = EventLog(id="log")
         self._header = HeaderBar(id="header")
         self._alerts = AlertBar(id="alerts")
+        self._strip = BoardStrip(self.model, settings, id="board-strip")
+        self._queue_pane = Horizontal(id="queue-pane")
 
     # --- layout ----------------------------------------------------------------------------------
     def compose(self) -> ComposeResult:
@@ -114,11 +137,12 @@ class ConsoleApp(App[None]):
         yield self._alerts
         with Vertical(id="main"):
             yield self._fleet
+            yield self._strip
             with Horizontal(id="middle"):
                 with self._boards:
                     for board in self.settings.boards:
                         yield BoardView(board, self.model, id=f"board-{board.board_id}")
-                with Horizontal(id="queue-pane"):
+                with self._queue_pane:
                     yield self._queue
                     yield self._preview
             yield self._event_log
@@ -150,9 +174,10 @@ class ConsoleApp(App[None]):
     def on_console_app_bus_wake(self, _: BusWake) -> None:
         now_s = self.clock()
         for item in self.inbox.drain():
+            was_online = self.model.orchestrator == "online"
             self.model.apply(item, now_s)
-            if isinstance(item, OrchestratorPresence) and item.alive:
-                self.join_show()
+            if isinstance(item, OrchestratorPresence) and item.alive and not was_online:
+                self.join_show()  # once per appearance: Zenoh may announce a token twice
 
     @work(exclusive=True, group="snapshot")
     async def join_show(self) -> None:
@@ -192,6 +217,9 @@ class ConsoleApp(App[None]):
         m = self.model
         self._header.orchestrator = m.orchestrator
         self._header.queue_paused = m.queue_paused
+        self._header.can_fly = m.can_fly_count()
+        self._header.faults = len(m.fault_ids())
+        self._header.awaiting = m.awaiting_count()
         counts = m.state_counts()
         text = f"{sum(counts.values())} vehicles, {counts.get('writing', 0)} writing"
         self._header.counts = text + (f", {counts['lost']} lost" if counts.get("lost") else "")
@@ -213,6 +241,9 @@ class ConsoleApp(App[None]):
             return not dirty
         self._drawn["table"] = self.model.fleet_version
         self._fleet.show_rows(self.model.vehicle_rows(now_s))
+        self._strip.display = not self._boards.all_visible  # at the table's (lower) rate
+        if self._strip.display:
+            self._strip.sync(now_s)
         return True
 
     def _redraw_queue(self) -> None:
@@ -227,6 +258,21 @@ class ConsoleApp(App[None]):
         if self._drawn_boards != key:  # new samples, new states, or other boards scrolled in
             self._drawn_boards = key
             self._boards.sync(now_s)
+
+    def on_board_grid_relaid(self, message: BoardGrid.Relaid) -> None:
+        self._strip.display = not message.all_visible
+        if self._strip.display:
+            self._strip.sync(self.clock())
+
+    def on_resize(self, event: Resize) -> None:
+        """Narrow terminals give the queue the preview's columns (``v`` shows it full-screen)."""
+        width, height = event.size
+        self._preview.display = width >= PREVIEW_MIN_WIDTH
+        wide = width >= 160
+        self._preview.styles.width = 30 if wide else 12
+        self._queue_pane.styles.max_width = 104 if wide else 72
+        self._event_log.styles.max_height = 12 if height < 40 else height // 4
+        self._drawn_boards = None
 
     # --- selection -------------------------------------------------------------------------------
     def on_queue_table_job_highlighted(self, message: QueueTable.JobHighlighted) -> None:
@@ -243,73 +289,109 @@ class ConsoleApp(App[None]):
 
     # --- commands --------------------------------------------------------------------------------
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
-        """No command keys behind a confirmation; no main-screen selections in the detail view."""
-        if isinstance(self.screen, ConfirmScreen):
-            return action in ("quit",)
-        if isinstance(self.screen, VehicleDetailScreen):
-            return action in ("quit", "land_all", "estop")
+        """Only the keys that act now: job keys with the queue focused, vehicle keys with the
+        fleet focused (so a command never acts on a selection out of sight), none behind a
+        question; the detail view has its own keys. False also hides the key in the footer."""
+        screen = self.screen
+        if action == "pop_screen":  # "back" of the screens above the main one
+            return len(self.screen_stack) > 1
+        if isinstance(screen, ConfirmScreen | HelpScreen | PreviewScreen):
+            return action == "quit" and not isinstance(screen, ConfirmScreen)
+        if isinstance(screen, VehicleDetailScreen):
+            return action in ("quit", "land_all", "estop", "help")
+        if action in JOB_ACTIONS:
+            return self.focused is self._queue
+        if action in VEHICLE_ACTIONS:
+            return self.focused is self._fleet
         return True
 
+    def on_descendant_focus(self) -> None:
+        self.refresh_bindings()
+
     def action_approve(self) -> None:
-        self._job_command("approve", ("awaiting_approval", "submitted"))
+        self._request(cmd.job_request("approve", self._selected_job()))
 
     def action_reject(self) -> None:
-        self._job_command("reject", ("awaiting_approval", "submitted"))
+        self._request(cmd.job_request("reject", self._selected_job()))
 
     def action_cancel_job(self) -> None:
-        self._job_command(
-            "cancel", ("awaiting_approval", "submitted", "queued", "assigned", "writing")
-        )
+        self._request(cmd.job_request("cancel", self._selected_job()))
 
-    def _job_command(self, command: str, allowed: tuple[str, ...]) -> None:
-        job = self.model.job(self._queue.selected_job)
-        if job is None or job.state not in allowed:
-            what = "a submission awaiting approval" if command != "cancel" else "a job not finished"
-            self.notify(f"{command}: select {what} in the queue", severity="warning")
-            return
-        reason = "by operator" if command in ("reject", "cancel") else ""
-        self.send(OperatorCommand(command=command, job_id=job.job_id, reason=reason))  # type: ignore[arg-type]
+    def action_priority(self, direction: str) -> None:
+        self._request(cmd.job_request(direction, self._selected_job()))
+
+    def action_preview(self) -> None:
+        job = self._selected_job()
+        if job is None:
+            self.notify("preview: no job selected", severity="warning", markup=False)
+        else:
+            self.push_screen(PreviewScreen(job))
+
+    def _selected_job(self) -> JobState | None:
+        return self.model.job(self._queue.selected_job)
 
     def action_toggle_pause(self) -> None:
         self.send(OperatorCommand(command="resume" if self.model.queue_paused else "pause"))
 
-    def action_land(self) -> None:
-        vehicle_id = self._fleet.selected_vehicle
-        if vehicle_id is None:
-            self.notify("land: no vehicle selected", severity="warning")
-            return
-        self.send(OperatorCommand(command="land", vehicle_id=vehicle_id))
+    def action_vehicle(self, command: str, vehicle_id: str | None = None) -> None:
+        """``land``, ``release`` or ``clear_fault`` of the selected (or the named) vehicle."""
+        vid = vehicle_id or self._fleet.selected_vehicle
+        row = self.model.vehicle_row(vid, self.clock()) if vid else None
+        self._request(cmd.vehicle_request(command, row))
+
+    def action_fresh_sheet(self) -> None:
+        vid = self._fleet.selected_vehicle
+        row = self.model.vehicle_row(vid, self.clock()) if vid else None
+        self._request(cmd.fresh_sheet_request(row, self.model.dirty_boards))
+
+    def action_clear_all(self) -> None:
+        self._request(cmd.clear_all_request(self.model.fault_ids()))
 
     def action_land_all(self) -> None:
-        self._confirm("Land ALL vehicles now?", OperatorCommand(command="land_all"), "Land all")
+        self._request(cmd.LAND_ALL)
 
-    def action_estop(self) -> None:
-        self._confirm(
-            "EMERGENCY STOP every vehicle?\nMotors stop: vehicles in the air will fall.",
-            OperatorCommand(command="estop", reason="operator emergency stop"),
-            "E-STOP",
-        )
+    def action_estop(self, vehicle_id: str | None = None) -> None:
+        self._request(cmd.estop_ask(vehicle_id))
 
-    def on_vehicle_detail_screen_land_requested(self, m: VehicleDetailScreen.LandRequested) -> None:
-        self.send(OperatorCommand(command="land", vehicle_id=m.vehicle_id))
+    def on_vehicle_detail_screen_requested(self, m: VehicleDetailScreen.Requested) -> None:
+        if m.command == "estop":
+            self.action_estop(m.vehicle_id)
+        else:
+            self.action_vehicle(m.command, m.vehicle_id)
 
-    def on_vehicle_detail_screen_estop_requested(
-        self, m: VehicleDetailScreen.EstopRequested
-    ) -> None:
-        self._confirm(
-            f"EMERGENCY STOP {m.vehicle_id}?\nIts motors stop: in the air it will fall.",
-            OperatorCommand(command="estop", vehicle_id=m.vehicle_id, reason="operator"),
-            "E-STOP",
-        )
+    def _request(self, request: cmd.Request) -> None:
+        """Send, ask first, or say why not."""
+        if isinstance(request, cmd.Refusal):
+            self.notify(request.message, severity="warning", markup=False)
+        elif isinstance(request, OperatorCommand):
+            self.send(request)
+        else:
+            self._confirm(request)
 
-    def _confirm(self, question: str, command: OperatorCommand, label: str) -> None:
-        def answered(yes: bool | None) -> None:
-            if yes:
-                self.send(command)
-            else:
-                self.notify(f"{command.command}: not sent")
+    def _confirm(self, ask: cmd.Ask) -> None:
+        def answered(reason: str | None) -> None:
+            if reason is None:
+                if ask.commands:
+                    self.notify(f"{ask.commands[0].command}: not sent", markup=False)
+            elif not ask.commands:
+                self.exit()
+            for command in ask.commands if reason is not None else ():
+                self.send(msgspec.structs.replace(command, reason=reason or command.reason))
 
-        self.push_screen(ConfirmScreen(question, label), answered)
+        screen = ConfirmScreen(ask.question, ask.label, reason_prompt=ask.reason_prompt)
+        self.push_screen(screen, answered)
+
+    async def action_quit(self) -> None:
+        """Quit; while vehicles fly, only once the operator confirms (the show goes on)."""
+        ask = cmd.quit_request(self.model.airborne_count())
+        if ask is None:
+            self.exit()
+        else:
+            self._confirm(ask)
+
+    def action_help(self) -> None:
+        if not isinstance(self.screen, HelpScreen):
+            self.push_screen(HelpScreen())
 
     def action_detail(self) -> None:
         vehicle_id = self._fleet.selected_vehicle
@@ -318,7 +400,7 @@ class ConsoleApp(App[None]):
 
     def action_acknowledge(self) -> None:
         count = self.model.acknowledge_alerts()
-        self.notify(f"{count} alert(s) acknowledged")
+        self.notify(f"{count} alert(s) acknowledged", markup=False)
         self.redraw()
 
     @work(group="commands")
@@ -333,8 +415,10 @@ class ConsoleApp(App[None]):
 
     def on_console_app_command_done(self, message: CommandDone) -> None:
         self.model.record_command(message.command, message.reply, self.clock())
-        text = f"{message.command.command}: {_reply_text(message.reply)}"
-        self.notify(text, severity="information" if message.reply.ok else "error")
+        text = clean(f"{message.command.command}: {_reply_text(message.reply)}")
+        self.notify(  # the answer may quote bus data
+            text, severity="information" if message.reply.ok else "error", markup=False
+        )
         self.redraw()
 
 

@@ -8,6 +8,7 @@ from rich.text import Text
 
 from bus.messages import JobState
 from tui.rows import QueueRow, VehicleRow
+from tui.safe_text import clean
 
 STATE_STYLES = {
     "idle": "green",
@@ -30,11 +31,15 @@ SECTION_LABELS = {
     "failed": ("failed", "bold red"),
 }
 """Label and style of each queue section."""
+ENDED_LABELS = {"rejected": ("rejected", "magenta"), "cancelled": ("cancelled", "dim")}
+"""Label and style of jobs in the ``failed`` section that did not fail: the operator ended them."""
+DETAIL_CHARS = 48
+"""Longest detail of a job in the queue, in characters."""
 
 
 def state_text(state: str) -> Text:
     """A vehicle state as a coloured word (``taking_off`` reads ``taking off``)."""
-    return Text(state.replace("_", " "), style=STATE_STYLES.get(state, ""))
+    return Text(clean(state.replace("_", " "), 20), style=STATE_STYLES.get(state, ""))
 
 
 def duration(seconds: float | None) -> str:
@@ -89,19 +94,19 @@ def clock(time_s: float) -> str:
 
 
 def job_detail(row: QueueRow) -> str:
-    """The one thing to know about a job in its section."""
+    """The one thing to know about a job in its section (bus strings cleaned: plain text)."""
     job = row.job
     if row.section == "awaiting":
-        return f"from {job.client_id}"
+        return f"from {clean(job.client_id, DETAIL_CHARS - 5)}"
     if row.section == "queued":
         position = f"#{job.queue_position}" if job.queue_position is not None else "#?"
         return f"{position} ETA {duration(job.eta_s)}"
     if row.section == "active":
-        return f"{job.vehicle_id or '?'} {100 * job.progress:.0f}%"
+        return f"{short_id(job.vehicle_id or '?', 16)} {100 * job.progress:.0f}%"
     if row.section == "done":
         return metrics_text(job)
     reason = job.error.message if job.error is not None else ""
-    return f"{job.state}: {reason}" if reason else job.state
+    return clean(reason or job.state, DETAIL_CHARS)
 
 
 def metrics_text(job: JobState) -> str:
@@ -115,9 +120,19 @@ def metrics_text(job: JobState) -> str:
 
 def section_text(row: QueueRow) -> Text:
     label, style = SECTION_LABELS[row.section]
+    if row.section == "failed":
+        label, style = ENDED_LABELS.get(row.job.state, (label, style))
     return Text(label, style=style)
 
 
+def vehicle_state_text(state: str, held: bool) -> Text:
+    """:func:`state_text`, marked ``held`` when the operator holds the vehicle on the ground."""
+    text = state_text(state)
+    if held:
+        text.append(" held", style="bold black on yellow")
+    return text
+
+
 def short_id(identifier: str, width: int = 8) -> str:
-    """An identifier cut to ``width`` characters (ids are unique in their first characters)."""
-    return identifier if len(identifier) <= width else identifier[: width - 1] + "…"
+    """An identifier (or label) from the bus, cleaned and cut to ``width`` characters."""
+    return clean(identifier, width)

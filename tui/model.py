@@ -11,8 +11,6 @@ from __future__ import annotations
 from collections import deque
 from typing import Literal
 
-import msgspec
-
 from bus.messages import (
     CommandReply,
     Event,
@@ -24,40 +22,24 @@ from bus.messages import (
     VehicleSummary,
 )
 from tui.inputs import BadPayload, BusInput, OrchestratorPresence, VehiclePresence
-from tui.rows import Alert, QueueRow, QueueSection, VehicleRow
+from tui.records import (
+    AWAITING_JOB_STATES,
+    FINAL_JOB_STATES,
+    VehicleRecord,
+    job_alerts,
+    queue_rows,
+    vehicle_alert,
+    with_known_strokes,
+)
+from tui.rows import Alert, QueueRow, VehicleRow
 from tui.settings import ConsoleSettings
 from tui.tracks import Track, TrackPoint
 
-FINAL_JOB_STATES = frozenset({"done", "failed", "cancelled", "rejected"})
-ACTIVE_JOB_STATES = frozenset({"assigned", "writing"})
+AIRBORNE_STATES = frozenset({"taking_off", "writing", "returning", "landing"})
+"""Vehicle states in which it is in the air."""
+GROUNDED_STATES = frozenset({"fault", "lost", "unknown"})
+"""Vehicle states in which it cannot take a job whatever the operator does to the queue."""
 OrchestratorStatus = Literal["unknown", "online", "offline"]
-
-
-def with_known_strokes(job: JobState, known: JobState | None) -> JobState:
-    """``job``, keeping the strokes of an earlier version of it: the orchestrator sends a drawing's
-    strokes only in some messages (``jobs/<id>`` while waiting), never in ``fleet``."""
-    if job.strokes is None and known is not None and known.strokes is not None:
-        return msgspec.structs.replace(job, strokes=known.strokes)
-    return job
-
-
-class _Vehicle:
-    """Mutable record behind a :class:`VehicleRow`."""
-
-    def __init__(self, vehicle_id: str, kind: str = "", board_id: str | None = None) -> None:
-        self.vehicle_id = vehicle_id
-        self.kind = kind
-        self.board_id = board_id
-        self.state = "unknown"
-        self.job_id: str | None = None
-        self.progress = 0.0
-        self.tracking_error_m: float | None = None
-        self.battery_fraction: float | None = None
-        self.heard_s: float | None = None
-        self.alive: bool | None = None
-        self.message = ""
-        self.position_m_enu: tuple[float, float, float] | None = None
-        self.track = Track()
 
 
 class ConsoleModel:
@@ -68,14 +50,18 @@ class ConsoleModel:
     ):
         self.settings = settings
         self.max_finished = max_finished
-        self._vehicles: dict[str, _Vehicle] = {}
+        self._vehicles: dict[str, VehicleRecord] = {}
         self._order = {spec.vehicle_id: i for i, spec in enumerate(settings.vehicles)}
         for spec in settings.vehicles:
-            self._vehicles[spec.vehicle_id] = _Vehicle(spec.vehicle_id, spec.kind, spec.board_id)
+            self._vehicles[spec.vehicle_id] = VehicleRecord(
+                spec.vehicle_id, spec.kind, spec.board_id
+            )
         self._sorted_ids: list[str] | None = None
         self._jobs: dict[str, JobState] = {}
         self._events: deque[tuple[int, Event]] = deque(maxlen=max_events)
         self._event_seq = 0
+        self._show_event_s = float("-inf")
+        """Time of the newest event of the show (not the console's own notes) in the log."""
         self._acknowledged: set[str] = set()
         self.orchestrator: OrchestratorStatus = "unknown"
         """Whether the orchestrator's liveliness token exists (unknown before any news)."""
@@ -84,6 +70,8 @@ class ConsoleModel:
         self.last_snapshot_s: float | None = None
         """Arrival time of the latest snapshot or fleet message."""
         self.queue_paused = False
+        self.dirty_boards: frozenset[str] = frozenset()
+        """Boards left half-written: the orchestrator waits for the operator's fresh sheet."""
         self.last_reply: tuple[OperatorCommand, CommandReply] | None = None
         self.fleet_version = 0
         self.queue_version = 0
@@ -133,6 +121,7 @@ class ConsoleModel:
             over_threshold=self._over_threshold(v),
             message=v.message,
             position_m_enu=v.position_m_enu,
+            held=v.held,
         )
 
     def vehicle_rows(self, now_s: float) -> list[VehicleRow]:
@@ -147,6 +136,26 @@ class ConsoleModel:
             counts[state] = counts.get(state, 0) + 1
         return counts
 
+    def airborne_count(self) -> int:
+        """Vehicles whose last known state is in the air (lost ones count: they may still fly)."""
+        return sum(1 for v in self._vehicles.values() if v.state in AIRBORNE_STATES)
+
+    def can_fly_count(self) -> int:
+        """Vehicles that may take the next job: present, not held, not in fault."""
+        return sum(
+            1
+            for v in self._vehicles.values()
+            if v.alive is not False and not v.held and v.state not in GROUNDED_STATES
+        )
+
+    def fault_ids(self) -> list[str]:
+        """Vehicles in ``fault`` (e.g. after an emergency stop), in display order."""
+        vehicles = self._vehicles
+        return [vid for vid in self.vehicle_ids() if vehicles[vid].state == "fault"]
+
+    def awaiting_count(self) -> int:
+        return sum(1 for j in self._jobs.values() if j.state in AWAITING_JOB_STATES)
+
     def track(self, vehicle_id: str) -> Track | None:
         v = self._vehicles.get(vehicle_id)
         return None if v is None else v.track
@@ -159,33 +168,8 @@ class ConsoleModel:
         return self._jobs.get(job_id) if job_id else None
 
     def queue_rows(self) -> list[QueueRow]:
-        """Awaiting approval, queued (in queue order), active, then done and failed (newest
-        first)."""
-        jobs = list(self._jobs.values())
-        awaiting = sorted(
-            (j for j in jobs if j.state in ("awaiting_approval", "submitted")),
-            key=lambda j: j.created_at_s,
-        )
-        queued = sorted(
-            (j for j in jobs if j.state == "queued"),
-            key=lambda j: (j.queue_position or 10**9, -j.priority, j.created_at_s),
-        )
-        active = sorted(
-            (j for j in jobs if j.state in ACTIVE_JOB_STATES), key=lambda j: j.vehicle_id or ""
-        )
-        done = sorted((j for j in jobs if j.state == "done"), key=lambda j: -j.updated_at_s)
-        failed = sorted(
-            (j for j in jobs if j.state in ("failed", "cancelled", "rejected")),
-            key=lambda j: -j.updated_at_s,
-        )
-        sections: list[tuple[QueueSection, list[JobState]]] = [
-            ("awaiting", awaiting),
-            ("queued", queued),
-            ("active", active),
-            ("done", done),
-            ("failed", failed),
-        ]
-        return [QueueRow(section, job) for section, group in sections for job in group]
+        """Awaiting approval, queued (in queue order), active, then ended (newest first)."""
+        return queue_rows(self._jobs.values())
 
     def events_after(self, seq: int) -> list[tuple[int, Event]]:
         """Events with a sequence number above ``seq`` (0 for all kept), oldest first."""
@@ -219,33 +203,16 @@ class ConsoleModel:
                     "orchestrator gone: showing the last known state",
                 )
             )
+        limit_m = self.settings.tracking_error_alert_m
         for vid in self.vehicle_ids():
             v = self._vehicles[vid]
-            if v.alive is False or v.state == "lost":
-                alerts.append(Alert(f"lost:{vid}", "vehicle_lost", f"{vid} lost"))
-            elif self._over_threshold(v):
-                limit_cm = 100 * self.settings.tracking_error_alert_m
-                error_cm = 100 * (v.tracking_error_m or 0.0)
-                alerts.append(
-                    Alert(
-                        f"tracking:{vid}",
-                        "tracking_error",
-                        f"{vid} tracking error {error_cm:.1f} cm > {limit_cm:.1f} cm",
-                    )
-                )
-        for job in self._jobs.values():
-            if job.state == "failed":
-                reason = job.error.message if job.error else "no reason given"
-                alerts.append(
-                    Alert(
-                        f"failed:{job.job_id}",
-                        "job_failed",
-                        f"job {job.job_id} ({job.label}) failed: {reason}",
-                    )
-                )
+            alert = vehicle_alert(v, limit_m, over_threshold=self._over_threshold(v))
+            if alert is not None:
+                alerts.append(alert)
+        alerts.extend(job_alerts(self._jobs.values(), self.dirty_boards))
         return alerts
 
-    def _over_threshold(self, v: _Vehicle) -> bool:
+    def _over_threshold(self, v: VehicleRecord) -> bool:
         return (
             v.alive is not False
             and v.state == "writing"
@@ -263,6 +230,7 @@ class ConsoleModel:
         elif isinstance(item, JobState):
             self._job(item)
         elif isinstance(item, Event):
+            self._show_event_s = max(self._show_event_s, item.time_s)
             self.add_event(item)
         elif isinstance(item, ShowSnapshot):
             self.apply_snapshot(item, now_s, full=False)
@@ -292,16 +260,28 @@ class ConsoleModel:
             self._jobs = jobs
             self._evict_finished()
             self.queue_version += 1
+            self._history(snapshot.events)
         else:
             for job in snapshot.jobs:
                 self._job(job)
         for summary in snapshot.vehicles:
             self._summary(summary, now_s)
+        if self.dirty_boards != frozenset(snapshot.dirty_boards):
+            self.dirty_boards = frozenset(snapshot.dirty_boards)
+            self.status_version += 1
+            self.tracks_version += 1  # board titles say it
         if self.queue_paused != snapshot.queue_paused:
             self.queue_paused = snapshot.queue_paused
             self.status_version += 1
         self.last_snapshot_s = now_s
         self.fleet_version += 1
+
+    def _history(self, events: list[Event]) -> None:
+        """The show's recent events from a snapshot: those newer than any already logged."""
+        for event in events:
+            if event.time_s > self._show_event_s:
+                self._show_event_s = event.time_s
+                self.add_event(event)
 
     def add_event(self, event: Event) -> None:
         self._event_seq += 1
@@ -343,10 +323,10 @@ class ConsoleModel:
             vehicle_id=command.vehicle_id,
         )
 
-    def _vehicle(self, vehicle_id: str) -> _Vehicle:
+    def _vehicle(self, vehicle_id: str) -> VehicleRecord:
         v = self._vehicles.get(vehicle_id)
         if v is None:
-            v = self._vehicles[vehicle_id] = _Vehicle(vehicle_id)
+            v = self._vehicles[vehicle_id] = VehicleRecord(vehicle_id)
             self._sorted_ids = None
         return v
 
@@ -385,6 +365,7 @@ class ConsoleModel:
         v = self._vehicle(s.vehicle_id)
         v.kind = v.kind or s.kind
         v.board_id = v.board_id or s.board_id
+        v.held = s.held
         if v.alive is None:
             v.alive = s.alive
         recent = v.heard_s is not None and now_s - v.heard_s <= self.settings.lost_after_s

@@ -14,6 +14,7 @@ from typing import Any
 from rich.text import Text
 
 from tui.braille import BrailleCanvas, apply_transform, fit_transform
+from tui.safe_text import clean
 
 Polyline = list[tuple[float, float]]
 
@@ -75,5 +76,5 @@ def render_preview(
     drawn = render_strokes(strokes, cols, rows) if strokes else None
     if drawn is not None:
         return drawn
-    shown = text if text else label
+    shown = clean(text if text else label)
     return Text(shown, style="bold", justify="center", no_wrap=False)

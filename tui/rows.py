@@ -37,6 +37,8 @@ class VehicleRow:
     """Writing with a tracking error above the show's alert threshold."""
     message: str
     position_m_enu: tuple[float, float, float] | None
+    held: bool = False
+    """Landed or stopped by the operator: it takes no job until released (``u``)."""
 
 
 @dataclass(frozen=True)
@@ -53,5 +55,13 @@ class Alert:
 
     key: str
     """Stable identity, e.g. ``lost:uav1``; acknowledged alerts stay hidden until it clears."""
-    kind: Literal["vehicle_lost", "tracking_error", "job_failed", "orchestrator_lost"]
+    kind: Literal[
+        "vehicle_lost",
+        "vehicle_fault",
+        "tracking_error",
+        "job_failed",
+        "awaiting_approval",
+        "fresh_sheet",
+        "orchestrator_lost",
+    ]
     message: str

@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import importlib
 import json
+import logging
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -26,8 +27,10 @@ from planner.glyphs import Glyph, fit_to_area, parse_strokes_json, text_glyph
 from planner.pipeline import PlanOptions, plan_strokes
 from planner.samples import TrajectorySamples
 from showfile import Show
+from showfile.checks import footprint
 from showfile.planning import board_frame, plan_options
 from sim.params import BrushParams, WorldParams
+from trust.settings import session_settings
 from vehicle_agent.backends.base import Vec3, VehicleBackend
 from vehicle_agent.backends.sim import SimBackend, SimVehicle
 from vehicle_agent.control.controller import (
@@ -40,6 +43,7 @@ from vehicle_agent.flight import FlightLog
 from vehicle_agent.job_picture import PICTURE_NAME, PictureWorker, job_figure, save_png
 from vehicle_agent.job_runner import JobRunner, PreparedJob, RunnerConfig
 from vehicle_agent.metrics import flight_metrics
+from vehicle_agent.safety import DeviationLimit, SafetyLimits, WritingBounds, vehicle_fence
 from vehicle_agent.service import (
     AgentService,
     EventOutbox,
@@ -97,17 +101,19 @@ def vehicle_setup(show: Show, vehicle_id: str, *, time_scale: float | None = Non
         scale = 1.0  # an autopilot lives in real time
     frame = board_frame(board)
     options = plan_options(planning, limits, frame)
+    cruise_z_m = frame.surface_z_m + planning.write_height_m + planning.clearance_m
     runner = RunnerConfig(
         vehicle_id=vehicle.id,
         kind=vehicle.kind,
         board_id=board.id,
         home_m_enu=vehicle.home_m_enu,
-        cruise_z_m=frame.surface_z_m + planning.write_height_m + planning.clearance_m,
+        cruise_z_m=cruise_z_m,
         v_max_mps=limits.v_max_mps,
         a_max_mps2=min(limits.a_max_mps2),
         loss_land_after_s=LOSS_LAND_AFTER_S,
         telemetry_period_s=scale / TELEMETRY_RATE_HZ,
         progress_period_s=scale * PROGRESS_PERIOD_S,
+        safety=safety_limits(show, vehicle_id, cruise_z_m),
     )
     return VehicleSetup(
         show=show,
@@ -119,6 +125,32 @@ def vehicle_setup(show: Show, vehicle_id: str, *, time_scale: float | None = Non
         runner_config=runner,
         time_scale=scale,
         control_rate_hz=show.controller.rate_hz,
+    )
+
+
+def safety_limits(show: Show, vehicle_id: str, cruise_z_m: float) -> SafetyLimits:
+    """The show's ``safety`` section for one vehicle, with its geofence: its board, its home and
+    the transit between them, up to ``cruise_z_m`` plus the ceiling margin."""
+    s = show.safety
+    vehicle = show.vehicle(vehicle_id)
+    fence = vehicle_fence(
+        footprint(show.board(vehicle.board)),
+        vehicle.home_m_enu,
+        cruise_z_m,
+        margin_m=s.fence_margin_m,
+        ceiling_margin_m=s.fence_ceiling_margin_m,
+    )
+    return SafetyLimits(
+        deviation=DeviationLimit(s.deviation_bound_m, s.deviation_window_s),
+        fence=fence,
+        writing=WritingBounds(s.rmse_pen_down_max_m, s.iou_min),
+        abort_policy=s.abort_policy,
+        abort_hold_s=s.abort_hold_s,
+        abort_backoff_s=s.abort_backoff_s,
+        fence_hold_s=s.fence_hold_s,
+        settle_tolerance_m=s.settle_tolerance_m,
+        settle_timeout_s=s.settle_timeout_s,
+        settle_attempts=s.settle_attempts,
     )
 
 
@@ -345,18 +377,30 @@ def make_runner(setup: VehicleSetup) -> JobRunner:
     return JobRunner(setup.runner_config)
 
 
+def warm_up(setup: VehicleSetup) -> None:
+    """Plan one character before joining the bus: the first plan imports and initialises the
+    solvers while holding the interpreter lock, which stalled the agent's loop (and its status
+    heartbeat, by which the orchestrator knows it is alive) for up to a second."""
+    try:
+        prepare_job(setup, JobAssignment(job_id="warm-up", text="一"))
+    except Exception as exc:  # the real jobs will say what is wrong
+        logging.getLogger(__name__).warning("%s: warm-up plan failed: %s", setup.vehicle_id, exc)
+
+
 async def run_agent(
     setup: VehicleSetup, backend: VehicleBackend, events: EventOutbox | None = None
 ) -> None:
     """Run this vehicle's agent until SIGINT/SIGTERM (the ``skyquill agent`` process);
     ``events``: the outbox the backend's ``on_text`` was given."""
     vehicle = setup.show.vehicle(setup.vehicle_id)
+    warm_up(setup)
     pictures = PictureWorker(setup.vehicle_id)
     settings = ServiceSettings(
         show_id=setup.show.show_id,
-        zenoh=setup.show.zenoh,
+        zenoh=session_settings(setup.show, setup.vehicle_id),
         time_scale=setup.time_scale,
         skip_when_late=vehicle.backend != "sim",
+        lost_after_s=setup.show.policy.lost_after_s,
     )
     service = AgentService(
         settings,

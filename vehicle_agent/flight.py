@@ -9,6 +9,10 @@ Clock mapping: tick ``k`` happens at clock time ``start_time_s + k * dt``; the r
 (not recorded); after the reference's end it holds the last sample. Each tick: record the state,
 read the mocap frame, compute the inner-loop command from the reference at the tick time, advance
 the world one tick.
+
+With ``FlightConfig.deviation`` set, a vehicle whose tracking error stays above the bound for longer
+than its window ends the flight there (``Flight.abort``, ``FlightLog.abort_reason``): what the
+agent does on a vehicle (lift the brush and stop writing), in batch form.
 """
 
 from __future__ import annotations
@@ -36,6 +40,7 @@ from vehicle_agent.control.controller import (
 )
 from vehicle_agent.control.errors import ControlError
 from vehicle_agent.control.inner import InnerLoopSetpoint
+from vehicle_agent.safety.deviation import DeviationLimit, DeviationMonitor, DeviationTrip
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -66,6 +71,8 @@ class FlightConfig:
     """Hover on the first reference sample before clock zero, in [s], not recorded: the vehicle
     meets the job already settled in the wind (the filter has learnt it, the body leans into
     it), as a vehicle that took off and flew to the start would."""
+    deviation: DeviationLimit | None = None
+    """End the flight when a vehicle's tracking error stays above this bound (None: never)."""
 
 
 @dataclass(frozen=True)
@@ -132,6 +139,8 @@ class FlightLog:
     """Nominal stroke width [m] (the target ink)."""
     board_height_m: float
     """Board surface height [m]."""
+    abort_reason: str | None = None
+    """Why the flight ended early (a deviation abort), None when it was flown to its end."""
 
     @property
     def n_vehicles(self) -> int:
@@ -191,6 +200,11 @@ class Flight:
         self._records: dict[str, list[FloatArray]] = {name: [] for name in _LOGGED}
         self._ticks: list[int] = []
         self._k = 0
+        self._monitors = (
+            [DeviationMonitor(cfg.deviation) for _ in references] if cfg.deviation else []
+        )
+        self.abort: tuple[int, DeviationTrip] | None = None
+        """(vehicle, trip) of the deviation that ended the flight early."""
         for _ in range(round(cfg.preroll_s / self.dt_s)):
             self._advance(0)
 
@@ -201,8 +215,18 @@ class Flight:
 
     @property
     def done(self) -> bool:
-        """True once the references and the settle time are flown."""
-        return bool(self._k * self.dt_s >= self.duration_s - 1e-9)
+        """True once the references and the settle time are flown, or the flight aborted."""
+        return self.abort is not None or bool(self._k * self.dt_s >= self.duration_s - 1e-9)
+
+    @property
+    def abort_reason(self) -> str | None:
+        """Why the flight ended early, in one sentence (None: it did not)."""
+        if self.abort is None:
+            return None
+        vehicle, trip = self.abort
+        return f"deviation abort of vehicle {vehicle} at t = {trip.tripped_at_s:.2f} s: " + (
+            trip.message
+        )
 
     def _row(self, tick: int) -> int:
         return min(tick, int(self._p.shape[0]) - 1)
@@ -236,6 +260,16 @@ class Flight:
         rec["disturbance_estimate_mps2_enu"].append(ctrl.estimator.disturbance_mps2_enu)
         self._ticks.append(row)
         self._k += 1
+        if self._monitors:
+            self._watch(s.position_m_enu, row)
+
+    def _watch(self, position_m_enu: FloatArray, row: int) -> None:
+        """Feed each vehicle's tracking error (to the body reference it tracks) to its monitor."""
+        errors = np.linalg.norm(position_m_enu - self._body_p[row], axis=1)
+        for vehicle, monitor in enumerate(self._monitors):
+            trip = monitor.update(float(errors[vehicle]), self.time_s)
+            if trip is not None and self.abort is None:
+                self.abort = (vehicle, trip)
 
     def _advance(self, row: int) -> InnerLoopSetpoint:
         """One control tick on reference row ``row``: mocap, controller, world step."""
@@ -296,6 +330,7 @@ class Flight:
             brush_lever_m=cfg.world.brush.write_height_m,
             nominal_width_m=cfg.world.brush.nominal_width_m,
             board_height_m=cfg.world.board_height_m,
+            abort_reason=self.abort_reason,
             **stacked,
         )
 

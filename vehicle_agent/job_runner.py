@@ -7,38 +7,42 @@ the :class:`TickActions` it returns. Nothing here reads a clock or touches the n
 Life of a job (``VehicleStatus.state``)::
 
     idle -> taking_off -> writing -> returning -> landing -> idle
-            (climb, plan, transit)   (to hover above home, then land)
+            (plan on the ground, climb, transit, settle)   (to hover above home, then land)
+
+The plan is made before take-off and checked against the vehicle's geofence: a plan that leaves it
+is refused (``failed``, code ``geofence``) and the vehicle never leaves the ground. Before writing
+the vehicle must hold the start of the plan (``safety.settle_*``); if it cannot after its
+approaches the job goes back to the queue (code ``not_settled``) and the brush never goes down.
 
 Interruptions while a job is running lift the brush first (straight up to the pen-up height), then:
 cancel -> return and land -> idle; operator land -> return and land -> landed; orchestrator lost ->
 hover in place, and when it comes back, or after ``loss_land_after_s``, return and land; estop ->
 motors off, ``fault``. A vehicle fault reported by the backend ends in ``fault`` as well.
 
-Reports: ``started``, ``progress`` and ``done`` for a job flown to its end; ``failed`` when the
-job itself cannot be written (it cannot be planned), or, with ``retry_after_s``, when the vehicle
-refused to take off (pre-arm checks): the job goes back to the queue and the vehicle stays idle,
-taking no job until then. An interrupted job is abandoned without a
-report: the status drops its ``job_id`` at once, and the orchestrator, which asked for the
-interruption or was away, puts the job back in the queue for another vehicle.
+Safety aborts (:class:`vehicle_agent.safety.guard.SafetyGuard`), with an alert event each: a
+tracking error above the bound for longer than its window (``deviation``) lifts the brush from
+where the vehicle is, then holds or returns and lands (``safety.abort_policy``); a vehicle found
+outside its geofence (``geofence``) holds ``fence_hold_s`` and lands where it is, then stays in
+``fault``. The job is reported ``failed`` with that code, handed back to the queue
+(``retry_after_s``) while writing had not begun, final once it had. After an abort the vehicle
+takes no job for ``safety.abort_backoff_s``.
+
+Reports: ``started``, ``progress`` and, for a job flown to its end, the service's result report
+(``done`` only within the writing bounds); ``failed`` when the job cannot be planned, or with
+``retry_after_s`` when the vehicle refused to take off (pre-arm checks). An interrupted job is
+abandoned without a report: the status drops its ``job_id`` at once, and the orchestrator, which
+asked for the interruption or was away, puts the job back in the queue for another vehicle.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field, replace
-
 from bus.messages import (
-    AgentReport,
     CommandReply,
     ErrorInfo,
     JobAssignment,
-    Telemetry,
     VehicleCommand,
-    VehicleStateName,
-    VehicleStatus,
 )
-from vehicle_agent.backends.base import Setpoint, Vec3, VehicleSnapshot
-from vehicle_agent.motion import Move, plan_move
+from vehicle_agent.backends.base import Vec3, VehicleSnapshot
 from vehicle_agent.runner_io import (
     ACTIVE_PHASES,
     BackendCommand,
@@ -49,10 +53,10 @@ from vehicle_agent.runner_io import (
     refuse,
     sample_at,
     takeoff_refused_report,
-    telemetry_message,
-    vec3,
 )
-from vehicle_agent.trace import FlownTrace, TraceRecorder
+from vehicle_agent.runner_job import RunningJob
+from vehicle_agent.runner_phases import ABORT_LIFT_M, Level, RunnerPhases
+from vehicle_agent.safety.guard import Breach
 
 __all__ = [
     "ACTIVE_PHASES",
@@ -66,50 +70,10 @@ __all__ = [
 ]
 
 
-@dataclass
-class _Job:
-    assignment: JobAssignment
-    prepared: PreparedJob | None = None
-    plan_requested: bool = False
-    started_s: float | None = None
-    recorder: TraceRecorder = field(default_factory=TraceRecorder)
-    progress: float = 0.0
-    next_progress_s: float = 0.0
-    planned_now: Setpoint | None = None
-    """The plan's sample at this tick: set by ``_write_setpoint``, recorded by ``_write_tick``."""
-
-
-class JobRunner:
+class JobRunner(RunnerPhases):
     """The decision logic of one vehicle agent (see the module docstring)."""
 
-    def __init__(self, config: RunnerConfig) -> None:
-        self.config = config
-        self.state: VehicleStateName = "idle"
-        self.message = ""
-        self.phase = "ground"
-        """Finer step inside ``state``: ground, climb, wait_plan, transit, settle, write, lift,
-        hover, return, land, stopped."""
-        self._job: _Job | None = None
-        self._abort: str | None = None
-        self._after_landing: VehicleStateName = "idle"
-        self._move: Move | None = None
-        self._hold_m_enu: Vec3 | None = None
-        self._backend_command: BackendCommand | None = None
-        self._reports: list[AgentReport] = []
-        self._orchestrator_alive = False
-        self._lost_since_s: float | None = None
-        self._next_telemetry_s = -math.inf
-        self._last_setpoint: Setpoint | None = None
-        self._settle_until_s = 0.0
-        self._retry_at_s = -math.inf
-        self._retry_backoff_s = config.takeoff_retry_s
-
     # --- inputs --------------------------------------------------------------------------------
-    @property
-    def job_id(self) -> str | None:
-        """The job this vehicle is working on (until it has landed after it)."""
-        return None if self._job is None else self._job.assignment.job_id
-
     @property
     def orchestrator_alive(self) -> bool:
         return self._orchestrator_alive
@@ -122,7 +86,9 @@ class JobRunner:
             return self._cancel(command.job_id)
         if command.command == "land":
             return self._land()
-        return self._estop()
+        if command.command == "estop":
+            return self._estop()
+        return refuse("invalid", f"the job runner does not take {command.command!r}")
 
     def set_orchestrator_alive(self, alive: bool, now_s: float) -> None:
         """The orchestrator's liveliness token appeared (True) or disappeared (False)."""
@@ -135,23 +101,39 @@ class JobRunner:
                 self._interrupt("orchestrator_lost", "orchestrator lost: brush lifted, hovering")
             return
         self._lost_since_s = None
-        if self.phase == "hover":
+        if self.phase == "hover" and self._abort == "orchestrator_lost":
             self.message = "orchestrator back: returning home"
             self._start_return(self._current_reference())
 
     def plan_ready(self, prepared: PreparedJob) -> None:
-        """The planner finished the current job's trajectory."""
-        if self._job is not None and self._job.assignment.job_id == prepared.job_id:
-            self._job.prepared = prepared
+        """The planner finished the current job's trajectory: checked against the geofence, then
+        the vehicle takes off (or goes on, if it is already in the air)."""
+        job = self._job
+        if job is None or job.job_id != prepared.job_id or self._abort:
+            return
+        flown = (prepared.command_samples or prepared.samples).position_m_enu
+        why = self.guard.check_plan(flown, self.config.hover_home_m_enu)
+        if why is not None:
+            self._event("alert", "geofence", f"plan of {job.job_id} refused: {why}")
+            self.plan_failed(job.job_id, ErrorInfo(code="geofence", message=f"refused: {why}"))
+            return
+        job.prepared = prepared
+        if self.phase == "preflight":
+            self._backend_command = ("takeoff", self.config.hover_home_m_enu)
+            self.phase = "climb"
 
     def plan_failed(self, job_id: str, error: ErrorInfo) -> None:
-        """The job could not be laid out or planned: report it failed and come back."""
-        if self._job is None or self._job.assignment.job_id != job_id or self._abort:
+        """The job could not be laid out, planned or fenced: report it failed and come back."""
+        job = self._job
+        if job is None or job.job_id != job_id or self._abort:
             return
-        self._fail(error)
+        self._reports.append(job.report(self.config.vehicle_id, "failed", error=error))
         self.message = f"cannot plan: {error.message}"
-        self._abort = "plan_failed"
         self._job = None
+        if self.phase == "preflight":
+            self.state, self.phase = self._after_landing, "ground"
+            return
+        self._abort = "plan_failed"
         if self.phase in ("wait_plan", "transit", "settle"):
             self._start_return(self._current_reference())
 
@@ -163,9 +145,10 @@ class JobRunner:
             return
         backoff = self._retry_backoff_s
         self._retry_backoff_s = min(2.0 * backoff, self.config.takeoff_retry_max_s)
-        self._retry_at_s = now_s + backoff
+        self._retry_at_s, self._retry_code = now_s + backoff, "takeoff_refused"
+        self._retry_reason = f"take-off refused: {reason}"
         if self._job is not None and self._abort is None:
-            job_id = self._job.assignment.job_id
+            job_id = self._job.job_id
             vid = self.config.vehicle_id
             self._reports.append(takeoff_refused_report(vid, job_id, reason, backoff))
         self.state, self.phase = self._after_landing, "ground"
@@ -177,20 +160,21 @@ class JobRunner:
     def _assign(self, job: JobAssignment | None, now_s: float) -> CommandReply:
         if job is None:
             return refuse("missing_job", "assign needs a job")
-        if self._job is not None and self._job.assignment.job_id == job.job_id:
+        if self._job is not None and self._job.job_id == job.job_id:
             return CommandReply(ok=True, message="already working on it")
         if self.phase != "ground" or self.state not in ("idle", "landed"):
             return refuse("busy", f"vehicle is {self.state}", field="job")
         if now_s < self._retry_at_s:
             wait_s = self._retry_at_s - now_s
-            return refuse("takeoff_refused", f"{self.message}; {wait_s:.0f} s to wait", field="job")
+            reason = f"{self._retry_reason}; {wait_s:.0f} s to wait"
+            return refuse(self._retry_code, reason, field="job")
         self._orchestrator_alive = True
         self._lost_since_s = None
-        self._job = _Job(assignment=job)
+        self._job = RunningJob(assignment=job)
         self._abort = None
         self._after_landing = "idle"
-        self.state, self.phase, self.message = "taking_off", "climb", f"job {job.job_id}"
-        self._backend_command = ("takeoff", self.config.hover_home_m_enu)
+        self.guard.reset()
+        self.state, self.phase, self.message = "taking_off", "preflight", f"job {job.job_id}"
         return CommandReply(ok=True, message=f"took job {job.job_id}")
 
     def _cancel(self, job_id: str | None) -> CommandReply:
@@ -204,6 +188,8 @@ class JobRunner:
     def _land(self) -> CommandReply:
         if self.phase == "stopped":
             return refuse("stopped", "vehicle is stopped")
+        if self.phase in ("land", "fence_hold"):
+            return CommandReply(ok=True, message="landing already")
         self._after_landing = "landed"
         if self.phase == "ground":
             self.state, self.message = "landed", "landed by operator"
@@ -223,41 +209,67 @@ class JobRunner:
         self._move = None
         self._job = None
 
-    # --- interruptions -------------------------------------------------------------------------
+    # --- interruptions and aborts --------------------------------------------------------------
     def _interrupt(self, reason: str, message: str) -> None:
         """Stop writing the current job: lift the brush; what follows depends on ``reason``."""
         self._abort = reason
         self.message = message
         self._job = None  # abandoned: the orchestrator requeues it (it asked, or it was gone)
+        if self.phase == "preflight":  # never left the ground
+            self.state, self.phase, self._abort = self._after_landing, "ground", None
+            return
         if self.phase == "climb":
             return  # lifted already; _advance decides once the climb is over
-        ref = self._current_reference()
-        lifted = (ref[0], ref[1], max(ref[2], self.config.cruise_z_m))
-        self._start_move(ref, lifted, "lift", "returning")
+        self._lift(self._current_reference())
 
-    def _fail(self, error: ErrorInfo) -> None:
-        assert self._job is not None
-        self._reports.append(
-            AgentReport(
-                vehicle_id=self.config.vehicle_id,
-                job_id=self._job.assignment.job_id,
-                event="failed",
-                progress=self._job.progress,
-                error=error,
-            )
-        )
+    def _abort_job(
+        self, code: str, message: str, lift_from: Vec3, *, level: Level = "alert"
+    ) -> None:
+        """A safety abort: report the job, raise an event, lift the brush, back off."""
+        vid, safety = self.config.vehicle_id, self.safety
+        job = self._job
+        self._event(level, code, f"{vid}: {message}")
+        if job is not None:
+            self._reports.append(job.aborted(vid, code, message, safety.abort_backoff_s))
+        self._retry_at_s, self._retry_code = self._now_s + safety.abort_backoff_s, code
+        self._retry_reason = f"{code} abort: {message}"
+        self._abort, self._job = code, None
+        self.message = f"{code}: {message}"
+        self._lift(lift_from, extra_m=ABORT_LIFT_M)
+
+    def _fence_breach(self, breach: Breach) -> None:
+        """Outside the geofence: stop writing where it is, hold, then land there; ``fault``."""
+        vid, job = self.config.vehicle_id, self._job
+        self._event("alert", "geofence", f"{vid}: {breach.message}: holding, then landing")
+        if job is not None:
+            report = job.aborted(vid, "geofence", breach.message, self.safety.abort_backoff_s)
+            self._reports.append(report)
+        self._abort, self._job, self._move = "geofence", None, None
+        self._after_landing = "fault"
+        self.message = f"geofence: {breach.message}; landing where it is"
+        self._hold_m_enu = breach.position_m_enu
+        self._hover_until_s = self._now_s + self.safety.fence_hold_s
+        self.phase, self.state = "fence_hold", "landing"
 
     # --- the tick ------------------------------------------------------------------------------
     def step(self, snapshot: VehicleSnapshot, now_s: float) -> TickActions:
         """Decide this control period from the vehicle state at its start (agent time ``now_s``)."""
         self._now_s = now_s
+        self._watch(snapshot)
         if snapshot.fault is not None and self.phase != "stopped":
             self._stop(f"vehicle fault: {snapshot.fault}")
         plan_request = self._take_plan_request()
+        breach = self.guard.check(self.phase, snapshot, self._tracked, now_s)
+        if breach is not None and breach.code == "geofence":
+            self._fence_breach(breach)
+        elif breach is not None:
+            self._abort_job(breach.code, breach.message, breach.position_m_enu)
         finished = None
         setpoint = self._advance(snapshot, now_s)
         if self.phase == "write" and self._job is not None:
+            assert setpoint is not None
             finished = self._write_tick(snapshot, now_s, setpoint)
+        self._tracked = setpoint
         if setpoint is not None:
             self._last_setpoint = setpoint
         actions = TickActions(
@@ -267,194 +279,27 @@ class JobRunner:
             reports=tuple(self._reports),
             telemetry=self._telemetry(snapshot, setpoint, now_s),
             finished=finished,
+            events=tuple(self._events),
         )
         self._backend_command = None
-        self._reports = []
+        self._reports, self._events = [], []
         return actions
+
+    def _watch(self, snap: VehicleSnapshot) -> None:
+        """Events for the autopilot's mode changes and for a fault appearing."""
+        vid = self.config.vehicle_id
+        mode = snap.autopilot_mode
+        if mode is not None and mode != self._seen_mode:
+            was = "" if self._seen_mode is None else f"{self._seen_mode} -> "
+            self._event("info", "vehicle_mode", f"{vid} autopilot mode {was}{mode}")
+            self._seen_mode = mode
+        if snap.fault != self._seen_fault:
+            if snap.fault is not None:
+                self._event("alert", "vehicle_fault", f"{vid} fault: {snap.fault}")
+            self._seen_fault = snap.fault
 
     def _take_plan_request(self) -> JobAssignment | None:
         if self._job is None or self._job.plan_requested or self.phase == "stopped":
             return None
         self._job.plan_requested = True
         return self._job.assignment
-
-    def _advance(self, snap: VehicleSnapshot, now_s: float) -> Setpoint | None:
-        phase = self.phase
-        if phase in ("ground", "stopped", "climb", "land"):
-            return self._passive(snap)
-        if phase == "wait_plan":
-            if self._job is not None and self._job.prepared is not None:
-                self._start_transit()
-            return self._reference_now(now_s)
-        if phase == "hover":
-            lost_for = now_s - (self._lost_since_s if self._lost_since_s is not None else now_s)
-            if lost_for >= self.config.loss_land_after_s:
-                self._after_landing = "landed"
-                self.message = "orchestrator lost: landing"
-                self._start_return(self._current_reference())
-            return self._hold()
-        if phase == "settle":
-            error = math.dist(snap.position_m_enu, self._hold_m_enu or snap.position_m_enu)
-            if error <= self.config.settle_tolerance_m or now_s >= self._settle_until_s:
-                self._begin_writing()
-                return self._write_setpoint(now_s)
-            return self._hold()
-        if phase == "write":
-            return self._write_setpoint(now_s)
-        assert self._move is not None
-        setpoint = self._move.setpoint(now_s)
-        if self._move.done(now_s):
-            self._move_finished()
-            if self.phase == "land":
-                return None  # the backend's landing mode flies from here
-        return setpoint
-
-    def _passive(self, snap: VehicleSnapshot) -> Setpoint | None:
-        """Phases where the backend's own mode flies: on the ground, climbing, landing."""
-        airborne_hold = snap.mode == "hold" and not snap.on_ground
-        if self.phase == "climb" and airborne_hold and self._backend_command is None:
-            self._hold_m_enu = self.config.hover_home_m_enu
-            self._retry_backoff_s = self.config.takeoff_retry_s  # it flies: forget refusals
-            if self._abort is not None:
-                self._start_return(self.config.hover_home_m_enu)
-            else:
-                self.phase = "wait_plan"
-                if self._job is not None and self._job.prepared is not None:
-                    self._start_transit()
-            return self._reference_now(self._now_s)
-        if self.phase == "land" and snap.on_ground and snap.mode == "idle":
-            self.state, self.phase = self._after_landing, "ground"
-            self.message = "landed" if self.state == "landed" else ""
-            self._job = None
-            self._abort = None
-        return None
-
-    def _reference_now(self, now_s: float) -> Setpoint:
-        """The reference of a phase that was just entered."""
-        if self._move is not None and self.phase in ("transit", "lift", "return"):
-            return self._move.setpoint(now_s)
-        return self._hold()
-
-    def _hold(self) -> Setpoint:
-        return Setpoint(position_m_enu=self._hold_m_enu or self.config.hover_home_m_enu)
-
-    def _start_transit(self) -> None:
-        assert self._job is not None and self._job.prepared is not None
-        prepared = self._job.prepared
-        first = (prepared.command_samples or prepared.samples).position_m_enu[0]
-        self._start_move(self._current_reference(), vec3(first), "transit", "taking_off")
-
-    def _start_return(self, start_m_enu: Vec3) -> None:
-        self._start_move(start_m_enu, self.config.hover_home_m_enu, "return", "returning")
-
-    def _start_move(self, start: Vec3, end: Vec3, phase: str, state: VehicleStateName) -> None:
-        cfg = self.config
-        self._move = plan_move(
-            start, end, self._now_s, v_max_mps=cfg.v_max_mps, a_max_mps2=cfg.a_max_mps2
-        )
-        self._hold_m_enu = end
-        self.phase, self.state = phase, state
-
-    def _move_finished(self) -> None:
-        if self.phase == "transit":
-            self.phase = "settle"
-            self._settle_until_s = self._now_s + self.config.settle_timeout_s
-        elif self.phase == "lift":
-            if self._abort == "orchestrator_lost" and not self._orchestrator_alive:
-                self.phase, self.state = "hover", "returning"
-            else:
-                self._start_return(self._current_reference())
-        elif self.phase == "return":
-            self._backend_command = ("land", None)
-            self.phase, self.state = "land", "landing"
-
-    def _current_reference(self) -> Vec3:
-        if self._last_setpoint is not None and self.phase not in ("climb", "ground"):
-            return self._last_setpoint.position_m_enu
-        return self._hold_m_enu or self.config.hover_home_m_enu
-
-    # --- writing -------------------------------------------------------------------------------
-    def _begin_writing(self) -> None:
-        job = self._job
-        assert job is not None and job.prepared is not None
-        job.started_s = self._now_s
-        job.next_progress_s = self._now_s + self.config.progress_period_s
-        self.phase, self.state = "write", "writing"
-        self._reports.append(
-            AgentReport(
-                vehicle_id=self.config.vehicle_id,
-                job_id=job.assignment.job_id,
-                event="started",
-                planned_duration_s=job.prepared.samples.duration_s,
-            )
-        )
-
-    def _write_setpoint(self, now_s: float) -> Setpoint:
-        job = self._job
-        assert job is not None and job.prepared is not None and job.started_s is not None
-        prepared = job.prepared
-        t_rel_s = now_s - job.started_s
-        job.planned_now = sample_at(prepared.samples, t_rel_s)
-        if prepared.command_samples is None:
-            return job.planned_now
-        # The body is commanded along the prepared reference; the pen state is the plan's.
-        commanded = sample_at(prepared.command_samples, t_rel_s)
-        return replace(commanded, pen_down=job.planned_now.pen_down)
-
-    def _write_tick(
-        self, snap: VehicleSnapshot, now_s: float, setpoint: Setpoint | None
-    ) -> FlownTrace | None:
-        job = self._job
-        assert job is not None and job.prepared is not None and job.started_s is not None
-        assert setpoint is not None and job.planned_now is not None
-        t_rel = now_s - job.started_s
-        duration = job.prepared.samples.duration_s
-        job.recorder.add(t_rel, snap, job.planned_now)
-        job.progress = min(t_rel / duration, 1.0) if duration > 0 else 1.0
-        if now_s >= job.next_progress_s and t_rel < duration:
-            job.next_progress_s = now_s + self.config.progress_period_s
-            self._reports.append(
-                AgentReport(
-                    vehicle_id=self.config.vehicle_id,
-                    job_id=job.assignment.job_id,
-                    event="progress",
-                    progress=job.progress,
-                )
-            )
-        if t_rel < duration:
-            return None
-        self.message = f"job {job.assignment.job_id} written"
-        self._start_return(setpoint.position_m_enu)
-        return job.recorder.finish(job.assignment.job_id, job.assignment.attempt)
-
-    # --- outputs -------------------------------------------------------------------------------
-    def _telemetry(
-        self, snap: VehicleSnapshot, setpoint: Setpoint | None, now_s: float
-    ) -> Telemetry | None:
-        period = self.config.telemetry_period_s
-        if now_s < self._next_telemetry_s - 1e-9:
-            return None
-        self._next_telemetry_s += period
-        if self._next_telemetry_s <= now_s:  # first message, or the loop fell behind
-            self._next_telemetry_s = now_s + period
-        progress = 0.0 if self._job is None else self._job.progress
-        return telemetry_message(
-            self.config.vehicle_id,
-            self.state,
-            snap,
-            setpoint,
-            now_s,
-            job_id=self.job_id,
-            progress=progress,
-        )
-
-    def status(self) -> VehicleStatus:
-        """The vehicle's status message as of now (publish it when it changes)."""
-        return VehicleStatus(
-            vehicle_id=self.config.vehicle_id,
-            kind=self.config.kind,
-            state=self.state,
-            board_id=self.config.board_id,
-            job_id=self.job_id,
-            message=self.message,
-        )

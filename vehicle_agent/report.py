@@ -5,7 +5,8 @@ the nominal lever, and the body, which leans away from it on purpose); velocity 
 body (Fig. 13); the input
 strokes, planned path and flown brush path on the board (Fig. 14), then the written ink beside the
 target ink with their intersection over union (Guo 2024 section VII). Matplotlib's Agg backend
-only, never pyplot, so it runs headless and in threads.
+only, never pyplot, so it runs headless and in threads. The title is data (it may hold a label
+from the public): drawn literally, never as mathtext (:func:`plain_title`).
 """
 
 from __future__ import annotations
@@ -90,9 +91,20 @@ def _ink_panels(fig: Figure, ink: InkResult, metrics: FlightMetrics, grid: objec
         ax.tick_params(labelsize=7)
 
 
-def _plain(text: str) -> str:
-    """Characters the default font lacks (CJK) spelt as U+XXXX."""
-    return "".join(ch if ord(ch) < 0x2000 else f"U+{ord(ch):04X}" for ch in text)
+TITLE_MAX_CHARS = 160
+"""Longest title drawn, in characters (before spelling): a label is data of any length."""
+
+
+def plain_title(text: str) -> str:
+    """``text`` as a title that is drawn literally: cut to ``TITLE_MAX_CHARS`` with an ellipsis,
+    one line, and every character the default font lacks (CJK) or that is not printable
+    (control codes, bidirectional overrides, line breaks) spelt as U+XXXX. The caller draws it
+    with ``parse_math=False``, so ``$...$`` stays text rather than matplotlib mathtext."""
+    if len(text) > TITLE_MAX_CHARS:
+        text = text[: TITLE_MAX_CHARS - 3] + "..."
+    return "".join(
+        ch if ch.isprintable() and ord(ch) < 0x2000 else f"U+{ord(ch):04X}" for ch in text
+    )
 
 
 def build_report(
@@ -116,7 +128,8 @@ def build_report(
         f"whole flight {metrics.rmse_m * 1000:.1f} mm, max {metrics.max_error_m * 1000:.1f} mm, "
         f"IoU {metrics.iou:.2f}, {metrics.sim_time_s:.1f} s simulated"
     )
-    fig.suptitle(f"{_plain(title)}\n{summary}" if title else summary, fontsize=11)
+    heading = f"{plain_title(title)}\n{summary}" if title else summary
+    fig.suptitle(heading, fontsize=11, parse_math=False)  # a title may hold a public label
     return fig
 
 

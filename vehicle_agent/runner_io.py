@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 
@@ -18,9 +19,10 @@ from bus.messages import (
 )
 from planner.samples import TrajectorySamples
 from vehicle_agent.backends.base import Setpoint, Vec3, VehicleSnapshot
+from vehicle_agent.safety.limits import SafetyLimits, WritingBounds, writing_verdict
 from vehicle_agent.trace import FlownTrace
 
-ACTIVE_PHASES = ("climb", "wait_plan", "transit", "settle", "write")
+ACTIVE_PHASES = ("preflight", "climb", "wait_plan", "transit", "settle", "write")
 """Phases in which a job is running (an interruption lifts the brush and abandons it)."""
 
 BackendCommand = tuple[str, Vec3 | None]
@@ -45,10 +47,6 @@ class RunnerConfig:
     """Speed limit in [m/s] for transit moves."""
     a_max_mps2: float
     """Acceleration limit in [m/s^2] for transit moves (the smallest per-axis limit)."""
-    settle_tolerance_m: float = 0.01
-    """Before writing, the vehicle holds the start until it is this close in [m] to it..."""
-    settle_timeout_s: float = 3.0
-    """...or for at most this long in [s] (agent time)."""
     loss_land_after_s: float = 10.0
     """How long in [s] (agent time) to hover after losing the orchestrator before landing."""
     telemetry_period_s: float = 0.05
@@ -60,6 +58,8 @@ class RunnerConfig:
     [s] (agent time)..."""
     takeoff_retry_max_s: float = 60.0
     """...doubled at each refusal in a row, up to this many [s]."""
+    safety: SafetyLimits = field(default_factory=SafetyLimits)
+    """Deviation bound, geofence, writing bounds, settling and the abort policy."""
 
     @property
     def hover_home_m_enu(self) -> Vec3:
@@ -83,6 +83,20 @@ class PreparedJob:
 
 
 @dataclass(frozen=True)
+class RunnerEvent:
+    """A line for the show's event log about this vehicle (published on its ``events`` key)."""
+
+    level: Literal["info", "warning", "alert"]
+    """How loud: ``alert`` for aborts and faults."""
+    kind: str
+    """e.g. ``deviation``, ``geofence``, ``not_settled``, ``vehicle_fault``, ``vehicle_mode``."""
+    message: str
+    """One sentence for a person."""
+    job_id: str | None = None
+    """The job concerned, if any."""
+
+
+@dataclass(frozen=True)
 class TickActions:
     """What the service must do in this control period, in this order."""
 
@@ -97,7 +111,9 @@ class TickActions:
     telemetry: Telemetry | None = None
     """A telemetry message to publish now."""
     finished: FlownTrace | None = None
-    """A job just flown to its end: compute its metrics and report ``done``."""
+    """A job just flown to its end: compute its metrics and report it (:func:`result_report`)."""
+    events: tuple[RunnerEvent, ...] = ()
+    """Events for the show's log (aborts, faults, autopilot mode changes), oldest first."""
 
 
 def done_report(vehicle_id: str, trace: FlownTrace, metrics: JobMetrics | None) -> AgentReport:
@@ -109,6 +125,29 @@ def done_report(vehicle_id: str, trace: FlownTrace, metrics: JobMetrics | None) 
         progress=1.0,
         planned_duration_s=trace.duration_s,
         metrics=metrics,
+    )
+
+
+def result_report(
+    vehicle_id: str, trace: FlownTrace, metrics: JobMetrics | None, bounds: WritingBounds
+) -> AgentReport:
+    """``done`` when the written job met ``bounds``; ``failed`` with code ``writing_bounds`` (the
+    metrics attached) when it did not, or ``unmeasured`` when it could not be measured."""
+    if metrics is None:
+        error = ErrorInfo(code="unmeasured", message="the written job could not be measured")
+    else:
+        why = writing_verdict(metrics.rmse_pen_down_m, metrics.iou, bounds)
+        if why is None:
+            return done_report(vehicle_id, trace, metrics)
+        error = ErrorInfo(code="writing_bounds", message=f"written out of bounds: {why}")
+    return AgentReport(
+        vehicle_id=vehicle_id,
+        job_id=trace.job_id,
+        event="failed",
+        progress=1.0,
+        planned_duration_s=trace.duration_s,
+        metrics=metrics,
+        error=error,
     )
 
 

@@ -8,6 +8,11 @@ Tasks of a running agent (one process, one event loop):
 - reports: a FIFO sent to the orchestrator's ``report`` queryable, each retried until some reply
   acknowledges it (``progress`` reports are best effort and superseded by newer ones);
 - presence: the agent's liveliness token; the orchestrator's token watched and fed to the runner;
+  the status heartbeat, at least every ``lost_after_s / 4`` (the orchestrator takes a silent
+  vehicle as lost, token or not);
+- the job lease (``vehicle_agent/lease.py``): before each tick, a job that may have been given to
+  another vehicle (this agent stalled, its writing went unacknowledged, or the orchestrator said
+  ``not_assigned``) is given up: brush lifted, back home;
 - commands: the ``vehicles/<id>/command`` queryable answered by ``runner.handle_command``;
 - events: what the vehicle says (autopilot STATUSTEXT, a refused take-off) published as Event on
   ``vehicles/<id>/events``, which the orchestrator relays into the show's event log.
@@ -24,6 +29,8 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Literal
+
+import msgspec
 
 from bus.bridge import FifoChannel
 from bus.keys import ShowKeys
@@ -48,7 +55,10 @@ from vehicle_agent.backends.base import (
     VehicleSnapshot,
 )
 from vehicle_agent.clock import TickClock
-from vehicle_agent.job_runner import JobRunner, PreparedJob, TickActions, done_report
+from vehicle_agent.fault import clear_fault
+from vehicle_agent.job_runner import JobRunner, PreparedJob, TickActions
+from vehicle_agent.lease import JobLease
+from vehicle_agent.runner_io import ACTIVE_PHASES, result_report
 from vehicle_agent.trace import FlownTrace
 
 log = logging.getLogger(__name__)
@@ -82,7 +92,11 @@ class ServiceSettings:
     report_timeout_s: float = 2.0
     """Wall time in [s] to wait for the orchestrator's acknowledgement of one attempt."""
     status_period_s: float = 1.0
-    """Wall time in [s] between status heartbeats (status is also sent on every change)."""
+    """Wall time in [s] between status heartbeats, at most ``lost_after_s / 4`` (status is also
+    sent on every change)."""
+    lost_after_s: float = 1.5
+    """The show's ``policy.lost_after_s`` in [s]: the orchestrator takes a vehicle silent this
+    long as lost; the heartbeat and the job lease follow from it."""
 
 
 class EventOutbox:
@@ -171,6 +185,11 @@ class AgentService:
         self._report_ready = asyncio.Event()
         self._status_sent: VehicleStatus | None = None
         self._tasks: set[asyncio.Task[None]] = set()
+        self._lease = JobLease(settings.lost_after_s)
+        self._stalled_s = 0.0
+        self._next_probe_s = 0.0
+        self._progress = 0.0
+        self._snapshot: VehicleSnapshot | None = None
 
     async def run(self, stop: asyncio.Event) -> None:
         """Join the bus, fly until ``stop`` is set, then leave it cleanly."""
@@ -186,6 +205,13 @@ class AgentService:
                 self.keys.vehicle_command(self.vehicle_id),
                 VehicleCommand,
                 self._on_command,
+                on_error=_error_reply,
+            )
+            serve_async(
+                session,
+                self.keys.vehicle_assign(self.vehicle_id),
+                VehicleCommand,
+                self._on_assign,
                 on_error=_error_reply,
             )
             self._telemetry = MessagePublisher(session, self.keys.telemetry(self.vehicle_id))
@@ -209,6 +235,38 @@ class AgentService:
 
     # --- inputs --------------------------------------------------------------------------------
     async def _on_command(self, command: VehicleCommand) -> CommandReply:
+        """Commands anyone with the right to command vehicles may send (not ``assign``)."""
+        if command.command == "assign":
+            info = ErrorInfo(
+                code="forbidden",
+                message=f"jobs are assigned on {self.keys.vehicle_assign(self.vehicle_id)} only",
+                field="command",
+            )
+            return CommandReply(ok=False, message=info.message, error=info)
+        return await self._handle(command)
+
+    async def _on_assign(self, command: VehicleCommand) -> CommandReply:
+        """Job assignments: access control lets only the orchestrator query this key. A job this
+        vehicle has just finished (its result not yet delivered: the orchestrator was away) is
+        refused rather than written twice."""
+        job = command.job
+        if job is not None and job.job_id == self._pending_result():
+            info = ErrorInfo(
+                code="busy", message=f"{job.job_id} is written; its report is on its way"
+            )
+            return CommandReply(ok=False, message=info.message, error=info)
+        if command.command != "assign":
+            info = ErrorInfo(
+                code="invalid",
+                message=f"only assign is sent on {self.keys.vehicle_assign(self.vehicle_id)}",
+                field="command",
+            )
+            return CommandReply(ok=False, message=info.message, error=info)
+        return await self._handle(command)
+
+    async def _handle(self, command: VehicleCommand) -> CommandReply:
+        if command.command == "clear_fault":
+            return self._clear_fault()
         reply = self.runner.handle_command(command, self.clock.now_s)
         log.info("%s %s -> %s", self.vehicle_id, command.command, reply.message)
         self._publish_status()
@@ -220,15 +278,64 @@ class AgentService:
             self.runner.set_orchestrator_alive(alive, self.clock.now_s)
             self._publish_status()
 
+    def _clear_fault(self) -> CommandReply:
+        """The operator's ``clear_fault``: leave ``fault`` only when the vehicle is at rest."""
+        if self._snapshot is None:
+            reply = CommandReply(ok=False, message="the vehicle has not reported its state yet")
+        else:
+            reply = clear_fault(self.runner, self._snapshot)
+        if reply.ok:
+            self.events.push("info", "fault_cleared", reply.message)
+        else:
+            self.events.push("warning", "fault_kept", reply.message)
+        log.info("%s clear_fault -> %s", self.vehicle_id, reply.message)
+        self._publish_status()
+        return reply
+
     # --- the control loop ----------------------------------------------------------------------
     async def _control_loop(self, snapshot: VehicleSnapshot) -> None:
         while True:
             await asyncio.sleep(self.clock.delay_s())
             now_s = self.clock.now_s
+            self._guard_job(time.monotonic())
             actions = self.runner.step(snapshot, now_s)
             snapshot = await self._fly(actions, snapshot, now_s)
+            self._snapshot = snapshot
             self.clock.advance()
             self._carry_out(actions)
+            self._lease.tick_done(time.monotonic())
+
+    def _guard_job(self, wall_s: float) -> None:
+        """Before a tick: give the job up if it may be someone else's by now; ask the
+        orchestrator to confirm it when writing has gone unacknowledged for a while."""
+        lease, runner = self._lease, self.runner
+        gap_s, self._stalled_s = max(lease.tick(wall_s), self._stalled_s), 0.0
+        lease.hold(runner.job_id, runner.phase == "write", wall_s)
+        why = lease.breach(gap_s, wall_s)
+        if why is not None:
+            self._give_up(why)
+        elif (
+            lease.job_id is not None and lease.wants_probe(wall_s) and wall_s >= self._next_probe_s
+        ):
+            self._next_probe_s = wall_s + lease.probe_after_s
+            probe = AgentReport(
+                vehicle_id=self.vehicle_id,
+                job_id=lease.job_id,
+                event="progress",
+                progress=self._progress,
+            )
+            self._queue_report(probe)
+
+    def _give_up(self, why: str) -> None:
+        """Stop the job at once (brush up, home): the orchestrator requeues it, or did already."""
+        runner, job_id = self.runner, self.runner.job_id
+        if job_id is None or runner.phase not in ACTIVE_PHASES:
+            return
+        runner.handle_command(VehicleCommand(command="cancel", job_id=job_id), self.clock.now_s)
+        runner.message = f"gave {job_id} up ({why}): brush lifted, returning"
+        log.warning("%s: gave job %s up: %s", self.vehicle_id, job_id, why)
+        message = f"{self.vehicle_id} gave job {job_id} up: {why}"
+        self.events.push("warning", "job_given_up", message, job_id=job_id)
 
     async def _fly(
         self, actions: TickActions, snapshot: VehicleSnapshot, now_s: float
@@ -267,6 +374,9 @@ class AgentService:
             self._spawn(self._finish(actions.finished))
         if actions.telemetry is not None:
             self._telemetry.put(actions.telemetry)
+            self._progress = actions.telemetry.progress
+        for said in actions.events:
+            self.events.push(said.level, said.kind, said.message, job_id=said.job_id)
         for event in self.events.drain():
             publish(self._session, self.keys.vehicle_events(self.vehicle_id), event)
         self._publish_status(only_if_changed=True)
@@ -291,9 +401,10 @@ class AgentService:
         metrics = None
         try:
             metrics = await asyncio.to_thread(self._measure, prepared, trace)
-        except Exception:  # written all the same: report it done, without metrics
+        except Exception:  # reported as unmeasured: done means within the writing bounds
             log.exception("%s: metrics of %s failed", self.vehicle_id, trace.job_id)
-        self._queue_report(done_report(self.vehicle_id, trace, metrics))
+        bounds = self.runner.safety.writing
+        self._queue_report(result_report(self.vehicle_id, trace, metrics, bounds))
         if self._archive is not None:
             try:
                 where = await asyncio.to_thread(self._archive, prepared, trace, metrics)
@@ -302,17 +413,34 @@ class AgentService:
                 log.exception("%s: cannot record job %s", self.vehicle_id, trace.job_id)
 
     # --- outputs -------------------------------------------------------------------------------
+    def _pending_result(self) -> str | None:
+        """The job whose result (``done``/``failed``) waits for the orchestrator's receipt."""
+        for report in self._reports:
+            if report.event in ("done", "failed"):
+                return report.job_id
+        return None
+
     def _publish_status(self, *, only_if_changed: bool = False) -> None:
         status = self.runner.status()
+        pending = self._pending_result() if status.job_id is None else None
+        if pending is not None:  # not over until the orchestrator has its result
+            status = msgspec.structs.replace(status, job_id=pending)
         if only_if_changed and status == self._status_sent:
             return
         self._status_sent = status
         publish(self._session, self.keys.vehicle_status(self.vehicle_id), status)
 
     async def _status_heartbeat(self) -> None:
+        """The heartbeat; also the agent's stall detector: when this task wakes up late, nothing
+        of the agent ran meanwhile (frozen, starved), whatever the control loop was doing."""
+        period_s = min(self.settings.status_period_s, self.settings.lost_after_s / 4.0)
+        woke_s = time.monotonic()
         while True:
             self._publish_status()
-            await asyncio.sleep(self.settings.status_period_s)
+            await asyncio.sleep(period_s)
+            now_s = time.monotonic()
+            self._stalled_s = max(self._stalled_s, now_s - woke_s - period_s)
+            woke_s = now_s
 
     def _queue_report(self, report: AgentReport) -> None:
         last = self._reports[-1] if self._reports else None
@@ -335,10 +463,11 @@ class AgentService:
             self._report_ready.clear()
 
     async def _deliver(self, report: AgentReport) -> bool:
+        sent_at_s = time.monotonic()
         try:
             reply = await aquery_one(
                 self._session,
-                self.keys.report,
+                self.keys.report(self.vehicle_id),
                 report,
                 CommandReply,
                 timeout_s=self.settings.report_timeout_s,
@@ -353,10 +482,15 @@ class AgentService:
         except Exception as exc:
             log.warning("%s: report %s refused: %s", self.vehicle_id, report.event, exc)
             return True  # the orchestrator answered: it has seen the report
-        if not reply.ok:
+        if reply.ok:
+            self._lease.acknowledged(report.job_id, sent_at_s)
+        else:
             log.warning(
                 "%s: report %s not accepted: %s", self.vehicle_id, report.event, reply.message
             )
+            refused = reply.error is not None and reply.error.code == "not_assigned"
+            if refused and report.job_id == self.runner.job_id:
+                self._give_up("the orchestrator says it is not this vehicle's any more")
         return True
 
 

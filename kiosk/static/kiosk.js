@@ -6,6 +6,7 @@
   const $ = (id) => document.getElementById(id);
   const config = {
     max_strokes: 60, max_points: 5000, max_text_chars: 1, writing_area_m: [1.2, 1.2],
+    idle_reset_s: 60,
   };
   const state = {
     mode: "draw",
@@ -15,9 +16,15 @@
     lastT: 0,
     pending: null,      // what the preview was made of: { text } or { strokes }
     preview: null,
-    job: null,          // { job_id, token, preview }
+    job: null,          // { ticket, token, job_id, preview, title }
     events: null,       // EventSource
+    lastLive: 0,        // Date.now() of the last frame of the status stream
+    serverStale: false, // the kiosk says the orchestrator's news stopped
+    watchdog: null,     // interval that notices a silent stream
   };
+  const STALE_AFTER_MS = 2500;   // the kiosk sends a frame every 0.5 s
+  const SAVED = "skyquill-tickets";  // localStorage: my characters, newest first
+  const CURRENT = "skyquill-current";
 
   // --- messages ---------------------------------------------------------------------------
   function say(text, good = false) {
@@ -216,29 +223,61 @@
     $("undo").disabled = n === 0;
     $("clear").disabled = n === 0;
     $("stroke-count").textContent = n ? `${n} stroke${n === 1 ? "" : "s"}` : "";
-    $("preview").disabled = currentSubmission() === null;
+    const empty = currentSubmission() === null;
+    $("preview").disabled = empty;
+    $("preview-why").hidden = !empty;  // a disabled button says why
+    $("preview-why").textContent = state.mode === "type"
+      ? "Type a character first." : "Draw a character in the box first.";
   }
 
-  // --- tabs -------------------------------------------------------------------------------
-  function setMode(mode) {
+  // --- tabs (ARIA tabs pattern: one tab stop, arrow keys move between tabs) -----------------
+  const tabs = [["draw", $("tab-draw")], ["type", $("tab-type")]];
+  function setMode(mode, fromKeyboard = false) {
     state.mode = mode;
-    $("tab-draw").setAttribute("aria-selected", String(mode === "draw"));
-    $("tab-type").setAttribute("aria-selected", String(mode === "type"));
+    for (const [name, tab] of tabs) {
+      tab.setAttribute("aria-selected", String(name === mode));
+      tab.tabIndex = name === mode ? 0 : -1;
+    }
     $("draw-pane").hidden = mode !== "draw";
     $("type-pane").hidden = mode !== "type";
     say("");
-    if (mode === "draw") redrawPad(); else $("text").focus();
+    if (mode === "draw") redrawPad(); else if (!fromKeyboard) $("text").focus();
     updateControls();
   }
-  $("tab-draw").addEventListener("click", () => setMode("draw"));
-  $("tab-type").addEventListener("click", () => setMode("type"));
+  for (const [name, tab] of tabs) {
+    tab.addEventListener("click", () => setMode(name));
+    tab.addEventListener("keydown", (e) => {
+      const i = tabs.findIndex(([n]) => n === name);
+      const next = { ArrowRight: i + 1, ArrowLeft: i - 1, Home: 0, End: tabs.length - 1 }[e.key];
+      if (next === undefined) return;
+      e.preventDefault();
+      const [mode, target] = tabs[(next + tabs.length) % tabs.length];
+      setMode(mode, true);
+      target.focus();
+    });
+  }
   $("text").addEventListener("input", updateControls);
   $("text").addEventListener("keydown", (e) => {
     if (e.key === "Enter" && !e.isComposing && !$("preview").disabled) $("preview").click();
   });
 
   // --- planned path pictures --------------------------------------------------------------
-  function drawPath(canvas, preview) {
+  // Runs of equal pen state: [start, end, down]; the air moves show as dashes.
+  function penRuns(path) {
+    const runs = [];
+    let start = 0;
+    while (start < path.length - 1) {
+      const down = Boolean(path[start + 1][2] && path[start][2]);
+      let end = start + 1;
+      while (end < path.length - 1 && Boolean(path[end + 1][2] && path[end][2]) === down) end += 1;
+      runs.push([start, end, down]);
+      start = end;
+    }
+    return runs;
+  }
+
+  // The path up to sample ``upto``: air moves first, ink over them (never air over ink).
+  function drawPath(canvas, preview, upto = Infinity) {
     const { ctx, w, h } = fitCanvas(canvas);
     ctx.clearRect(0, 0, w, h);
     drawGuides(ctx, w, h);
@@ -247,27 +286,33 @@
     const map = (p) => [w / 2 + p[0] * scale, h / 2 - p[1] * scale];
     ctx.lineCap = "round";
     ctx.lineJoin = "round";
-    // Runs of equal pen state as one path each, so the air moves show as dashes.
     const path = preview.path;   // [x, y, pen_down]
-    let start = 0;
-    while (start < path.length - 1) {
-      const down = Boolean(path[start + 1][2] && path[start][2]);
-      let end = start + 1;
-      while (end < path.length - 1 && Boolean(path[end + 1][2] && path[end][2]) === down) end += 1;
-      ctx.strokeStyle = down ? "#14213d" : "#8d99ae";
-      ctx.lineWidth = down ? 6 : 1.5;
-      ctx.setLineDash(down ? [] : [5, 5]);
-      ctx.beginPath();
-      const first = map(path[start]);
-      ctx.moveTo(first[0], first[1]);
-      for (let i = start + 1; i <= end; i += 1) {
-        const p = map(path[i]);
-        ctx.lineTo(p[0], p[1]);
+    const runs = penRuns(path);
+    for (const layer of [false, true]) {
+      for (const [start, end, down] of runs) {
+        if (down !== layer || start >= upto) continue;
+        ctx.strokeStyle = down ? "#14213d" : "#6f7a91";
+        ctx.lineWidth = down ? 6 : 1.5;
+        ctx.setLineDash(down ? [] : [5, 5]);
+        ctx.beginPath();
+        const first = map(path[start]);
+        ctx.moveTo(first[0], first[1]);
+        for (let i = start + 1; i <= Math.min(end, upto); i += 1) {
+          const p = map(path[i]);
+          ctx.lineTo(p[0], p[1]);
+        }
+        ctx.stroke();
       }
-      ctx.stroke();
-      start = end;
     }
     ctx.setLineDash([]);
+    if (upto < path.length) {  // where the brush is now
+      const [x, y] = map(path[Math.max(0, Math.floor(upto))]);
+      ctx.fillStyle = "#b44703";
+      ctx.beginPath();
+      ctx.arc(x, y, 6, 0, 2 * Math.PI);
+      ctx.fill();
+      return;
+    }
     ctx.fillStyle = "#e85d04";
     for (const stroke of preview.turning_points) {
       for (const p of stroke) {
@@ -277,6 +322,23 @@
         ctx.fill();
       }
     }
+  }
+
+  // The writing order, played in about 3 s (at once for visitors who ask for less motion).
+  function animatePath(canvas, preview) {
+    const n = preview.path.length;
+    const still = window.matchMedia("(prefers-reduced-motion: reduce)").matches;
+    canvas.dataset.drawn = "0";
+    const t0 = performance.now();
+    const frame = (now) => {
+      if (canvas.dataset.playing !== String(t0)) return;  // a newer preview took over
+      const upto = still ? n : Math.floor((n * (now - t0)) / 3000);
+      drawPath(canvas, preview, upto >= n ? Infinity : upto);
+      if (upto >= n) { canvas.dataset.drawn = "1"; return; }
+      requestAnimationFrame(frame);
+    };
+    canvas.dataset.playing = String(t0);
+    requestAnimationFrame(frame);
   }
 
   function show(section) {
@@ -295,11 +357,21 @@
     state.pending = submission;
     state.preview = reply.preview;
     show("confirm");
-    drawPath($("preview-canvas"), reply.preview);
+    animatePath($("preview-canvas"), reply.preview);
     const secs = Math.round(reply.preview.duration_s);
     $("preview-facts").textContent =
       `${reply.preview.turning_point_count} turning points, about ${secs} seconds of flying.`;
+    $("preview-canvas").setAttribute("aria-label", describePath(reply.preview));
+    $("confirm-title").focus();
   });
+
+  // The text alternative of a planned path: what a sighted visitor reads off the picture.
+  function describePath(preview) {
+    const n = preview.stroke_count;
+    return `Planned flight: the drone writes ${n} stroke${n === 1 ? "" : "s"} with the brush, ` +
+      `lifting it between strokes, with ${preview.turning_point_count} turning points, ` +
+      `in about ${Math.round(preview.duration_s)} seconds.`;
+  }
 
   $("back").addEventListener("click", () => { show("compose"); redrawPad(); });
 
@@ -312,41 +384,109 @@
     say("");
     const title = state.pending.text ? `Your character: ${state.pending.text}` : "Your drawing";
     state.job = {
-      job_id: reply.job_id, token: reply.token, preview: reply.preview || state.preview, title,
+      ticket: reply.ticket, token: reply.token, job_id: reply.job_id, code: reply.code,
+      preview: reply.preview || state.preview, title,
     };
-    try { sessionStorage.setItem("skyquill-job", JSON.stringify(state.job)); } catch (err) { /* private mode */ }
+    saveTicket(state.job);
     showJob(reply.job);
+    $("status-title").focus();
   });
+
+  // --- my characters, kept in this browser (survive a new tab and a closed browser) ----------
+  function savedTickets() {
+    try { return JSON.parse(localStorage.getItem(SAVED) || "[]"); } catch (err) { return []; }
+  }
+
+  function saveTicket(job) {
+    const list = [job, ...savedTickets().filter((t) => t.ticket !== job.ticket)].slice(0, 20);
+    try {
+      localStorage.setItem(SAVED, JSON.stringify(list));
+      localStorage.setItem(CURRENT, job.ticket);
+    } catch (err) { /* private mode: this tab still follows it */ }
+    renderSaved();
+  }
+
+  function renderSaved() {
+    const list = savedTickets();
+    const box = $("mine");
+    box.hidden = list.length === 0;
+    const ul = $("mine-list");
+    ul.textContent = "";
+    for (const t of list) {
+      const li = document.createElement("li");
+      const button = document.createElement("button");
+      button.type = "button";
+      button.className = "link";
+      button.textContent = t.title;  // text, never markup
+      button.addEventListener("click", () => resumeTicket(t));
+      li.append(button);
+      ul.append(li);
+    }
+  }
 
   function showJob(job) {
     show("status");
-    $("job-id").textContent = state.job.job_id;
+    $("job-id").textContent = state.job.job_id || "-";
     $("status-title").textContent = state.job.title;
+    showCode(state.job);
     $("result").hidden = false;
     $("result-facts").textContent = "This is the path the drone will fly.";
     if (state.job.preview) drawPath($("result-canvas"), state.job.preview);
     render(job);
-    follow(state.job.job_id, state.job.token);
+    follow(state.job.ticket, state.job.token);
   }
 
-  function follow(jobId, token) {
-    if (state.events) state.events.close();
-    const url = `/api/jobs/${encodeURIComponent(jobId)}/events?token=${encodeURIComponent(token)}`;
+  // The short code and its QR code: the same ticket on another device (/t/<code>).
+  function showCode(job) {
+    $("elsewhere").hidden = !job.code;
+    if (!job.code) return;
+    const link = `${location.origin}/t/${job.code}`;
+    const pretty = `${job.code.slice(0, 4)}-${job.code.slice(4)}`;
+    $("code").textContent = pretty;
+    $("code-link").textContent = link;
+    $("qr").src = `/api/jobs/${encodeURIComponent(job.ticket)}/qr.svg?token=${encodeURIComponent(job.token)}`;
+    $("qr").alt = `QR code of the link ${link}`;
+  }
+
+  function stopFollowing() {
+    if (state.events) { state.events.close(); state.events = null; }
+    if (state.watchdog) { clearInterval(state.watchdog); state.watchdog = null; }
+    $("stale").hidden = true;
+  }
+
+  function follow(ticket, token) {
+    stopFollowing();
+    const url = `/api/jobs/${encodeURIComponent(ticket)}/events?token=${encodeURIComponent(token)}`;
     const events = new EventSource(url);
     state.events = events;
+    state.lastLive = Date.now();
+    state.serverStale = false;
     events.addEventListener("job", (e) => {
+      state.lastLive = Date.now();
       const job = JSON.parse(e.data);
       render(job);
-      if (job.final) {
-        events.close();
-        state.events = null;
-        try { sessionStorage.removeItem("skyquill-job"); } catch (err) { /* private mode */ }
-      }
+      if (job.final) stopFollowing();
     });
+    events.addEventListener("live", (e) => {
+      state.lastLive = Date.now();
+      state.serverStale = Boolean(JSON.parse(e.data).stale);
+      checkStale();
+    });
+    state.watchdog = setInterval(checkStale, 500);
+  }
+
+  // Old news must not look current: say so as soon as the stream or the show goes quiet.
+  function checkStale() {
+    const stale = state.serverStale || Date.now() - state.lastLive > STALE_AFTER_MS;
+    if ($("stale").hidden === stale) $("stale").hidden = !stale;
   }
 
   function render(job) {
     if (!job) return;
+    if (job.job_id && state.job) {
+      state.job.job_id = job.job_id;
+      $("job-id").textContent = job.job_id;
+    }
     $("status-text").textContent = job.status_text;
     const waiting = job.state === "queued";
     $("queue-place").textContent = waiting && job.queue_position ? `${job.queue_position}` : "-";
@@ -358,20 +498,26 @@
     if (job.final && job.state !== "done") $("result").hidden = true;
     if (job.state === "done" && state.job) {
       const m = job.metrics;
-      let facts = "Written!";
+      const where = job.place ? ` Look for it at ${job.place}.` : "";
+      let facts = `Written!${where}`;
       if (m) {
-        facts = `Written in ${Math.round(m.duration_s)} s, on average within ` +
-          `${(m.rmse_pen_down_m * 100).toFixed(1)} cm of the plan.`;
-        if (m.iou != null) facts += ` The ink matches the plan ${Math.round(m.iou * 100)}%.`;
+        const cm = m.rmse_pen_down_m * 100;
+        const close = cm < 1 ? "very close to" : cm < 3 ? "close to" : "a little off";
+        facts = `Written in ${Math.round(m.duration_s)} s.${where} The brush stayed ${close} ` +
+          `the planned path: on average within ${cm.toFixed(1)} cm.`;
+        if (m.iou != null) facts += ` Ink and plan overlap ${Math.round(m.iou * 100)}%.`;
       }
+      // The picture stays the planned path (the agent does not send its ink image yet): say so.
+      facts += " The picture above is the planned path.";
       $("result-facts").textContent = facts;
     }
   }
 
   $("again").addEventListener("click", () => {
-    if (state.events) { state.events.close(); state.events = null; }
-    try { sessionStorage.removeItem("skyquill-job"); } catch (err) { /* private mode */ }
+    stopFollowing();
+    try { localStorage.removeItem(CURRENT); } catch (err) { /* private mode */ }
     state.job = null;
+    renderSaved();
     resetDrawing();
     $("text").value = "";
     show("compose");
@@ -379,19 +525,67 @@
   });
 
   // --- start ------------------------------------------------------------------------------
-  // After a reload: follow the job this tab submitted, if the kiosk still knows it.
-  async function resume() {
-    let saved = null;
-    try { saved = JSON.parse(sessionStorage.getItem("skyquill-job") || "null"); } catch (err) { return; }
-    if (!saved || !saved.job_id || !saved.token) return;
+  // After a reload, in a new tab or a reopened browser: follow the character being followed.
+  async function resumeTicket(saved) {
+    if (!saved || !saved.ticket || !saved.token) return;
     const reply = await callApi(
-      `/api/jobs/${encodeURIComponent(saved.job_id)}?token=${encodeURIComponent(saved.token)}`);
+      `/api/jobs/${encodeURIComponent(saved.ticket)}?token=${encodeURIComponent(saved.token)}`);
     if (!reply.ok) {
-      try { sessionStorage.removeItem("skyquill-job"); } catch (err) { /* private mode */ }
+      const list = savedTickets().filter((t) => t.ticket !== saved.ticket);
+      try { localStorage.setItem(SAVED, JSON.stringify(list)); } catch (err) { /* private mode */ }
+      renderSaved();
       return;
     }
-    state.job = saved;
+    state.job = { ...saved };
+    try { localStorage.setItem(CURRENT, saved.ticket); } catch (err) { /* private mode */ }
     showJob(reply.job);
+  }
+
+  // Opened from a short code (/t/<code>, typed or scanned): follow that ticket here too.
+  async function openCode(code) {
+    const reply = await callApi(`/api/t/${encodeURIComponent(code)}`);
+    history.replaceState(null, "", "/");
+    if (!reply.ok) { say(reply.error.message); return; }
+    const title = reply.label.startsWith("drawing") ? "Your drawing" : `Your character: ${reply.label}`;
+    state.job = {
+      ticket: reply.ticket, token: reply.token, job_id: reply.job.job_id, code: reply.code,
+      preview: reply.preview, title,
+    };
+    saveTicket(state.job);
+    showJob(reply.job);
+  }
+
+  function resume() {
+    const opened = location.pathname.match(/^\/t\/([A-Za-z0-9-]{4,16})$/);
+    if (opened) { openCode(opened[1]); return; }
+    let current = null;
+    try { current = localStorage.getItem(CURRENT); } catch (err) { return; }
+    resumeTicket(savedTickets().find((t) => t.ticket === current));
+  }
+
+  // --- shared tablets: back to the start after a while without a touch ---------------------
+  let idleTimer = null;
+  function touched() {
+    clearTimeout(idleTimer);
+    if (config.idle_reset_s > 0) idleTimer = setTimeout(idleReset, config.idle_reset_s * 1000);
+  }
+  // A character still on its way stays on screen (its visitor is watching it); a finished one,
+  // a drawing or a preview left alone goes, and the next visitor starts afresh.
+  function idleReset() {
+    const watching = !$("status").hidden && state.events !== null;
+    if (watching) { touched(); return; }
+    stopFollowing();
+    try { localStorage.removeItem(CURRENT); } catch (err) { /* private mode */ }
+    state.job = null;
+    resetDrawing();
+    $("text").value = "";
+    setMode("draw", true);
+    show("compose");
+    redrawPad();
+    touched();
+  }
+  for (const name of ["pointerdown", "keydown", "input", "wheel"]) {
+    document.addEventListener(name, touched, { capture: true, passive: true });
   }
 
   async function start() {
@@ -403,6 +597,8 @@
     }
     new ResizeObserver(() => { if (!$("compose").hidden) redrawPad(); }).observe(pad);
     redrawPad();
+    renderSaved();
+    touched();
     resume();
     document.body.dataset.ready = "1";
   }

@@ -33,6 +33,9 @@ class Glyph:
     """What this is, for people: the typed text or the handwriting file's label or name."""
     source: str
     """Where it came from: "strokes-json", "hershey:<font>", "hanzi-writer-data" or a mix."""
+    frame: tuple[float, float, float, float] | None = None
+    """The drawing area the strokes were drawn in, ``(x_min, y_min, x_max, y_max)`` in ``units``,
+    y up (a strokes document's ``canvas``); None: the ink itself is the whole picture."""
 
     def __post_init__(self) -> None:
         if self.units not in GLYPH_UNITS:

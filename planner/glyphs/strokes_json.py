@@ -26,6 +26,9 @@ UNITS = ("px", "m")
 """Units of a strokes document: canvas pixels or metres."""
 Y_AXES = ("down", "up")
 """Direction of +y in a strokes document: "down" as on screens, or "up"."""
+MAX_COORDINATE = 1e6
+"""Largest |x|, |y| of a point and largest canvas side, in the document's units (px or m).
+Beyond it a drawing could not be scaled onto a board without overflowing floats."""
 
 _MAX_TEXT_FIELD_CHARS = 200
 
@@ -44,8 +47,11 @@ def parse_strokes_json(
     y_axis = _enum_field(data, "y_axis", Y_AXES, source_name)
     label = _optional_text(data, "label", source_name)
     _optional_text(data, "device", source_name)
+    frame: tuple[float, float, float, float] | None = None
     if "canvas" in data:
         _check_canvas(data["canvas"], source_name)
+        width, height = _as_float(data["canvas"]["width"]), _as_float(data["canvas"]["height"])
+        frame = (0.0, -height, width, 0.0) if y_axis == "down" else (0.0, 0.0, width, height)
     raw_strokes = _stroke_lists(data, source_name)
     timed = _has_time(raw_strokes[0][0])
     strokes: list[FloatArray] = []
@@ -80,6 +86,7 @@ def parse_strokes_json(
         units=units,
         label=label if label is not None else source_name,
         source="strokes-json",
+        frame=frame,
     )
 
 
@@ -149,9 +156,11 @@ def _check_canvas(canvas: Any, source_name: str) -> None:
         raise PlannerError(f"{source_name}: must be an object, got {_kind(canvas)}", field="canvas")
     for key in ("width", "height"):
         value = canvas.get(key)
-        if not _is_number(value) or not math.isfinite(_as_float(value)) or value <= 0:
+        if not _is_number(value) or not 0 < _as_float(value) <= MAX_COORDINATE:
             raise PlannerError(
-                f"{source_name}: must be a positive number, got {value!r}", field=f"canvas.{key}"
+                f"{source_name}: must be a positive number at most {MAX_COORDINATE:g}, "
+                f"got {_short(value)}",
+                field=f"canvas.{key}",
             )
 
 
@@ -192,6 +201,12 @@ def _stroke_lists(data: Mapping[str, Any], source_name: str) -> list[list[Any]]:
                 stroke_index=i,
             )
     return strokes
+
+
+def _short(value: Any) -> str:
+    """``repr`` of a value cut to 40 characters (a 4,000-digit integer stays readable)."""
+    text = repr(value)
+    return text if len(text) <= 40 else f"{text[:37]}..."
 
 
 def _has_time(point: Any) -> bool:
@@ -261,7 +276,9 @@ def _point_values(point: Any, stroke_index: int, point_index: int, source_name: 
             raise fail(f"{name} must be a number, got {_kind(value)}")
         number = _as_float(value)
         if not math.isfinite(number):
-            raise fail(f"{name} is not finite ({value!r})")
+            raise fail(f"{name} is not finite ({_short(value)})")
+        if name in ("x", "y") and abs(number) > MAX_COORDINATE:
+            raise fail(f"|{name}| must be at most {MAX_COORDINATE:g}, got {number!r}")
         if name == "pressure" and number < 0.0:
             raise fail(f"pressure must be >= 0, got {number}")
         values.append(number)

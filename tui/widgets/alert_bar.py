@@ -6,6 +6,8 @@ from rich.text import Text
 from textual.reactive import reactive
 from textual.widgets import Static
 
+from tui.safe_text import clean
+
 
 class AlertBar(Static):
     """A red line while there is anything to act on; a quiet one otherwise."""
@@ -22,8 +24,14 @@ class AlertBar(Static):
         text = Text(no_wrap=True, overflow="ellipsis")
         text.append(f" ⚠ {len(self.alerts)} ", style="bold reverse")
         text.append(" x:ack ", style="italic")
+        width = self.content_size.width or 10_000
         for i, message in enumerate(self.alerts):
+            shown = clean(message)
+            rest = len(self.alerts) - i
+            if text.cell_len + 3 + len(shown) + (6 if rest > 1 else 0) > width:
+                text.append(f" │ +{rest} more", style="italic")  # whole alerts only
+                break
             if i:
                 text.append(" │ ")
-            text.append(message)
+            text.append(shown)
         return text

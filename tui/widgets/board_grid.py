@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from textual.containers import VerticalScroll
 from textual.events import Resize
+from textual.message import Message
 
 from tui.widgets.board_view import BoardView
 
@@ -25,8 +26,18 @@ def grid_shape(count: int, width: int, height: int) -> tuple[int, int]:
     return columns, max(1, height // visible_rows)
 
 
-class BoardGrid(VerticalScroll):
+class BoardGrid(VerticalScroll, can_focus=False):
     """Holds one :class:`BoardView` per board."""
+
+    all_visible = True
+    """Every board is (at least partly) on screen without scrolling."""
+
+    class Relaid(Message):
+        """Whether every board fits on screen changed."""
+
+        def __init__(self, all_visible: bool) -> None:
+            super().__init__()
+            self.all_visible = all_visible
 
     def on_resize(self, event: Resize) -> None:
         self._relayout(event.size.width, event.size.height)
@@ -36,6 +47,10 @@ class BoardGrid(VerticalScroll):
         columns, rows = grid_shape(count, width, height)
         self.styles.grid_size_columns = columns
         self.styles.grid_rows = str(rows)
+        all_visible = count <= columns * max(1, height // rows)
+        if all_visible != self.all_visible:
+            self.all_visible = all_visible
+            self.post_message(self.Relaid(all_visible))
 
     def sync(self, now_s: float) -> None:
         """Let each board draw what is new."""

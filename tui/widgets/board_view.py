@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from rich.segment import Segment
 from rich.style import Style
+from rich.text import Text
 from textual.dom import NoScreen
 from textual.errors import NoWidget
 from textual.geometry import Region
@@ -15,6 +16,7 @@ from textual.widget import Widget
 
 from tui.braille import BrailleCanvas, apply_transform, fit_transform
 from tui.model import ConsoleModel
+from tui.safe_text import clean
 from tui.settings import BoardGeometry
 from tui.tracks import Track, TrackPoint
 
@@ -23,6 +25,10 @@ LAYER_STYLES = ("#4e4e4e", "#8a8a8a", "#0087ff", "bold #ffffff", "bold #ff3030")
 _RICH_STYLES = tuple(Style.parse(style) for style in LAYER_STYLES)
 """Style per layer: writing-area corners, pen-up flight, reference (pen down), ink, vehicle."""
 LEGEND = "[bold #ffffff]━ink[/] [#8a8a8a]┈pen-up[/] [#0087ff]━ref[/] [#ff3030]●[/]"
+"""The board's subtitle: the console's own markup (no bus data)."""
+TITLE_ID_CHARS = 24
+TITLE_LABEL_CHARS = 16
+"""Longest board/vehicle id and job label in a board's title, in characters."""
 
 
 @dataclass
@@ -59,7 +65,7 @@ class BoardView(Widget):
         self.border_subtitle = LEGEND
 
     def watch_title(self, title: str) -> None:
-        self.border_title = title
+        self.border_title = Text(title)  # a str would be read as markup
 
     def _vehicles(self) -> list[str]:
         if self.vehicle_id is not None:
@@ -108,17 +114,25 @@ class BoardView(Widget):
             self.refresh(*regions)  # only the rows that changed: borders are costly to redraw
 
     def _title(self, vehicles: list[str], now_s: float) -> str:
-        parts = [self.board.board_id]
-        for vid in vehicles:
-            row = self.model.vehicle_row(vid, now_s)
+        """Board, vehicles and what they write, as plain text (bus strings cleaned)."""
+        parts = [clean(self.board.board_id, TITLE_ID_CHARS)]
+        for vehicle_id in vehicles:
+            row = self.model.vehicle_row(vehicle_id, now_s)
             if row is None:
                 continue
+            vid = clean(vehicle_id, TITLE_ID_CHARS)
             if row.job_label:
-                parts.append(f"{vid} «{row.job_label}» {100 * row.progress:.0f}%")
+                label = clean(row.job_label, TITLE_LABEL_CHARS)
+                parts.append(f"{vid} «{label}» {100 * row.progress:.0f}%")
                 continue
-            track = self.model.track(vid)
+            track = self.model.track(vehicle_id)
             last = self.model.job(track.job_id if track else None)
-            parts.append(f"{vid} (last «{last.label}» {last.state})" if last else vid)
+            if last is None:
+                parts.append(vid)
+            else:
+                parts.append(f"{vid} (last «{clean(last.label, TITLE_LABEL_CHARS)}» {last.state})")
+        if self.board.board_id in self.model.dirty_boards:
+            parts.append("HALF-WRITTEN: new sheet, then s")
         return " · ".join(parts)
 
     def _ensure_canvas(self) -> BrailleCanvas | None:

@@ -7,19 +7,20 @@ from textual.widgets import RichLog
 
 from bus.messages import Event
 from tui import format as fmt
+from tui.safe_text import clean
 
 LEVEL_STYLES = {"info": "", "warning": "yellow", "alert": "bold white on red"}
 
 
 def event_line(event: Event) -> Text:
-    """``12:03:04 vehicle_lost uav2: lost after 1.5 s``."""
+    """``12:03:04 vehicle_lost uav2: lost after 1.5 s`` (bus strings as plain, cleaned text)."""
     text = Text(no_wrap=True, overflow="ellipsis")
     text.append(fmt.clock(event.time_s), style="dim")
-    text.append(f" {event.kind} ", style="bold")
+    text.append(f" {clean(event.kind, 32)} ", style="bold")
     subject = event.vehicle_id or event.job_id
     if subject:
-        text.append(f"{subject}: ")
-    text.append(event.message)
+        text.append(f"{clean(subject, 40)}: ")
+    text.append(clean(event.message))
     text.stylize(LEVEL_STYLES.get(event.level, ""), 9)
     return text
 

@@ -41,6 +41,8 @@ Cell = tuple[str, str]
 Cells = tuple[Cell, ...]
 GAP = 2
 """Spaces between columns."""
+ID_CHARS = 24
+"""Longest vehicle id or kind shown, in characters (bus strings: cleaned and cut)."""
 _HEADER_STYLE = Style(bold=True)
 _CURSOR_STYLE = Style(bgcolor="#0178d4", color="#ffffff")
 _CURSOR_BLURRED_STYLE = Style(bgcolor="#3a3a3a")
@@ -53,17 +55,17 @@ def _cell(value: Text | str) -> Cell:
 
 
 def row_cells(row: VehicleRow) -> Cells:
-    """The cells of one vehicle, in column order."""
+    """The cells of one vehicle, in column order; every bus string cleaned (see tui.safe_text)."""
     values: tuple[Text | str, ...] = (
-        Text(row.vehicle_id, style="bold"),
-        fmt.state_text(row.state),
+        Text(fmt.short_id(row.vehicle_id, ID_CHARS), style="bold"),
+        fmt.vehicle_state_text(row.state, row.held),
         Text(fmt.short_id(row.job_label, 6) if row.job_label else "-", style="bold"),
         fmt.progress(row.progress, 5) if row.job_id else "",
         fmt.tracking_error(row),
         fmt.battery(row.battery_fraction),
         fmt.link_age(row),
         fmt.short_id(row.job_id) if row.job_id else "-",
-        row.kind or "-",
+        fmt.short_id(row.kind, ID_CHARS) if row.kind else "-",
     )
     return tuple(_cell(v) for v in values)
 
@@ -194,11 +196,15 @@ class FleetTable(ScrollView, can_focus=True):
 
     def _strip(self, texts: Cells, base: Style, extra: Style | None) -> Strip:
         row_style = base + extra if extra is not None else base
-        segments = [Segment(" ", row_style)]
-        for (text, style), width in zip(texts, self._widths, strict=True):
-            segments.append(Segment(text, row_style + self._style(style)))
-            segments.append(Segment(" " * (width - cell_len(text) + GAP), row_style))
         width = self.scrollable_content_region.width
+        segments = [Segment(" ", row_style)]
+        used = 1
+        for (text, style), column_width in zip(texts, self._widths, strict=True):
+            if used + column_width > width:
+                break  # whole columns only: the rightmost are the least urgent
+            segments.append(Segment(text, row_style + self._style(style)))
+            segments.append(Segment(" " * (column_width - cell_len(text) + GAP), row_style))
+            used += column_width + GAP
         return Strip(segments).adjust_cell_length(width, row_style)
 
     def render_line(self, y: int) -> Strip:

@@ -11,6 +11,7 @@ from textual.widgets import Static
 
 from bus.messages import JobState
 from tui.preview import render_preview
+from tui.safe_text import clean
 
 
 def job_strokes(job: JobState) -> dict[str, Any] | None:
@@ -40,7 +41,7 @@ class PreviewPane(Static):
         rows = max(2, self.content_size.height - 1)
         drawing = render_preview(job_text(job), job_strokes(job), job.label, cols, rows)
         caption = Text(
-            f"{job.kind} · {job.client_id}",
+            f"{job.kind} · {clean(job.client_id, 100)}",
             style="dim",
             justify="center",
             no_wrap=True,

@@ -9,21 +9,23 @@ from textual.widgets import DataTable
 from tui import format as fmt
 from tui.rows import QueueRow
 
-COLUMNS = (("section", "State"), ("char", "Char"), ("detail", "Detail"), ("job", "Job"))
+COLUMNS = (("section", "State"), ("char", "Char"), ("job", "Job"), ("detail", "Detail"))
+"""Job ids before the details, which are the widest: a narrow queue still shows every id."""
 
-Cells = tuple[str | Text, ...]
+Cells = tuple[Text, ...]
 
 
 def row_cells(row: QueueRow) -> Cells:
+    """The cells of one job: Text only, as DataTable reads a ``str`` cell as markup."""
     return (
         fmt.section_text(row),
         Text(fmt.short_id(row.job.label, 12), style="bold"),
-        fmt.job_detail(row),
-        fmt.short_id(row.job.job_id),
+        Text(fmt.short_id(row.job.job_id)),
+        Text(fmt.job_detail(row)),
     )
 
 
-class QueueTable(DataTable[str | Text]):
+class QueueTable(DataTable[Text]):
     """Jobs by section; the cursor selects the job that approve/reject/cancel act on."""
 
     class JobHighlighted(Message):

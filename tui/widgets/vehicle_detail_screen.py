@@ -16,13 +16,14 @@ from textual.widgets import Footer, Static
 from tui import format as fmt
 from tui.model import ConsoleModel
 from tui.rows import VehicleRow
+from tui.safe_text import clean, plain
 from tui.settings import BoardGeometry
 from tui.widgets.board_view import BoardView
 from tui.widgets.event_log import EventLog
 
 
 def detail_table(row: VehicleRow) -> Table:
-    """Name/value pairs of one vehicle."""
+    """Name/value pairs of one vehicle; values are Text (a ``str`` cell would be read as markup)."""
     table = Table.grid(padding=(0, 1))
     table.add_column(style="dim", no_wrap=True)
     table.add_column(no_wrap=True)
@@ -31,42 +32,43 @@ def detail_table(row: VehicleRow) -> Table:
         if row.position_m_enu is None
         else "({:+.2f}, {:+.2f}, {:+.2f}) m".format(*row.position_m_enu)
     )
-    pairs: list[tuple[str, str | Text]] = [
-        ("vehicle", Text(row.vehicle_id, style="bold")),
-        ("kind", row.kind or "-"),
-        ("state", fmt.state_text(row.state)),
-        ("board", row.board_id or "-"),
-        ("job", row.job_id or "-"),
-        ("character", Text(row.job_label or "-", style="bold")),
-        ("progress", fmt.progress(row.progress, 10)),
+    pairs: list[tuple[str, Text]] = [
+        ("vehicle", plain(row.vehicle_id, "bold")),
+        ("kind", plain(row.kind or "-")),
+        ("state", fmt.vehicle_state_text(row.state, row.held)),
+        ("board", plain(row.board_id or "-")),
+        ("job", plain(row.job_id or "-")),
+        ("character", plain(row.job_label or "-", "bold")),
+        ("progress", Text(fmt.progress(row.progress, 10))),
         ("tracking err", fmt.tracking_error(row)),
         ("battery", fmt.battery(row.battery_fraction)),
         ("link age", fmt.link_age(row)),
-        ("position", position),
-        ("message", row.message or "-"),
+        ("position", Text(position)),
+        ("message", plain(row.message or "-")),
     ]
     for name, value in pairs:
-        table.add_row(name, value)
+        table.add_row(Text(name), value)
     return table
 
 
 class VehicleDetailScreen(Screen[None]):
-    """One vehicle in full; Escape goes back, ``l`` lands it, ``e`` stops it (confirmed)."""
+    """One vehicle in full; Escape or q goes back; its own commands are confirmed by the app."""
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("escape,q", "app.pop_screen", "back"),
-        Binding("l", "land", "land it"),
-        Binding("e", "estop", "E-STOP it"),
+        Binding("escape,q", "back", "back"),
+        Binding("l", "request('land')", "land it"),
+        Binding("u", "request('release')", "release it"),
+        Binding("f", "request('clear_fault')", "reset fault"),
+        Binding("e", "request('estop')", "E-STOP it"),
     ]
 
-    class LandRequested(Message):
-        def __init__(self, vehicle_id: str) -> None:
-            super().__init__()
-            self.vehicle_id = vehicle_id
+    class Requested(Message):
+        """The operator asked for a command on this vehicle (the app confirms and sends it)."""
 
-    class EstopRequested(Message):
-        def __init__(self, vehicle_id: str) -> None:
+        def __init__(self, command: str, vehicle_id: str) -> None:
             super().__init__()
+            self.command = command
+            """``land``, ``release``, ``clear_fault`` or ``estop``."""
             self.vehicle_id = vehicle_id
 
     def __init__(self, vehicle_id: str, model: ConsoleModel, board: BoardGeometry | None) -> None:
@@ -85,20 +87,21 @@ class VehicleDetailScreen(Screen[None]):
         yield Footer()
 
     def on_mount(self) -> None:
-        self.query_one("#detail-info").border_title = self.vehicle_id
-        self.query_one(EventLog).border_title = f"events of {self.vehicle_id}"
+        shown = clean(self.vehicle_id, 40)
+        self.query_one("#detail-info").border_title = Text(shown)  # a str would be markup
+        self.query_one(EventLog).border_title = Text(f"events of {shown}")
 
     def sync(self, now_s: float) -> None:
         """Show the model's current state of the vehicle."""
         row = self.model.vehicle_row(self.vehicle_id, now_s)
         info = self.query_one("#detail-info", Static)
-        info.update(detail_table(row) if row else Text(f"{self.vehicle_id}: unknown"))
+        info.update(detail_table(row) if row else plain(f"{self.vehicle_id}: unknown"))
         self.query_one(BoardView).sync(now_s)
         log = self.query_one(EventLog)
         log.add_events(self.model.events_after(log.last_seq))
 
-    def action_land(self) -> None:
-        self.post_message(self.LandRequested(self.vehicle_id))
+    def action_back(self) -> None:
+        self.dismiss()
 
-    def action_estop(self) -> None:
-        self.post_message(self.EstopRequested(self.vehicle_id))
+    def action_request(self, command: str) -> None:
+        self.post_message(self.Requested(command, self.vehicle_id))

@@ -92,6 +92,9 @@ class VehicleSnapshot:
     """Where the brush tip is in [m], ENU, when the backend knows (for ink metrics)."""
     pen_width_m: float | None = None
     """Width in [m] of the stroke the brush paints now (0 without contact), when known."""
+    autopilot_mode: str | None = None
+    """The autopilot's own name of its flight mode (``GUIDED``, ``OFFBOARD``, ``AUTO.LAND``...),
+    for the event log; None for a backend without an autopilot."""
 
 
 @runtime_checkable

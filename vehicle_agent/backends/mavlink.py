@@ -1,15 +1,18 @@
 """The MAVLink backend: the agent flies a PX4 or ArduPilot vehicle (or ``skyquill sim-mavlink``).
 
-``start`` opens the link, waits for the autopilot's heartbeat (system and component id from it,
-ArduPilot or PX4 from its ``autopilot`` field) and asks for position/attitude telemetry at the
-control rate. ``takeoff``: ArduPilot -> GUIDED (custom mode 4, MAV_CMD_DO_SET_MODE), arm,
-MAV_CMD_NAV_TAKEOFF (param 7: metres above home); PX4 -> stream the current position for a second,
-OFFBOARD, arm, then our own climb ramp. ``tick`` streams SET_POSITION_TARGET_LOCAL_NED (p, v, a) or
+``start`` opens the link, announces itself as a ground station (HEARTBEAT MAV_TYPE_GCS: PX4 sends
+STATUSTEXT only to links where it hears one), waits for the autopilot's heartbeat (system and
+component id from it, ArduPilot or PX4 from its ``autopilot`` field), asks for position/attitude
+telemetry at the control rate, then sets and reads back the parameters the show depends on
+(:mod:`~vehicle_agent.backends.mavlink_params`; if they do not hold, the vehicle is in fault).
+``takeoff``: ArduPilot -> GUIDED (custom mode 4, MAV_CMD_DO_SET_MODE), arm, MAV_CMD_NAV_TAKEOFF
+(param 7: metres above home); PX4 -> stream setpoints for a second, OFFBOARD, arm, then our own
+climb ramp. ``tick`` streams SET_POSITION_TARGET_LOCAL_NED (p, v, a and the take-off heading) or
 SET_ATTITUDE_TARGET at ``setpoint_rate_hz``; ``land`` switches to the autopilot's landing mode;
 ``estop`` force-disarms. ENU inside, LOCAL_NED on the wire (origin ``origin_m_enu``).
 
-Failsafe, never fighting the pilot: a lost heartbeat, a mode or arming change we did not command
-(the pilot's switch or the autopilot's own failsafe), a STATUSTEXT naming a failsafe, or a gap in
+Failsafe, never fighting the pilot (:mod:`~vehicle_agent.backends.mavlink_watchdog`): a lost
+heartbeat, a mode or arming change we did not command, a STATUSTEXT naming a failsafe, or a gap in
 our setpoint stream longer than the autopilot's timeout stop the stream and set
 ``VehicleSnapshot.fault``; commands then raise :class:`VehicleFaultError` (except ``estop``).
 Refused commands raise :class:`CommandRejectedError` with the autopilot's STATUSTEXT reason.
@@ -22,6 +25,7 @@ import logging
 import math
 from collections import deque
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 from vehicle_agent.backends.base import BackendError, BackendMode, Setpoint, Vec3, VehicleSnapshot
@@ -36,16 +40,22 @@ from vehicle_agent.backends.mavlink_errors import (
 from vehicle_agent.backends.mavlink_frames import LocalFrame, ned_to_enu
 from vehicle_agent.backends.mavlink_link import MavlinkLink
 from vehicle_agent.backends.mavlink_mocap import MocapForwarder, MocapSource
-from vehicle_agent.backends.mavlink_setpoints import (
-    MAV_FRAME_LOCAL_NED,
-    TYPE_MASK_ATTITUDE_ONLY,
-    TYPE_MASK_POSITION_VELOCITY_ACCEL,
-    AttitudeOuterLoop,
-    ned_target,
+from vehicle_agent.backends.mavlink_params import (
+    ParamChannel,
+    ParamError,
+    autopilot_fence,
+    show_params,
 )
 from vehicle_agent.backends.mavlink_settings import MavlinkSettings, settings_from_show
-from vehicle_agent.backends.mavlink_state import SEVERITY_WARNING, LinkState
+from vehicle_agent.backends.mavlink_state import (
+    MAV_AUTOPILOT_INVALID,
+    MAV_TYPE_GCS,
+    SEVERITY_WARNING,
+    LinkState,
+)
+from vehicle_agent.backends.mavlink_stream import SetpointStream
 from vehicle_agent.backends.mavlink_url import parse_mavlink_url
+from vehicle_agent.backends.mavlink_watchdog import Commanded, Watchdog, WatchLimits
 from vehicle_agent.motion import Move, plan_move
 
 log = logging.getLogger(__name__)
@@ -56,6 +66,9 @@ FORCE_DISARM = 21196.0
 STREAMED = {32: "LOCAL_POSITION_NED", 30: "ATTITUDE", 85: "POSITION_TARGET_LOCAL_NED"}
 SLOW = {1: "SYS_STATUS", 147: "BATTERY_STATUS", 245: "EXTENDED_SYS_STATE"}
 TextHandler = Callable[[int, str], None]
+GCS_HEARTBEAT_PERIOD_S = 0.5
+"""Our heartbeat period in [s]: PX4 drops a ground station unheard for 2.5 s (and its texts with
+it), so a stall of the agent of up to 2 s keeps the texts coming."""
 
 
 class MavlinkBackend:
@@ -78,29 +91,36 @@ class MavlinkBackend:
         self.fault: str | None = None
         self.events: deque[tuple[int, str]] = deque(maxlen=200)
         """STATUSTEXTs of the autopilot (severity, text), newest last, for the event log."""
-        self.setpoints_sent = 0
         self._on_text = on_text
         self._mocap = MocapForwarder(settings, self.frame, mocap_source)
         self._link: MavlinkLink | None = None
         self._heartbeat_seen = asyncio.Event()
         self.commands = CommandChannel(lambda: self.link, self.state,
             timeout_s=settings.command_timeout_s, attempts=settings.command_attempts)  # fmt: skip
+        self.params = ParamChannel(lambda: self.link, self.state, lambda: self._flavor().name,
+            timeout_s=settings.command_timeout_s, attempts=settings.command_attempts)  # fmt: skip
+        self.params_set: dict[str, float] = {}
+        """Parameters set and read back at connect, by name."""
+        limits = WatchLimits(settings.heartbeat_timeout_s, settings.setpoint_timeout_s,
+                             settings.takeoff_timeout_s, settings.land_timeout_s)  # fmt: skip
+        self.watchdog = Watchdog(limits)
         self._now_s = 0.0
         self._commanded_mode: int | None = None
         self._commanded_at = 0  # heartbeat count when our last mode/arming change was accepted
-        self._hb_count, self._hb_at_s = 0, math.nan
-        self._last_tick_s = math.inf
-        self._last_sent_s = -math.inf
         self._last_gcs_heartbeat_s = -math.inf
         self._hold: Setpoint | None = None
         self._climb: Move | None = None
         self._climb_to: tuple[Vec3, Vec3] | None = None  # (from, to): planned at the next tick
-        self._mode_since_s = math.nan  # NaN: the mode began after the last tick
-        self._outer: AttitudeOuterLoop | None = None
+        self.stream = SetpointStream(settings, self.frame, self.state, lambda: self.link)
 
     @property
     def control_period_s(self) -> float:
         return self.settings.control_period_s
+
+    @property
+    def setpoints_sent(self) -> int:
+        """Setpoints sent so far."""
+        return self.stream.sent
 
     @property
     def link(self) -> MavlinkLink:
@@ -136,9 +156,24 @@ class MavlinkBackend:
         self._request_telemetry()
         if self.state.armed:
             self.fault = "vehicle already armed when the agent connected: the pilot has it"
+        elif self.settings.set_params:
+            await self._configure()
         log.info("MAVLink vehicle %s (%s) on %s", self.state.system_id,
                  self.state.flavor.name, self.settings.url)  # fmt: skip
         return self._snapshot(0.0)
+
+    async def _configure(self) -> None:
+        """Set and read back every parameter the show needs; a fault if one does not hold."""
+        s = self.settings
+        specs = show_params(self._flavor().name, setpoint_timeout_s=s.setpoint_timeout_s,
+                            attitude=s.setpoints == "attitude", fence=s.fence)  # fmt: skip
+        for spec in specs:
+            try:
+                self.params_set[spec.name] = await self.params.ensure(spec)
+            except ParamError as exc:
+                self.fault = f"parameters not set, vehicle refused: {exc}"
+                log.error("vehicle %s: %s", self.state.system_id, self.fault)
+                return
 
     def _request_telemetry(self) -> None:
         fast_us = 1e6 / self.settings.telemetry_rate_hz
@@ -153,6 +188,8 @@ class MavlinkBackend:
             self._heartbeat_seen.set()
         elif kind == "COMMAND_ACK":
             self.commands.on_ack(message)
+        elif kind == "PARAM_VALUE":
+            self.params.on_param_value(message)
         elif kind == "STATUSTEXT":
             severity, text = self.state.recent_texts[-1]
             self.commands.on_text(text)
@@ -186,11 +223,9 @@ class MavlinkBackend:
             raise BackendError(f"cannot take off in mode {self.mode}")
         flavor = self._flavor()
         here = self._position_m_enu()
+        self.stream.new_flight(await self._heading_now())
         if flavor.name == "px4":
-            self._hold = Setpoint(position_m_enu=here)
-            for _ in range(int(self.settings.setpoint_rate_hz)):  # >1 s of setpoints first
-                self._send_setpoint(self._hold, self._now_s)
-                await asyncio.sleep(1.0 / self.settings.setpoint_rate_hz)
+            await self._prove_life(Setpoint(position_m_enu=here))
         await self._set_mode(flavor.offboard_mode)
         await self.commands.run(CMD_ARM_DISARM, 1.0, arming=True)
         self._commanded_at = self.state.heartbeats
@@ -208,6 +243,29 @@ class MavlinkBackend:
             self._climb_to = (here, top)
         self._hold = Setpoint(position_m_enu=hover_m_enu)
         self._set_backend_mode("takeoff")
+
+    async def _heading_now(self) -> float:
+        """The vehicle's heading in [rad] from north (ATTITUDE), held for the whole flight; a
+        vehicle that has not said it within a second is refused the take-off (try again)."""
+        for _ in range(20):
+            if self.state.attitude_ned is not None:
+                return self.state.attitude_ned[2]
+            await asyncio.sleep(0.05)
+        raise CommandRejectedError(
+            CMD_NAV_TAKEOFF, 1, "no ATTITUDE from the vehicle yet: its heading is unknown"
+        )
+
+    async def _prove_life(self, hold: Setpoint) -> None:
+        """PX4: OFFBOARD and arming need a live setpoint stream; stream a second and a bit of
+        the current position (attitude setpoints: level, zero thrust) on a running clock."""
+        self._hold = hold
+        rate = self.settings.setpoint_rate_hz
+        for k in range(int(rate) + 5):
+            self.stream.send_proof_of_life(hold, self._now_s + k / rate)
+            if k % max(1, round(rate * GCS_HEARTBEAT_PERIOD_S)) == 0:
+                self._send_gcs_heartbeat()  # no tick meanwhile: stay a ground station for PX4
+            await asyncio.sleep(1.0 / rate)
+        self.stream.last_sent_s = self._now_s  # the agent's clock did not run meanwhile
 
     async def _disarm_on_ground(self) -> None:
         """Armed but refused the take-off: disarm (best effort) so that it may be retried."""
@@ -238,6 +296,7 @@ class MavlinkBackend:
 
     def close_link(self) -> None:
         self.commands.cancel_all()
+        self.params.cancel_all()
         if self._link is not None:
             self._link.close()
             self._link = None
@@ -257,19 +316,20 @@ class MavlinkBackend:
             self._mocap.forward(self.link, self.state, now_s)
         elif self.state.heartbeats > self._commanded_at:
             self._observe_after_fault()
-        if now_s - self._last_gcs_heartbeat_s >= 1.0:
+        if now_s - self._last_gcs_heartbeat_s >= GCS_HEARTBEAT_PERIOD_S:
             self._last_gcs_heartbeat_s = now_s
             self._send_gcs_heartbeat()
         return self._snapshot(now_s)
 
     def _send_gcs_heartbeat(self) -> None:
         if self._link is not None:
-            # MAV_TYPE_ONBOARD_CONTROLLER, MAV_AUTOPILOT_INVALID, MAV_STATE_ACTIVE
-            self._link.send(self._link.mav.heartbeat_encode(18, 8, 0, 0, 4))
+            # a ground station (PX4 sends STATUSTEXT only then), no autopilot, MAV_STATE_ACTIVE
+            hb = self._link.mav.heartbeat_encode(MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, 0, 0, 4)
+            self._link.send(hb)
 
     def _set_backend_mode(self, mode: BackendMode) -> None:
         self.mode = mode
-        self._mode_since_s = math.nan
+        self.watchdog.mode_changed()
 
     def _fail(self, reason: str) -> None:
         """Stop streaming for good; the autopilot (or the pilot) flies from here."""
@@ -287,43 +347,11 @@ class MavlinkBackend:
             self._set_backend_mode("idle")
 
     def _supervise(self, now_s: float) -> None:
-        st = self.state
-        stalled_s = now_s - self._last_tick_s - self.control_period_s
-        if stalled_s > 2 * self.control_period_s:
-            # The agent did not run (its clock jumped ahead): we did not listen either, and what
-            # the vehicle said meanwhile is still in the socket. Only count time we listened.
-            self._hb_at_s += stalled_s
-        self._last_tick_s = now_s
-        if st.heartbeats != self._hb_count or math.isnan(self._hb_at_s):
-            self._hb_count, self._hb_at_s = st.heartbeats, now_s
-        silent_s = now_s - self._hb_at_s
-        if silent_s > self.settings.heartbeat_timeout_s:
-            self._fail(f"lost link: no heartbeat from the autopilot for {silent_s:.1f} s")
-        flying = self.mode in ("takeoff", "hold", "offboard", "landing")
-        for severity, text in st.take_texts():
-            if flying and severity <= SEVERITY_WARNING and "failsafe" in text.lower():
-                self._fail(f"autopilot failsafe: {text}")
-        fresh = st.heartbeats > self._commanded_at
-        if flying and fresh and st.custom_mode != self._commanded_mode:
-            name = self._flavor().mode_name(st.custom_mode or 0)
-            self._fail(f"mode changed to {name} by the pilot or the autopilot: not streaming")
-        if flying and fresh and not st.armed and self.mode != "landing":
-            self._fail("vehicle disarmed in flight by the pilot or the autopilot")
-        timeout = self.settings.setpoint_timeout_s or self._flavor().setpoint_timeout_s
-        gap_s = now_s - self._last_sent_s
-        if self.mode in ("hold", "offboard") and gap_s > timeout:
-            self._fail(f"setpoint stream stopped for {gap_s:.1f} s (autopilot timeout "
-                       f"{timeout:.1f} s): its failsafe has stopped the vehicle")  # fmt: skip
-        self._check_progress(now_s)
-
-    def _check_progress(self, now_s: float) -> None:
-        if math.isnan(self._mode_since_s):
-            self._mode_since_s = now_s
-        in_mode_s = now_s - self._mode_since_s
-        if self.mode == "takeoff" and in_mode_s > self.settings.takeoff_timeout_s:
-            self._fail(f"take-off not complete after {in_mode_s:.0f} s")
-        if self.mode == "landing" and in_mode_s > self.settings.land_timeout_s:
-            self._fail(f"landing not complete after {in_mode_s:.0f} s")
+        commanded = Commanded(self._commanded_mode, self._commanded_at, self.stream.last_sent_s)
+        reason = self.watchdog.check(now_s, self.control_period_s, self.state, self._flavor(),
+                                     self.mode, commanded)  # fmt: skip
+        if reason is not None:
+            self._fail(reason)
 
     def _advance(self, now_s: float) -> None:
         st = self.state
@@ -337,6 +365,8 @@ class MavlinkBackend:
             height_error = abs(self._position_m_enu()[2] - self._hold.position_m_enu[2])
             near = height_error < self.settings.takeoff_tolerance_m
             if climb_done and st.position_ned is not None and near:
+                if self._climb is not None:  # our own climb (PX4): its outer loop learnt the
+                    self.stream.new_flight(self.stream.heading_ned_rad)  # ground; start afresh
                 self._climb = None
                 self._set_backend_mode("hold")
         elif self.mode == "landing" and not st.armed and st.heartbeats > self._commanded_at:
@@ -358,43 +388,7 @@ class MavlinkBackend:
             target = self._climb.setpoint(now_s)
         else:
             return
-        if (
-            self.settings.setpoints == "attitude"
-            or now_s - self._last_sent_s >= self._send_period_s()
-        ):
-            self._send_setpoint(target, now_s)
-
-    def _send_period_s(self) -> float:
-        return 1.0 / self.settings.setpoint_rate_hz - 0.5 * self.control_period_s
-
-    def _send_setpoint(self, setpoint: Setpoint, now_s: float) -> None:
-        st, mav = self.state, self.link.mav
-        stamp_ms = int(now_s * 1000) & 0xFFFFFFFF
-        sysid, compid = st.system_id or 0, st.component_id or 0
-        if self.settings.setpoints == "attitude":
-            command = self._attitude_loop().update(self._position_m_enu(), setpoint)
-            if now_s - self._last_sent_s < self._send_period_s():
-                return  # the outer loop runs every tick; the stream goes at its own rate
-            message = mav.set_attitude_target_encode(stamp_ms, sysid, compid,
-                TYPE_MASK_ATTITUDE_ONLY, command.q_ned, 0.0, 0.0, 0.0, command.thrust)  # fmt: skip
-        else:
-            t = ned_target(setpoint, self.frame)
-            message = mav.set_position_target_local_ned_encode(
-                stamp_ms, sysid, compid, MAV_FRAME_LOCAL_NED, TYPE_MASK_POSITION_VELOCITY_ACCEL,
-                *t.position_m_ned, *t.velocity_mps_ned, *t.acceleration_mps2_ned, 0.0, 0.0,
-            )  # fmt: skip
-        if self.link.send(message):
-            self._last_sent_s = now_s
-            self.setpoints_sent += 1
-
-    def _attitude_loop(self) -> AttitudeOuterLoop:
-        if self._outer is None:
-            s = self.settings
-            thrust_max_mps2 = s.thrust_max_n / s.mass_kg
-            self._outer = AttitudeOuterLoop(
-                s.controller, s.control_period_s, self._position_m_enu(), thrust_max_mps2
-            )
-        return self._outer
+        self.stream.send(target, now_s, self._position_m_enu())
 
     # --- state out ---------------------------------------------------------------------------
     def _position_m_enu(self) -> Vec3:
@@ -420,17 +414,28 @@ class MavlinkBackend:
             pen_tip_m_enu=None if brush is None else brush.tip_m_enu,
             pen_width_m=None if brush is None else brush.width_m,
             pen_contact=None if brush is None else brush.contact,
+            autopilot_mode=None if st.flavor is None else st.flavor.mode_name(st.custom_mode or 0),
         )
 
 
 def create_backend(setup: Any, **kwargs: Any) -> MavlinkBackend:
     """The backend of ``setup`` (a :class:`vehicle_agent.agent.VehicleSetup` whose vehicle has
-    ``backend: mavlink``), carrying the show's brush over its board; ``kwargs`` go to
-    :class:`MavlinkBackend` (``on_text``, ``mocap_source``)."""
+    ``backend: mavlink``), carrying the show's brush over its board and, as a second line, the
+    autopilot's own fence around the agent's geofence; ``kwargs`` go to :class:`MavlinkBackend`
+    (``on_text``, ``mocap_source``)."""
     from vehicle_agent.agent import on_board, world_params  # the agent imports us lazily
 
     show = setup.show
-    settings = settings_from_show(show, show.vehicle(setup.vehicle_id))
+    vehicle = show.vehicle(setup.vehicle_id)
+    settings = settings_from_show(show, vehicle)
+    fence = setup.runner_config.safety.fence
+    if show.safety.autopilot_fence and fence is not None:
+        settings = replace(
+            settings,
+            fence=autopilot_fence(
+                fence, settings.origin_m_enu, show.safety.autopilot_fence_margin_m
+            ),
+        )
     world = world_params(setup)
     kwargs.setdefault("brush", BrushModel(world.brush, world.board_height_m, on_board(setup)))
     return MavlinkBackend(settings, **kwargs)

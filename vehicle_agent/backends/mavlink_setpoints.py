@@ -1,14 +1,17 @@
 """What a setpoint becomes on the wire (pure): LOCAL_NED p/v/a, or attitude + thrust.
 
-Position setpoints carry position, velocity and acceleration (type_mask ``0x0C00``: ignore only yaw
-and yaw rate), which ArduPilot and PX4 use as feed-forward; measured on ArduCopter SITL this tracks
-a trajectory far better than position-only targets (``0x0DF8``). Attitude setpoints come from our
-own RPT outer loop (:mod:`vehicle_agent.control.controller`) closed on the autopilot's
-LOCAL_POSITION_NED, with thrust as a fraction of the maximum thrust.
+Position setpoints carry position, velocity, acceleration and yaw (type_mask ``0x0800``: ignore
+only the yaw rate): ArduPilot and PX4 use p, v, a as feed-forward (measured on ArduCopter SITL this
+tracks a trajectory far better than position-only targets, ``0x0DF8``), and the explicit yaw keeps
+the autopilot from turning the vehicle (the heading at take-off is held). Attitude setpoints come
+from our own RPT outer loop (:mod:`vehicle_agent.control.controller`) closed on the autopilot's
+LOCAL_POSITION_NED, at the held heading, with thrust as a fraction of the maximum thrust
+(ArduPilot: GUID_OPTIONS bit 3, set at connect; PX4: normalised thrust).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,6 +29,8 @@ from vehicle_agent.control.inner import G_C
 
 TYPE_MASK_POSITION_VELOCITY_ACCEL = 0x0C00
 """POSITION_TARGET_TYPEMASK: use x, y, z, vx, vy, vz, afx, afy, afz; ignore yaw and yaw rate."""
+TYPE_MASK_POSITION_VELOCITY_ACCEL_YAW = 0x0800
+"""POSITION_TARGET_TYPEMASK: use x, y, z, vx, vy, vz, afx, afy, afz and yaw; ignore yaw rate."""
 TYPE_MASK_ATTITUDE_ONLY = 0x07
 """ATTITUDE_TARGET_TYPEMASK: ignore the three body rates, use the quaternion and thrust."""
 MAV_FRAME_LOCAL_NED = 1
@@ -71,9 +76,13 @@ class AttitudeOuterLoop:
         dt_s: float,
         initial_position_m_enu: Vec3,
         thrust_max_mps2: float,
+        *,
+        heading_ned_rad: float = 0.0,
     ) -> None:
         self._controller = PositionController(config, dt_s, np.array([initial_position_m_enu]))
         self._thrust_max_mps2 = thrust_max_mps2
+        self._yaw_enu = np.array([math.pi / 2 - heading_ned_rad])
+        """The heading to hold, about ENU z from east."""
         self._throttle_per_mps2 = float(G_C[0, 2])
 
     def update(self, measured_m_enu: Vec3, setpoint: Setpoint) -> AttitudeCommand:
@@ -82,6 +91,7 @@ class AttitudeOuterLoop:
             position_m_enu=np.array([setpoint.position_m_enu]),
             velocity_mps_enu=np.array([setpoint.velocity_mps_enu]),
             acceleration_mps2_enu=np.array([setpoint.acceleration_mps2_enu]),
+            yaw_rad=self._yaw_enu,
         )
         out = self._controller.update(np.array([measured_m_enu]), tick)
         roll, pitch, yaw = (float(out.roll_rad[0]), float(out.pitch_rad[0]), float(out.yaw_rad[0]))

@@ -7,6 +7,7 @@ from typing import Literal
 
 from showfile import Show, Vehicle
 from vehicle_agent.backends.base import BackendError, Vec3
+from vehicle_agent.backends.mavlink_params import FenceSpec
 from vehicle_agent.control.controller import DEFAULT_CONFIG, PAPER_CONFIG, ControllerConfig
 
 SetpointKind = Literal["position", "attitude"]
@@ -41,9 +42,14 @@ class MavlinkSettings:
     """How long one attempt of a command waits for its COMMAND_ACK."""
     command_attempts: int = 3
     """Attempts per command before it times out."""
-    setpoint_timeout_s: float | None = None
-    """Setpoint gap after which the autopilot has stopped following (None: its default, ArduPilot
-    GUID_TIMEOUT 3 s, PX4 COM_OF_LOSS_T 1 s); a longer gap in our stream is a fault."""
+    setpoint_timeout_s: float = 1.0
+    """The autopilot's setpoint timeout in [s], set at connect (ArduPilot GUID_TIMEOUT, PX4
+    COM_OF_LOSS_T; 0.5..1 s): a longer gap in our stream is a fault."""
+    set_params: bool = True
+    """Set and verify the parameters the show needs at connect (mavlink_params.show_params);
+    a vehicle whose parameters cannot be set is in fault."""
+    fence: FenceSpec | None = None
+    """The autopilot's own fence around its home, set at connect (None: left as it is)."""
     takeoff_tolerance_m: float = 0.1
     """Height error in [m] under which the take-off is complete."""
     takeoff_timeout_s: float = 30.0
@@ -73,15 +79,20 @@ class MavlinkSettings:
             raise BackendError("mavlink setpoint_rate_hz cannot exceed the control rate")
         if self.command_attempts < 1:
             raise BackendError("mavlink command_attempts must be >= 1")
+        if not 0.1 <= self.setpoint_timeout_s <= 10.0:
+            raise BackendError("mavlink setpoint_timeout_s must be in 0.1..10 s")
 
     @property
     def control_period_s(self) -> float:
         return 1.0 / self.control_rate_hz
 
 
-def settings_from_show(show: Show, vehicle: Vehicle) -> MavlinkSettings:
+def settings_from_show(
+    show: Show, vehicle: Vehicle, fence: FenceSpec | None = None
+) -> MavlinkSettings:
     """Settings of ``vehicle`` (a show-file vehicle with ``backend: mavlink``) in ``show``: its
-    ``mavlink_*`` fields (origin default: its home), limits and controller from the show."""
+    ``mavlink_*`` fields (origin default: its home), limits and controller from the show;
+    ``fence``: the autopilot's own fence (see ``create_backend``)."""
     if not vehicle.mavlink_url:
         raise BackendError(f"vehicle {vehicle.id}: backend mavlink needs mavlink_url")
     limits = show.vehicle_limits(vehicle.id)
@@ -98,6 +109,7 @@ def settings_from_show(show: Show, vehicle: Vehicle) -> MavlinkSettings:
         mass_kg=float(limits.mass_kg),
         thrust_max_n=float(limits.thrust_max_n),
         controller=_controller(show),
+        fence=fence,
     )
 
 

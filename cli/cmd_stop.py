@@ -1,0 +1,87 @@
+"""``skyquill down SHOW.yaml`` (also ``skyquill stop``): stop a show that ``skyquill up`` runs.
+
+It reads ``<database dir>/up.json``. While that ``up`` runs, it sends it SIGTERM and waits: ``up``
+stops its processes as on Ctrl-C. When ``up`` is gone (killed) but its processes still run, it
+stops them itself in the same order: agents and kiosk, the orchestrator, simulated autopilots,
+the router last; each gets SIGTERM and its own grace period, and only one that outlives its own
+grace gets SIGKILL.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import sys
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from cli.runstate import RunFile
+    from showfile import Show
+
+NAME = "down"
+ALIASES = "stop"
+HELP = "Stop a show started by skyquill up (cleanly: SIGTERM, a grace period per process)."
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("show", type=Path, help="show file (YAML)")
+    parser.add_argument(
+        "--timeout", type=float, default=60.0, help="how long to wait for the show to stop [s]"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    from cli.runstate import RunFile, RunFileError, run_file_path
+    from showfile import ShowError, load_show
+
+    try:
+        show = load_show(args.show)
+        runfile = RunFile.load(run_file_path(show.database_path))
+    except (ShowError, RunFileError) as exc:
+        print(f"skyquill down: {exc}", file=sys.stderr)
+        return 2
+    if runfile is None:
+        print(f"skyquill down: show {show.show_id} is not running here", file=sys.stderr)
+        return 1
+    up = runfile.up
+    if up is not None and up.alive():
+        os.kill(up.pid, signal.SIGTERM)
+        deadline = time.monotonic() + args.timeout
+        while up.alive():
+            if time.monotonic() > deadline:
+                print(
+                    f"skyquill down: skyquill up (pid {up.pid}) still runs after "
+                    f"{args.timeout:.0f} s",
+                    file=sys.stderr,
+                )
+                return 1
+            time.sleep(0.1)
+        print(f"skyquill down: show {show.show_id} stopped (skyquill up pid {up.pid})")
+        return 0
+    return _stop_orphans(args.show, show, runfile)
+
+
+def _stop_orphans(show_path: Path, show: Show, runfile: RunFile) -> int:
+    """``up`` is gone: stop the processes it left, as it would have."""
+    from cli.runstate import AdoptedProcess
+    from cli.supervisor import ChildSpec, Supervisor, show_children
+
+    known = {
+        spec.name: spec
+        for spec in show_children(
+            show_path, [v.id for v in show.vehicles], kiosk=True, mavlink_sim=True
+        )
+    }
+    running = {name: record for name, record in runfile.children.items() if record.alive()}
+    specs = [known.get(name) or ChildSpec(name, ()) for name in running]
+    supervisor = Supervisor(specs, say=lambda line: print(f"skyquill down: {line}"))
+    for name, record in running.items():
+        supervisor.adopt(name, AdoptedProcess(record))
+    supervisor.stop()
+    runfile.remove()
+    names = ", ".join(running) or "nothing was left running"
+    print(f"skyquill down: show {show.show_id} stopped ({names})")
+    return 0

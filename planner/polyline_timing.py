@@ -1,0 +1,89 @@
+"""Time-optimal times along the data polyline: the start of the time allocation at the limits.
+
+The data points of a character (planner.waypoints) form a polyline. Along it, the fastest rest-to-
+rest motion under the vehicle limits is found by the classic forward-backward pass: each piece
+``j`` (direction ``u_j``, length ``L_j``) gets the largest acceleration the per-axis bounds allow
+along ``u_j`` and the largest speed the QP's speed polytope allows along it; each vertex gets a
+speed limit from its turn (the velocity turns by ``2 v sin(theta/2)`` within about one smoothing
+time ``corner_time_s`` at that acceleration), zero at a repeated point (a dwell) and at the ends.
+Each piece is then flown accelerate-cruise-decelerate between its vertex speeds.
+
+This is bang-bang timing of a path with corners; the minimum-jerk fit smooths both, and
+planner.timescale re-times the result until the fit is within the limits everywhere.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from planner.bspline import FloatArray
+from planner.fit_qp import SPEED_DIRECTIONS, SPEED_POLYTOPE_APOTHEM, QpLimits
+
+
+def _along(limits: QpLimits, u: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Per piece direction (n, 3): largest |acceleration| and speed along it."""
+    bound = np.minimum(-np.asarray(limits.accel_lower_mps2), np.asarray(limits.accel_upper_mps2))
+    with np.errstate(divide="ignore"):
+        accel = np.min(np.where(np.abs(u) > 1e-12, bound / np.abs(u), np.inf), axis=1)
+    if limits.speed_max_mps is None:
+        return accel, np.full(u.shape[0], np.inf)
+    support = np.max(np.abs(u @ SPEED_DIRECTIONS.T), axis=1)
+    return accel, limits.speed_max_mps * SPEED_POLYTOPE_APOTHEM / np.maximum(support, 1e-12)
+
+
+def _vertex_speeds(
+    u: FloatArray, accel: FloatArray, length: FloatArray, corner_time_s: float
+) -> FloatArray:
+    """Speed limit at every vertex (n + 1,): 0 at the ends and around zero-length pieces."""
+    n = u.shape[0]
+    limit = np.zeros(n + 1)
+    turn = np.linalg.norm(u[1:] - u[:-1], axis=1)  # = 2 sin(theta / 2)
+    a = np.minimum(accel[1:], accel[:-1])
+    with np.errstate(divide="ignore"):
+        limit[1:-1] = np.where(turn > 1e-9, a * corner_time_s / turn, np.inf)
+    still = length <= 1e-12
+    limit[:-1][still] = 0.0
+    limit[1:][still] = 0.0
+    return limit
+
+
+def _piece_time_s(v_a: float, v_b: float, length: float, a: float, v_max: float) -> float:
+    """Accelerate from ``v_a``, cruise at most ``v_max``, decelerate to ``v_b`` over ``length``."""
+    if length <= 0.0:
+        return 0.0
+    peak = min(v_max, math.sqrt(max(a * length + 0.5 * (v_a * v_a + v_b * v_b), 0.0)))
+    peak = max(peak, v_a, v_b)
+    ramps = (2.0 * peak * peak - v_a * v_a - v_b * v_b) / (2.0 * a)
+    cruise = max(length - ramps, 0.0) / peak if peak > 0.0 else 0.0
+    return (peak - v_a) / a + (peak - v_b) / a + cruise
+
+
+def polyline_durations_s(
+    points_m: FloatArray,
+    limits: QpLimits,
+    *,
+    corner_time_s: float,
+    min_duration_s: float,
+) -> FloatArray:
+    """Time-optimal duration of every piece of the polyline ``points_m`` (N, 3), shape (N - 1,)."""
+    delta = np.diff(points_m, axis=0)
+    length = np.linalg.norm(delta, axis=1)
+    u = np.divide(delta, length[:, None], out=np.zeros_like(delta), where=length[:, None] > 0.0)
+    accel, speed = _along(limits, u)
+    accel = np.where(np.isfinite(accel), accel, 1.0)
+    v = np.minimum(_vertex_speeds(u, accel, length, corner_time_s), np.append(speed, 0.0))
+    v = np.minimum(v, np.concatenate([[0.0], speed]))
+    n = length.shape[0]
+    for j in range(n):  # forward: reachable from the previous vertex
+        v[j + 1] = min(v[j + 1], math.sqrt(v[j] ** 2 + 2.0 * accel[j] * length[j]))
+    for j in range(n - 1, -1, -1):  # backward: can still stop in time
+        v[j] = min(v[j], math.sqrt(v[j + 1] ** 2 + 2.0 * accel[j] * length[j]))
+    times = np.array(
+        [
+            _piece_time_s(float(v[j]), float(v[j + 1]), float(length[j]), accel[j], speed[j])
+            for j in range(n)
+        ]
+    )
+    return np.asarray(np.maximum(times, min_duration_s), dtype=np.float64)

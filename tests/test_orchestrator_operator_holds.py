@@ -1,0 +1,152 @@
+"""Operator holds (pure): a landed or stopped vehicle flies again only when released by name."""
+
+from __future__ import annotations
+
+from bus.messages import AgentReport, OperatorCommand, SubmitRequest, VehicleStatus
+from orchestrator.core import Book, CoreConfig, Effects
+from orchestrator.fleet import VehicleInfo, ready_for_job
+
+VEHICLES = (
+    VehicleInfo("uav1", "quadrotor-brush", "b1"),
+    VehicleInfo("uav2", "quadrotor-brush", "b2"),
+)
+
+
+def _book() -> Book:
+    book = Book(CoreConfig(show_id="t", vehicles=VEHICLES), now_s=0.0)
+    for vid in ("uav1", "uav2"):
+        book.liveliness(vid, True, 0.0)
+        book.status(VehicleStatus(vehicle_id=vid, kind="quadrotor-brush", state="idle"), 0.0)
+    return book
+
+
+def _submit(book: Book, job_id: str, now_s: float) -> Effects:
+    reply, eff = book.submit(
+        job_id, SubmitRequest(text="L"), label="L", estimate_s=20.0, now_s=now_s
+    )
+    assert reply.ok, reply
+    return eff
+
+
+def _assigned(eff: Effects) -> list[tuple[str, str]]:
+    return [(vid, c.job.job_id) for vid, c in eff.commands if c.command == "assign" and c.job]
+
+
+def _idle(book: Book, vid: str, now_s: float) -> Effects:
+    status = VehicleStatus(vehicle_id=vid, kind="quadrotor-brush", state="idle")
+    return book.status(status, now_s)
+
+
+def _op(book: Book, now_s: float, command: str, **kw: object) -> tuple[bool, str, Effects]:
+    reply, eff = book.operator(OperatorCommand(command=command, **kw), now_s)  # type: ignore[arg-type]
+    return reply.ok, reply.message, eff
+
+
+def test_land_holds_the_vehicle_through_pause_and_resume_of_the_queue() -> None:
+    book = _book()
+    ok, _, _ = _op(book, 1.0, "land", vehicle_id="uav1")
+    assert ok and book.vehicles["uav1"].held
+    _op(book, 2.0, "pause")
+    ok, message, eff = _op(book, 3.0, "resume")  # the console's `p` `p`
+    assert ok and "uav1 held" in message
+    _submit(book, "j1", 4.0)
+    _submit(book, "j2", 4.0)
+    eff = _idle(book, "uav1", 5.0)
+    assert _assigned(eff) == []  # uav1 stays down; uav2 took j1 when it was submitted
+    assert book.jobs["j2"].state == "queued"
+    assert not ready_for_job(book.vehicles["uav1"], 5.0)
+    assert book.vehicles["uav1"].summary(None).held
+
+
+def test_resume_of_the_held_vehicle_itself_does_not_release_it() -> None:
+    book = _book()
+    _op(book, 1.0, "land", vehicle_id="uav1")
+    ok, message, _ = _op(book, 2.0, "resume", vehicle_id="uav1")
+    assert ok and "release" in message
+    assert book.vehicles["uav1"].held and book.vehicles["uav1"].paused
+
+
+def test_release_is_explicit_and_per_vehicle() -> None:
+    book = _book()
+    _op(book, 1.0, "land_all")
+    assert all(v.held for v in book.vehicles.values()) and book.queue_paused
+    ok, message, _ = _op(book, 2.0, "release")
+    assert not ok and "vehicle_id" in message
+    _op(book, 2.5, "resume")
+    _submit(book, "j1", 3.0)
+    assert book.jobs["j1"].state == "queued"
+    ok, message, eff = _op(book, 4.0, "release", vehicle_id="uav2")
+    assert ok and message == "uav2 released"
+    assert _assigned(eff) == [("uav2", "j1")]
+    assert book.vehicles["uav1"].held
+    ok, message, _ = _op(book, 5.0, "release", vehicle_id="uav2")
+    assert not ok and "not held" in message
+
+
+def test_estop_holds_and_etas_count_only_vehicles_that_can_fly() -> None:
+    book = _book()
+    _op(book, 1.0, "estop")
+    _op(book, 2.0, "resume")
+    assert all(v.held for v in book.vehicles.values()) and not book.queue_paused
+    _submit(book, "j1", 3.0)
+    assert book.etas(3.0)["j1"] == (1, None)  # nobody can fly: no promise of a time
+    ok, _, _ = _op(book, 4.0, "release", vehicle_id="uav9")
+    assert not ok
+    ok, _, eff = _op(book, 4.0, "release", vehicle_id="uav1")
+    assert ok and _assigned(eff) == [("uav1", "j1")]
+
+
+def test_the_snapshot_reply_carries_recent_events_and_fleet_publications_none() -> None:
+    book = _book()
+    _op(book, 1.0, "land", vehicle_id="uav1")
+    _op(book, 2.0, "release", vehicle_id="uav1")
+    events = book.snapshot(3.0).events
+    assert [e.message for e in events if e.kind == "operator"] == [
+        "operator: land uav1",
+        "operator: release uav1",
+    ]
+    assert book.snapshot(3.0, include_final=False).events == []
+    for i in range(200):
+        _op(book, 4.0 + i, "pause")
+    assert len(book.snapshot(300.0).events) == 50
+
+
+def _writing(book: Book, vid: str, job_id: str, now_s: float) -> None:
+    report = AgentReport(vehicle_id=vid, job_id=job_id, event="started", planned_duration_s=20.0)
+    assert book.report(report, now_s)[0].ok
+    status = VehicleStatus(vehicle_id=vid, kind="quadrotor-brush", state="writing", job_id=job_id)
+    book.status(status, now_s)
+
+
+def test_a_board_half_written_by_a_lost_vehicle_waits_for_a_fresh_sheet() -> None:
+    book = Book(CoreConfig(show_id="t", vehicles=VEHICLES[:1]), now_s=0.0)
+    book.liveliness("uav1", True, 0.0)
+    _idle(book, "uav1", 0.0)
+    assert _assigned(_submit(book, "j1", 1.0)) == [("uav1", "j1")]
+    _writing(book, "uav1", "j1", 2.0)
+    assert book.jobs["j1"].state == "writing"
+    book.liveliness("uav1", False, 3.0)
+    book.tick(30.0)  # past the grace period: lost, j1 requeued
+    assert book.jobs["j1"].state == "queued" and book.dirty_boards == {"b1"}
+    assert book.snapshot(30.0).dirty_boards == ["b1"]
+    assert any(e.kind == "board_dirty" for e in book.recent_events)
+    book.liveliness("uav1", True, 31.0)
+    assert _assigned(_idle(book, "uav1", 31.0)) == []  # back, but the sheet is spoilt
+    ok, message, _ = _op(book, 32.0, "fresh_sheet")
+    assert not ok and "board_id" in message
+    ok, message, _ = _op(book, 32.0, "fresh_sheet", board_id="b9")
+    assert not ok and "b1" in message  # the valid boards are listed
+    ok, message, eff = _op(book, 33.0, "fresh_sheet", board_id="b1")
+    assert ok and _assigned(eff) == [("uav1", "j1")] and not book.dirty_boards
+    ok, message, _ = _op(book, 34.0, "fresh_sheet", board_id="b1")
+    assert not ok and "not waiting" in message
+
+
+def test_a_job_requeued_before_writing_started_leaves_the_board_clean() -> None:
+    book = Book(CoreConfig(show_id="t", vehicles=VEHICLES[:1]), now_s=0.0)
+    book.liveliness("uav1", True, 0.0)
+    _idle(book, "uav1", 0.0)
+    _submit(book, "j1", 1.0)
+    assert book.jobs["j1"].state == "assigned"
+    _op(book, 2.0, "land", vehicle_id="uav1")
+    assert book.jobs["j1"].state == "queued" and not book.dirty_boards

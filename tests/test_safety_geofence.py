@@ -1,0 +1,76 @@
+"""The geofence alone: built from a board, a home and margins; points in and out; plans."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from showfile import load_show
+from showfile.checks import footprint
+from vehicle_agent.safety import Geofence, GeofenceError, vehicle_fence
+from vehicle_agent.safety.geofence import convex_hull
+
+BOARD = [(-0.7, -0.7), (0.7, -0.7), (0.7, 0.7), (-0.7, 0.7)]
+HOME = (0.0, -1.2, 0.0)
+
+
+def fence() -> Geofence:
+    return vehicle_fence(BOARD, HOME, 1.05, margin_m=0.5, ceiling_margin_m=0.5)
+
+
+def test_the_fence_covers_board_home_and_transit_with_its_margins() -> None:
+    f = fence()
+    for inside in [(0.0, 0.0, 1.0), (0.7 + 0.49, 0.0, 1.0), (0.0, -1.2 - 0.49, 0.5),
+                   (0.0, -0.95, 1.05), (0.0, 0.0, 1.05 + 0.49), (0.0, -1.2, -0.1)]:  # fmt: skip
+        assert f.contains(inside), inside
+    for outside, distance in [((0.7 + 0.6, 0.0, 1.0), 0.1), ((0.0, 0.0, 1.05 + 0.7), 0.2),
+                              ((0.0, 0.7 + 0.8, 1.0), 0.3), ((0.0, 0.0, -0.5), 0.3)]:  # fmt: skip
+        assert not f.contains(outside), outside
+        assert f.distance_outside_m(outside) == pytest.approx(distance, abs=0.02)
+    assert math.isinf(f.distance_outside_m((math.nan, 0.0, 1.0)))
+
+
+def test_first_outside_finds_the_first_sample_that_leaves() -> None:
+    f = fence()
+    points = np.array([[0.0, 0.0, 1.0], [0.5, 0.5, 1.0], [3.0, 0.0, 1.0], [0.0, 0.0, 9.0]])
+    assert f.first_outside(points) == 2
+    assert f.first_outside(points[:2]) is None
+    assert f.first_outside(np.empty((0, 3))) is None
+
+
+@settings(max_examples=200, deadline=None)
+@given(x=st.floats(-3, 3), y=st.floats(-3, 3), z=st.floats(-1, 3))
+def test_vectorised_and_scalar_checks_agree(x: float, y: float, z: float) -> None:
+    f = fence()
+    assert (f.first_outside(np.array([[x, y, z]])) is None) == f.contains((x, y, z))
+
+
+def test_hull_is_counter_clockwise_and_drops_inner_points() -> None:
+    hull = convex_hull([(0, 0), (1, 0), (1, 1), (0, 1), (0.5, 0.5), (0.5, 0.0)])
+    assert hull == ((0, 0), (1, 0), (1, 1), (0, 1))
+
+
+def test_a_fence_without_area_or_with_a_bad_margin_is_refused() -> None:
+    with pytest.raises(GeofenceError, match="no area"):
+        vehicle_fence([(0.0, 0.0)], (0.0, 0.0, 0.0), 1.0, margin_m=0.0, ceiling_margin_m=0.5)
+    with pytest.raises(GeofenceError, match=">= 0"):
+        vehicle_fence(BOARD, HOME, 1.0, margin_m=-1.0, ceiling_margin_m=0.5)
+
+
+def test_each_shipped_vehicles_fence_holds_its_board_and_home_but_not_its_neighbours() -> None:
+    show = load_show("shows/airshow-2014.yaml")
+    s = show.safety
+    fences = {}
+    for vehicle in show.vehicles:
+        board = show.board(vehicle.board)
+        f = vehicle_fence(footprint(board), vehicle.home_m_enu, 1.05, margin_m=s.fence_margin_m,
+                          ceiling_margin_m=s.fence_ceiling_margin_m)  # fmt: skip
+        assert f.contains((*board.center_m_enu[:2], 1.0)) and f.contains(vehicle.home_m_enu)
+        fences[vehicle.id] = (f, board)
+    f1, _ = fences["uav1"]
+    _, b3 = fences["uav3"]
+    assert not f1.contains((*b3.center_m_enu[:2], 1.0))

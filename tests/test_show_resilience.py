@@ -1,0 +1,397 @@
+"""A show survives its processes dying or freezing, and never writes a character twice.
+
+SIGKILL of the router, of the orchestrator and of an agent, and SIGSTOP of an agent for 20 s,
+mid-show: one show of three simulated vehicles runs for these (every process of it a supervised
+child, router included, as under ``skyquill up``; loopback, mutual TLS, sped up). SIGKILL of the
+console and of ``skyquill up`` itself: a real ``skyquill up`` each (one vehicle).
+
+After each, the show's promises are checked: every acknowledged submission is ``done`` in the
+orchestrator's SQLite store and was written completely exactly once (one job folder of the agent
+that flew it to its end), and no vehicle put ink for a job while or after another vehicle had it
+(pen-down telemetry of two vehicles for one job never interleaves).
+"""
+
+from __future__ import annotations
+
+import itertools
+import os
+import pty
+import signal
+import sqlite3
+import subprocess
+import threading
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+from bus.keys import ShowKeys
+from bus.messages import Event, JobState, ShowSnapshot, Telemetry
+from bus.pubsub import subscribe
+from bus.rpc import NoReplyError
+from bus.session import Session, open_session
+from cli.runstate import RunFile, run_file_path
+from cli.showrun import ShowRun, Stagehand, derived_show, snapshot, submit_texts, wait_for_jobs
+from cli.supervisor import child_env, skyquill_argv
+from showfile import Show, load_show
+from trust.settings import ensure_show_keys, session_settings
+
+pytestmark = [pytest.mark.multiprocess, pytest.mark.slow, pytest.mark.timeout(120)]
+
+SHOWS = Path(__file__).resolve().parent.parent / "shows"
+TIME_SCALE = 6.0
+JOB_TIMEOUT_S = 60.0
+FREEZE_S = 20.0
+
+
+@dataclass(frozen=True)
+class Ink:
+    arrived_s: float
+    """Monotonic time the telemetry sample arrived here, [s]."""
+    vehicle_id: str
+    job_id: str
+
+
+@dataclass
+class LiveShow:
+    run: ShowRun
+    session: Session
+    events: list[Event] = field(default_factory=list)
+    ink: list[Ink] = field(default_factory=list)
+    acknowledged: list[str] = field(default_factory=list)
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+    @property
+    def keys(self) -> ShowKeys:
+        return self.run.keys
+
+    def submit(self, texts: list[str]) -> list[str]:
+        ids = [str(r.job_id) for r in submit_texts(self.session, self.keys, texts)]
+        self.acknowledged.extend(ids)
+        return ids
+
+    def wait(self, job_ids: list[str]) -> list[JobState]:
+        return wait_for_jobs(self.session, self.keys, job_ids, timeout_s=JOB_TIMEOUT_S)
+
+    def wait_until_writing(self, job_ids: list[str]) -> JobState:
+        deadline = time.monotonic() + JOB_TIMEOUT_S
+        while time.monotonic() < deadline:
+            jobs = {j.job_id: j for j in self.snapshot().jobs}
+            for job_id in job_ids:
+                job = jobs.get(job_id)
+                if job is not None and job.state == "writing" and job.progress > 0.05:
+                    return job
+            time.sleep(0.1)
+        raise AssertionError(f"none of {job_ids} started writing")
+
+    def snapshot(self) -> ShowSnapshot:
+        """The orchestrator's view; empty while it does not answer (starting, restarting)."""
+        try:
+            return snapshot(self.session, self.keys, timeout_s=2.0)
+        except NoReplyError:
+            return ShowSnapshot(show_id="", time_s=0.0, queue_paused=False, jobs=[], vehicles=[])
+
+    def events_of(self, kind: str, vehicle_id: str) -> list[Event]:
+        with self.lock:
+            return [e for e in self.events if e.kind == kind and e.vehicle_id == vehicle_id]
+
+    def ink_after(self, vehicle_id: str, job_id: str, since_s: float) -> list[Ink]:
+        with self.lock:
+            return [
+                i
+                for i in self.ink
+                if (i.vehicle_id, i.job_id) == (vehicle_id, job_id) and i.arrived_s >= since_s
+            ]
+
+    def wait_ready(self, vehicle_id: str, timeout_s: float = 30.0) -> None:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            vehicles = {v.vehicle_id: v for v in self.snapshot().vehicles}
+            view = vehicles.get(vehicle_id)
+            if view is not None and view.alive and view.state in ("idle", "landed"):
+                return
+            time.sleep(0.2)
+        raise AssertionError(f"{vehicle_id} did not come back")
+
+    def check_written_once(self) -> None:
+        """Every acknowledged job done once, completely written once, never by two at once."""
+        jobs = self.wait(list(self.acknowledged))
+        assert [j.state for j in jobs] == ["done"] * len(jobs), [(j.job_id, j.state) for j in jobs]
+        show = self.run.show
+        stored = sqlite3.connect(f"file:{show.database_path}?mode=ro", uri=True)
+        try:
+            states = dict(stored.execute("SELECT job_id, state FROM jobs").fetchall())
+        finally:
+            stored.close()
+        assert all(states[j] == "done" for j in self.acknowledged), states
+        folders = [p.name for p in (show.database_path.parent / "jobs").iterdir()]
+        for job_id in self.acknowledged:
+            written = [name for name in folders if name.startswith(f"{job_id}-")]
+            assert len(written) == 1, f"{job_id} written completely {len(written)} times"
+        with self.lock:
+            ink = list(self.ink)
+        for job_id in self.acknowledged:
+            spans = sorted(
+                (min(times), max(times), vid)
+                for vid, times in _times_by_vehicle(ink, job_id).items()
+            )
+            for earlier, later in itertools.pairwise(spans):
+                assert earlier[1] < later[0], f"{job_id}: {earlier[2]} and {later[2]} both inked"
+
+
+def _times_by_vehicle(ink: list[Ink], job_id: str) -> dict[str, list[float]]:
+    out: dict[str, list[float]] = {}
+    for sample in ink:
+        if sample.job_id == job_id:
+            out.setdefault(sample.vehicle_id, []).append(sample.arrived_s)
+    return out
+
+
+@pytest.fixture(scope="module")
+def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveShow]:
+    out = tmp_path_factory.mktemp("resilience")
+    base = load_show(SHOWS / "airshow-2014.yaml")
+    path, show = derived_show(
+        SHOWS / "airshow-2014.yaml",
+        out,
+        time_scale=TIME_SCALE,
+        vehicles=base.vehicles[:3],
+        controller=base.controller.model_copy(update={"preset": "default"}),
+    )
+    assert show.security.mode == "mtls" and show.policy.lost_after_s == 1.5
+    with (
+        ShowRun(path, show, log_dir=out / "logs", say=lambda _: None) as run,
+        run.client() as session,
+    ):
+        live = LiveShow(run, session)
+
+        def on_event(_key: str, event: Event) -> None:
+            with live.lock:
+                live.events.append(event)
+
+        def on_telemetry(_key: str, t: Telemetry) -> None:
+            if t.pen_down and t.job_id is not None:
+                with live.lock:
+                    live.ink.append(Ink(time.monotonic(), t.vehicle_id, t.job_id))
+
+        subs = [
+            subscribe(session, run.keys.events, Event, on_event),
+            subscribe(session, run.keys.telemetry_all, Telemetry, on_telemetry),
+        ]
+        for vehicle in show.vehicles:
+            live.wait_ready(vehicle.id, timeout_s=60.0)
+        with Stagehand(session, run.keys):  # fresh sheets on boards left half-written
+            yield live
+        for sub in subs:
+            sub.undeclare()  # type: ignore[no-untyped-call]
+
+
+def _new_pid(run: ShowRun, name: str, old: int, within_s: float) -> float:
+    """Seconds until the supervisor runs a new ``name``; fails after ``within_s``."""
+    started = time.monotonic()
+    while run.supervisor.pid(name) in (None, old):
+        assert time.monotonic() - started < within_s, f"{name} not restarted in {within_s} s"
+        time.sleep(0.02)
+    return time.monotonic() - started
+
+
+def test_the_router_killed_mid_show_is_back_within_2_s_and_every_job_finishes(
+    live: LiveShow,
+) -> None:
+    job_ids = live.submit(["一", "L", "十"])
+    live.wait_until_writing(job_ids)
+    pid = live.run.supervisor.pid("router")
+    assert pid is not None
+    os.kill(pid, signal.SIGKILL)
+    back_s = _new_pid(live.run, "router", pid, within_s=2.0)
+    print(f"\nrouter restarted after {back_s:.2f} s")
+    live.check_written_once()  # every client reconnected by itself and re-declared everything
+
+
+def test_the_orchestrator_killed_mid_show_loses_no_job(live: LiveShow) -> None:
+    job_ids = live.submit(["二", "I", "T"])
+    live.wait_until_writing(job_ids)
+    pid = live.run.supervisor.pid("orchestrator")
+    assert pid is not None
+    os.kill(pid, signal.SIGKILL)
+    _new_pid(live.run, "orchestrator", pid, within_s=10.0)
+    live.check_written_once()
+
+
+def test_an_agent_killed_mid_character_is_lost_within_2_s_and_another_writes_it(
+    live: LiveShow,
+) -> None:
+    (job_id,) = live.submit(["L"])
+    victim = str(live.wait_until_writing([job_id]).vehicle_id)
+    pid = live.run.supervisor.pid(f"agent {victim}")
+    assert pid is not None
+    killed_at = time.time()
+    os.kill(pid, signal.SIGKILL)
+    (job,) = live.wait([job_id])
+    assert job.vehicle_id != victim and job.attempts == 2
+    lost = live.events_of("vehicle_lost", victim)
+    assert lost and 0.0 <= lost[-1].time_s - killed_at <= 2.0, lost
+    print(f"\nkilled agent taken as lost after {lost[-1].time_s - killed_at:.2f} s")
+    live.wait_ready(victim)  # restarted by the supervisor
+    live.check_written_once()
+
+
+def test_an_agent_frozen_20_s_is_lost_within_2_s_and_never_inks_its_old_job(
+    live: LiveShow,
+) -> None:
+    (job_id,) = live.submit(["V"])
+    victim = str(live.wait_until_writing([job_id]).vehicle_id)
+    pid = live.run.supervisor.pid(f"agent {victim}")
+    assert pid is not None
+    stopped_at = time.time()
+    os.kill(pid, signal.SIGSTOP)
+    try:
+        deadline = time.monotonic() + 10.0
+        while not [e for e in live.events_of("vehicle_lost", victim) if e.time_s > stopped_at]:
+            assert time.monotonic() < deadline, "a frozen agent was never taken as lost"
+            time.sleep(0.05)
+        lost = [e for e in live.events_of("vehicle_lost", victim) if e.time_s > stopped_at]
+        assert lost[0].time_s - stopped_at <= 2.0, lost  # as fast as a dead one
+        print(f"\nfrozen agent taken as lost after {lost[0].time_s - stopped_at:.2f} s")
+        time.sleep(max(0.0, stopped_at + FREEZE_S - time.time()))
+    finally:
+        os.kill(pid, signal.SIGCONT)
+    resumed_at = time.monotonic()
+    (job,) = live.wait([job_id])
+    assert job.state == "done" and job.vehicle_id != victim
+    live.wait_ready(victim)
+    # fenced before its next tick (the tick the freeze interrupted may finish: 0.1 s of slack)
+    assert live.ink_after(victim, job_id, resumed_at + 0.1) == []
+    agent_log = (live.run.show.database_path.parent / "logs" / f"{victim}.log").read_text()
+    assert f"gave job {job_id} up: " in agent_log  # it stalled, or went unacknowledged
+    assert live.run.supervisor.restarts(f"agent {victim}") <= 1  # not restarted for freezing
+    live.check_written_once()
+
+
+# --- a real `skyquill up`: its console and itself ------------------------------------------------
+
+
+def _solo(tmp_path: Path) -> tuple[Path, Show]:
+    path, show = derived_show(SHOWS / "solo.yaml", tmp_path, time_scale=TIME_SCALE)
+    ensure_show_keys(show)  # `up` would make them too, but this test's session needs them first
+    return path, show
+
+
+def _operator(show: Show) -> Session:
+    """An operator's session, once the router `up` started listens."""
+    operator = session_settings(show, "operator")
+    return open_session(operator, role="client", open_timeout_s=30.0)
+
+
+def _run_file(show: Show, wanted: Callable[[RunFile], bool], timeout_s: float = 30.0) -> RunFile:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        runfile = RunFile.load(run_file_path(show.database_path))
+        if runfile is not None and wanted(runfile):
+            return runfile
+        time.sleep(0.1)
+    raise AssertionError(f"no run file as wanted in {run_file_path(show.database_path)}")
+
+
+def _write_one(session: Session, show: Show, text: str) -> JobState:
+    keys = ShowKeys(show.show_id)
+    (reply,) = submit_texts(session, keys, [text], timeout_s=60.0)
+    (job,) = wait_for_jobs(session, keys, [str(reply.job_id)], timeout_s=JOB_TIMEOUT_S)
+    return job
+
+
+def _down(path: Path) -> str:
+    done = subprocess.run(
+        skyquill_argv("down", str(path)),
+        env=child_env(),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+def test_the_console_is_a_viewer_killed_it_reopens_quit_the_show_runs_on(tmp_path: Path) -> None:
+    path, show = _solo(tmp_path)
+    main, tty = pty.openpty()
+    up = subprocess.Popen(
+        skyquill_argv("up", str(path), "--no-kiosk"),
+        env={**child_env(), "TERM": "xterm-256color", "COLUMNS": "100", "LINES": "30"},
+        stdin=tty,
+        stdout=tty,
+        stderr=tty,
+        start_new_session=True,
+    )
+    reader = threading.Thread(target=_drain, args=(main,), daemon=True)
+    reader.start()
+    try:
+        with _operator(show) as session, Stagehand(session, ShowKeys(show.show_id)):
+            first = _run_file(show, lambda r: "console" in r.children).children["console"]
+            os.kill(first.pid, signal.SIGKILL)
+            again = _run_file(show, lambda r: r.children["console"].pid != first.pid)
+            assert _write_one(session, show, "一").state == "done"  # the show never noticed
+            time.sleep(3.0)  # let the new console draw, then quit it with its key
+            os.write(main, b"q")
+            deadline = time.monotonic() + 20.0
+            while again.children["console"].alive():
+                assert time.monotonic() < deadline, "the console did not quit"
+                time.sleep(0.1)
+            assert up.poll() is None  # quitting the viewer left the show running
+            assert _write_one(session, show, "二").state == "done"
+        children = RunFile.load(run_file_path(show.database_path))
+        assert children is not None
+        _down(path)
+        assert up.wait(timeout=30) == 0
+    finally:
+        if up.poll() is None:
+            up.kill()
+        os.close(tty)
+    log = (show.database_path.parent / "logs" / "up.log").read_text()
+    assert "console exited (killed by signal 9); reopening it" in log
+    assert "the show keeps running" in log and "killing" not in log
+    assert not [r for name, r in children.children.items() if r.alive()]
+
+
+def _drain(fd: int) -> None:
+    try:
+        while os.read(fd, 65536):
+            pass
+    except OSError:
+        pass
+
+
+def test_a_killed_up_leaves_the_show_running_and_a_new_up_adopts_it(tmp_path: Path) -> None:
+    path, show = _solo(tmp_path)
+    argv = skyquill_argv("up", str(path), "--headless", "--no-kiosk")
+    first = subprocess.Popen(argv, env=child_env(), stderr=subprocess.DEVNULL)
+    second: subprocess.Popen[str] | None = None
+    try:
+        with _operator(show) as session, Stagehand(session, ShowKeys(show.show_id)):
+            assert _write_one(session, show, "一").state == "done"
+            before = _run_file(show, lambda r: len(r.children) == 3).children
+            first.kill()  # SIGKILL: no chance to stop anything
+            first.wait()
+            assert all(record.alive() for record in before.values())
+            assert _write_one(session, show, "L").state == "done"  # router and all run on
+            second = subprocess.Popen(argv, env=child_env(), stderr=subprocess.PIPE, text=True)
+            after = _run_file(show, lambda r: r.up is not None and r.up.pid == second.pid)
+            assert after.children == before  # the same processes, adopted
+            os.kill(before["router"].pid, signal.SIGKILL)  # and supervised again
+            _run_file(show, lambda r: r.children["router"].pid != before["router"].pid)
+            assert _write_one(session, show, "十").state == "done"
+        assert "stopped" in _down(path)
+        _, stderr = second.communicate(timeout=30)
+    finally:
+        leftover = False
+        for process in (first, second):
+            if process is not None and process.poll() is None:
+                process.kill()
+                leftover = True
+        if leftover:  # the children outlive a killed `up` by design: stop them for good
+            subprocess.run(skyquill_argv("down", str(path)), env=child_env(), timeout=60)
+    assert second.returncode == 0, stderr
+    assert "adopted router" in stderr and "killing" not in stderr
+    assert not [r for r in before.values() if r.alive()]

@@ -1,0 +1,217 @@
+"""The show CA, its certificates, the generated access control and ``skyquill keys``."""
+
+from __future__ import annotations
+
+import json
+import logging
+import stat
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import zenoh
+from cryptography import x509
+from cryptography.x509.oid import NameOID
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from bus.keys import ShowKeys
+from bus.rpc import JSON
+from bus.session import free_tcp_endpoint, open_session
+from cli.main import main
+from showfile import Show, ShowError, dump_show, load_show
+from trust.acl import access_control
+from trust.pki import identity_files, is_valid
+from trust.settings import ensure_show_keys, identities, session_settings
+
+SOLO = Path(__file__).resolve().parents[1] / "shows" / "solo.yaml"
+AIRSHOW = Path(__file__).resolve().parents[1] / "shows" / "airshow-2014.yaml"
+
+
+def _show(tmp_path: Path, source: Path = AIRSHOW, host: str = "127.0.0.1") -> tuple[Path, Show]:
+    base = load_show(source)
+    endpoint = free_tcp_endpoint().replace("127.0.0.1", host)
+    show = base.model_copy(
+        update={
+            "zenoh": base.zenoh.model_copy(
+                update={"router_listen": (endpoint,), "connect": (endpoint,)}
+            ),
+            "security": base.security.model_copy(update={"keys_dir": tmp_path / "keys"}),
+        }
+    )
+    path = tmp_path / "show.yaml"
+    dump_show(show, path)
+    return path, load_show(path)
+
+
+def _common_name(path: Path) -> str:
+    cert = x509.load_pem_x509_certificate(path.read_bytes())
+    return str(cert.subject.get_attributes_for_oid(NameOID.COMMON_NAME)[0].value)
+
+
+def test_keys_are_made_once_private_and_named_after_their_identity(tmp_path: Path) -> None:
+    _, show = _show(tmp_path)
+    assert ensure_show_keys(show) == ["router", "orchestrator", "kiosk", "operator",
+                                      "uav1", "uav2", "uav3", "uav4"]  # fmt: skip
+    assert ensure_show_keys(show) == []  # idempotent: nothing stale
+    for identity in identities(show):
+        files = identity_files(show.keys_dir, identity)
+        assert _common_name(files.cert) == identity
+        assert stat.S_IMODE(files.key.stat().st_mode) == 0o600
+        assert is_valid(files, ["127.0.0.1"])
+    assert stat.S_IMODE((show.keys_dir / "ca.key").stat().st_mode) == 0o600
+    other = identity_files(show.keys_dir, "uav1")
+    other.key.write_bytes(identity_files(show.keys_dir, "uav2").key.read_bytes())
+    assert not is_valid(other)  # a key that is not the certificate's
+    assert ensure_show_keys(show) == ["uav1"]
+
+
+def test_a_new_router_host_reissues_the_certificates(tmp_path: Path) -> None:
+    _, show = _show(tmp_path)
+    ensure_show_keys(show)
+    _, moved = _show(tmp_path, host="127.0.0.2")
+    assert "router" in ensure_show_keys(moved)
+    assert is_valid(identity_files(moved.keys_dir, "router"), ["127.0.0.2"])
+
+
+def _rules_of(acl: dict[str, object], common_name: str) -> list[dict[str, object]]:
+    policies = {p["subjects"][0]: p["rules"] for p in acl["policies"]}  # type: ignore[attr-defined]
+    rules = {r["id"]: r for r in acl["rules"]}  # type: ignore[attr-defined]
+    return [rules[r] for r in policies[f"cn {common_name}"]]
+
+
+def _may(acl: dict[str, object], common_name: str, message: str, key: str) -> bool:
+    """Whether an ingress ``message`` on exactly ``key`` is allowed (keys here are literal or
+    end in ``/**`` / ``/*``: enough to read the generated rules)."""
+    for rule in _rules_of(acl, common_name):
+        if "ingress" not in rule["flows"] or message not in rule["messages"]:  # type: ignore[operator]
+            continue
+        for expr in rule["key_exprs"]:  # type: ignore[attr-defined]
+            if expr == key or (expr.endswith("/**") and key.startswith(expr[:-2])):
+                return True
+            head, _, tail = expr.partition("/*/")
+            if tail and key.startswith(head + "/") and key.endswith("/" + tail):
+                return True
+    return False
+
+
+def test_access_control_gives_each_identity_only_its_part() -> None:
+    acl = access_control("s", ["uav1", "uav2"])
+    k = ShowKeys("s")
+    assert acl["default_permission"] == "deny" and acl["enabled"] is True
+    assert _may(acl, "uav1", "put", k.telemetry("uav1"))
+    assert not _may(acl, "uav1", "put", k.telemetry("uav2"))
+    assert not _may(acl, "uav1", "put", k.job("j1"))
+    assert _may(acl, "uav1", "liveliness_token", k.vehicle_alive("uav1"))
+    assert not _may(acl, "uav1", "liveliness_token", k.vehicle_alive("uav2"))
+    assert _may(acl, "uav1", "query", k.report("uav1"))
+    assert not _may(acl, "uav1", "query", k.report("uav2"))
+    assert not _may(acl, "uav1", "query", k.command)
+    for role in ("kiosk", "submitter"):
+        assert _may(acl, role, "query", k.submit)
+        assert not _may(acl, role, "query", k.command)
+        assert not _may(acl, role, "query", k.vehicle_command("uav1"))
+        assert not _may(acl, role, "declare_subscriber", k.telemetry("uav1"))
+    assert _may(acl, "operator", "query", k.command)
+    assert _may(acl, "operator", "query", k.vehicle_command("uav2"))
+    assert not _may(acl, "operator", "query", k.vehicle_assign("uav2"))
+    assert not _may(acl, "operator", "put", k.job("j1"))
+    assert _may(acl, "watcher", "declare_subscriber", k.telemetry("uav1"))
+    assert not _may(acl, "watcher", "query", k.command)
+    assert _may(acl, "orchestrator", "query", k.vehicle_assign("uav2"))
+    assert _may(acl, "orchestrator", "put", k.fleet)
+
+
+vehicle_ids = st.lists(
+    st.from_regex(r"[a-z][a-z0-9_-]{0,8}", fullmatch=True).filter(
+        lambda v: v not in ("router", "orchestrator", "kiosk", "operator", "watcher", "submitter")
+    ),
+    min_size=1,
+    max_size=6,
+    unique=True,
+)
+
+
+@settings(max_examples=50, deadline=None)
+@given(vehicle_ids)
+def test_a_vehicle_never_sends_under_another_vehicles_keys(ids: list[str]) -> None:
+    acl = access_control("show", ids)
+    k = ShowKeys("show")
+    for vehicle in ids:
+        for rule in _rules_of(acl, vehicle):
+            if "ingress" not in rule["flows"]:
+                continue
+            for expr in rule["key_exprs"]:  # type: ignore[attr-defined]
+                assert "*" not in expr, expr  # only literal keys
+                assert (
+                    expr.startswith(f"{k.prefix}/vehicles/{vehicle}/")
+                    or expr == k.report(vehicle)
+                    or expr == k.orchestrator_alive
+                ), (vehicle, expr)
+    assert len({s["id"] for s in acl["subjects"]}) == len(acl["subjects"])  # type: ignore[union-attr]
+
+
+def test_a_vehicle_cannot_take_a_role_name(tmp_path: Path) -> None:
+    text = SOLO.read_text(encoding="utf-8").replace("{id: uav1,", "{id: kiosk,")
+    path = tmp_path / "bad.yaml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(ShowError, match=r"bad\.yaml:\d+: vehicles\[0\]\.id: .*reserved"):
+        load_show(path)
+
+
+def test_security_none_warns_and_uses_plain_settings(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    _, show = _show(tmp_path)
+    plain = show.model_copy(update={"security": show.security.model_copy(update={"mode": "none"})})
+    with caplog.at_level(logging.WARNING):
+        settings_ = session_settings(plain, "orchestrator")
+    assert settings_ is plain.zenoh
+    assert "security: none" in caplog.text
+    assert ensure_show_keys(plain) == []
+
+
+def test_missing_keys_give_a_one_line_hint(tmp_path: Path) -> None:
+    _, show = _show(tmp_path)
+    with pytest.raises(Exception, match="skyquill keys"):
+        session_settings(show, "orchestrator")
+
+
+def test_cli_issues_a_client_whose_config_file_joins_the_show(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path, show = _show(tmp_path)
+    assert main(["keys", str(path)]) == 0
+    assert main(["keys", str(path), "--client", "press", "--role", "watcher"]) == 0
+    out = capsys.readouterr().out
+    config_path = show.keys_dir / "clients" / "press" / "zenoh-client.json5"
+    assert str(config_path) in out
+    assert json.loads(config_path.read_text())["mode"] == "client"
+    assert main(["keys", str(path), "--client", "../x"]) == 2
+    keys = ShowKeys(show.show_id)
+    got: list[bytes] = []
+    with (
+        open_session(session_settings(show, "router"), role="router"),
+        open_session(session_settings(show, "orchestrator"), role="client") as orchestrator,
+    ):
+        orchestrator.declare_queryable(
+            keys.snapshot, lambda q: q.reply(keys.snapshot, b"{}", encoding=JSON)
+        )
+        orchestrator.declare_queryable(keys.command, lambda q: q.reply(keys.command, b"{}"))
+        with zenoh.open(zenoh.Config.from_file(str(config_path))) as outsider:
+            deadline = time.monotonic() + 5.0
+            while not got and time.monotonic() < deadline:
+                got = [r.ok.payload.to_bytes() for r in outsider.get(keys.snapshot) if r.ok]
+            refused = list(outsider.get(keys.command, payload=b"{}", timeout=1.0))
+        cli = [sys.executable, "-m", "zenoh_cli", "--config", str(config_path), "--mode", "client"]
+        answered = subprocess.run(
+            [*cli, "get", "--decoder", "json", "-s", keys.snapshot],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+    assert got == [b"{}"]
+    assert refused == []
+    assert answered.stdout.strip() == "{}", answered.stderr[-500:]

@@ -1,0 +1,9 @@
+"""Who is who on a show's bus: a show CA, one certificate per process, generated access control.
+
+- ``trust.pki``: the show's certificate authority and the certificates it issues (files, 0600).
+- ``trust.acl``: the Zenoh ``access_control`` section of a show, default deny (pure).
+- ``trust.settings``: the bus settings of one identity (TLS files, endpoints, ACL on the router).
+
+Identities are certificate common names: ``router``, ``orchestrator``, ``kiosk``, ``operator``
+(console and CLI), ``watcher`` and ``submitter`` (outside clients), and each vehicle's id.
+"""

@@ -1,0 +1,120 @@
+"""The Zenoh ``access_control`` section of a show, generated from its fleet (pure, default deny).
+
+The router enforces it on every message that enters it from a client (``ingress``). What each
+identity may *send* is listed; what it may *receive* follows from what it may subscribe to and
+query, so egress is open inside the show's namespace. The rules Zenoh cannot express (a report
+only for a job assigned to its vehicle; a vehicle's messages naming that vehicle) are checked by
+the orchestrator and the agents on top: each agent reports on its own key, so the key says who.
+
+What each identity may send:
+
+- ``orchestrator``: anything under ``skyquill/<show>/**``;
+- each vehicle: telemetry, status, events and its liveliness token under its own keys; replies
+  of its own ``command`` and ``assign`` queryables; reports on its own report key;
+- ``kiosk`` and ``submitter``: submit and snapshot queries; they follow jobs and the fleet;
+- ``operator``: operator commands, submissions, snapshots and vehicle commands (never an
+  assignment); it watches everything;
+- ``watcher``: snapshot queries; it watches everything;
+- ``router``: anything (another router of the show, at a venue with several hosts).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+from bus.keys import ShowKeys
+
+PUBLISH = ("put",)
+SUBSCRIBE = ("declare_subscriber",)
+QUERY = ("query",)
+SERVE = ("declare_queryable", "reply")
+TOKEN = ("liveliness_token",)
+WATCH_PRESENCE = ("declare_liveliness_subscriber", "liveliness_query")
+ALL_MESSAGES = ("delete", *PUBLISH, *SUBSCRIBE, *QUERY, *SERVE, *TOKEN, *WATCH_PRESENCE)
+
+
+def _rule(rule_id: str, messages: Sequence[str], key_exprs: Iterable[str]) -> dict[str, Any]:
+    return {
+        "id": rule_id,
+        "permission": "allow",
+        "flows": ["ingress"],
+        "messages": list(messages),
+        "key_exprs": list(key_exprs),
+    }
+
+
+def _watch_all(keys: ShowKeys, name: str) -> list[dict[str, Any]]:
+    everything = [f"{keys.prefix}/**"]
+    return [
+        _rule(f"{name}: watch", (*SUBSCRIBE, *WATCH_PRESENCE), everything),
+        _rule(f"{name}: snapshot", QUERY, [keys.snapshot]),
+    ]
+
+
+def _follow_jobs(keys: ShowKeys, name: str) -> list[dict[str, Any]]:
+    return [
+        _rule(f"{name}: submit", QUERY, [keys.submit, keys.snapshot]),
+        _rule(f"{name}: follow", SUBSCRIBE, [keys.jobs_all, keys.fleet]),
+        _rule(f"{name}: presence", WATCH_PRESENCE, [keys.orchestrator_alive]),
+    ]
+
+
+def _vehicle(keys: ShowKeys, vehicle_id: str) -> list[dict[str, Any]]:
+    name = f"vehicle {vehicle_id}"
+    own = [keys.telemetry(vehicle_id), keys.vehicle_status(vehicle_id)]
+    return [
+        _rule(f"{name}: publish", PUBLISH, [*own, keys.vehicle_events(vehicle_id)]),
+        _rule(f"{name}: serve", SERVE, [keys.vehicle_command(vehicle_id)]),
+        _rule(f"{name}: take jobs", SERVE, [keys.vehicle_assign(vehicle_id)]),
+        _rule(f"{name}: alive", TOKEN, [keys.vehicle_alive(vehicle_id)]),
+        _rule(f"{name}: report", QUERY, [keys.report(vehicle_id)]),
+        _rule(f"{name}: orchestrator", WATCH_PRESENCE, [keys.orchestrator_alive]),
+    ]
+
+
+def _egress(keys: ShowKeys) -> dict[str, Any]:
+    rule = _rule("receive inside the show", ALL_MESSAGES, [f"{keys.prefix}/**"])
+    rule["flows"] = ["egress"]
+    return rule
+
+
+def access_control(show_id: str, vehicle_ids: Sequence[str]) -> dict[str, Any]:
+    """The ``access_control`` section for the show's router (default deny)."""
+    keys = ShowKeys(show_id)
+    everything = [f"{keys.prefix}/**"]
+    egress = _egress(keys)
+    per_subject: dict[str, list[dict[str, Any]]] = {
+        "router": [_rule("router: anything", ALL_MESSAGES, ["**"])],
+        "orchestrator": [_rule("orchestrator: anything in the show", ALL_MESSAGES, everything)],
+        "kiosk": _follow_jobs(keys, "kiosk"),
+        "submitter": _follow_jobs(keys, "submitter"),
+        "operator": [
+            *_watch_all(keys, "operator"),
+            _rule("operator: command", QUERY, [keys.command, keys.submit]),
+            _rule("operator: vehicles", QUERY, [f"{keys.prefix}/vehicles/*/command"]),
+        ],
+        "watcher": _watch_all(keys, "watcher"),
+    }
+    for vehicle_id in vehicle_ids:
+        per_subject[vehicle_id] = _vehicle(keys, vehicle_id)
+    rules = [egress]
+    subjects = []
+    policies = []
+    for common_name, own_rules in per_subject.items():
+        rules += own_rules
+        subjects.append({"id": f"cn {common_name}", "cert_common_names": [common_name]})
+        policies.append(
+            {
+                "id": f"policy {common_name}",
+                "rules": [egress["id"], *(r["id"] for r in own_rules)],
+                "subjects": [f"cn {common_name}"],
+            }
+        )
+    return {
+        "enabled": True,
+        "default_permission": "deny",
+        "rules": rules,
+        "subjects": subjects,
+        "policies": policies,
+    }

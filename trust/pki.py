@@ -1,0 +1,221 @@
+"""The show's certificate authority and the certificates it issues (the ``cryptography`` package).
+
+Layout of a show's keys folder (``show.keys_dir``; private keys 0600, folders 0700)::
+
+    ca.pem  ca.key                  the show CA (ECDSA P-256, 5 years)
+    <identity>/cert.pem  key.pem    one per service and per vehicle (common name = identity)
+    clients/<name>/cert.pem key.pem ca.pem   outside clients (common name = their role)
+
+Certificates carry the router's host names (from the show's endpoints) so that clients verify
+the router they connect to; every certificate is signed by the CA and valid for one year.
+"""
+
+from __future__ import annotations
+
+import datetime
+import ipaddress
+import os
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+from cryptography import x509
+from cryptography.exceptions import InvalidSignature
+from cryptography.hazmat.primitives import hashes, serialization
+from cryptography.hazmat.primitives.asymmetric import ec
+from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
+
+from bus.session import SessionOpenError
+
+CA_LIFETIME = datetime.timedelta(days=5 * 365)
+CERT_LIFETIME = datetime.timedelta(days=365)
+CLOCK_SKEW = datetime.timedelta(minutes=10)
+
+
+class KeysError(SessionOpenError):
+    """The show's keys are missing, unreadable or not the show's (no session can be opened)."""
+
+
+@dataclass(frozen=True)
+class IdentityFiles:
+    """Where one identity's certificate and key are."""
+
+    common_name: str
+    """The identity, as the router's access control sees it."""
+    cert: Path
+    """PEM certificate signed by the show CA."""
+    key: Path
+    """PEM private key (mode 0600)."""
+    ca: Path
+    """The show CA's certificate, to verify the other side."""
+
+
+def identity_files(keys_dir: Path, identity: str) -> IdentityFiles:
+    """Paths of a service's or vehicle's identity (they may not exist yet)."""
+    folder = Path(keys_dir) / identity
+    return IdentityFiles(
+        identity, folder / "cert.pem", folder / "key.pem", Path(keys_dir) / "ca.pem"
+    )
+
+
+def client_files(keys_dir: Path, name: str, role: str) -> IdentityFiles:
+    """Paths of an outside client's identity: a folder it can carry away (with the CA cert)."""
+    folder = Path(keys_dir) / "clients" / name
+    return IdentityFiles(role, folder / "cert.pem", folder / "key.pem", folder / "ca.pem")
+
+
+def _now() -> datetime.datetime:
+    return datetime.datetime.now(datetime.UTC)
+
+
+def _write_private(path: Path, data: bytes) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    with os.fdopen(fd, "wb") as out:
+        out.write(data)
+    os.chmod(path, 0o600)
+
+
+def _write_public(path: Path, cert: x509.Certificate) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+    path.write_bytes(cert.public_bytes(serialization.Encoding.PEM))
+
+
+def _key_pem(key: ec.EllipticCurvePrivateKey) -> bytes:
+    return key.private_bytes(
+        serialization.Encoding.PEM,
+        serialization.PrivateFormat.PKCS8,
+        serialization.NoEncryption(),
+    )
+
+
+def _alt_names(hosts: Iterable[str]) -> list[x509.GeneralName]:
+    names: list[x509.GeneralName] = []
+    for host in dict.fromkeys(["localhost", "127.0.0.1", "::1", *hosts]):
+        try:
+            names.append(x509.IPAddress(ipaddress.ip_address(host)))
+        except ValueError:
+            names.append(x509.DNSName(host))
+    return names
+
+
+def ensure_ca(keys_dir: Path, show_id: str) -> tuple[x509.Certificate, ec.EllipticCurvePrivateKey]:
+    """The show CA, created when the folder has none."""
+    cert_path, key_path = Path(keys_dir) / "ca.pem", Path(keys_dir) / "ca.key"
+    if cert_path.exists() and key_path.exists():
+        try:
+            cert = x509.load_pem_x509_certificate(cert_path.read_bytes())
+            key = serialization.load_pem_private_key(key_path.read_bytes(), password=None)
+        except (ValueError, OSError) as exc:
+            raise KeysError(f"{keys_dir}: cannot read the show CA: {exc}") from exc
+        if not isinstance(key, ec.EllipticCurvePrivateKey):
+            raise KeysError(f"{key_path}: not an ECDSA key")
+        return cert, key
+    key = ec.generate_private_key(ec.SECP256R1())
+    name = x509.Name(
+        [
+            x509.NameAttribute(NameOID.ORGANIZATION_NAME, "skyquill"),
+            x509.NameAttribute(NameOID.COMMON_NAME, f"skyquill show CA {show_id}"),
+        ]
+    )
+    now = _now()
+    cert = (
+        x509.CertificateBuilder()
+        .subject_name(name)
+        .issuer_name(name)
+        .public_key(key.public_key())
+        .serial_number(x509.random_serial_number())
+        .not_valid_before(now - CLOCK_SKEW)
+        .not_valid_after(now + CA_LIFETIME)
+        .add_extension(x509.BasicConstraints(ca=True, path_length=0), critical=True)
+        .add_extension(
+            x509.KeyUsage(
+                digital_signature=True,
+                key_cert_sign=True,
+                crl_sign=True,
+                content_commitment=False,
+                key_encipherment=False,
+                data_encipherment=False,
+                key_agreement=False,
+                encipher_only=False,
+                decipher_only=False,
+            ),
+            critical=True,
+        )
+        .add_extension(x509.SubjectKeyIdentifier.from_public_key(key.public_key()), critical=False)
+        .sign(key, hashes.SHA256())
+    )
+    _write_private(key_path, _key_pem(key))
+    _write_public(cert_path, cert)
+    return cert, key
+
+
+def issue(
+    keys_dir: Path,
+    files: IdentityFiles,
+    *,
+    show_id: str,
+    hosts: Iterable[str] = (),
+    holder: str | None = None,
+) -> IdentityFiles:
+    """Sign a new key pair for ``files.common_name`` (replacing any there); returns ``files``.
+
+    ``holder`` is a person's or device's name kept in the subject (organisational unit), apart
+    from the common name the access control matches.
+    """
+    ca_cert, ca_key = ensure_ca(keys_dir, show_id)
+    key = ec.generate_private_key(ec.SECP256R1())
+    attributes = [x509.NameAttribute(NameOID.ORGANIZATION_NAME, f"skyquill {show_id}")]
+    if holder:
+        attributes.append(x509.NameAttribute(NameOID.ORGANIZATIONAL_UNIT_NAME, holder))
+    attributes.append(x509.NameAttribute(NameOID.COMMON_NAME, files.common_name))
+    now = _now()
+    usages = [ExtendedKeyUsageOID.SERVER_AUTH, ExtendedKeyUsageOID.CLIENT_AUTH]
+    cert = (
+        x509.CertificateBuilder()
+        .subject_name(x509.Name(attributes))
+        .issuer_name(ca_cert.subject)
+        .public_key(key.public_key())
+        .serial_number(x509.random_serial_number())
+        .not_valid_before(now - CLOCK_SKEW)
+        .not_valid_after(now + CERT_LIFETIME)
+        .add_extension(x509.BasicConstraints(ca=False, path_length=None), critical=True)
+        .add_extension(x509.SubjectAlternativeName(_alt_names(hosts)), critical=False)
+        .add_extension(x509.ExtendedKeyUsage(usages), critical=False)
+        .add_extension(
+            x509.AuthorityKeyIdentifier.from_issuer_public_key(ca_key.public_key()), critical=False
+        )
+        .sign(ca_key, hashes.SHA256())
+    )
+    _write_private(files.key, _key_pem(key))
+    _write_public(files.cert, cert)
+    if files.ca != Path(keys_dir) / "ca.pem":
+        _write_public(files.ca, ca_cert)
+    return files
+
+
+def is_valid(files: IdentityFiles, hosts: Iterable[str] = ()) -> bool:
+    """Whether the identity's files exist, match the CA, name ``hosts`` and are not about to
+    expire."""
+    try:
+        cert = x509.load_pem_x509_certificate(files.cert.read_bytes())
+        ca = x509.load_pem_x509_certificate(files.ca.read_bytes())
+        key = serialization.load_pem_private_key(files.key.read_bytes(), password=None)
+    except (OSError, ValueError):
+        return False
+    if cert.public_key() != key.public_key() or cert.issuer != ca.subject:
+        return False
+    try:
+        cert.verify_directly_issued_by(ca)
+    except (InvalidSignature, ValueError, TypeError):
+        return False
+    common_names = cert.subject.get_attributes_for_oid(NameOID.COMMON_NAME)
+    if not common_names or common_names[0].value != files.common_name:
+        return False
+    try:
+        alt = cert.extensions.get_extension_for_class(x509.SubjectAlternativeName).value
+    except x509.ExtensionNotFound:
+        return False
+    if not set(_alt_names(hosts)) <= set(alt):
+        return False
+    return cert.not_valid_after_utc - _now() > datetime.timedelta(days=7)

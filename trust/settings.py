@@ -1,0 +1,124 @@
+"""The bus settings of one identity of a show: its certificate, the router's endpoints as TLS,
+and, for the router, the generated access control.
+
+Every process opens its session with ``open_session(session_settings(show, identity), ...)``.
+With ``security: none`` the show's settings are returned unchanged and a warning is logged.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from bus.session import BusSettings
+from showfile import Show
+from showfile.security import SERVICE_ROLES
+from trust.acl import access_control
+from trust.pki import IdentityFiles, KeysError, identity_files, is_valid, issue
+
+log = logging.getLogger(__name__)
+
+_warned: set[str] = set()
+
+
+def _host(endpoint: str) -> str | None:
+    """``tcp/10.0.0.2:7447`` -> ``10.0.0.2``; ``tls/[::1]:7447`` -> ``::1``."""
+    _, _, address = endpoint.partition("/")
+    host, _, _port = address.split("#", 1)[0].rpartition(":")
+    return host.strip("[]") or None
+
+
+def show_hosts(show: Show) -> list[str]:
+    """Host names and addresses the router is reached at, for its certificate."""
+    endpoints = [*show.zenoh.router_listen, *show.zenoh.connect, *show.zenoh.router_connect]
+    hosts = [h for h in (_host(e) for e in endpoints) if h and h not in ("0.0.0.0", "::")]
+    return list(dict.fromkeys(hosts))
+
+
+def as_tls(endpoints: Sequence[str]) -> tuple[str, ...]:
+    """Endpoints with ``tcp/`` served as ``tls/`` (a secured show speaks TLS only)."""
+    return tuple("tls/" + e[4:] if e.startswith("tcp/") else e for e in endpoints)
+
+
+def identities(show: Show) -> list[str]:
+    """Every identity a show runs: the services and one per vehicle."""
+    return [*SERVICE_ROLES, *(v.id for v in show.vehicles)]
+
+
+def ensure_show_keys(show: Show) -> list[str]:
+    """Create the show CA and any missing or stale identity; returns the identities (re)issued."""
+    if show.security.mode == "none":
+        return []
+    issued = []
+    hosts = show_hosts(show)
+    for identity in identities(show):
+        files = identity_files(show.keys_dir, identity)
+        if not is_valid(files, hosts):
+            issue(show.keys_dir, files, show_id=show.show_id, hosts=hosts)
+            issued.append(identity)
+    return issued
+
+
+def tls_section(files: IdentityFiles, *, router: bool) -> dict[str, Any]:
+    """Zenoh ``transport/link/tls`` for an identity: mutual TLS against the show CA."""
+    section: dict[str, Any] = {
+        "root_ca_certificate": str(files.ca),
+        "enable_mtls": True,
+        "verify_name_on_connect": True,
+        "connect_private_key": str(files.key),
+        "connect_certificate": str(files.cert),
+    }
+    if router:
+        section["listen_private_key"] = str(files.key)
+        section["listen_certificate"] = str(files.cert)
+    return section
+
+
+def secured(show: Show, files: IdentityFiles, *, router: bool) -> BusSettings:
+    """The show's bus settings for the identity in ``files``."""
+    for path in (files.cert, files.key, files.ca):
+        if not path.exists():
+            raise KeysError(
+                f"{path} is missing: create the show's keys with `skyquill keys "
+                f"{show.source_path or show.show_id}` (or start it with `skyquill up`)"
+            )
+    z = show.zenoh
+    return BusSettings(
+        router_listen=as_tls(z.router_listen),
+        connect=as_tls(z.connect),
+        multicast_scouting=z.multicast_scouting,
+        router_connect=as_tls(z.router_connect),
+        peer_listen=as_tls(z.peer_listen),
+        tls=tls_section(files, router=router),
+        access_control=(
+            access_control(show.show_id, [v.id for v in show.vehicles]) if router else None
+        ),
+        extra=dict(z.extra),
+        open_timeout_s=z.open_timeout_s,
+    )
+
+
+def session_settings(show: Show, identity: str) -> Any:
+    """Settings for ``open_session`` of the process that is ``identity`` in ``show``."""
+    if show.security.mode == "none":
+        if show.show_id not in _warned:
+            _warned.add(show.show_id)
+            log.warning(
+                "show %s runs with security: none: anyone who reaches its bus can command it",
+                show.show_id,
+            )
+        return show.zenoh
+    if identity not in identities(show):
+        raise KeysError(f"{identity!r} is not an identity of show {show.show_id}")
+    files = identity_files(show.keys_dir, identity)
+    return secured(show, files, router=identity == "router")
+
+
+def client_session_settings(show: Show, client_dir: Path) -> BusSettings:
+    """Settings for an outside client holding the folder ``skyquill keys --client`` made (its
+    certificate's common name is its role)."""
+    folder = Path(client_dir)
+    files = IdentityFiles("client", folder / "cert.pem", folder / "key.pem", folder / "ca.pem")
+    return secured(show, files, router=False)

@@ -1,0 +1,167 @@
+"""What a command key does, decided from what the operator sees (pure: no Textual, no Zenoh).
+
+Each ``*_request`` function returns the command to send at once, an :class:`Ask` (a question to
+confirm first) or a :class:`Refusal` (a one-line reason shown to the operator, nothing sent).
+The question and the refusal name their target with :func:`~tui.safe_text.clean` text only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from bus.messages import MAX_PRIORITY, JobState, OperatorCommand
+from tui.records import ACTIVE_JOB_STATES, AWAITING_JOB_STATES, FINAL_JOB_STATES
+from tui.rows import VehicleRow
+from tui.safe_text import clean
+
+
+@dataclass(frozen=True)
+class Ask:
+    """A command sent only once the operator confirms ``question``."""
+
+    question: str
+    label: str
+    """Text of the confirm button."""
+    commands: tuple[OperatorCommand, ...]
+    """Sent in order once confirmed; none: the answer only decides what the console does."""
+    reason_prompt: str | None = None
+    """When set, the dialog has an input for an optional ``reason`` (sent with the command)."""
+
+
+@dataclass(frozen=True)
+class Refusal:
+    """Nothing is sent; ``message`` says why (shown as a warning)."""
+
+    message: str
+
+
+Request = OperatorCommand | Ask | Refusal
+
+
+def _name(identifier: str) -> str:
+    return clean(identifier, 40)
+
+
+def job_request(command: str, job: JobState | None) -> Request:
+    """``approve``, ``reject``, ``cancel``, ``raise`` or ``lower`` on the selected job."""
+    if job is None:
+        return Refusal(f"{command}: no job selected (Tab to the queue, arrows to pick one)")
+    what = f"{_name(job.job_id)} ({_name(job.label)})"
+    if command in ("approve", "reject") and job.state not in AWAITING_JOB_STATES:
+        return Refusal(f"{command}: {what} is {job.state}, not awaiting approval")
+    if command == "approve":
+        return OperatorCommand(command="approve", job_id=job.job_id)
+    if command == "reject":
+        return Ask(
+            f"Reject {what}?\nThe visitor's submission will not be written.",
+            "Reject",
+            (OperatorCommand(command="reject", job_id=job.job_id),),
+            reason_prompt="reason (optional, shown to the visitor)",
+        )
+    if command == "cancel":
+        if job.state in FINAL_JOB_STATES:
+            return Refusal(f"cancel: {what} is already {job.state}")
+        stop = "\nThe vehicle writing it stops." if job.state in ACTIVE_JOB_STATES else ""
+        return Ask(
+            f"Cancel {what}?{stop}",
+            "Cancel job",
+            (OperatorCommand(command="cancel", job_id=job.job_id),),
+            reason_prompt="reason (optional)",
+        )
+    return _prioritize(command, job, what)
+
+
+def _prioritize(command: str, job: JobState, what: str) -> Request:
+    if job.state not in ("awaiting_approval", "queued"):
+        return Refusal(f"priority: {what} is {job.state}; only waiting jobs can move")
+    step = 1 if command == "raise" else -1
+    priority = max(-MAX_PRIORITY, min(MAX_PRIORITY, job.priority + step))
+    if priority == job.priority:
+        return Refusal(f"priority: {what} is already at {priority}")
+    return OperatorCommand(command="prioritize", job_id=job.job_id, priority=priority)
+
+
+def vehicle_request(command: str, row: VehicleRow | None) -> Request:
+    """``land``, ``release`` or ``clear_fault`` on the selected vehicle."""
+    if row is None:
+        return Refusal(f"{command}: no vehicle selected")
+    name = _name(row.vehicle_id)
+    if command == "land":
+        return Ask(
+            f"Land {name}?\nIt stays on the ground (held) until you release it with u.",
+            "Land",
+            (OperatorCommand(command="land", vehicle_id=row.vehicle_id),),
+        )
+    if command == "release":
+        if not row.held:
+            return Refusal(f"release: {name} is not held")
+        return Ask(
+            f"Release {name}?\nIt may take the next job and fly.",
+            "Release",
+            (OperatorCommand(command="release", vehicle_id=row.vehicle_id),),
+        )
+    if row.state != "fault":
+        return Refusal(f"reset: {name} is {row.state}, not in fault")
+    return Ask(
+        f"Reset the fault of {name}?\nCheck the vehicle first. It stays held until released (u).",
+        "Reset fault",
+        (clear_fault(row.vehicle_id),),
+    )
+
+
+def fresh_sheet_request(row: VehicleRow | None, dirty_boards: frozenset[str]) -> Request:
+    """``fresh_sheet`` of the selected vehicle's board, once it was left half-written."""
+    board_id = row.board_id if row else None
+    if board_id is None or board_id not in dirty_boards:
+        waiting = ", ".join(_name(b) for b in sorted(dirty_boards)) or "none"
+        return Refusal(f"fresh sheet: select a vehicle of a half-written board ({waiting})")
+    return Ask(
+        f"Fresh sheet on {_name(board_id)}?\nSay yes once the half-written sheet is replaced: "
+        "the next job is written there.",
+        "Fresh sheet",
+        (OperatorCommand(command="fresh_sheet", board_id=board_id),),
+    )
+
+
+def clear_fault(vehicle_id: str) -> OperatorCommand:
+    return OperatorCommand(command="clear_fault", vehicle_id=vehicle_id)
+
+
+def clear_all_request(fault_ids: list[str]) -> Request:
+    if not fault_ids:
+        return Refusal("reset: no vehicle in fault")
+    names = ", ".join(_name(v) for v in fault_ids[:6]) + (" …" if len(fault_ids) > 6 else "")
+    return Ask(
+        f"Reset the fault of {len(fault_ids)} vehicle(s)?\n{names}\n"
+        "Check them first. They stay held until released (u).",
+        "Reset all",
+        tuple(clear_fault(vid) for vid in fault_ids),
+    )
+
+
+LAND_ALL = Ask(
+    "Land ALL vehicles now?\nThey stay held until released one by one (u).",
+    "Land all",
+    (OperatorCommand(command="land_all"),),
+)
+
+
+def estop_ask(vehicle_id: str | None) -> Ask:
+    """Emergency stop of one vehicle, or of all (None)."""
+    if vehicle_id is None:
+        question = "EMERGENCY STOP every vehicle?\nMotors stop: vehicles in the air will fall."
+    else:
+        question = f"EMERGENCY STOP {_name(vehicle_id)}?\nIts motors stop: in the air it will fall."
+    command = OperatorCommand(command="estop", vehicle_id=vehicle_id, reason="operator")
+    return Ask(question, "E-STOP", (command,))
+
+
+def quit_request(airborne: int) -> Ask | None:
+    """None: quit at once; else ask (the show keeps running either way)."""
+    if airborne == 0:
+        return None
+    return Ask(
+        f"{airborne} vehicle(s) are flying: quit the console?\nThe show keeps running.",
+        "Quit console",
+        (),
+    )

@@ -1,0 +1,121 @@
+"""What the console keeps per vehicle, and the alerts its records raise (pure)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+import msgspec
+
+from bus.messages import JobState
+from tui.rows import Alert, QueueRow, QueueSection
+from tui.tracks import Track
+
+AWAITING_JOB_STATES = frozenset({"awaiting_approval", "submitted"})
+ACTIVE_JOB_STATES = frozenset({"assigned", "writing"})
+FINAL_JOB_STATES = frozenset({"done", "failed", "cancelled", "rejected"})
+
+
+def with_known_strokes(job: JobState, known: JobState | None) -> JobState:
+    """``job``, keeping the strokes of an earlier version of it: the orchestrator sends a drawing's
+    strokes only in some messages (``jobs/<id>`` while waiting), never in ``fleet``."""
+    if job.strokes is None and known is not None and known.strokes is not None:
+        return msgspec.structs.replace(job, strokes=known.strokes)
+    return job
+
+
+class VehicleRecord:
+    """Mutable record behind a :class:`VehicleRow`."""
+
+    def __init__(self, vehicle_id: str, kind: str = "", board_id: str | None = None) -> None:
+        self.vehicle_id = vehicle_id
+        self.kind = kind
+        self.board_id = board_id
+        self.state = "unknown"
+        self.job_id: str | None = None
+        self.progress = 0.0
+        self.tracking_error_m: float | None = None
+        self.battery_fraction: float | None = None
+        self.heard_s: float | None = None
+        self.alive: bool | None = None
+        self.message = ""
+        self.position_m_enu: tuple[float, float, float] | None = None
+        self.held = False
+        self.track = Track()
+
+
+def vehicle_alert(v: VehicleRecord, limit_m: float, *, over_threshold: bool) -> Alert | None:
+    """The one alert a vehicle raises now (lost before fault before tracking error), if any."""
+    vid = v.vehicle_id
+    if v.alive is False or v.state == "lost":
+        return Alert(f"lost:{vid}", "vehicle_lost", f"{vid} lost")
+    if v.state == "fault":
+        why = f": {v.message}" if v.message else ""
+        return Alert(f"fault:{vid}", "vehicle_fault", f"{vid} fault{why}")
+    if over_threshold:
+        error_cm = 100 * (v.tracking_error_m or 0.0)
+        return Alert(
+            f"tracking:{vid}",
+            "tracking_error",
+            f"{vid} tracking error {error_cm:.1f} cm > {100 * limit_m:.1f} cm",
+        )
+    return None
+
+
+def job_alerts(jobs: Iterable[JobState], dirty_boards: Iterable[str]) -> list[Alert]:
+    """Boards waiting for a fresh sheet, submissions waiting for approval, failed jobs."""
+    alerts = [
+        Alert(f"sheet:{b}", "fresh_sheet", f"{b} half-written: replace the sheet, then s")
+        for b in sorted(dirty_boards)
+    ]
+    jobs = list(jobs)
+    awaiting = [j for j in jobs if j.state in AWAITING_JOB_STATES]
+    if awaiting:  # a newer submission brings an acknowledged alert back
+        newest = max(awaiting, key=lambda j: (j.created_at_s, j.job_id))
+        alerts.append(
+            Alert(
+                f"approval:{newest.job_id}",
+                "awaiting_approval",
+                f"{len(awaiting)} submission(s) awaiting approval",
+            )
+        )
+    for job in jobs:
+        if job.state == "failed":
+            reason = job.error.message if job.error else "no reason given"
+            alerts.append(
+                Alert(
+                    f"failed:{job.job_id}",
+                    "job_failed",
+                    f"job {job.job_id} ({job.label}) failed: {reason}",
+                )
+            )
+    return alerts
+
+
+def queue_rows(jobs_in: Iterable[JobState]) -> list[QueueRow]:
+    """Awaiting approval, queued (in queue order), active, then done and failed (newest
+    first)."""
+    jobs = list(jobs_in)
+    awaiting = sorted(
+        (j for j in jobs if j.state in AWAITING_JOB_STATES),
+        key=lambda j: j.created_at_s,
+    )
+    queued = sorted(
+        (j for j in jobs if j.state == "queued"),
+        key=lambda j: (j.queue_position or 10**9, -j.priority, j.created_at_s),
+    )
+    active = sorted(
+        (j for j in jobs if j.state in ACTIVE_JOB_STATES), key=lambda j: j.vehicle_id or ""
+    )
+    done = sorted((j for j in jobs if j.state == "done"), key=lambda j: -j.updated_at_s)
+    failed = sorted(
+        (j for j in jobs if j.state in ("failed", "cancelled", "rejected")),
+        key=lambda j: -j.updated_at_s,
+    )
+    sections: list[tuple[QueueSection, list[JobState]]] = [
+        ("awaiting", awaiting),
+        ("queued", queued),
+        ("active", active),
+        ("done", done),
+        ("failed", failed),
+    ]
+    return [QueueRow(section, job) for section, group in sections for job in group]

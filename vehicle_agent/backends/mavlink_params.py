@@ -1,0 +1,219 @@
+"""Autopilot parameters a show depends on: chosen in pure code, set and read back over MAVLink.
+
+At connect the backend sets each :class:`ParamSpec` with PARAM_SET, waits for the autopilot's
+PARAM_VALUE, then asks again with PARAM_REQUEST_READ and compares: a parameter that is unknown,
+never answered or answered with another value makes the vehicle unusable (:class:`ParamError`).
+
+ArduPilot carries every value as a float (integers cast); PX4 packs integer parameters bytewise
+into the float field (MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE): :func:`encode_value` and
+:func:`decode_value` know both.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import math
+import struct
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Literal
+
+from vehicle_agent.backends.mavlink_errors import MavlinkError
+from vehicle_agent.backends.mavlink_link import MavlinkLink
+from vehicle_agent.backends.mavlink_state import LinkState
+from vehicle_agent.safety.geofence import Geofence, Vec3
+
+MAV_PARAM_TYPE_INT8, MAV_PARAM_TYPE_INT32, MAV_PARAM_TYPE_REAL32 = 2, 6, 9
+INTEGER_TYPES = frozenset(range(1, 9))
+"""MAV_PARAM_TYPE_UINT8 .. INT64."""
+GUID_OPTIONS_THRUST_AS_THRUST = 8
+"""ArduCopter GUID_OPTIONS bit 3: SET_ATTITUDE_TARGET's thrust is thrust, not a climb rate."""
+ARDUPILOT_FENCE_CIRCLE_AND_ALT_MAX = 3
+"""ArduCopter FENCE_TYPE: bit 0 maximum altitude, bit 1 circle around home."""
+ARDUPILOT_FENCE_ACTION_LAND = 2
+PX4_GF_ACTION_LAND = 5
+
+Flavor = Literal["ardupilot", "px4"]
+
+
+class ParamError(MavlinkError):
+    """A parameter could not be set to the value the show needs."""
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One parameter and the value the show needs."""
+
+    name: str
+    """Parameter id (at most 16 characters)."""
+    value: float
+    """The value to set; for a bitmask, the bits to set (see ``bits``)."""
+    param_type: int
+    """MAV_PARAM_TYPE of the parameter on that autopilot."""
+    bits: bool = False
+    """``value`` is a bitmask OR-ed into the current value (other bits kept)."""
+    why: str = ""
+    """Why the show needs it (for the error message)."""
+
+
+@dataclass(frozen=True)
+class FenceSpec:
+    """The autopilot's own fence around its home: a cylinder."""
+
+    radius_m: float
+    """Largest horizontal distance from home in [m]."""
+    ceiling_m: float
+    """Largest height above home in [m]."""
+
+
+def autopilot_fence(fence: Geofence, home_m_enu: Vec3, margin_m: float) -> FenceSpec:
+    """The autopilot's cylinder around its home that contains ``fence`` with ``margin_m`` to
+    spare (the autopilot's fence is the second line: the agent's own acts first)."""
+    radius = fence.radius_around_m((home_m_enu[0], home_m_enu[1])) + margin_m
+    return FenceSpec(radius_m=radius, ceiling_m=fence.ceiling_z_m - home_m_enu[2] + margin_m)
+
+
+def show_params(
+    flavor: Flavor, *, setpoint_timeout_s: float, attitude: bool, fence: FenceSpec | None
+) -> list[ParamSpec]:
+    """What a show needs of this autopilot: setpoint timeout, yaw left alone (ArduPilot), thrust
+    as thrust for attitude setpoints (ArduPilot), its own fence as a second line."""
+    if flavor == "px4":
+        specs = [ParamSpec("COM_OF_LOSS_T", setpoint_timeout_s, MAV_PARAM_TYPE_REAL32,
+                           why="offboard loss timeout")]  # fmt: skip
+        if fence is not None:
+            specs += [
+                ParamSpec("GF_MAX_HOR_DIST", fence.radius_m, MAV_PARAM_TYPE_REAL32, why="fence"),
+                ParamSpec("GF_MAX_VER_DIST", fence.ceiling_m, MAV_PARAM_TYPE_REAL32, why="fence"),
+                ParamSpec("GF_ACTION", PX4_GF_ACTION_LAND, MAV_PARAM_TYPE_INT32, why="fence"),
+            ]
+        return specs
+    specs = [
+        ParamSpec("GUID_TIMEOUT", setpoint_timeout_s, MAV_PARAM_TYPE_REAL32,
+                  why="stop when setpoints stop"),
+        ParamSpec("WP_YAW_BEHAVIOR", 0, MAV_PARAM_TYPE_INT8, why="yaw not turned by the autopilot"),
+    ]  # fmt: skip
+    if attitude:
+        specs.append(ParamSpec("GUID_OPTIONS", GUID_OPTIONS_THRUST_AS_THRUST, MAV_PARAM_TYPE_INT32,
+                               bits=True, why="attitude setpoints: thrust as thrust"))  # fmt: skip
+    if fence is not None:
+        specs += [
+            ParamSpec("FENCE_TYPE", ARDUPILOT_FENCE_CIRCLE_AND_ALT_MAX, MAV_PARAM_TYPE_INT8,
+                      why="fence"),
+            ParamSpec("FENCE_RADIUS", fence.radius_m, MAV_PARAM_TYPE_REAL32, why="fence"),
+            ParamSpec("FENCE_ALT_MAX", fence.ceiling_m, MAV_PARAM_TYPE_REAL32, why="fence"),
+            ParamSpec("FENCE_ACTION", ARDUPILOT_FENCE_ACTION_LAND, MAV_PARAM_TYPE_INT8,
+                      why="fence"),
+            ParamSpec("FENCE_ENABLE", 1, MAV_PARAM_TYPE_INT8, why="fence"),
+        ]  # fmt: skip
+    return specs
+
+
+def encode_value(flavor: Flavor, value: float, param_type: int) -> float:
+    """The float to put in PARAM_SET.param_value."""
+    if flavor == "px4" and param_type in INTEGER_TYPES:
+        return float(struct.unpack("<f", struct.pack("<i", round(value)))[0])
+    return float(value)
+
+
+def decode_value(flavor: Flavor, raw: float, param_type: int) -> float:
+    """The parameter's value from PARAM_VALUE.param_value."""
+    if flavor == "px4" and param_type in INTEGER_TYPES:
+        return float(struct.unpack("<i", struct.pack("<f", raw))[0])
+    return float(raw)
+
+
+def same_value(a: float, b: float) -> bool:
+    """Equal as a float32 parameter can hold them."""
+    return math.isclose(a, b, rel_tol=1e-6, abs_tol=1e-6)
+
+
+class ParamChannel:
+    """PARAM_SET / PARAM_REQUEST_READ answered by PARAM_VALUE, with retries."""
+
+    def __init__(
+        self,
+        link: Callable[[], MavlinkLink],
+        state: LinkState,
+        flavor: Callable[[], Flavor],
+        *,
+        timeout_s: float,
+        attempts: int,
+    ) -> None:
+        self._link = link
+        self._state = state
+        self._flavor = flavor
+        self.timeout_s = timeout_s
+        self.attempts = attempts
+        self._waiters: list[tuple[str, asyncio.Future[tuple[float, int]]]] = []
+
+    def on_param_value(self, message: Any) -> None:
+        """A PARAM_VALUE of the autopilot: the oldest request for that name gets it."""
+        name = _name(message.param_id)
+        for waiting_for, future in self._waiters:
+            if waiting_for == name and not future.done():
+                future.set_result((float(message.param_value), int(message.param_type)))
+                return
+
+    async def read(self, name: str) -> float:
+        """The current value (PARAM_REQUEST_READ)."""
+        st, link = self._state, self._link()
+        raw, kind = await self._ask(name, lambda: link.mav.param_request_read_encode(
+            st.system_id or 0, st.component_id or 0, name.encode(), -1))  # fmt: skip
+        return decode_value(self._flavor(), raw, kind)
+
+    async def write(self, name: str, value: float, param_type: int) -> float:
+        """PARAM_SET; the value the autopilot answers with."""
+        st, link, flavor = self._state, self._link(), self._flavor()
+        encoded = encode_value(flavor, value, param_type)
+
+        def build() -> Any:
+            target = (st.system_id or 0, st.component_id or 0)
+            return link.mav.param_set_encode(*target, name.encode(), encoded, param_type)
+
+        raw, kind = await self._ask(name, build)
+        return decode_value(flavor, raw, kind)
+
+    async def ensure(self, spec: ParamSpec) -> float:
+        """Set ``spec`` and read it back; raises :class:`ParamError` unless it holds."""
+        want = spec.value
+        if spec.bits:
+            current = await self.read(spec.name)
+            want = float(int(current) | int(spec.value))
+        echoed = await self.write(spec.name, want, spec.param_type)
+        read_back = await self.read(spec.name)
+        if not (same_value(echoed, want) and same_value(read_back, want)):
+            raise ParamError(
+                f"parameter {spec.name} ({spec.why}) is {read_back:g} after setting it to {want:g}"
+            )
+        return read_back
+
+    async def _ask(self, name: str, build: Callable[[], Any]) -> tuple[float, int]:
+        loop = asyncio.get_running_loop()
+        for _ in range(self.attempts):
+            future: asyncio.Future[tuple[float, int]] = loop.create_future()
+            entry = (name, future)
+            self._waiters.append(entry)
+            self._link().send(build())
+            try:
+                return await asyncio.wait_for(future, self.timeout_s)
+            except TimeoutError:
+                continue
+            finally:
+                with contextlib.suppress(ValueError):
+                    self._waiters.remove(entry)
+        raise ParamError(
+            f"parameter {name}: no PARAM_VALUE after {self.attempts} tries (unknown to this "
+            "autopilot?)"
+        )
+
+    def cancel_all(self) -> None:
+        for _, future in self._waiters:
+            future.cancel()
+        self._waiters.clear()
+
+
+def _name(raw: Any) -> str:
+    text = raw.decode(errors="replace") if isinstance(raw, bytes) else str(raw)
+    return text.rstrip("\x00")

@@ -1,0 +1,100 @@
+"""One job inside the job runner (pure): its plan, its flown trace, its reports."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Literal
+
+from bus.messages import AgentReport, ErrorInfo, JobAssignment
+from vehicle_agent.backends.base import Setpoint, VehicleSnapshot
+from vehicle_agent.runner_io import PreparedJob, sample_at
+from vehicle_agent.trace import FlownTrace, TraceRecorder
+
+ReportEvent = Literal["started", "progress", "done", "failed"]
+
+
+@dataclass
+class RunningJob:
+    """A job from its assignment until the vehicle is back on the ground (or it is dropped)."""
+
+    assignment: JobAssignment
+    """What the orchestrator asked for."""
+    prepared: PreparedJob | None = None
+    """The plan, once ready and inside the fence."""
+    plan_requested: bool = False
+    """The plan was asked for (once)."""
+    started_s: float | None = None
+    """Agent time in [s] writing began (the brush may touch from here on)."""
+    recorder: TraceRecorder = field(default_factory=TraceRecorder)
+    """What was flown while writing."""
+    progress: float = 0.0
+    """Fraction 0..1 of the plan written."""
+    next_progress_s: float = 0.0
+    """Agent time in [s] of the next progress report."""
+    planned_now: Setpoint | None = None
+    """The plan's sample at this tick: set by :meth:`setpoint`, recorded by :meth:`record`."""
+    approaches: int = 0
+    """Approaches to the start of the plan flown so far (settling)."""
+
+    @property
+    def job_id(self) -> str:
+        return self.assignment.job_id
+
+    @property
+    def started(self) -> bool:
+        """Writing has begun: the board may carry ink of this job."""
+        return self.started_s is not None
+
+    def setpoint(self, now_s: float) -> Setpoint:
+        """What to command at agent time ``now_s`` while writing (the body reference when the
+        plan has one; the pen state is the plan's)."""
+        assert self.prepared is not None and self.started_s is not None
+        prepared = self.prepared
+        t_rel_s = now_s - self.started_s
+        self.planned_now = sample_at(prepared.samples, t_rel_s)
+        if prepared.command_samples is None:
+            return self.planned_now
+        commanded = sample_at(prepared.command_samples, t_rel_s)
+        return replace(commanded, pen_down=self.planned_now.pen_down)
+
+    def record(self, snap: VehicleSnapshot, now_s: float) -> bool:
+        """Record this tick; True once the plan is written to its end."""
+        assert self.prepared is not None and self.started_s is not None
+        assert self.planned_now is not None
+        t_rel = now_s - self.started_s
+        duration = self.prepared.samples.duration_s
+        self.recorder.add(t_rel, snap, self.planned_now)
+        self.progress = min(t_rel / duration, 1.0) if duration > 0 else 1.0
+        return t_rel >= duration
+
+    def finish(self) -> FlownTrace:
+        """The flown trace of the whole job."""
+        return self.recorder.finish(self.job_id, self.assignment.attempt)
+
+    def report(
+        self,
+        vehicle_id: str,
+        event: ReportEvent,
+        *,
+        error: ErrorInfo | None = None,
+        retry_after_s: float | None = None,
+        planned_duration_s: float | None = None,
+    ) -> AgentReport:
+        """A report about this job, with its progress."""
+        return AgentReport(
+            vehicle_id=vehicle_id,
+            job_id=self.job_id,
+            event=event,
+            progress=self.progress,
+            error=error,
+            retry_after_s=retry_after_s,
+            planned_duration_s=planned_duration_s,
+        )
+
+    def aborted(self, vehicle_id: str, code: str, message: str, backoff_s: float) -> AgentReport:
+        """``failed`` with ``code``: before writing began the job goes back to the queue (the
+        vehicle is healthy enough to say so, the board is clean: ``retry_after_s`` set); once
+        the brush may have touched, it is final."""
+        retry = None if self.started else backoff_s
+        error = ErrorInfo(code=code, message=message)
+        return self.report(vehicle_id, "failed", error=error, retry_after_s=retry)

@@ -1,0 +1,289 @@
+"""The phases of a job runner that fly the vehicle (pure): moves, hover, settling, writing.
+
+:class:`RunnerPhases` holds the runner's state and advances it once per control period; the job
+runner (``vehicle_agent/job_runner.py``) adds the commands, the interruptions and the aborts.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from bus.messages import AgentReport, Telemetry, VehicleStateName, VehicleStatus
+from vehicle_agent.backends.base import Setpoint, Vec3, VehicleSnapshot
+from vehicle_agent.motion import Move, plan_move
+from vehicle_agent.runner_io import (
+    BackendCommand,
+    RunnerConfig,
+    RunnerEvent,
+    telemetry_message,
+)
+from vehicle_agent.runner_job import RunningJob
+from vehicle_agent.safety.guard import SafetyGuard
+from vehicle_agent.trace import FlownTrace
+
+Level = Literal["info", "warning", "alert"]
+ABORT_LIFT_M = 0.1
+"""After a safety abort the brush is lifted this much higher than the pen-up height, in [m]."""
+ABORT_CEILING_GAP_M = 0.1
+"""...but kept this far below the fence's ceiling, in [m]."""
+POLICY_ABORTS = frozenset({"deviation", "not_settled"})
+"""Aborts after which the vehicle follows ``safety.abort_policy`` (hold or land)."""
+
+
+class RunnerPhases:
+    """State of one vehicle's runner and the phases that move it (see the module docstring)."""
+
+    def __init__(self, config: RunnerConfig) -> None:
+        self.config = config
+        self.safety = config.safety
+        self.guard = SafetyGuard(config.safety)
+        self.state: VehicleStateName = "idle"
+        self.message = ""
+        self.phase = "ground"
+        """Finer step inside ``state``: ground, preflight, climb, wait_plan, transit, settle,
+        write, lift, hover, return, fence_hold, land, stopped."""
+        self._job: RunningJob | None = None
+        self._abort: str | None = None
+        self._after_landing: VehicleStateName = "idle"
+        self._move: Move | None = None
+        self._hold_m_enu: Vec3 | None = None
+        self._backend_command: BackendCommand | None = None
+        self._reports: list[AgentReport] = []
+        self._events: list[RunnerEvent] = []
+        self._orchestrator_alive = False
+        self._lost_since_s: float | None = None
+        self._next_telemetry_s = -math.inf
+        self._last_setpoint: Setpoint | None = None
+        """The last setpoint given (phases with a reference), where interruptions start from."""
+        self._tracked: Setpoint | None = None
+        """The setpoint of the last tick (None: the backend's mode flew), for the guard."""
+        self._settle_until_s = 0.0
+        self._hover_until_s = math.inf
+        self._retry_at_s = -math.inf
+        self._retry_code = "takeoff_refused"
+        self._retry_reason = ""
+        self._retry_backoff_s = config.takeoff_retry_s
+        self._seen_mode: str | None = None
+        self._seen_fault: str | None = None
+        self._now_s = 0.0
+
+    @property
+    def job_id(self) -> str | None:
+        """The job this vehicle is working on (until it has landed after it)."""
+        return None if self._job is None else self._job.job_id
+
+    def _abort_job(
+        self, code: str, message: str, lift_from: Vec3, *, level: Level = "alert"
+    ) -> None:
+        """A safety abort (the job runner's)."""
+        raise NotImplementedError
+
+    def _lift(self, start: Vec3, *, extra_m: float = 0.0) -> None:
+        """Straight up to the pen-up height (``extra_m`` higher after a safety abort, within the
+        fence's ceiling)."""
+        top = self.config.cruise_z_m + extra_m
+        fence = self.safety.fence
+        if fence is not None:
+            top = min(top, max(self.config.cruise_z_m, fence.ceiling_z_m - ABORT_CEILING_GAP_M))
+        lifted = (start[0], start[1], max(start[2], top))
+        self._start_move(start, lifted, "lift", "returning")
+
+    def _event(self, level: Level, kind: str, message: str) -> None:
+        self._events.append(RunnerEvent(level, kind, message, self.job_id))
+
+    def _advance(self, snap: VehicleSnapshot, now_s: float) -> Setpoint | None:
+        phase = self.phase
+        if phase in ("ground", "preflight", "stopped", "climb", "land"):
+            return self._passive(snap)
+        if phase == "wait_plan":
+            if self._job is not None and self._job.prepared is not None:
+                self._start_transit(self._current_reference())
+            return self._reference_now(now_s)
+        if phase in ("hover", "fence_hold"):
+            return self._hover(now_s)
+        if phase == "settle":
+            return self._settle(snap, now_s)
+        if phase == "write":
+            assert self._job is not None
+            return self._job.setpoint(now_s)
+        assert self._move is not None
+        setpoint = self._move.setpoint(now_s)
+        if self._move.done(now_s):
+            self._move_finished(snap)
+            if self.phase == "land":
+                return None  # the backend's landing mode flies from here
+        return setpoint
+
+    def _passive(self, snap: VehicleSnapshot) -> Setpoint | None:
+        """Phases where the backend's own mode flies: on the ground, climbing, landing."""
+        airborne_hold = snap.mode == "hold" and not snap.on_ground
+        if self.phase == "climb" and airborne_hold and self._backend_command is None:
+            self._hold_m_enu = self.config.hover_home_m_enu
+            self._retry_backoff_s = self.config.takeoff_retry_s  # it flies: forget refusals
+            if self._abort is not None:
+                self._start_return(self.config.hover_home_m_enu)
+            else:
+                self.phase = "wait_plan"
+                if self._job is not None and self._job.prepared is not None:
+                    self._start_transit(self.config.hover_home_m_enu)
+            return self._reference_now(self._now_s)
+        if self.phase == "land" and snap.on_ground and snap.mode == "idle":
+            stopped = self._after_landing == "fault"
+            self.state, self.phase = self._after_landing, "stopped" if stopped else "ground"
+            if not stopped:
+                self.message = "landed" if self.state == "landed" else ""
+            self._job = None
+            self._abort = None
+        return None
+
+    def _hover(self, now_s: float) -> Setpoint | None:
+        """Hold in place until the hover ends: then return and land (or land right here)."""
+        if now_s >= self._hover_until_s:
+            if self.phase == "fence_hold":
+                self._backend_command = ("land", None)
+                self.phase, self.state = "land", "landing"
+                return None  # the backend's landing mode flies from here
+            else:
+                if self._abort == "orchestrator_lost":
+                    self._after_landing = "landed"
+                    self.message = "orchestrator lost: landing"
+                self._start_return(self._current_reference())
+        return self._hold()
+
+    def _settle(self, snap: VehicleSnapshot, now_s: float) -> Setpoint:
+        """Hold the start of the plan until the vehicle is there; fly the approach again if it
+        is not in time; hand the job back when no approach settles."""
+        job = self._job
+        assert job is not None and self._hold_m_enu is not None
+        error = math.dist(snap.position_m_enu, self._hold_m_enu)
+        safety = self.safety
+        if error <= safety.settle_tolerance_m:
+            self._begin_writing(job)
+            return job.setpoint(now_s)
+        if now_s < self._settle_until_s:
+            return self._hold()
+        if job.approaches < safety.settle_attempts:
+            self.message = f"not settled ({error:.3f} m): flying the approach again"
+            self._start_transit(snap.position_m_enu)
+            return self._reference_now(now_s)
+        message = (
+            f"not settled within {safety.settle_tolerance_m:.3f} m of the start after "
+            f"{job.approaches} approaches of {safety.settle_timeout_s:.1f} s (error {error:.3f} m)"
+        )
+        self._abort_job("not_settled", message, self._hold_m_enu, level="warning")
+        assert self._move is not None
+        return self._move.setpoint(now_s)
+
+    def _reference_now(self, now_s: float) -> Setpoint:
+        """The reference of a phase that was just entered."""
+        if self._move is not None and self.phase in ("transit", "lift", "return"):
+            return self._move.setpoint(now_s)
+        return self._hold()
+
+    def _hold(self) -> Setpoint:
+        return Setpoint(position_m_enu=self._hold_m_enu or self.config.hover_home_m_enu)
+
+    def _start_transit(self, start_m_enu: Vec3) -> None:
+        assert self._job is not None and self._job.prepared is not None
+        prepared = self._job.prepared
+        first = (prepared.command_samples or prepared.samples).position_m_enu[0]
+        end = (float(first[0]), float(first[1]), float(first[2]))
+        self._start_move(start_m_enu, end, "transit", "taking_off")
+
+    def _start_return(self, start_m_enu: Vec3) -> None:
+        self._start_move(start_m_enu, self.config.hover_home_m_enu, "return", "returning")
+
+    def _start_move(self, start: Vec3, end: Vec3, phase: str, state: VehicleStateName) -> None:
+        cfg = self.config
+        self._move = plan_move(
+            start, end, self._now_s, v_max_mps=cfg.v_max_mps, a_max_mps2=cfg.a_max_mps2
+        )
+        self._hold_m_enu = end
+        self.phase, self.state = phase, state
+
+    def _move_finished(self, snap: VehicleSnapshot) -> None:
+        if self.phase == "transit":
+            assert self._job is not None
+            self._job.approaches += 1
+            self.phase = "settle"
+            self._settle_until_s = self._now_s + self.safety.settle_timeout_s
+        elif self.phase == "lift":
+            self._after_lift()
+        elif self.phase == "return":
+            self._backend_command = ("land", None)
+            self.phase, self.state = "land", "landing"
+
+    def _after_lift(self) -> None:
+        if self._abort == "orchestrator_lost" and not self._orchestrator_alive:
+            lost_since = self._lost_since_s if self._lost_since_s is not None else self._now_s
+            self._hover_until_s = lost_since + self.config.loss_land_after_s
+            self.phase, self.state = "hover", "returning"
+        elif self._abort in POLICY_ABORTS and self.safety.abort_policy == "hold":
+            self._hover_until_s = self._now_s + self.safety.abort_hold_s
+            self.phase, self.state = "hover", "returning"
+        else:
+            self._start_return(self._current_reference())
+
+    def _current_reference(self) -> Vec3:
+        if self._last_setpoint is not None and self.phase not in ("climb", "ground"):
+            return self._last_setpoint.position_m_enu
+        return self._hold_m_enu or self.config.hover_home_m_enu
+
+    # --- writing -------------------------------------------------------------------------------
+    def _begin_writing(self, job: RunningJob) -> None:
+        assert job.prepared is not None
+        job.started_s = self._now_s
+        job.next_progress_s = self._now_s + self.config.progress_period_s
+        self.phase, self.state = "write", "writing"
+        duration_s = job.prepared.samples.duration_s
+        self._reports.append(
+            job.report(self.config.vehicle_id, "started", planned_duration_s=duration_s)
+        )
+
+    def _write_tick(
+        self, snap: VehicleSnapshot, now_s: float, setpoint: Setpoint
+    ) -> FlownTrace | None:
+        job = self._job
+        assert job is not None
+        written = job.record(snap, now_s)
+        if now_s >= job.next_progress_s and not written:
+            job.next_progress_s = now_s + self.config.progress_period_s
+            self._reports.append(job.report(self.config.vehicle_id, "progress"))
+        if not written:
+            return None
+        self.message = f"job {job.job_id} written"
+        self._start_return(setpoint.position_m_enu)
+        return job.finish()
+
+    # --- outputs -------------------------------------------------------------------------------
+    def _telemetry(
+        self, snap: VehicleSnapshot, setpoint: Setpoint | None, now_s: float
+    ) -> Telemetry | None:
+        period = self.config.telemetry_period_s
+        if now_s < self._next_telemetry_s - 1e-9:
+            return None
+        self._next_telemetry_s += period
+        if self._next_telemetry_s <= now_s:  # first message, or the loop fell behind
+            self._next_telemetry_s = now_s + period
+        progress = 0.0 if self._job is None else self._job.progress
+        return telemetry_message(
+            self.config.vehicle_id,
+            self.state,
+            snap,
+            setpoint,
+            now_s,
+            job_id=self.job_id,
+            progress=progress,
+        )
+
+    def status(self) -> VehicleStatus:
+        """The vehicle's status message as of now (publish it when it changes)."""
+        return VehicleStatus(
+            vehicle_id=self.config.vehicle_id,
+            kind=self.config.kind,
+            state=self.state,
+            board_id=self.config.board_id,
+            job_id=self.job_id,
+            message=self.message,
+        )

@@ -1,0 +1,17 @@
+"""Pure safety checks of one vehicle: tracking deviation, geofence, writing bounds (no I/O)."""
+
+from vehicle_agent.safety.deviation import DeviationLimit, DeviationMonitor, DeviationTrip
+from vehicle_agent.safety.geofence import Geofence, GeofenceError, vehicle_fence
+from vehicle_agent.safety.limits import SafetyLimits, WritingBounds, writing_verdict
+
+__all__ = [
+    "DeviationLimit",
+    "DeviationMonitor",
+    "DeviationTrip",
+    "Geofence",
+    "GeofenceError",
+    "SafetyLimits",
+    "WritingBounds",
+    "vehicle_fence",
+    "writing_verdict",
+]
