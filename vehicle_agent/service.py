@@ -237,12 +237,8 @@ class AgentService:
     async def _on_command(self, command: VehicleCommand) -> CommandReply:
         """Commands anyone with the right to command vehicles may send (not ``assign``)."""
         if command.command == "assign":
-            info = ErrorInfo(
-                code="forbidden",
-                message=f"jobs are assigned on {self.keys.vehicle_assign(self.vehicle_id)} only",
-                field="command",
-            )
-            return CommandReply(ok=False, message=info.message, error=info)
+            where = self.keys.vehicle_assign(self.vehicle_id)
+            return _refusal("forbidden", f"jobs are assigned on {where} only", field="command")
         return await self._handle(command)
 
     async def _on_assign(self, command: VehicleCommand) -> CommandReply:
@@ -251,17 +247,10 @@ class AgentService:
         refused rather than written twice."""
         job = command.job
         if job is not None and job.job_id == self._pending_result():
-            info = ErrorInfo(
-                code="busy", message=f"{job.job_id} is written; its report is on its way"
-            )
-            return CommandReply(ok=False, message=info.message, error=info)
+            return _refusal("busy", f"{job.job_id} is written; its report is on its way")
         if command.command != "assign":
-            info = ErrorInfo(
-                code="invalid",
-                message=f"only assign is sent on {self.keys.vehicle_assign(self.vehicle_id)}",
-                field="command",
-            )
-            return CommandReply(ok=False, message=info.message, error=info)
+            where = self.keys.vehicle_assign(self.vehicle_id)
+            return _refusal("invalid", f"only assign is sent on {where}", field="command")
         return await self._handle(command)
 
     async def _handle(self, command: VehicleCommand) -> CommandReply:
@@ -492,6 +481,12 @@ class AgentService:
             if refused and report.job_id == self.runner.job_id:
                 self._give_up("the orchestrator says it is not this vehicle's any more")
         return True
+
+
+def _refusal(code: str, message: str, *, field: str | None = None) -> CommandReply:
+    """A command the agent will not carry out, and why."""
+    info = ErrorInfo(code=code, message=message, field=field)
+    return CommandReply(ok=False, message=message, error=info)
 
 
 def _error_reply(info: ErrorInfo) -> CommandReply:
