@@ -42,11 +42,15 @@ from bench_planner import COMMON_HANZI, LATIN  # noqa: E402
 from planner.errors import PlannerError  # noqa: E402
 from planner.glyphs import has_glyph, text_glyph  # noqa: E402
 from planner.samples import TrajectorySamples  # noqa: E402
-from sim.params import WindParams, WorldParams  # noqa: E402
+from sim.params import WindParams  # noqa: E402
 from sim.reference import writing_reference  # noqa: E402
-from vehicle_agent.control.controller import DEFAULT_CONFIG, PAPER_CONFIG  # noqa: E402
-from vehicle_agent.flight import FlightConfig, fly, plan_glyph  # noqa: E402
-from vehicle_agent.metrics import flight_metrics  # noqa: E402
+from vehicles.jobs import plan_glyph  # noqa: E402
+from vehicles.quadrotor_brush.control.controller import DEFAULT_CONFIG, PAPER_CONFIG  # noqa: E402
+from vehicles.quadrotor_brush.flight import FlightConfig, fly  # noqa: E402
+from vehicles.quadrotor_brush.metrics import flight_metrics  # noqa: E402
+from vehicles.quadrotor_brush.params import WorldParams  # noqa: E402
+from vehicles.registry import vehicle_kind  # noqa: E402
+from vehicles.surface import Surface  # noqa: E402
 
 BATCH = 40
 WIND_MPS = 1.0
@@ -58,26 +62,31 @@ def corpus(quick: bool) -> list[str]:
     return list(LATIN) + [c for c in COMMON_HANZI if has_glyph(c)][:120]
 
 
-def plan_corpus(
-    chars: list[str], world: WorldParams
-) -> tuple[dict[str, TrajectorySamples], list[str], list[str]]:
-    """Plan every character; one the planner rejects for straying from its strokes is planned
-    again without that check (the flight is judged against the plan, not the strokes)."""
+def plan_corpus(chars: list[str]) -> tuple[dict[str, TrajectorySamples], list[str], list[str]]:
+    """Plan every character 1 m tall as ``skyquill fly`` does (the one job-planning function, a
+    show file's default settings); one the planner rejects for straying from its strokes is
+    planned again without that check (the flight is judged against the plan, not the strokes)."""
+    kind = vehicle_kind("quadrotor-brush")
+    settings = kind.settings(None, None)
+    loose_settings = dataclasses.replace(
+        settings, plan=dataclasses.replace(settings.plan, fit_tolerance_m=None)
+    )
+    surface = Surface.of("horizontal", (0.0, 0.0, 0.0), 0.0)
     planned: dict[str, TrajectorySamples] = {}
     failed: list[str] = []
     loose: list[str] = []
     for char in chars:
         glyph = text_glyph(char)
         try:
-            _, plan = plan_glyph(glyph, world, height_m=1.0)
+            job = plan_glyph(kind, settings, surface, glyph, (100.0, 1.0), 0.0)
         except PlannerError as exc:
             try:
-                _, plan = plan_glyph(glyph, world, height_m=1.0, fit_tolerance_m=None)
+                job = plan_glyph(kind, loose_settings, surface, glyph, (100.0, 1.0), 0.0)
             except PlannerError:
                 failed.append(f"{char}: {exc}")
                 continue
             loose.append(f"{char}: {exc}")
-        planned[char] = plan.sample(world.control_rate_hz)
+        planned[char] = job.plan.samples
     return planned, failed, loose
 
 
@@ -155,7 +164,7 @@ def main() -> int:
     world = WorldParams()
     chars = corpus(args.quick)
     start = time.perf_counter()
-    planned, failed, loose = plan_corpus(chars, world)
+    planned, failed, loose = plan_corpus(chars)
     print(
         f"corpus: {len(chars)} characters, {len(planned)} planned in"
         f" {time.perf_counter() - start:.1f} s; {len(loose)} only without the planner's"

@@ -83,40 +83,72 @@ def _glyph(args: argparse.Namespace) -> Any:
     return parse_strokes_json(path.read_text(encoding="utf-8"), source_name=path.name)
 
 
-def run(args: argparse.Namespace) -> int:
+FLY_INK_PIXEL_M = 0.001
+"""Pixel size in [m] of the ink rasters of ``fly``'s IoU (finer than a show's 2 mm: one job)."""
+
+
+def _settings(args: argparse.Namespace) -> Any:
+    """The brush quadrotor's settings of a show file left at its defaults, with this run's
+    stroke width, wind, controller and deviation bound."""
     import dataclasses
     import math
 
-    from planner.errors import PlannerError
-    from sim.params import BrushParams, WindParams, WorldParams
-    from vehicle_agent.control.controller import DEFAULT_CONFIG, PAPER_CONFIG
-    from vehicle_agent.flight import FlightConfig, fly, plan_glyph
-    from vehicle_agent.metrics import flight_metrics, ink_result
-    from vehicle_agent.safety import DeviationLimit, WritingBounds, writing_verdict
+    from sim.params import WindParams
+    from vehicles.deviation import DeviationLimit
+    from vehicles.quadrotor_brush.control.controller import PAPER_CONFIG
+    from vehicles.registry import vehicle_kind
 
-    brush = dataclasses.replace(BrushParams(), nominal_width_m=args.stroke_width)
-    wind = WindParams.from_speed(args.wind, heading_rad=math.radians(args.wind_heading_deg))
-    world = WorldParams(brush=brush, wind=wind)
-    controller = PAPER_CONFIG if args.gains == "paper" else DEFAULT_CONFIG
+    base = vehicle_kind("quadrotor-brush").settings(None, None)
+    world = base.flight.world
+    world = dataclasses.replace(
+        world,
+        brush=dataclasses.replace(world.brush, nominal_width_m=args.stroke_width),
+        wind=WindParams.from_speed(args.wind, heading_rad=math.radians(args.wind_heading_deg)),
+    )
+    flight = dataclasses.replace(
+        base.flight,
+        world=world,
+        controller=PAPER_CONFIG if args.gains == "paper" else base.flight.controller,
+        deviation=DeviationLimit(args.deviation_bound, args.deviation_window),
+    )
+    return dataclasses.replace(base, flight=flight, ink_pixel_m=FLY_INK_PIXEL_M)
+
+
+def run(args: argparse.Namespace) -> int:
+    from planner.errors import PlannerError
+    from vehicle_agent.safety import WritingBounds, writing_verdict
+    from vehicles.jobs import plan_glyph
+    from vehicles.registry import vehicle_kind
+    from vehicles.surface import Surface
+
+    kind = vehicle_kind("quadrotor-brush")
     try:
         glyph = _glyph(args)
-        fitted, plan = plan_glyph(glyph, world, height_m=args.height)
-        deviation = DeviationLimit(args.deviation_bound, args.deviation_window)
+        settings = _settings(args)
+        surface = Surface.of("horizontal", (0.0, 0.0, 0.0), 0.0)
+        area = (100.0 * args.height, args.height)  # the character is --height tall
+        job = plan_glyph(kind, settings, surface, glyph, area, 0.0)
     except (PlannerError, OSError, ValueError) as exc:
         print(f"skyquill fly: {exc}", file=sys.stderr)
         return 2
+    plan = job.plan
     start = time.perf_counter()
-    config = FlightConfig(world, controller, deviation=deviation)
-    log = fly([plan.sample(world.control_rate_hz)], config, seed=args.seed)
+    flown = kind.fly(plan, settings, seed=args.seed)
     wall_s = time.perf_counter() - start
-    ink = ink_result(log)
-    scores = flight_metrics(log, ink=ink)
+    score = kind.score(plan, flown, settings)
+    controller = settings.flight.controller
     bounds = WritingBounds(args.rmse_max, args.iou_min)
-    problem = log.abort_reason or writing_verdict(scores.rmse_pen_down_m, scores.iou, bounds)
+    iou = score.iou if score.iou is not None else float("nan")
+    problem = flown.abort_reason or writing_verdict(score.rmse_pen_down_m, iou, bounds)
+    sim_time_s = score.extra["sim_time_s"]
     doc: dict[str, Any] = {
-        **scores.to_json_dict(),
+        "rmse_pen_down_m": score.rmse_pen_down_m,
+        "rmse_m": score.rmse_m,
+        "max_error_m": score.max_error_m,
+        "iou": iou,
+        **score.extra,
         "wall_time_s": wall_s,
-        "real_time_factor": scores.sim_time_s / wall_s if wall_s > 0 else None,
+        "real_time_factor": sim_time_s / wall_s if wall_s > 0 else None,
         "seed": args.seed,
         "wind_mps": args.wind,
         "wind_heading_deg": args.wind_heading_deg,
@@ -124,10 +156,10 @@ def run(args: argparse.Namespace) -> int:
         "disturbance_compensation": controller.disturbance_compensation,
         "brush_lever_m": controller.brush_lever_m,
         "character_height_m": args.height,
-        "nominal_width_m": brush.nominal_width_m,
+        "nominal_width_m": settings.flight.world.brush.nominal_width_m,
         "label": glyph.label,
         "planned_duration_s": plan.duration_s,
-        "aborted": log.abort_reason,
+        "aborted": flown.abort_reason,
         "within_bounds": problem is None,
         "bounds": {"rmse_pen_down_max_m": args.rmse_max, "iou_min": args.iou_min,
                    "deviation_bound_m": args.deviation_bound,
@@ -136,21 +168,22 @@ def run(args: argparse.Namespace) -> int:
     print(json.dumps({k: doc[k] for k in ("rmse_pen_down_m", "rmse_m", "max_error_m", "iou",
                                            "sim_time_s", "wall_time_s")}))  # fmt: skip
     if args.report:
-        from vehicle_agent.report import build_report, save_report
-
-        out = Path(args.report)
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "metrics.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
-        fig = build_report(
-            log,
-            scores,
-            ink,
-            input_strokes_xy_m=fitted.strokes,
-            title=f"{glyph.label!r}: gains {controller.gains.name}, wind {args.wind} m/s, "
-            f"seed {args.seed}",
-        )
-        save_report(fig, out / "report.png")
+        _write_report(args, kind, job, flown, settings, doc)
     if problem is not None:
         print(f"skyquill fly: writing out of bounds: {problem}", file=sys.stderr)
         return 1
     return 0
+
+
+def _write_report(
+    args: argparse.Namespace, kind: Any, job: Any, flown: Any, settings: Any, doc: dict[str, Any]
+) -> None:
+    """``metrics.json`` and ``report.png`` into ``--report``."""
+    from vehicle_agent.job_picture import save_png
+
+    out = Path(args.report)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "metrics.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+    gains = settings.flight.controller.gains.name
+    title = f"{job.glyph.label!r}: gains {gains}, wind {args.wind} m/s, seed {args.seed}"
+    save_png(kind.report(job.plan, flown, settings, title), out / "report.png")

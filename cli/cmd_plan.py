@@ -9,6 +9,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from planner import defaults
+from planner.limits import VehicleLimits
+
 NAME = "plan"
 HELP = "Plan a flyable minimum-jerk writing trajectory for a strokes file or text."
 
@@ -24,7 +27,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     board = parser.add_argument_group("writing area (board-local metres)")
     board.add_argument("--width", type=float, default=1.0, help="area width [m] (1.0)")
     board.add_argument("--height", type=float, default=1.0, help="area height [m] (1.0)")
-    board.add_argument("--margin", type=float, default=0.05, help="margin inside the area [m]")
+    board.add_argument(
+        "--margin",
+        type=float,
+        default=defaults.MARGIN_M,
+        help=f"margin inside the area [m] ({defaults.MARGIN_M})",
+    )
     board.add_argument(
         "--board-center",
         type=float,
@@ -37,28 +45,37 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     board.add_argument(
         "--write-height",
         type=float,
-        default=0.30,
-        help="reference height above the board while writing [m] (0.30)",
+        default=defaults.WRITE_HEIGHT_M,
+        help=f"reference height above the board while writing [m] ({defaults.WRITE_HEIGHT_M})",
     )
     board.add_argument(
-        "--clearance", type=float, default=0.08, help="extra height with the pen up [m] (0.08)"
+        "--clearance",
+        type=float,
+        default=defaults.CLEARANCE_M,
+        help=f"extra height with the pen up [m] ({defaults.CLEARANCE_M})",
     )
-    lim = parser.add_argument_group("vehicle limits")
+    d = VehicleLimits()
+    lim = parser.add_argument_group("vehicle limits (a show file's defaults)")
     lim.add_argument(
         "--a-max",
         type=float,
         nargs="+",
         metavar="A",
-        help="max |acceleration| [m/s^2]: one value, or x y z (0.8 0.8 0.5)",
+        help="max |acceleration| [m/s^2]: one value, or x y z"
+        f" ({' '.join(str(a) for a in d.a_max_mps2)})",
     )
-    lim.add_argument("--v-max", type=float, default=0.5, help="max speed [m/s] (0.5)")
-    lim.add_argument("--mass", type=float, default=1.0, help="vehicle mass [kg] (1.0)")
+    lim.add_argument(
+        "--v-max", type=float, default=d.v_max_mps, help=f"max speed [m/s] ({d.v_max_mps})"
+    )
+    lim.add_argument(
+        "--mass", type=float, default=d.mass_kg, help=f"vehicle mass [kg] ({d.mass_kg})"
+    )
     lim.add_argument("--thrust-max", type=float, help="max thrust [N] (2 x weight)")
     lim.add_argument(
         "--body-rate-max",
         type=float,
-        default=3.0,
-        help="max body-rate bound of eq. 15 [rad/s] (3.0)",
+        default=d.body_rate_max_radps,
+        help=f"max body-rate bound of eq. 15 [rad/s] ({d.body_rate_max_radps})",
     )
     opt = parser.add_argument_group("planner")
     opt.add_argument("--total-time", type=float, help="fixed total time [s] (default: free)")
@@ -67,9 +84,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     opt.add_argument("--no-resegment", action="store_true", help="keep the initial times")
     opt.add_argument("--resegment-method", choices=("analytic", "numerical"), default="analytic")
     opt.add_argument(
-        "--split-threshold", type=float, default=0.01, help="split-and-merge threshold [m] (0.01)"
+        "--split-threshold",
+        type=float,
+        default=defaults.SPLIT_THRESHOLD_M,
+        help=f"split-and-merge threshold [m] ({defaults.SPLIT_THRESHOLD_M})",
     )
-    opt.add_argument("--rate", type=float, default=100.0, help="sample rate of TRAJ.json [Hz]")
+    opt.add_argument(
+        "--rate", type=float, default=defaults.SAMPLE_RATE_HZ, help="sample rate of TRAJ.json [Hz]"
+    )
 
 
 def _error(source: str, exc: Exception) -> int:
@@ -91,12 +113,14 @@ def _error(source: str, exc: Exception) -> int:
     return 2
 
 
-def _options(args: argparse.Namespace) -> Any:
-    from planner.board import BoardFrame
-    from planner.limits import GRAVITY_MPS2, VehicleLimits
-    from planner.pipeline import PlanOptions
+def _settings(args: argparse.Namespace, base: Any) -> Any:
+    """The brush quadrotor's settings ``base`` (a show file's defaults) with this run's limits
+    and planner options."""
+    from dataclasses import replace
 
-    a_max = args.a_max or [0.8, 0.8, 0.5]
+    from planner.limits import GRAVITY_MPS2
+
+    a_max = args.a_max or list(VehicleLimits().a_max_mps2)
     if len(a_max) == 1:
         a_max = a_max * 3
     if len(a_max) != 3:
@@ -109,9 +133,9 @@ def _options(args: argparse.Namespace) -> Any:
         thrust_max_n=thrust,
         body_rate_max_radps=args.body_rate_max,
     )
-    return PlanOptions(
+    plan = replace(
+        base.plan,
         limits=limits,
-        board=BoardFrame(tuple(args.board_center), math.radians(args.board_yaw_deg)),
         write_height_m=args.write_height,
         clearance_m=args.clearance,
         total_time_s=args.total_time,
@@ -122,14 +146,19 @@ def _options(args: argparse.Namespace) -> Any:
         method=args.method,
         sample_rate_hz=args.rate,
     )
+    return replace(base, plan=plan)
 
 
 def run(args: argparse.Namespace) -> int:
     from planner.errors import PlannerError
-    from planner.glyphs import fit_to_area, parse_strokes_json, text_glyph
-    from planner.pipeline import plan_strokes
+    from planner.glyphs import parse_strokes_json, text_glyph
+    from planner.trajectory import PlannedTrajectory
+    from vehicles.jobs import plan_glyph
+    from vehicles.registry import vehicle_kind
+    from vehicles.surface import Surface
 
     source = args.strokes if args.strokes is not None else "<text>"
+    kind = vehicle_kind("quadrotor-brush")
     try:
         if args.strokes is not None:
             try:
@@ -139,20 +168,22 @@ def run(args: argparse.Namespace) -> int:
             glyph = parse_strokes_json(text, source_name=args.strokes)
         else:
             glyph = text_glyph(args.text)
-        if glyph.units != "m":
-            glyph = fit_to_area(
-                glyph, width_m=args.width, height_m=args.height, margin_m=args.margin
-            )
-        options = _options(args)
-        traj = plan_strokes(glyph.strokes, options)
+        settings = _settings(args, kind.settings(None, None))
+        surface = Surface.of(
+            "horizontal", tuple(args.board_center), math.radians(args.board_yaw_deg)
+        )
+        job = plan_glyph(kind, settings, surface, glyph, (args.width, args.height), args.margin)
     except (PlannerError, ValueError) as exc:
         return _error(source, exc)
+    traj = job.plan.detail
+    if not isinstance(traj, PlannedTrajectory):
+        raise TypeError(f"the {kind.name} plan holds no planner trajectory")
     if args.out:
         Path(args.out).write_text(json.dumps(traj.to_json_dict(args.rate)), encoding="utf-8")
     if args.plot:
         from planner.plots import plot_trajectory
 
-        plot_trajectory(traj, glyph.strokes).savefig(args.plot, dpi=100)
+        plot_trajectory(traj, job.glyph.strokes).savefig(args.plot, dpi=100)
     _summary(traj)
     return 0
 

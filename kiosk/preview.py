@@ -1,13 +1,15 @@
 """What the vehicle will write: the glyph laid out on the writing area and planned.
 
-Uses only the planner's public functions (glyph sources, layout, ``plan_strokes``); returns plain
-JSON for the page: turning points and the planned path in the writing area's own frame (metres,
-origin at the centre, y up).
+Plans through the one job-planning function (:func:`vehicles.jobs.plan_glyph`) with the brush
+quadrotor's settings of the show (the kiosk's planner options); returns plain JSON for the page:
+turning points and the planned path in the writing area's own frame (metres, origin at the
+centre, y up).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -17,9 +19,14 @@ from kiosk.errors import RejectedError
 from kiosk.limits import Submission
 from kiosk.settings import KioskSettings
 from planner.errors import PlannerError
-from planner.glyphs import Glyph, fit_to_area, parse_strokes_json, text_glyph
+from planner.glyphs import Glyph, parse_strokes_json, text_glyph
 from planner.glyphs.layout import MIN_INK_FRACTION, ink_fraction
-from planner.pipeline import plan_strokes
+from vehicles.jobs import JobPlan, plan_glyph
+from vehicles.registry import vehicle_kind
+from vehicles.surface import Surface
+
+PREVIEW_KIND = "quadrotor-brush"
+"""The kind the preview plans for (the kiosk's planner options are that kind's)."""
 
 PATH_POINTS_MAX = 800
 """Most points of the path sent to the page (decimated from the planner's samples)."""
@@ -54,17 +61,17 @@ def plan_preview(submission: Submission, settings: KioskSettings) -> dict[str, A
     if fraction is not None and fraction < MIN_INK_FRACTION:
         raise RejectedError("too_small", wording.TOO_SMALL, status=422)
     try:
-        fitted = fit_to_area(glyph, width_m=width_m, height_m=height_m, margin_m=settings.margin_m)
-        planned = plan_strokes(fitted.strokes, settings.plan)
+        job = _plan(glyph, settings)
     except PlannerError:
         raise RejectedError("unplannable", wording.UNPLANNABLE, status=422) from None
+    planned, fitted = job.plan, job.glyph
     if planned.duration_s > settings.max_flight_s:
         message = wording.TOO_LONG_FLIGHT.format(
             seconds=round(planned.duration_s), limit=round(settings.max_flight_s)
         )
         raise RejectedError("too_long", message, status=422)
-    samples = planned.sample(PATH_RATE_HZ)
-    board_xy = settings.plan.board.to_board(samples.position_m_enu)
+    samples = planned.samples
+    board_xy = planned.surface.to_surface(samples.position_m_enu)
     step = max(1, int(np.ceil(board_xy.shape[0] / PATH_POINTS_MAX)))
     keep = np.unique(np.r_[np.arange(0, board_xy.shape[0], step), board_xy.shape[0] - 1])
     # keep every pen change so the page draws strokes where they really start and stop
@@ -75,7 +82,7 @@ def plan_preview(submission: Submission, settings: KioskSettings) -> dict[str, A
         [round(float(x), 4), round(float(y), 4), bool(p)]
         for (x, y), p in zip(board_xy[keep], pen[keep], strict=True)
     ]
-    turning = [np.round(tp, 4).tolist() for tp in planned.turning_points_board_m]
+    turning = [np.round(tp, 4).tolist() for tp in planned.turning_points_m]
     return {
         "label": submission.label,
         "writing_area_m": [width_m, height_m],
@@ -85,6 +92,18 @@ def plan_preview(submission: Submission, settings: KioskSettings) -> dict[str, A
         "path": path,
         "duration_s": round(planned.duration_s, 2),
     }
+
+
+def _plan(glyph: Glyph, settings: KioskSettings) -> JobPlan:
+    """The job as a vehicle would plan it, on the writing area's own frame."""
+    kind = vehicle_kind(PREVIEW_KIND)
+    base = kind.settings(None, None)
+    plan = replace(settings.plan, sample_rate_hz=PATH_RATE_HZ)
+    board = settings.plan.board
+    surface = Surface.of("horizontal", board.center_m_enu, board.yaw_rad)
+    return plan_glyph(
+        kind, replace(base, plan=plan), surface, glyph, settings.writing_area_m, settings.margin_m
+    )
 
 
 def make_previewer(settings: KioskSettings) -> Callable[[Submission], dict[str, Any]]:

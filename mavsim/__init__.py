@@ -3,7 +3,8 @@
 - :mod:`mavsim.autopilot` (pure): an ArduCopter-like mode logic, arming checks, take-off, GUIDED
   setpoint following with GUID_TIMEOUT, LAND; :mod:`mavsim.px4` the PX4 OFFBOARD differences;
 - :mod:`mavsim.control` (pure): the autopilot's own position controller (PID + feed-forward);
-- :mod:`mavsim.airframe`: the simulator's quadrotor physics (``sim.quadrotor``) on the ground;
+- :mod:`mavsim.airframe`: the simulator's quadrotor physics
+  (``vehicles.quadrotor_brush.dynamics``) on the ground;
 - :mod:`mavsim.endpoint`: one vehicle on a UDP port, MAVLink 2 bytes in and out (pymavlink);
 - :mod:`mavsim.server`: several vehicles in real time (or faster) on one thread;
 - :mod:`mavsim.show`: a show file's ``backend: mavlink`` vehicles as vehicle configurations.

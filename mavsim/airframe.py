@@ -1,8 +1,9 @@
 """One simulated airframe: the simulator's quadrotor dynamics plus the ground it stands on.
 
-The physics are ``sim.quadrotor`` (translational dynamics, 25 rad/s inner attitude loop, motor lag,
-drag, ground effect) for a single vehicle; this module adds what an autopilot needs around them:
-resting on the ground at the start height, and scalar access to the state.
+The physics are ``vehicles.quadrotor_brush.dynamics`` (translational dynamics, 25 rad/s inner
+attitude loop, motor lag, drag, ground effect) for a single vehicle; this module adds what an
+autopilot needs around them: resting on the ground at the start height, and scalar access to the
+state.
 """
 
 from __future__ import annotations
@@ -12,8 +13,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from mavsim.config import VehicleConfig
-from sim.params import QuadrotorParams
-from sim.quadrotor import InnerLoopCommand, QuadrotorDynamics, QuadrotorState, ground_effect_gain
+from vehicles.quadrotor_brush.dynamics import (
+    InnerLoopCommand,
+    QuadrotorDynamics,
+    QuadrotorState,
+    ground_effect_gain,
+)
+from vehicles.quadrotor_brush.params import QuadrotorParams
 
 Vec3 = tuple[float, float, float]
 PHYSICS_SUBSTEPS = 4

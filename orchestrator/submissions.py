@@ -1,9 +1,9 @@
 """Submissions: validated by the planner's glyph parsing before acknowledgement; durations.
 
-:func:`validate_submission` turns a :class:`SubmitRequest` into an :class:`Accepted` (label,
-glyph, rough duration) or raises :class:`SubmissionError` whose ``info`` names the field, stroke
-and point at fault. :func:`planned_duration_s` runs the real planner on a board (slow: run it in a
-worker thread, after the acknowledgement).
+:func:`validate_submission` turns a :class:`SubmitRequest` into an :class:`Accepted` (label, glyph,
+rough duration) or raises :class:`SubmissionError` whose ``info`` names the field, stroke and point
+at fault. :func:`planned_duration_s` runs the vehicle's own planning (``vehicles.jobs.plan_job``)
+(slow: run it in a worker thread, after the acknowledgement).
 """
 
 from __future__ import annotations
@@ -16,9 +16,8 @@ import numpy as np
 from bus.messages import ErrorInfo, SubmitRequest
 from planner.errors import PlannerError
 from planner.glyphs import Glyph, parse_strokes_json, text_glyph
-from planner.pipeline import plan_strokes
 from showfile import Show
-from showfile.planning import fit_to_board, vehicle_plan_options
+from vehicles.jobs import lay_out, plan_job
 
 MAX_CLIENT_ID_CHARS = 100
 PRIORITY_RANGE = (-10, 10)
@@ -115,13 +114,13 @@ def _check_fits(glyph: Glyph, request: SubmitRequest, show: Show) -> None:
     )
     for board in show.boards:
         try:
-            fit_to_board(glyph, board, show.planning)
+            lay_out(glyph, board.writing_area_m, show.planning.margin_m)
         except PlannerError as exc:
             raise _planner_error(exc, code, field) from None
 
 
 def _fitted(glyph: Glyph, show: Show) -> Glyph:
-    return fit_to_board(glyph, show.boards[0], show.planning)
+    return lay_out(glyph, show.boards[0].writing_area_m, show.planning.margin_m)
 
 
 def rough_duration_s(glyph: Glyph, show: Show) -> float:
@@ -138,10 +137,9 @@ def rough_duration_s(glyph: Glyph, show: Show) -> float:
 
 
 def planned_duration_s(glyph: Glyph, show: Show) -> float | None:
-    """Duration of the real plan on the first vehicle's board, or None if planning fails."""
+    """Duration of the real plan of the first vehicle, or None if planning fails."""
     try:
-        options = vehicle_plan_options(show, show.vehicles[0].id)
-        duration = plan_strokes(list(_fitted(glyph, show).strokes), options).duration_s
+        duration = plan_job(show, show.vehicles[0].id, glyph).plan.duration_s
     except PlannerError:
         return None
     return float(duration) if math.isfinite(duration) else None

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from planner import defaults
 from planner.board import BoardFrame
 from planner.errors import PlannerError
 from planner.fit_qp import QpLimits
@@ -27,9 +28,9 @@ class PlanOptions:
     """Vehicle limits (acceleration per axis, speed, thrust, body rate)."""
     board: BoardFrame = field(default_factory=_default_board)
     """Board the strokes are written on (strokes are board-local, metres)."""
-    write_height_m: float = 0.30
+    write_height_m: float = defaults.WRITE_HEIGHT_M
     """Vehicle reference height above the board surface while the brush writes, [m]."""
-    clearance_m: float = 0.08
+    clearance_m: float = defaults.CLEARANCE_M
     """Extra height with the pen up, [m] (0: the brush never lifts between strokes)."""
     total_time_s: float | None = None
     """Fixed total duration in [s]; ``None`` lets the planner choose it (see ``pace``)."""
@@ -39,7 +40,7 @@ class PlanOptions:
     0.6 v_max and half the smallest acceleration limit, stretched only where the fit breaks a
     limit, with the time penalty balanced there (the default before issue 15: 1.5-2x longer
     flights)."""
-    split_threshold_m: float = 0.01
+    split_threshold_m: float = defaults.SPLIT_THRESHOLD_M
     """Split-and-merge threshold, [m]."""
     resegment: bool = True
     """Run the optimal time re-segmentation."""
@@ -49,7 +50,7 @@ class PlanOptions:
     """QP solver: ``"piqp"`` (default), ``"clarabel"`` or ``"osqp"``."""
     method: str = "qp"
     """``"qp"`` (limits imposed) or ``"closed-form"`` (limits only checked)."""
-    sample_rate_hz: float = 100.0
+    sample_rate_hz: float = defaults.SAMPLE_RATE_HZ
     """Rate of ``TRAJ.json`` samples, [Hz] (>= 100)."""
     knot_spacing_s: float = 0.2
     """Time between spline knots, [s]."""

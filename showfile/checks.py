@@ -10,6 +10,7 @@ import math
 from collections.abc import Iterator
 
 from showfile.models import KIND_ORIENTATION, Board, Show
+from vehicles import ROOMS
 
 Loc = tuple[str | int, ...]
 Problem = tuple[Loc, str]
@@ -92,6 +93,14 @@ def cross_check(show: Show) -> list[Problem]:
                 )
     board_ids = {b.id: b for b in show.boards}
     for i, vehicle in enumerate(show.vehicles):
+        if vehicle.kind not in ROOMS:
+            problems.append(
+                (
+                    ("vehicles", i, "kind"),
+                    f"no vehicle kind {vehicle.kind!r} is built yet; the kinds are: "
+                    + ", ".join(sorted(ROOMS)),
+                )
+            )
         target = board_ids.get(vehicle.board)
         if target is None:
             problems.append(

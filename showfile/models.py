@@ -145,15 +145,17 @@ KIND_ORIENTATION: dict[str, str] = {
 
 
 class Limits(_Model):
-    """Dynamic limits used by the planner (planner.pipeline.VehicleLimits)."""
+    """Dynamic limits used by the planner (planner.pipeline.VehicleLimits). The defaults are the
+    planner's own (one set for shows, ``plan`` and ``fly``; tests/test_vehicles_jobs.py holds them
+    equal; the show file cannot import the planner, which the console and trust must not see)."""
 
-    a_max_mps2: Vec3 = (0.8, 0.8, 0.8)
+    a_max_mps2: Vec3 = (0.8, 0.8, 0.5)
     """Largest acceleration per world axis x, y, z, in [m/s^2]."""
-    v_max_mps: float = Field(default=0.6, gt=0.0)
+    v_max_mps: float = Field(default=0.5, gt=0.0)
     """Largest speed, in [m/s]."""
     mass_kg: float = Field(default=1.0, gt=0.0)
     """Vehicle mass, in [kg] (the Airshow quadrotors were about 1 kg)."""
-    thrust_max_n: float = Field(default=19.6, gt=0.0)
+    thrust_max_n: float = Field(default=19.6133, gt=0.0)
     """Largest total thrust, in [N]."""
     body_rate_max_radps: float = Field(default=3.0, gt=0.0)
     """Largest body rate, in [rad/s]."""
@@ -166,9 +168,10 @@ class Limits(_Model):
 
 
 class PlanningSettings(_Model):
-    """How a job is planned on its board (planner.pipeline.PlanOptions)."""
+    """How a job is planned on its board (planner.pipeline.PlanOptions). The defaults are
+    ``planner.defaults`` (held equal by tests/test_vehicles_jobs.py)."""
 
-    write_height_m: float = Field(default=0.25, gt=0.0)
+    write_height_m: float = Field(default=0.335, gt=0.0)
     """Height of the vehicle reference point above the board surface while writing, in [m]."""
     clearance_m: float = Field(default=0.05, ge=0.0)
     """Extra height with the pen up between strokes, in [m]."""
@@ -199,7 +202,7 @@ class ControllerSettings(_Model):
     rate_hz: float = Field(default=100.0, gt=0.0)
     """Control loop rate, in [Hz]."""
     overrides: dict[str, float] = Field(default_factory=dict)
-    """Individual gains replacing the preset's (names as in vehicle_agent/control)."""
+    """Individual gains replacing the preset's (names as in vehicles/quadrotor_brush/control)."""
 
 
 class Vehicle(_Model):

@@ -30,11 +30,14 @@ def vehicle_limits(limits: Limits) -> VehicleLimits:
     )
 
 
-def plan_options(planning: PlanningSettings, limits: Limits, board: BoardFrame) -> PlanOptions:
-    """Planner options of the show's planning settings and ``limits``, on ``board``."""
+def plan_options(
+    planning: PlanningSettings, limits: Limits, board: BoardFrame | None = None
+) -> PlanOptions:
+    """Planner options of the show's planning settings and ``limits``, on ``board`` (default:
+    a board centred on the origin)."""
     return PlanOptions(
         limits=vehicle_limits(limits),
-        board=board,
+        board=board if board is not None else BoardFrame(center_m_enu=(0.0, 0.0, 0.0)),
         write_height_m=planning.write_height_m,
         clearance_m=planning.clearance_m,
         total_time_s=planning.total_time_s,

@@ -7,9 +7,17 @@ import math
 import numpy as np
 import pytest
 
-from vehicle_agent.control.estimator import EstimatorConfig, MocapEstimator, steady_state_gain
-from vehicle_agent.control.inner import G_C, inner_setpoint
-from vehicle_agent.control.tip import body_reference_for_tip, lag_compensated, tip_filter_poles
+from vehicles.quadrotor_brush.control.estimator import (
+    EstimatorConfig,
+    MocapEstimator,
+    steady_state_gain,
+)
+from vehicles.quadrotor_brush.control.inner import G_C, inner_setpoint
+from vehicles.quadrotor_brush.control.tip import (
+    body_reference_for_tip,
+    lag_compensated,
+    tip_filter_poles,
+)
 
 G = 9.81
 

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from vehicle_agent.control.errors import ControlError
-from vehicle_agent.control.rpt import (
+from vehicles.quadrotor_brush.control.errors import ControlError
+from vehicles.quadrotor_brush.control.rpt import (
     DEFAULT_GAINS,
     PAPER_GAINS,
     RptAxisGains,
@@ -96,7 +96,11 @@ def test_bad_gains_name_the_field() -> None:
 
 def test_controller_command_is_f_aug_times_x_aug() -> None:
     """The paper's controller outputs u = F_aug x_aug per axis (eq. 8) on its own estimates."""
-    from vehicle_agent.control.controller import PAPER_CONFIG, PositionController, ReferenceTick
+    from vehicles.quadrotor_brush.control.controller import (
+        PAPER_CONFIG,
+        PositionController,
+        ReferenceTick,
+    )
 
     ctrl = PositionController(PAPER_CONFIG, 0.01, np.zeros((2, 3)))
     rng = np.random.default_rng(0)

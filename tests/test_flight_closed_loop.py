@@ -8,11 +8,12 @@ import numpy as np
 import pytest
 
 from planner.samples import TrajectorySamples
-from sim.params import MocapParams, WindParams, WorldParams
+from sim.params import MocapParams, WindParams
 from sim.reference import writing_reference
-from vehicle_agent.control.controller import DEFAULT_CONFIG, PAPER_CONFIG
-from vehicle_agent.flight import Flight, FlightConfig, FlightLog, fly
-from vehicle_agent.metrics import flight_metrics, writing_point_error
+from vehicles.quadrotor_brush.control.controller import DEFAULT_CONFIG, PAPER_CONFIG
+from vehicles.quadrotor_brush.flight import Flight, FlightConfig, FlightLog, fly
+from vehicles.quadrotor_brush.metrics import flight_metrics, writing_point_error
+from vehicles.quadrotor_brush.params import WorldParams
 
 QUIET = WorldParams(mocap=MocapParams(noise_std_m=0.0))
 

@@ -14,8 +14,8 @@ from mavsim.config import PositionGains, VehicleConfig
 from mavsim.control import Target, thrust_to_attitude
 from mavsim.errors import MavsimError
 from mavsim.modes import CopterMode
-from sim.quadrotor import body_z_axis
 from vehicle_agent.motion import plan_move
+from vehicles.quadrotor_brush.dynamics import body_z_axis
 
 HOME = (1.0, -1.2, 0.0)
 

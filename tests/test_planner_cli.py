@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from cli.main import main
@@ -21,7 +22,8 @@ def test_plan_text_writes_traj_json_and_png(
     assert status == 0, capsys.readouterr().err
     doc = json.loads(out.read_text())
     samples = TrajectorySamples.from_json_dict(doc["samples"])
-    assert samples.rate_hz == pytest.approx(120.0, rel=1e-3)
+    # on the 120 Hz grid (the last sample closes the plan, off the grid; times rounded to 1 us)
+    assert np.diff(samples.t_s)[:-1] == pytest.approx(1.0 / 120.0, abs=2e-6)
     assert samples.duration_s == pytest.approx(doc["duration_s"], abs=1e-6)
     assert samples.pen_down.any() and not samples.pen_down[0]
     assert doc["limits"]["a_max"] == [0.8, 0.8, 0.5] and doc["limits"]["v_max"] == 0.5

@@ -5,11 +5,13 @@ from __future__ import annotations
 import itertools
 import math
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from showfile import ShowFileError, dump_show, load_show, parse_show
 from showfile.checks import footprint, polygons_overlap
+from vehicles import ROOMS
 
 SHOWS = Path(__file__).resolve().parents[1] / "shows"
 
@@ -121,6 +123,15 @@ def test_mavlink_backend_needs_a_url_and_kind_needs_matching_board() -> None:
     assert err.field == "vehicles[0]" and "mavlink_url" in str(err)
     err = _problem(SOLO.replace("    board: b1\n", "    board: b1\n    kind: hexarotor-sponge\n"))
     assert "vertical board" in str(err)
+
+
+def test_a_kind_without_a_room_is_refused_naming_the_kinds(monkeypatch: Any) -> None:
+    monkeypatch.delitem(ROOMS, "quadrotor-brush")
+    monkeypatch.setitem(ROOMS, "omni-wheel", "vehicles.omni_wheel.kind")
+    err = _problem(SOLO)
+    fields = {p.field: p for p in err.problems}
+    message = fields["vehicles[0].kind"].message
+    assert "'quadrotor-brush'" in message and message.endswith("the kinds are: omni-wheel")
 
 
 MAVLINK_SOLO = SOLO.replace(

@@ -7,12 +7,13 @@ import math
 import numpy as np
 import pytest
 
-from sim.brush import brush_state
 from sim.errors import SimError
 from sim.ink import InkCanvas, RasterSpec, iou
-from sim.params import BrushParams, MocapParams, WorldParams
-from sim.quadrotor import InnerLoopCommand
-from sim.world import World
+from sim.params import MocapParams
+from vehicles.quadrotor_brush.brush import brush_state
+from vehicles.quadrotor_brush.dynamics import InnerLoopCommand
+from vehicles.quadrotor_brush.params import BrushParams, WorldParams
+from vehicles.quadrotor_brush.world import World
 
 BRUSH = BrushParams()
 

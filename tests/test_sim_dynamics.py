@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from sim.errors import SimError
-from sim.params import MocapParams, QuadrotorParams, WindParams, WorldParams
-from sim.quadrotor import InnerLoopCommand, ground_effect_gain
-from sim.world import World
+from sim.params import MocapParams, WindParams
+from vehicles.quadrotor_brush.dynamics import InnerLoopCommand, ground_effect_gain
+from vehicles.quadrotor_brush.params import QuadrotorParams, WorldParams
+from vehicles.quadrotor_brush.world import World
 
 G = 9.81
 HIGH = (0.0, 0.0, 50.0)  # far above the board: no ground effect to speak of

@@ -1,9 +1,8 @@
 """``report.png`` of a flown job, drawn off the control loop.
 
-:func:`job_figure` is the report figure of :mod:`vehicle_agent.report` (as ``skyquill fly`` draws
-it) for one job an agent flew; :class:`PictureWorker` draws such figures in a background thread,
-one at a time: while one is still being drawn, the next is skipped rather than queued, so a slow
-renderer never piles up work or memory behind a busy vehicle.
+The figure is the vehicle kind's report (``VehicleKind.report``); :class:`PictureWorker` draws such
+figures in a background thread, one at a time: while one is still being drawn, the next is skipped
+rather than queued, so a slow renderer never piles up work or memory behind a busy vehicle.
 """
 
 from __future__ import annotations
@@ -12,17 +11,9 @@ import logging
 import os
 import threading
 from collections.abc import Callable
-from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
 from matplotlib.figure import Figure
-
-from planner.board import BoardFrame
-from planner.samples import TrajectorySamples
-from vehicle_agent.flight import FlightLog
-from vehicle_agent.metrics import flight_metrics, ink_result
-from vehicle_agent.report import build_report, save_report
 
 log = logging.getLogger(__name__)
 
@@ -30,39 +21,10 @@ PICTURE_NAME = "report.png"
 """File name of the picture in a job's directory."""
 
 
-def _reference_velocity(samples: TrajectorySamples, t_s: np.ndarray) -> np.ndarray:
-    """The planned velocity at the trace's instants (time since writing started), (K, 1, 3)."""
-    axes = [np.interp(t_s, samples.t_s, samples.velocity_mps_enu[:, c]) for c in range(3)]
-    return np.stack(axes, axis=1)[:, None, :]
-
-
-def job_figure(
-    flight: FlightLog,
-    samples: TrajectorySamples,
-    strokes_board_m: tuple[np.ndarray, ...] | None,
-    board: BoardFrame,
-    *,
-    pixel_m: float,
-    title: str,
-) -> Figure:
-    """The report figure of one flown job: ``flight`` as the agent recorded it, ``samples`` its
-    planned reference, ``strokes_board_m`` the glyph as laid out on ``board`` (drawn in world
-    x/y); metrics and ink as the agent measures them (``pixel_m``)."""
-    flight = replace(flight, reference_velocity_mps_enu=_reference_velocity(samples, flight.t_s))
-    ink = ink_result(flight, pixel_m=pixel_m)
-    scores = flight_metrics(flight, ink=ink)
-    strokes_xy = (
-        [board.to_world(np.asarray(s, dtype=np.float64))[:, :2] for s in strokes_board_m]
-        if strokes_board_m
-        else None
-    )
-    return build_report(flight, scores, ink, input_strokes_xy_m=strokes_xy, title=title)
-
-
 def save_png(figure: Figure, path: Path) -> None:
     """Write the figure as PNG atomically (a reader never sees half a file)."""
     partial = path.with_name(f".{path.name}.partial")
-    save_report(figure, partial)
+    figure.savefig(str(partial), format="png")
     os.replace(partial, path)
 
 

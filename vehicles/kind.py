@@ -2,28 +2,34 @@
 reach a vehicle kind. Everything that differs between kinds lives in the kind's own room
 (``vehicles/<kind>/``) behind a :class:`VehicleKind`; adding a kind means adding a room.
 
-A job flows through a kind the same way for every kind::
+A job flows through a kind the same way for every kind (``vehicles.jobs`` does the first steps)::
 
+    VehicleKind.settings(show, vehicle)     -> the kind's typed settings (limits, world, control)
     glyph (planner.glyphs) -> laid out on the surface (strokes in surface metres)
         -> VehicleKind.plan(...)            -> WritingPlan   (reference + feasibility)
+        -> VehicleKind.command_reference(...) what the vehicle's own loop tracks (live agent)
         -> VehicleKind.fly(...) (batch) or the live agent ticking VehicleKind.simulated_vehicle(...)
+                                            -> FlownWriting  (the one trace format)
         -> VehicleKind.score(...)           -> WritingScore  (RMSE, IoU, kind-specific figures)
         -> VehicleKind.report(...)          -> report.png
 
-Pure: no transport, no asyncio, no show-file parsing here (rooms get typed settings).
+Pure: no transport, no asyncio; a room reads a parsed show only in ``settings``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from planner.samples import TrajectorySamples
 from vehicles.surface import Orientation, Surface, Vec3
+
+if TYPE_CHECKING:
+    from showfile.models import Show
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -57,6 +63,11 @@ class WritingPlan:
     feasibility: Mapping[str, Any] = field(default_factory=dict)
     """The planner's own report: peak acceleration and speed against limits, fit error, solver
     status, iterations, solve time... (JSON-serialisable values)."""
+    turning_points_m: tuple[FloatArray, ...] = ()
+    """Per stroke, the turning points the planner kept, (k, 2) in surface metres (previews)."""
+    detail: object = None
+    """The kind's own plan object, for its kind-specific outputs (the brush quadrotor: the
+    ``planner.pipeline.PlannedTrajectory`` behind ``TRAJ.json`` and the plan plot)."""
 
     @property
     def duration_s(self) -> float:
@@ -104,12 +115,55 @@ class WritingScore:
     """Kind-specific figures, names with units (``force_rmse_n``, ``rmse_base_m``, ...)."""
 
 
+@dataclass(frozen=True)
+class LiveReference:
+    """What a live simulated vehicle tracks for one tick (the agent's setpoint)."""
+
+    position_m_enu: Vec3
+    """Reference of the vehicle reference point in [m], ENU."""
+    velocity_mps_enu: Vec3 = (0.0, 0.0, 0.0)
+    """Feed-forward velocity in [m/s], ENU."""
+    acceleration_mps2_enu: Vec3 = (0.0, 0.0, 0.0)
+    """Feed-forward acceleration in [m/s^2], ENU."""
+    pen_down: bool = False
+    """The pen is meant to touch."""
+    force_n: float | None = None
+    """Wanted normal contact force in [N], for kinds that control force."""
+
+
+@dataclass(frozen=True)
+class LiveState:
+    """A live simulated vehicle after a tick (true values)."""
+
+    position_m_enu: Vec3
+    """Vehicle reference point in [m], ENU."""
+    velocity_mps_enu: Vec3
+    """Velocity in [m/s], ENU."""
+    pen_tip_m_enu: Vec3
+    """Where the pen tip is in [m], ENU."""
+    pen_contact: bool
+    """The pen touches its surface (anywhere on its plane; the agent knows the board's edges)."""
+    pen_width_m: float
+    """Width in [m] of the ink laid now (0 without contact)."""
+    force_n: float | None = None
+    """Measured normal contact force in [N], for kinds that sense it."""
+
+
 class SimulatedVehicle(Protocol):
-    """A simulated vehicle stepped one control period per ``tick`` (the agent's sim backend wraps
-    it; see ``vehicle_agent/backends/base.py`` ``SynchronousVehicle``)."""
+    """A live simulated vehicle in flight (or driving), one control period per ``step``: the
+    kind's world and controller in one closed loop. The agent's ``sim`` backend wraps it with an
+    autopilot-like mode logic (take-off, hold, landing) and creates one per flight."""
 
     dt_s: float
     """Length of one tick in [s]."""
+
+    def step(self, reference: LiveReference) -> None:
+        """Advance one tick tracking ``reference``."""
+        ...
+
+    def state(self) -> LiveState:
+        """The vehicle now."""
+        ...
 
 
 class VehicleKind(Protocol):
@@ -120,25 +174,38 @@ class VehicleKind(Protocol):
     orientation: Orientation
     """The surface it writes on."""
 
+    def settings(self, show: Show | None, vehicle_id: str | None) -> Any:
+        """The kind's typed settings of vehicle ``vehicle_id`` in ``show`` (its limits, the
+        show's planning and controller sections, its board); with ``show`` None, those of a show
+        file that leaves every section at its default (what ``plan`` and ``fly`` use)."""
+        ...
+
     def plan(self, strokes: Sequence[StrokeInput], surface: Surface, settings: Any) -> WritingPlan:
         """Plan writing ``strokes`` on ``surface`` (raises ``planner.errors.PlannerError`` naming
         the stroke and limit when it cannot)."""
+        ...
+
+    def command_reference(self, plan: WritingPlan, settings: Any) -> TrajectorySamples:
+        """What the vehicle's position loop is given to track so that its writing point follows
+        ``plan`` (the brush quadrotor: its body, placed so the tip is on the plan; a kind whose
+        writing point is its reference point returns ``plan.samples``)."""
         ...
 
     def fly(self, plan: WritingPlan, settings: Any, *, seed: int = 0) -> FlownWriting:
         """Fly or drive ``plan`` in the kind's simulated world to its end, in a batch."""
         ...
 
-    def score(self, plan: WritingPlan, flown: FlownWriting) -> WritingScore:
+    def score(self, plan: WritingPlan, flown: FlownWriting, settings: Any) -> WritingScore:
         """Metrics of a flown job against its plan."""
         ...
 
-    def report(
-        self, plan: WritingPlan, flown: FlownWriting, score: WritingScore, title: str
-    ) -> Any:
+    def report(self, plan: WritingPlan, flown: FlownWriting, settings: Any, title: str) -> Any:
         """A matplotlib figure of the job (drawn only where a report is written)."""
         ...
 
-    def simulated_vehicle(self, home_m_enu: Vec3, settings: Any, *, seed: int = 0) -> Any:
-        """A live simulated vehicle for the agent's ``sim`` backend."""
+    def simulated_vehicle(
+        self, start_m_enu: Vec3, settings: Any, *, seed: int = 0
+    ) -> SimulatedVehicle:
+        """A live simulated vehicle at rest at ``start_m_enu`` for the agent's ``sim`` backend
+        (which makes one per flight)."""
         ...

@@ -57,6 +57,7 @@ from vehicle_agent.backends.mavlink_stream import SetpointStream
 from vehicle_agent.backends.mavlink_url import parse_mavlink_url
 from vehicle_agent.backends.mavlink_watchdog import Commanded, Watchdog, WatchLimits
 from vehicle_agent.motion import Move, plan_move
+from vehicle_agent.setup import VehicleSetup, on_board, world_params
 
 log = logging.getLogger(__name__)
 
@@ -418,13 +419,11 @@ class MavlinkBackend:
         )
 
 
-def create_backend(setup: Any, **kwargs: Any) -> MavlinkBackend:
+def create_backend(setup: VehicleSetup, **kwargs: Any) -> MavlinkBackend:
     """The backend of ``setup`` (a :class:`vehicle_agent.agent.VehicleSetup` whose vehicle has
     ``backend: mavlink``), carrying the show's brush over its board and, as a second line, the
     autopilot's own fence around the agent's geofence; ``kwargs`` go to :class:`MavlinkBackend`
     (``on_text``, ``mocap_source``)."""
-    from vehicle_agent.agent import on_board, world_params  # the agent imports us lazily
-
     show = setup.show
     vehicle = show.vehicle(setup.vehicle_id)
     settings = settings_from_show(show, vehicle)

@@ -1,10 +1,10 @@
 """The brush a MAVLink vehicle carries, modelled from its pose (pure).
 
-The Airshow brush is passive: a shaft on a linear bearing hanging along the body's -z axis. Its
-tip, press, stroke width and board contact follow from the vehicle's position and attitude alone
-(``sim.brush``, the same model as the in-process simulator), so the agent can measure ink and the
-writing point's error for a vehicle it only hears over MAVLink. Contact counts only over the
-vehicle's board.
+The Airshow brush is passive: a shaft on a linear bearing hanging along the body's -z axis. Its tip,
+press, stroke width and board contact follow from the vehicle's position and attitude alone
+(``vehicles.quadrotor_brush.brush``, the same model as the in-process simulator), so the agent can
+measure ink and the writing point's error for a vehicle it only hears over MAVLink. Contact counts
+only over the vehicle's board.
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.brush import brush_state
-from sim.params import BrushParams
 from vehicle_agent.backends.mavlink_frames import Vec3, attitude_ned_to_enu, euler_to_matrix
+from vehicles.quadrotor_brush.brush import brush_state
+from vehicles.quadrotor_brush.params import BrushParams
 
 
 @dataclass(frozen=True)

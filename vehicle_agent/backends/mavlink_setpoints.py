@@ -1,11 +1,11 @@
 """What a setpoint becomes on the wire (pure): LOCAL_NED p/v/a, or attitude + thrust.
 
-Position setpoints carry position, velocity, acceleration and yaw (type_mask ``0x0800``: ignore
-only the yaw rate): ArduPilot and PX4 use p, v, a as feed-forward (measured on ArduCopter SITL this
+Position setpoints carry position, velocity, acceleration and yaw (type_mask ``0x0800``: ignore only
+the yaw rate): ArduPilot and PX4 use p, v, a as feed-forward (measured on ArduCopter SITL this
 tracks a trajectory far better than position-only targets, ``0x0DF8``), and the explicit yaw keeps
 the autopilot from turning the vehicle (the heading at take-off is held). Attitude setpoints come
-from our own RPT outer loop (:mod:`vehicle_agent.control.controller`) closed on the autopilot's
-LOCAL_POSITION_NED, at the held heading, with thrust as a fraction of the maximum thrust
+from our own RPT outer loop (:mod:`vehicles.quadrotor_brush.control.controller`) closed on the
+autopilot's LOCAL_POSITION_NED, at the held heading, with thrust as a fraction of the maximum thrust
 (ArduPilot: GUID_OPTIONS bit 3, set at connect; PX4: normalised thrust).
 """
 
@@ -24,8 +24,12 @@ from vehicle_agent.backends.mavlink_frames import (
     enu_to_ned,
     euler_to_quaternion,
 )
-from vehicle_agent.control.controller import ControllerConfig, PositionController, ReferenceTick
-from vehicle_agent.control.inner import G_C
+from vehicles.quadrotor_brush.control.controller import (
+    ControllerConfig,
+    PositionController,
+    ReferenceTick,
+)
+from vehicles.quadrotor_brush.control.inner import G_C
 
 TYPE_MASK_POSITION_VELOCITY_ACCEL = 0x0C00
 """POSITION_TARGET_TYPEMASK: use x, y, z, vx, vy, vz, afx, afy, afz; ignore yaw and yaw rate."""

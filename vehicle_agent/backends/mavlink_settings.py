@@ -8,7 +8,11 @@ from typing import Literal
 from showfile import Show, Vehicle
 from vehicle_agent.backends.base import BackendError, Vec3
 from vehicle_agent.backends.mavlink_params import FenceSpec
-from vehicle_agent.control.controller import DEFAULT_CONFIG, PAPER_CONFIG, ControllerConfig
+from vehicles.quadrotor_brush.control.controller import (
+    DEFAULT_CONFIG,
+    PAPER_CONFIG,
+    ControllerConfig,
+)
 
 SetpointKind = Literal["position", "attitude"]
 MocapMessage = Literal["none", "vision_position_estimate", "att_pos_mocap"]

@@ -1,23 +1,19 @@
-"""The in-process simulated vehicle: the SIM world of one quadrotor flown by our RPT controller.
+"""The in-process simulated vehicle: the vehicle kind's live simulated vehicle (its world and
+controller in one closed loop, ``VehicleKind.simulated_vehicle``) behind an autopilot-like mode
+logic.
 
-Each ``tick`` is one control period of the closed loop the SIM helper built (``flight.Flight`` does
-the same for batches): read the mocap frame, run the position controller on the reference,
-step the world under the resulting inner-loop command. The backend plays the autopilot's part
-around it: it rests on the ground until ``takeoff`` (the world is not stepped there: it has no
-ground), climbs and descends along its own min-jerk moves, holds the last point when no setpoint
-comes, and freezes where it touched down. Time is the world's tick count; nothing reads a clock.
+The backend plays the autopilot's part around the kind's vehicle: it rests on the ground until
+``takeoff`` (the world is not stepped there: it has no ground), climbs and descends along its own
+min-jerk moves, holds the last point when no setpoint comes, and freezes where it touched down.
+Time is the world's tick count; nothing reads a clock.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
-import numpy as np
-
-from sim.params import WorldParams
-from sim.quadrotor import InnerLoopCommand
-from sim.world import World
 from vehicle_agent.backends.base import (
     BackendError,
     BackendMode,
@@ -26,13 +22,12 @@ from vehicle_agent.backends.base import (
     Vec3,
     VehicleSnapshot,
 )
-from vehicle_agent.control.controller import (
-    DEFAULT_CONFIG,
-    ControllerConfig,
-    PositionController,
-    ReferenceTick,
-)
 from vehicle_agent.motion import Move, plan_move
+from vehicles.kind import LiveReference, SimulatedVehicle, VehicleKind
+from vehicles.registry import vehicle_kind
+
+DEFAULT_KIND = "quadrotor-brush"
+"""The kind simulated when none is given."""
 
 TOUCHDOWN_TOLERANCE_M = 0.03
 """Height above the ground in [m] below which a finished descent counts as landed."""
@@ -41,24 +36,27 @@ SETTLE_LIMIT_S = 2.0
 
 
 class SimVehicle:
-    """One simulated quadrotor with an autopilot-like mode logic (synchronous, pure)."""
+    """One simulated vehicle of a kind with an autopilot-like mode logic (synchronous, pure).
+
+    ``kind`` and its ``settings`` (default: the brush quadrotor with the defaults a show file
+    has) make a new live vehicle per flight, seeded ``seed`` plus the flight's number."""
 
     def __init__(
         self,
         home_m_enu: Vec3,
         *,
-        world: WorldParams | None = None,
-        controller: ControllerConfig = DEFAULT_CONFIG,
+        kind: VehicleKind | None = None,
+        settings: Any = None,
         seed: int = 0,
         vertical_speed_mps: float = 0.5,
         vertical_accel_mps2: float = 0.8,
         contact_region: Callable[[Vec3], bool] | None = None,
     ) -> None:
-        self.params = world if world is not None else WorldParams()
-        self.controller_config = controller
+        self.kind = kind if kind is not None else vehicle_kind(DEFAULT_KIND)
+        self.settings = settings if settings is not None else self.kind.settings(None, None)
         self.seed = seed
         self.home_m_enu = home_m_enu
-        self.dt_s = self.params.dt_s
+        self.dt_s = self.kind.simulated_vehicle(home_m_enu, self.settings, seed=seed).dt_s
         self.vertical_speed_mps = vertical_speed_mps
         self.vertical_accel_mps2 = vertical_accel_mps2
         self.contact_region = contact_region
@@ -66,8 +64,7 @@ class SimVehicle:
         self.t_s = 0.0
         self.mode: BackendMode = "idle"
         self._rest_m_enu: Vec3 = home_m_enu
-        self._world: World | None = None
-        self._controller: PositionController | None = None
+        self._vehicle: SimulatedVehicle | None = None
         self._move: Move | None = None
         self._hold: Setpoint = Setpoint(position_m_enu=home_m_enu)
         self._flights = 0
@@ -78,8 +75,9 @@ class SimVehicle:
         if self.mode != "idle":
             raise BackendError(f"cannot take off in mode {self.mode}")
         start = self._rest_m_enu
-        self._world = World(self.params, [start], seed=self.seed + self._flights)
-        self._controller = PositionController(self.controller_config, self.dt_s, np.array([start]))
+        self._vehicle = self.kind.simulated_vehicle(
+            start, self.settings, seed=self.seed + self._flights
+        )
         self._flights += 1
         self._begin_move(start, (start[0], start[1], hover_m_enu[2]), "takeoff")
 
@@ -94,8 +92,7 @@ class SimVehicle:
         """Motors off: the vehicle drops to the ground where it is and stays there."""
         x, y, _ = self._position()
         self._rest_m_enu = (x, y, self.home_m_enu[2])
-        self._world = None
-        self._controller = None
+        self._vehicle = None
         self.mode = "estop"
 
     def _begin_move(self, start: Vec3, end: Vec3, mode: BackendMode) -> None:
@@ -126,22 +123,21 @@ class SimVehicle:
         return self.snapshot()
 
     def _reference(self) -> Setpoint | None:
-        if self._world is None:
+        if self._vehicle is None:
             return None
         if self.mode in ("takeoff", "landing") and self._move is not None:
             return self._move.setpoint(self.t_s)
         return self._hold
 
     def _step(self, reference: Setpoint) -> None:
-        assert self._world is not None and self._controller is not None
-        tick = ReferenceTick(
-            position_m_enu=np.asarray([reference.position_m_enu]),
-            velocity_mps_enu=np.asarray([reference.velocity_mps_enu]),
-            acceleration_mps2_enu=np.asarray([reference.acceleration_mps2_enu]),
-        )
-        command = self._controller.update(self._world.mocap_frame().position_m_enu, tick)
-        self._world.step(
-            InnerLoopCommand(command.throttle, command.roll_rad, command.pitch_rad, command.yaw_rad)
+        assert self._vehicle is not None
+        self._vehicle.step(
+            LiveReference(
+                position_m_enu=reference.position_m_enu,
+                velocity_mps_enu=reference.velocity_mps_enu,
+                acceleration_mps2_enu=reference.acceleration_mps2_enu,
+                pen_down=reference.pen_down,
+            )
         )
 
     def _finish_move(self) -> None:
@@ -159,20 +155,18 @@ class SimVehicle:
         else:
             x, y, _ = self._position()
             self._rest_m_enu = (x, y, self.home_m_enu[2])
-            self._world = None
-            self._controller = None
+            self._vehicle = None
             self.mode = "idle"
 
     # --- state ---------------------------------------------------------------------------------
     def _position(self) -> Vec3:
-        if self._world is None:
+        if self._vehicle is None:
             return self._rest_m_enu
-        return _vec(self._world.state.position_m_enu[0])
+        return self._vehicle.state().position_m_enu
 
     def snapshot(self) -> VehicleSnapshot:
         """The vehicle now."""
-        world = self._world
-        if world is None:
+        if self._vehicle is None:
             return VehicleSnapshot(
                 t_s=self.t_s,
                 position_m_enu=self._rest_m_enu,
@@ -184,27 +178,22 @@ class SimVehicle:
                 pen_contact=False,
                 pen_width_m=0.0,
             )
-        brush = world.brush()
-        tip = _vec(brush.tip_m_enu[0])
-        contact = bool(brush.contact[0])
+        state = self._vehicle.state()
+        tip, contact = state.pen_tip_m_enu, state.pen_contact
         if contact and self.contact_region is not None and not self.contact_region(tip):
-            contact = False  # the world's board spans everything; the real one does not
+            contact = False  # the world's surface spans everything; the real board does not
         return VehicleSnapshot(
             t_s=self.t_s,
-            position_m_enu=_vec(world.state.position_m_enu[0]),
-            velocity_mps_enu=_vec(world.state.velocity_mps_enu[0]),
+            position_m_enu=state.position_m_enu,
+            velocity_mps_enu=state.velocity_mps_enu,
             armed=True,
             mode=self.mode,
             on_ground=False,
             battery_fraction=None,
             pen_contact=contact,
             pen_tip_m_enu=tip,
-            pen_width_m=float(brush.width_m[0]) if contact else 0.0,
+            pen_width_m=state.pen_width_m if contact else 0.0,
         )
-
-
-def _vec(row: np.ndarray) -> Vec3:
-    return (float(row[0]), float(row[1]), float(row[2]))
 
 
 class SimBackend(SynchronousBackend[SimVehicle]):

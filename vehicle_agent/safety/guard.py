@@ -14,8 +14,8 @@ from typing import Literal
 import numpy as np
 
 from vehicle_agent.backends.base import Setpoint, Vec3, VehicleSnapshot
-from vehicle_agent.safety.deviation import DeviationMonitor
 from vehicle_agent.safety.limits import SafetyLimits
+from vehicles.deviation import DeviationMonitor
 
 TRACKED_PHASES = frozenset({"transit", "settle", "write"})
 """Phases of a job in which the tracking error is bounded."""

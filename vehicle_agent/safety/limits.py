@@ -6,8 +6,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Literal
 
-from vehicle_agent.safety.deviation import DeviationLimit
 from vehicle_agent.safety.geofence import Geofence
+from vehicles.deviation import DeviationLimit
 
 AbortPolicy = Literal["hold", "land"]
 

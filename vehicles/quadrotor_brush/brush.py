@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.params import BrushParams
+from vehicles.quadrotor_brush.params import BrushParams
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

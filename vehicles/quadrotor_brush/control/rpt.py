@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from vehicle_agent.control.errors import ControlError
+from vehicles.quadrotor_brush.control.errors import ControlError
 
 FloatArray = NDArray[np.float64]
 ComplexArray = NDArray[np.complex128]

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.signal import lfilter
 
-from vehicle_agent.control.errors import ControlError
+from vehicles.quadrotor_brush.control.errors import ControlError
 
 FloatArray = NDArray[np.float64]
 

@@ -15,11 +15,15 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from vehicle_agent.control.errors import ControlError
-from vehicle_agent.control.estimator import EstimatorConfig, MocapEstimator
-from vehicle_agent.control.inner import G_C, InnerLoopSetpoint, inner_setpoint
-from vehicle_agent.control.rpt import DEFAULT_GAINS, PAPER_GAINS, RptGains
-from vehicle_agent.control.tip import body_reference_for_tip, lag_compensated, tip_filter_poles
+from vehicles.quadrotor_brush.control.errors import ControlError
+from vehicles.quadrotor_brush.control.estimator import EstimatorConfig, MocapEstimator
+from vehicles.quadrotor_brush.control.inner import G_C, InnerLoopSetpoint, inner_setpoint
+from vehicles.quadrotor_brush.control.rpt import DEFAULT_GAINS, PAPER_GAINS, RptGains
+from vehicles.quadrotor_brush.control.tip import (
+    body_reference_for_tip,
+    lag_compensated,
+    tip_filter_poles,
+)
 
 FloatArray = NDArray[np.float64]
 
@@ -89,10 +93,10 @@ def body_reference(
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """The whole reference (K, ..., 3) as the controller should be fed it, tick by tick.
 
-    Aims the brush tip (:func:`vehicle_agent.control.tip.body_reference_for_tip`, when
+    Aims the brush tip (:func:`vehicles.quadrotor_brush.control.tip.body_reference_for_tip`, when
     ``brush_lever_m > 0``) and leads the acceleration feed-forward by the inner loop's lag
-    (:func:`vehicle_agent.control.tip.lag_compensated`). Needs the reference in advance, which a
-    planned trajectory is.
+    (:func:`vehicles.quadrotor_brush.control.tip.lag_compensated`). Needs the reference in
+    advance, which a planned trajectory is.
     """
     p, v, a = body_reference_for_tip(
         position_m_enu,
@@ -194,11 +198,12 @@ class PositionController:
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Shift the horizontal reference against the tilt the disturbance demands, so that the
         brush tip (not the body) meets it; the reference's own accelerations are handled by the
-        preview of :mod:`vehicle_agent.control.tip` before the flight.
+        preview of :mod:`vehicles.quadrotor_brush.control.tip` before the flight.
 
         The shift is ``-lever / g`` times the disturbance through ``a / (s + a)``, the causal
-        factor of the tip inverse (:func:`vehicle_agent.control.tip.tip_filter_poles`); its
-        velocity is fed forward too."""
+        factor of the tip inverse
+        (:func:`vehicles.quadrotor_brush.control.tip.tip_filter_poles`); its velocity is fed
+        forward too."""
         lever = self.config.brush_lever_m
         p, v, a = (
             reference.position_m_enu,

@@ -12,15 +12,14 @@ from the public): drawn literally, never as mathtext (:func:`plain_title`).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
-from vehicle_agent.flight import FlightLog
-from vehicle_agent.metrics import FlightMetrics, InkResult, writing_point_error
+from vehicles.quadrotor_brush.flight import FlightLog
+from vehicles.quadrotor_brush.metrics import FlightMetrics, InkResult, writing_point_error
 
 FloatArray = NDArray[np.float64]
 
@@ -131,8 +130,3 @@ def build_report(
     heading = f"{plain_title(title)}\n{summary}" if title else summary
     fig.suptitle(heading, fontsize=11, parse_math=False)  # a title may hold a public label
     return fig
-
-
-def save_report(fig: Figure, path: str | Path) -> None:
-    """Write the figure as PNG."""
-    fig.savefig(str(path), format="png")

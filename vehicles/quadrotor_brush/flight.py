@@ -23,24 +23,19 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.board import BoardFrame
-from planner.glyphs import Glyph, fit_to_area
-from planner.pipeline import PlannedTrajectory, PlanOptions, VehicleLimits, plan_strokes
 from planner.samples import TrajectorySamples
-from sim.brush import BrushState, brush_state
-from sim.params import WorldParams
-from sim.quadrotor import InnerLoopCommand
-from sim.world import World
-from vehicle_agent.control.controller import (
+from vehicles.deviation import DeviationLimit, DeviationMonitor, DeviationTrip
+from vehicles.quadrotor_brush.brush import BrushState, brush_state
+from vehicles.quadrotor_brush.control.controller import (
     DEFAULT_CONFIG,
     ControllerConfig,
-    PositionController,
     ReferenceTick,
     body_reference,
 )
-from vehicle_agent.control.errors import ControlError
-from vehicle_agent.control.inner import InnerLoopSetpoint
-from vehicle_agent.safety.deviation import DeviationLimit, DeviationMonitor, DeviationTrip
+from vehicles.quadrotor_brush.control.errors import ControlError
+from vehicles.quadrotor_brush.control.inner import InnerLoopSetpoint
+from vehicles.quadrotor_brush.loop import ClosedLoop
+from vehicles.quadrotor_brush.params import WorldParams
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -193,9 +188,8 @@ class Flight:
         )
         self.duration_s = (self._p.shape[0] - 1) * self.dt_s + cfg.settle_s
         self.n_vehicles = len(references)
-        p0 = self._body_p[0]
-        self.world = World(cfg.world, p0, seed=seed)
-        self.controller = PositionController(cfg.controller, self.dt_s, p0)
+        self.loop = ClosedLoop(cfg.world, cfg.controller, self._body_p[0], seed)
+        self.world, self.controller = self.loop.world, self.loop.controller
         self._setpoint: InnerLoopSetpoint | None = None
         self._records: dict[str, list[FloatArray]] = {name: [] for name in _LOGGED}
         self._ticks: list[int] = []
@@ -273,15 +267,8 @@ class Flight:
 
     def _advance(self, row: int) -> InnerLoopSetpoint:
         """One control tick on reference row ``row``: mocap, controller, world step."""
-        world, ctrl = self.world, self.controller
         reference = ReferenceTick(self._body_p[row], self._body_v[row], self._body_a[row])
-        setpoint = ctrl.update(world.mocap_frame().position_m_enu, reference)
-        self._setpoint = setpoint
-        world.step(
-            InnerLoopCommand(
-                setpoint.throttle, setpoint.roll_rad, setpoint.pitch_rad, setpoint.yaw_rad
-            )
-        )
+        self._setpoint = setpoint = self.loop.advance(reference)
         return setpoint
 
     def state(self) -> FlightState:
@@ -343,28 +330,3 @@ def fly(
 ) -> FlightLog:
     """Fly N vehicles (one reference each) to the end in one batch and return the log."""
     return Flight(references, config, seed=seed).run()
-
-
-def plan_glyph(
-    glyph: Glyph,
-    world: WorldParams,
-    *,
-    height_m: float = 1.0,
-    limits: VehicleLimits | None = None,
-    fit_tolerance_m: float | None = 0.025,
-) -> tuple[Glyph, PlannedTrajectory]:
-    """Lay ``glyph`` out ``height_m`` tall (aspect kept) centred on the world origin of a board
-    at ``world.board_height_m`` and plan it at the brush's nominal writing height.
-
-    Raises :class:`planner.errors.PlannerError` when the planner cannot fly it.
-    """
-    fitted = fit_to_area(glyph, width_m=100.0 * height_m, height_m=height_m)
-    options = PlanOptions(
-        limits=limits if limits is not None else VehicleLimits(),
-        board=BoardFrame(center_m_enu=(0.0, 0.0, world.board_height_m)),
-        write_height_m=world.brush.write_height_m,
-        clearance_m=0.05,
-        sample_rate_hz=world.control_rate_hz,
-        fit_tolerance_m=fit_tolerance_m,
-    )
-    return fitted, plan_strokes(fitted.strokes, options)

@@ -12,17 +12,17 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sim.brush import BrushState, brush_state
 from sim.errors import SimError
 from sim.noise import MOCAP_STREAM, WIND_STREAM, NormalBlocks
-from sim.params import WorldParams
-from sim.quadrotor import (
+from vehicles.quadrotor_brush.brush import BrushState, brush_state
+from vehicles.quadrotor_brush.dynamics import (
     InnerLoopCommand,
     QuadrotorDynamics,
     QuadrotorState,
     body_z_axis,
     ground_effect_gain,
 )
+from vehicles.quadrotor_brush.params import WorldParams
 
 FloatArray = NDArray[np.float64]
 

@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sim.errors import SimError
-from sim.params import QuadrotorParams
+from vehicles.quadrotor_brush.params import QuadrotorParams
 
 FloatArray = NDArray[np.float64]
 

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sim.ink import InkCanvas, RasterSpec, iou
-from vehicle_agent.flight import FlightLog
+from vehicles.quadrotor_brush.flight import FlightLog
 
 FloatArray = NDArray[np.float64]
 

@@ -1,0 +1,146 @@
+"""A job on one vehicle (pure apart from the files it writes): the glyph of an assignment planned
+through the vehicle's kind, the metrics of what was flown, the job's files and picture."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import msgspec
+import numpy as np
+
+from bus.messages import JobAssignment, JobMetrics
+from planner.errors import PlannerError
+from planner.glyphs import Glyph, parse_strokes_json, text_glyph
+from vehicle_agent.job_picture import PICTURE_NAME, PictureWorker, save_png
+from vehicle_agent.job_runner import PreparedJob
+from vehicle_agent.setup import VehicleSetup
+from vehicle_agent.trace import FlownTrace
+from vehicles.jobs import plan_job
+from vehicles.kind import FlownWriting, WritingPlan
+
+
+def job_glyph(assignment: JobAssignment) -> Glyph:
+    """The glyph of a job: its typed text, or its strokes document."""
+    if (assignment.text is None) == (assignment.strokes is None):
+        raise PlannerError("a job needs exactly one of text and strokes", field="text")
+    if assignment.text is not None:
+        return text_glyph(assignment.text)
+    assert assignment.strokes is not None
+    return parse_strokes_json(assignment.strokes, source_name=f"job {assignment.job_id}")
+
+
+def prepare_job(setup: VehicleSetup, assignment: JobAssignment) -> PreparedJob:
+    """Lay the job's glyph out on the vehicle's board and plan it with its kind (raises
+    PlannerError); the context is the kind's :class:`vehicles.kind.WritingPlan`."""
+    job = plan_job(setup.show, setup.vehicle_id, job_glyph(assignment))
+    commands = setup.kind.command_reference(job.plan, setup.settings)
+    return PreparedJob(
+        assignment.job_id, job.plan.samples, command_samples=commands, context=job.plan
+    )
+
+
+def writing_plan(prepared: PreparedJob) -> WritingPlan:
+    """The kind's plan a prepared job carries."""
+    if not isinstance(prepared.context, WritingPlan):
+        raise TypeError(f"job {prepared.job_id} was not prepared by prepare_job")
+    return prepared.context
+
+
+def flown_writing(trace: FlownTrace) -> FlownWriting | None:
+    """The trace in the kinds' one trace format (None when the backend does not know its pen)."""
+    tip, width, contact = trace.pen_tip_m_enu, trace.pen_width_m, trace.pen_contact
+    if tip is None or width is None or contact is None:
+        return None
+    return FlownWriting(
+        t_s=trace.t_s,
+        reference_m_enu=trace.reference_m_enu,
+        writing_point_m_enu=tip,
+        pen_down=trace.pen_down,
+        ink_width_m=np.where(contact, width, 0.0),
+        base_m_enu=trace.position_m_enu,
+        extra={"velocity_mps_enu": trace.velocity_mps_enu, "tip_m_enu": tip},
+    )
+
+
+def job_metrics(setup: VehicleSetup, prepared: PreparedJob, trace: FlownTrace) -> JobMetrics:
+    """The kind's metrics of the flown job (writing-point errors, ink IoU); for a backend that
+    does not know its pen, errors of the vehicle reference point and no IoU."""
+    flown = flown_writing(trace)
+    if flown is None:
+        error = np.linalg.norm(trace.position_m_enu - trace.reference_m_enu, axis=1)
+        down = trace.pen_down
+        return JobMetrics(
+            rmse_pen_down_m=float(np.sqrt(np.mean(error[down] ** 2))) if down.any() else 0.0,
+            rmse_m=float(np.sqrt(np.mean(error**2))) if error.size else 0.0,
+            max_error_m=float(error.max()) if error.size else 0.0,
+            iou=None,
+            duration_s=trace.duration_s,
+        )
+    score = setup.kind.score(writing_plan(prepared), flown, setup.settings)
+    return JobMetrics(
+        rmse_pen_down_m=score.rmse_pen_down_m,
+        rmse_m=score.rmse_m,
+        max_error_m=score.max_error_m,
+        iou=score.iou,
+        duration_s=trace.duration_s,
+    )
+
+
+def job_report_dir(setup: VehicleSetup, trace: FlownTrace) -> Path:
+    """Where a flown job's files go: ``<database dir>/jobs/<job>-<vehicle>-<attempt>/``."""
+    name = f"{trace.job_id}-{setup.vehicle_id}-{trace.attempt}"
+    return setup.show.database_path.parent / "jobs" / name
+
+
+def write_job_report(
+    setup: VehicleSetup, prepared: PreparedJob, trace: FlownTrace, metrics: JobMetrics | None
+) -> Path:
+    """Write ``metrics.json``, ``TRAJ.json`` (the planned reference) and ``flight.npz`` (what was
+    flown, tick by tick) of a job; returns the directory."""
+    out = job_report_dir(setup, trace)
+    out.mkdir(parents=True, exist_ok=True)
+    summary = {
+        "job_id": trace.job_id,
+        "vehicle_id": setup.vehicle_id,
+        "attempt": trace.attempt,
+        "board_id": setup.runner_config.board_id,
+        "metrics": None if metrics is None else msgspec.to_builtins(metrics),
+    }
+    (out / "metrics.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
+    traj = {"samples": prepared.samples.to_json_dict()}
+    (out / "TRAJ.json").write_text(json.dumps(traj), encoding="utf-8")
+    arrays: dict[str, Any] = {
+        name: value for name, value in vars(trace).items() if isinstance(value, np.ndarray)
+    }
+    np.savez_compressed(out / "flight.npz", allow_pickle=False, **arrays)
+    return out
+
+
+def write_job_picture(
+    setup: VehicleSetup, prepared: PreparedJob, trace: FlownTrace, out: Path
+) -> Path | None:
+    """Draw ``report.png`` of a flown job into ``out`` (slow: seconds); None for a backend that
+    does not know its pen (nothing to draw the writing from)."""
+    flown = flown_writing(trace)
+    if flown is None:
+        return None
+    title = f"job {trace.job_id} on {setup.vehicle_id}, attempt {trace.attempt}"
+    figure = setup.kind.report(writing_plan(prepared), flown, setup.settings, title)
+    path = out / PICTURE_NAME
+    save_png(figure, path)
+    return path
+
+
+def archive_job(
+    setup: VehicleSetup,
+    pictures: PictureWorker,
+    prepared: PreparedJob,
+    trace: FlownTrace,
+    metrics: JobMetrics | None,
+) -> Path:
+    """:func:`write_job_report`, then ``report.png`` drawn by ``pictures`` in the background."""
+    out = write_job_report(setup, prepared, trace, metrics)
+    pictures.submit(lambda: write_job_picture(setup, prepared, trace, out))
+    return out

@@ -1,0 +1,142 @@
+"""One vehicle of a show, set up from the show file once (pure): its kind and the kind's settings,
+its board, the job runner's configuration and its safety limits."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from planner.board import BoardFrame
+from showfile import Show
+from showfile.checks import footprint
+from showfile.planning import board_frame
+from vehicle_agent.backends.base import Vec3
+from vehicle_agent.job_runner import RunnerConfig
+from vehicle_agent.safety import DeviationLimit, SafetyLimits, WritingBounds, vehicle_fence
+from vehicles.kind import VehicleKind
+from vehicles.quadrotor_brush.params import WorldParams
+from vehicles.quadrotor_brush.settings import QuadrotorSettings
+from vehicles.registry import vehicle_kind
+
+LOSS_LAND_AFTER_S = 10.0
+"""Agent time in [s] a vehicle hovers after losing the orchestrator before it lands."""
+TELEMETRY_RATE_HZ = 20.0
+"""Telemetry messages per second of wall time."""
+PROGRESS_PERIOD_S = 1.0
+"""Wall time in [s] between progress reports while writing."""
+
+
+@dataclass(frozen=True)
+class VehicleSetup:
+    """Everything about one vehicle of a show, derived from the show file once."""
+
+    show: Show
+    """The validated show."""
+    vehicle_id: str
+    """This vehicle."""
+    board_frame: BoardFrame
+    """Its board's pose."""
+    writing_area_m: tuple[float, float]
+    """Width and height in [m] of the area glyphs are fitted to."""
+    margin_m: float
+    """Margin in [m] kept free inside the writing area."""
+    kind: VehicleKind
+    """Its vehicle kind (plans, flies in simulation, scores)."""
+    settings: Any
+    """The kind's settings of this vehicle (``VehicleKind.settings``)."""
+    runner_config: RunnerConfig
+    """The job runner's configuration."""
+    time_scale: float
+    """Agent seconds per wall second."""
+    control_rate_hz: float
+    """Control loop rate in [Hz]."""
+
+
+def vehicle_setup(show: Show, vehicle_id: str, *, time_scale: float | None = None) -> VehicleSetup:
+    """The setup of ``vehicle_id`` in ``show`` (KeyError naming the known ids if absent).
+
+    ``time_scale`` (default: the show's) applies to simulated vehicles only."""
+    vehicle = show.vehicle(vehicle_id)
+    board = show.board(vehicle.board)
+    limits = show.vehicle_limits(vehicle_id)
+    planning = show.planning
+    scale = float(time_scale if time_scale is not None else show.time_scale)
+    if vehicle.backend != "sim":
+        scale = 1.0  # an autopilot lives in real time
+    frame = board_frame(board)
+    kind = vehicle_kind(vehicle.kind)
+    cruise_z_m = frame.surface_z_m + planning.write_height_m + planning.clearance_m
+    runner = RunnerConfig(
+        vehicle_id=vehicle.id,
+        kind=vehicle.kind,
+        board_id=board.id,
+        home_m_enu=vehicle.home_m_enu,
+        cruise_z_m=cruise_z_m,
+        v_max_mps=limits.v_max_mps,
+        a_max_mps2=min(limits.a_max_mps2),
+        loss_land_after_s=LOSS_LAND_AFTER_S,
+        telemetry_period_s=scale / TELEMETRY_RATE_HZ,
+        progress_period_s=scale * PROGRESS_PERIOD_S,
+        safety=safety_limits(show, vehicle_id, cruise_z_m),
+    )
+    return VehicleSetup(
+        show=show,
+        vehicle_id=vehicle.id,
+        board_frame=frame,
+        writing_area_m=board.writing_area_m,
+        margin_m=planning.margin_m,
+        kind=kind,
+        settings=kind.settings(show, vehicle.id),
+        runner_config=runner,
+        time_scale=scale,
+        control_rate_hz=show.controller.rate_hz,
+    )
+
+
+def safety_limits(show: Show, vehicle_id: str, cruise_z_m: float) -> SafetyLimits:
+    """The show's ``safety`` section for one vehicle, with its geofence: its board, its home and
+    the transit between them, up to ``cruise_z_m`` plus the ceiling margin."""
+    s = show.safety
+    vehicle = show.vehicle(vehicle_id)
+    fence = vehicle_fence(
+        footprint(show.board(vehicle.board)),
+        vehicle.home_m_enu,
+        cruise_z_m,
+        margin_m=s.fence_margin_m,
+        ceiling_margin_m=s.fence_ceiling_margin_m,
+    )
+    return SafetyLimits(
+        deviation=DeviationLimit(s.deviation_bound_m, s.deviation_window_s),
+        fence=fence,
+        writing=WritingBounds(s.rmse_pen_down_max_m, s.iou_min),
+        abort_policy=s.abort_policy,
+        abort_hold_s=s.abort_hold_s,
+        abort_backoff_s=s.abort_backoff_s,
+        fence_hold_s=s.fence_hold_s,
+        settle_tolerance_m=s.settle_tolerance_m,
+        settle_timeout_s=s.settle_timeout_s,
+        settle_attempts=s.settle_attempts,
+    )
+
+
+def on_board(setup: VehicleSetup) -> Callable[[Vec3], bool]:
+    """Whether a point's horizontal position lies over this vehicle's board."""
+    board = setup.show.board(setup.show.vehicle(setup.vehicle_id).board)
+    half = np.asarray(board.size_m) / 2.0
+
+    def inside(point_m_enu: Vec3) -> bool:
+        local = setup.board_frame.to_board(np.asarray([point_m_enu]))[0]
+        return bool(np.all(np.abs(local) <= half))
+
+    return inside
+
+
+def world_params(setup: VehicleSetup) -> WorldParams:
+    """The brush quadrotor's simulated world of this vehicle (its brush and board height), which
+    the MAVLink backend uses to follow a brush it cannot sense; ValueError for another kind."""
+    if not isinstance(setup.settings, QuadrotorSettings):
+        raise ValueError(f"vehicle {setup.vehicle_id}: a {setup.kind.name} has no brush model")
+    return setup.settings.flight.world

@@ -1,0 +1,133 @@
+"""The brush quadrotor over a horizontal board (Airshow, Phang et al. 2015) as a vehicle kind.
+
+Plans with the Airshow planner (:func:`planner.pipeline.plan_strokes`), flies in its own world
+(:mod:`vehicles.quadrotor_brush.world`) under its RPT controller
+(:mod:`vehicles.quadrotor_brush.control`), scores tracking at the writing point and the ink IoU
+(:mod:`vehicles.quadrotor_brush.metrics`) and draws ``report.png``
+(:mod:`vehicles.quadrotor_brush.report`, imported only when a report is drawn).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from planner.board import BoardFrame
+from planner.pipeline import plan_strokes
+from planner.samples import TrajectorySamples
+from vehicles.kind import FlownWriting, StrokeInput, WritingPlan, WritingScore
+from vehicles.quadrotor_brush.control.controller import body_reference
+from vehicles.quadrotor_brush.flight import fly
+from vehicles.quadrotor_brush.loop import SimulatedQuadrotor
+from vehicles.quadrotor_brush.metrics import flight_metrics, ink_result
+from vehicles.quadrotor_brush.settings import QuadrotorSettings, quadrotor_settings
+from vehicles.quadrotor_brush.trace import flown_of, log_of
+from vehicles.surface import Orientation, Surface, Vec3
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from showfile.models import Show
+
+
+def board_of(surface: Surface) -> BoardFrame:
+    """The planner's frame of a horizontal surface."""
+    x, y, _ = surface.x_axis_enu
+    return BoardFrame(center_m_enu=surface.origin_m_enu, yaw_rad=math.atan2(y, x))
+
+
+class QuadrotorBrush:
+    """The ``quadrotor-brush`` kind (see :class:`vehicles.kind.VehicleKind`)."""
+
+    name = "quadrotor-brush"
+    orientation: Orientation = "horizontal"
+
+    def settings(self, show: Show | None, vehicle_id: str | None) -> QuadrotorSettings:
+        """Settings of ``vehicle_id`` in ``show``, or a default show's with ``show`` None."""
+        return quadrotor_settings(show, vehicle_id)
+
+    def plan(
+        self, strokes: Sequence[StrokeInput], surface: Surface, settings: QuadrotorSettings
+    ) -> WritingPlan:
+        """The Airshow planner's reference of the brush writing point (raises PlannerError)."""
+        options = replace(settings.plan, board=board_of(surface))
+        trajectory = plan_strokes([s.xy_m for s in strokes], options)
+        return WritingPlan(
+            samples=trajectory.sample(options.sample_rate_hz),
+            strokes=tuple(strokes),
+            surface=surface,
+            feasibility=trajectory.feasibility.to_json_dict(),
+            turning_points_m=trajectory.turning_points_board_m,
+            detail=trajectory,
+        )
+
+    def command_reference(
+        self, plan: WritingPlan, settings: QuadrotorSettings
+    ) -> TrajectorySamples:
+        """The body reference that puts the brush tip on the plan, with the acceleration
+        feed-forward led by the inner loop's lag: the preprocessing the batch flight applies
+        (:func:`vehicles.quadrotor_brush.control.controller.body_reference`), so the live agent
+        and a batch flight fly the same."""
+        s = plan.samples
+        dt_s = float(np.mean(np.diff(s.t_s)))
+        p, v, a = body_reference(
+            settings.flight.controller,
+            s.position_m_enu,
+            s.velocity_mps_enu,
+            s.acceleration_mps2_enu,
+            dt_s,
+        )
+        return TrajectorySamples(s.t_s, p, v, a, s.pen_down)
+
+    def fly(self, plan: WritingPlan, settings: QuadrotorSettings, *, seed: int = 0) -> FlownWriting:
+        """Fly ``plan`` in the simulated world to its end (one vehicle, batch)."""
+        return flown_of(fly([plan.samples], settings.flight, seed=seed))
+
+    def score(
+        self, plan: WritingPlan, flown: FlownWriting, settings: QuadrotorSettings
+    ) -> WritingScore:
+        """Writing-point errors and ink IoU (Phang 2015 Fig. 12, Guo 2024 section VII)."""
+        log = log_of(flown, plan.samples, settings.flight.world.brush, plan.surface.origin_m_enu[2])
+        m = flight_metrics(log, pixel_m=settings.ink_pixel_m)
+        return WritingScore(
+            rmse_pen_down_m=m.rmse_pen_down_m,
+            rmse_m=m.rmse_m,
+            max_error_m=m.max_error_m,
+            iou=m.iou if math.isfinite(m.iou) else None,
+            extra={k: v for k, v in m.to_json_dict().items() if k not in _SCORE_FIELDS},
+        )
+
+    def report(
+        self,
+        plan: WritingPlan,
+        flown: FlownWriting,
+        settings: QuadrotorSettings,
+        title: str,
+    ) -> Figure:
+        """The report figure: tracking against time, paths on the board, ink against target."""
+        from vehicles.quadrotor_brush.report import build_report
+
+        log = log_of(flown, plan.samples, settings.flight.world.brush, plan.surface.origin_m_enu[2])
+        ink = ink_result(log, pixel_m=settings.ink_pixel_m)
+        scores = flight_metrics(log, ink=ink)
+        board = board_of(plan.surface)
+        strokes_xy = [board.to_world(np.asarray(s.xy_m))[:, :2] for s in plan.strokes]
+        return build_report(log, scores, ink, input_strokes_xy_m=strokes_xy, title=title)
+
+    def simulated_vehicle(
+        self, start_m_enu: Vec3, settings: QuadrotorSettings, *, seed: int = 0
+    ) -> SimulatedQuadrotor:
+        """One live simulated quadrotor hovering at ``start_m_enu`` (the agent's sim backend
+        creates one per flight, at take-off)."""
+        flight = settings.flight
+        return SimulatedQuadrotor(start_m_enu, flight.world, flight.controller, seed=seed)
+
+
+_SCORE_FIELDS = ("rmse_pen_down_m", "rmse_m", "max_error_m", "iou")
+
+KIND = QuadrotorBrush()
+"""The kind, as the registry (:mod:`vehicles`) hands it out."""

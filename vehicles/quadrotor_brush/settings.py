@@ -1,0 +1,80 @@
+"""The brush quadrotor's settings from a show file (or the defaults a show file has).
+
+One place decides them for the agent, the orchestrator, the kiosk preview, ``plan`` and ``fly``:
+the planner options of the show's planning section and the vehicle's limits, the simulated world
+(a brush reaching the show's writing height, the board's height, the control rate) and the
+controller preset aiming the brush at that height.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+from planner.options import PlanOptions
+from showfile.models import ControllerSettings, Limits, PlanningSettings, Show
+from showfile.planning import plan_options
+from vehicles.quadrotor_brush.control.controller import (
+    DEFAULT_CONFIG,
+    PAPER_CONFIG,
+    ControllerConfig,
+)
+from vehicles.quadrotor_brush.flight import FlightConfig
+from vehicles.quadrotor_brush.params import BrushParams, WorldParams
+
+INK_PIXEL_M = 0.002
+"""Pixel size in [m] of the ink rasters compared for a job's IoU (2 mm: cheap for 1 m glyphs)."""
+
+
+@dataclass(frozen=True)
+class QuadrotorSettings:
+    """Everything the brush quadrotor needs to plan, fly and score a job."""
+
+    plan: PlanOptions = field(default_factory=PlanOptions)
+    """Planner options (their ``board`` is replaced by the job's surface)."""
+    flight: FlightConfig = field(default_factory=FlightConfig)
+    """Simulated world and controller (the world's brush reaches the board at nominal press from
+    ``plan.write_height_m``, see :func:`world_params`)."""
+    ink_pixel_m: float = INK_PIXEL_M
+    """Pixel size in [m] of the ink rasters of the IoU."""
+
+
+def world_params(
+    write_height_m: float, board_height_m: float, control_rate_hz: float
+) -> WorldParams:
+    """The simulated world: a brush that reaches the board at nominal press from
+    ``write_height_m`` above it [m], the board at ``board_height_m`` [m], ticks at
+    ``control_rate_hz`` [Hz]."""
+    brush = BrushParams()
+    brush = replace(brush, length_m=write_height_m + brush.nominal_press_m)
+    return WorldParams(brush=brush, board_height_m=board_height_m, control_rate_hz=control_rate_hz)
+
+
+def controller_config(preset: str, write_height_m: float) -> ControllerConfig:
+    """The position controller of a show's ``controller.preset``, aiming the brush from
+    ``write_height_m`` [m] above the board (the paper's preset aims the body)."""
+    if preset == "paper":
+        return PAPER_CONFIG
+    return replace(DEFAULT_CONFIG, brush_lever_m=write_height_m)
+
+
+def quadrotor_settings(show: Show | None, vehicle_id: str | None) -> QuadrotorSettings:
+    """The settings of ``vehicle_id`` in ``show`` (KeyError naming the known ids if absent), or
+    with ``show`` None those of a show file that leaves every section at its default, on a
+    board at height 0."""
+    if show is None or vehicle_id is None:
+        planning, limits, controller = PlanningSettings(), Limits(), ControllerSettings()
+        board_height_m = 0.0
+    else:
+        vehicle = show.vehicle(vehicle_id)
+        planning, limits, controller = (
+            show.planning,
+            show.vehicle_limits(vehicle_id),
+            show.controller,
+        )
+        board_height_m = show.board(vehicle.board).center_m_enu[2]
+    plan = plan_options(planning, limits)
+    world = world_params(plan.write_height_m, board_height_m, controller.rate_hz)
+    flight = FlightConfig(
+        world=world, controller=controller_config(controller.preset, plan.write_height_m)
+    )
+    return QuadrotorSettings(plan=plan, flight=flight)
