@@ -149,6 +149,29 @@ class LiveState:
     """Measured normal contact force in [N], for kinds that sense it."""
 
 
+class LiveStateView(Protocol):
+    """What the agent reads of a live vehicle after a tick: :class:`LiveState`'s fields, read
+    only (a room may return its own frozen dataclass with these fields)."""
+
+    @property
+    def position_m_enu(self) -> Vec3: ...
+
+    @property
+    def velocity_mps_enu(self) -> Vec3: ...
+
+    @property
+    def pen_tip_m_enu(self) -> Vec3: ...
+
+    @property
+    def pen_contact(self) -> bool: ...
+
+    @property
+    def pen_width_m(self) -> float: ...
+
+    @property
+    def force_n(self) -> float | None: ...
+
+
 class SimulatedVehicle(Protocol):
     """A live simulated vehicle in flight (or driving), one control period per ``step``: the
     kind's world and controller in one closed loop. The agent's ``sim`` backend wraps it with an
@@ -161,7 +184,7 @@ class SimulatedVehicle(Protocol):
         """Advance one tick tracking ``reference``."""
         ...
 
-    def state(self) -> LiveState:
+    def state(self) -> LiveStateView:
         """The vehicle now."""
         ...
 
