@@ -8,6 +8,7 @@ rear wheels are up) and averaged per wheel group (front, middle, rear) as in the
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
@@ -85,15 +86,19 @@ class ClimbResult:
         out: dict[str, float] = {}
         for group in ("front", "middle", "rear"):
             members = [values[i] for i, g in enumerate(WHEEL_GROUP) if g == group]
-            out[group] = float(np.nanmean(members))
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                out[group] = float(np.nanmean(members))
         out["average"] = float(np.mean([out["front"], out["middle"], out["rear"]]))
         return out
 
 
-def _ratios(
+def wheel_ratios(
     truth: TrueState, refs: FloatArray, geometry: OmniGeometry
 ) -> tuple[FloatArray, FloatArray]:
-    """Per-wheel slip and rotation error at one tick (NaN where the wheel is nearly still)."""
+    """Per-wheel |slip| (eq. 19, from the wheel's absolute spin and its centre's speed in the
+    wheel plane) and |rotation error| (eq. 20, motor rate against ``refs``) at one tick, capped at
+    :data:`RATIO_CAP`; NaN where the wheel is nearly still."""
     r, v0 = geometry.wheel_radius_m, geometry.running_speed_mps
     along = np.sum(truth.hub_velocity_mps_enu * truth.axle_enu, axis=1)
     in_plane = truth.hub_velocity_mps_enu - along[:, None] * truth.axle_enu
@@ -134,7 +139,7 @@ def climb(
             np.all(truth.hub_m_enu[:, 0] > STEP_EDGE_X_M + 0.5 * r)
         )
         if climbing:
-            slip, error = _ratios(truth, refs, geometry)
+            slip, error = wheel_ratios(truth, refs, geometry)
             for key, value in (
                 ("t_s", np.array(world.t_s)),
                 ("slip", slip),
@@ -147,7 +152,8 @@ def climb(
             break
     log = {k: np.asarray(v, dtype=np.float64) for k, v in logs.items()}
     nan7 = np.full(7, np.nan)
-    with np.errstate(all="ignore"):
+    with warnings.catch_warnings():  # a wheel that never turned has no ratio: NaN
+        warnings.simplefilter("ignore", RuntimeWarning)
         slip_mean = np.nanmean(log["slip"], axis=0) if log["slip"].size else nan7
         error_mean = np.nanmean(log["rotation_error"], axis=0) if log["slip"].size else nan7
     return ClimbResult(method, step_height_m, climbed, world.t_s, slip_mean, error_mean, log)

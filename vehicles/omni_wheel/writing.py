@@ -30,7 +30,7 @@ from planner.pipeline import plan_strokes
 from planner.samples import TrajectorySamples
 from sim.ink import InkCanvas, RasterSpec, iou
 from vehicles.kind import FlownWriting, StrokeInput, WritingPlan, WritingScore
-from vehicles.omni_wheel.climb import configuration_of
+from vehicles.omni_wheel.climb import configuration_of, wheel_ratios
 from vehicles.omni_wheel.geometry import OmniGeometry
 from vehicles.omni_wheel.model import Terrain
 from vehicles.omni_wheel.sim import OmniWorld
@@ -150,6 +150,8 @@ class FloorWriter:
         self._rng = np.random.default_rng(seed + 7919)
         self._pen_timer_s = 0.0
         self.pen_is_down = False
+        self.last_refs_radps = np.zeros(7)
+        """The wheel references of the last tick in [rad/s]."""
 
     def tick(
         self, position_m_enu: FloatArray, velocity_mps_enu: FloatArray, pen_down: bool
@@ -170,6 +172,7 @@ class FloorWriter:
         )
         v_body[1] -= yaw_rate * s.pen_offset_m()  # pen velocity -> middle axle velocity
         refs = proposed_references(v_body, configuration_of(sensed, yaw_rate), s.geometry)
+        self.last_refs_radps = refs.rate_radps
         self.world.step(refs.rate_radps[None, :])
         want = 1.0 if pen_down else -1.0
         self._pen_timer_s = float(
@@ -199,10 +202,12 @@ def drive_plan(plan: WritingPlan, settings: OmniSettings, *, seed: int = 0) -> F
     point = np.empty((n, 3))
     base = np.empty((n, 3))
     inked = np.zeros(n, dtype=bool)
+    slip, rotation_error = np.empty((n, 7)), np.empty((n, 7))
     for k in range(n):
         writer.tick(ref[k], vel[k], bool(pen[k]))
-        point[k] = writer.marker_m_enu()
-        base[k] = writer.world.truth(0).base_m_enu
+        truth = writer.world.truth(0)
+        point[k], base[k] = truth.pen_m_enu, truth.base_m_enu
+        slip[k], rotation_error[k] = wheel_ratios(truth, writer.last_refs_radps, settings.geometry)
         inked[k] = writer.pen_is_down
     width = np.where(inked, settings.marker_width_m, 0.0)
     return FlownWriting(
@@ -212,6 +217,7 @@ def drive_plan(plan: WritingPlan, settings: OmniSettings, *, seed: int = 0) -> F
         pen_down=pen,
         ink_width_m=width,
         base_m_enu=base,
+        extra={"slip": slip, "rotation_error": rotation_error},
     )
 
 

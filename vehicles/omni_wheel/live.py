@@ -1,0 +1,86 @@
+"""The ground writer as a live simulated vehicle for the agent's ``sim`` backend.
+
+One control period per :meth:`OmniLiveVehicle.step`, tracking the agent's reference of the marker.
+A ground vehicle has no height to gain or lose, so the autopilot-like modes map as:
+
+* take-off: motors enabled (:meth:`OmniLiveVehicle.enable`), marker up, holding where it stands;
+  the reference's height is ignored (the marker always stays on the floor);
+* hold / offboard: track the reference (pen state from the reference);
+* land: marker up, wheels brought to rest, then motors disabled (it stays where it stopped);
+* estop: motors disabled at once (the wheels' motors go limp and the vehicle rolls to rest).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from vehicles.omni_wheel.writing import FloorWriter, OmniSettings
+from vehicles.surface import Vec3
+
+
+class MarkerReference(Protocol):
+    """What the agent gives each tick (``vehicles.kind.LiveReference`` has these fields)."""
+
+    position_m_enu: Vec3
+    velocity_mps_enu: Vec3
+    pen_down: bool
+
+
+@dataclass(frozen=True)
+class OmniLiveState:
+    """The vehicle after a tick (true values; the fields of ``vehicles.kind.LiveState``)."""
+
+    position_m_enu: Vec3
+    """Marker point (the vehicle's reference point) on the floor in [m], ENU."""
+    velocity_mps_enu: Vec3
+    """Velocity of the middle axle in [m/s], ENU."""
+    pen_tip_m_enu: Vec3
+    """Where the marker is in [m], ENU."""
+    pen_contact: bool
+    """The marker touches the floor."""
+    pen_width_m: float
+    """Width in [m] of the line laid now (0 with the marker up)."""
+    force_n: float | None = None
+    """Not sensed by this kind."""
+
+
+def _vec(values: np.ndarray) -> Vec3:
+    return (float(values[0]), float(values[1]), float(values[2]))
+
+
+class OmniLiveVehicle:
+    """A ground writer at rest at its start, motors disabled until :meth:`enable`."""
+
+    def __init__(self, start_m_enu: Vec3, settings: OmniSettings, *, seed: int = 0) -> None:
+        self.settings = settings
+        self.dt_s = settings.control_dt_s
+        self._writer = FloorWriter(settings, np.asarray(start_m_enu, dtype=np.float64), seed=seed)
+        self._writer.world.enabled[0] = False
+
+    def enable(self, on: bool) -> None:
+        """Motors on (take-off) or off (landed, estop)."""
+        self._writer.world.enabled[0] = on
+
+    def step(self, reference: MarkerReference) -> None:
+        """Advance one tick tracking ``reference`` (height ignored; pen only while enabled)."""
+        enabled = bool(self._writer.world.enabled[0])
+        self._writer.tick(
+            np.asarray(reference.position_m_enu, dtype=np.float64),
+            np.asarray(reference.velocity_mps_enu, dtype=np.float64),
+            bool(reference.pen_down) and enabled,
+        )
+
+    def state(self) -> OmniLiveState:
+        """The vehicle now."""
+        truth = self._writer.world.truth(0)
+        down = self._writer.pen_is_down
+        return OmniLiveState(
+            position_m_enu=_vec(truth.pen_m_enu),
+            velocity_mps_enu=_vec(truth.base_velocity_mps_enu),
+            pen_tip_m_enu=_vec(truth.pen_m_enu),
+            pen_contact=down,
+            pen_width_m=self.settings.marker_width_m if down else 0.0,
+        )
