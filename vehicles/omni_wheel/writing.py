@@ -152,6 +152,8 @@ class FloorWriter:
         self.pen_is_down = False
         self.last_refs_radps = np.zeros(7)
         """The wheel references of the last tick in [rad/s]."""
+        self.measured_marker_xy = np.asarray(start_pen_m_enu[:2], dtype=np.float64)
+        """The marker's position in [m] as the last tick measured it (floor localisation)."""
 
     def tick(
         self, position_m_enu: FloatArray, velocity_mps_enu: FloatArray, pen_down: bool
@@ -161,6 +163,7 @@ class FloorWriter:
         truth = self.world.truth(0)
         sensed = self.world.sense(0)
         pen_xy = truth.pen_m_enu[:2] + self._rng.normal(0.0, s.position_noise_m, 2)
+        self.measured_marker_xy = pen_xy
         heading = _heading_rad(truth.rotation) + float(self._rng.normal(0.0, s.heading_noise_rad))
         v_world = np.asarray(velocity_mps_enu[:2]) + s.position_gain_per_s * (
             np.asarray(position_m_enu[:2]) - pen_xy
