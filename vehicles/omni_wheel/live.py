@@ -24,9 +24,20 @@ from vehicles.surface import Vec3
 class MarkerReference(Protocol):
     """What the agent gives each tick (``vehicles.kind.LiveReference`` has these fields)."""
 
-    position_m_enu: Vec3
-    velocity_mps_enu: Vec3
-    pen_down: bool
+    @property
+    def position_m_enu(self) -> Vec3:
+        """Marker reference in [m], ENU (its height is ignored)."""
+        ...
+
+    @property
+    def velocity_mps_enu(self) -> Vec3:
+        """Feed-forward velocity in [m/s], ENU."""
+        ...
+
+    @property
+    def pen_down(self) -> bool:
+        """The marker is meant to touch the floor."""
+        ...
 
 
 @dataclass(frozen=True)
