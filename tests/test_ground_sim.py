@@ -46,6 +46,10 @@ def test_proposed_method_climbs_the_papers_step() -> None:
     result = climb("proposed", 0.1, geometry=RUBBER)
     assert result.climbed
     assert result.duration_s < 8.0
+    # the references follow the body configuration: while the front part swings up, eq. 15
+    # slows the middle wheels well below V0 / r (the standard method never changes them)
+    middle = result.log["reference_radps"][:, 3]
+    assert middle.min() < 0.6 * GEO.running_speed_mps / GEO.wheel_radius_m
     assert np.all(np.isfinite(result.slip_per_wheel[[0, 2, 3, 4, 5, 6]]))
 
 
