@@ -38,6 +38,7 @@ def test_live_vehicle_needs_its_motors_and_follows_the_marker_reference() -> Non
     settings = KIND.settings(None, None)
     vehicle = KIND.simulated_vehicle((0.0, 0.0, 0.0), settings, seed=1)
     start = np.array(vehicle.state().position_m_enu)
+    vehicle.enable(False)
     target = (0.1, 0.05, 3.0)  # the height is ignored: a ground vehicle stays on the floor
     for _ in range(50):  # motors off: it stands, and the marker never goes down
         vehicle.step(_Ref(target, pen_down=True))

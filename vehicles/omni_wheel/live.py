@@ -3,11 +3,14 @@
 One control period per :meth:`OmniLiveVehicle.step`, tracking the agent's reference of the marker.
 A ground vehicle has no height to gain or lose, so the autopilot-like modes map as:
 
-* take-off: motors enabled (:meth:`OmniLiveVehicle.enable`), marker up, holding where it stands;
-  the reference's height is ignored (the marker always stays on the floor);
-* hold / offboard: track the reference (pen state from the reference);
-* land: marker up, wheels brought to rest, then motors disabled (it stays where it stopped);
-* estop: motors disabled at once (the wheels' motors go limp and the vehicle rolls to rest).
+* take-off: the backend creates the live vehicle (motors on, marker up) where it rests; there is
+  no climb: the reference's height is ignored and the marker stays on the floor, so a backend
+  should end a ground vehicle's take-off (and landing) move at once instead of waiting for a
+  height it never reaches;
+* hold / offboard: track the reference (marker down only while the reference says so);
+* land: marker up and hold where it is, then the backend drops the live vehicle (motors off);
+* estop: :meth:`OmniLiveVehicle.enable` ``(False)``: the motors go limp at once and the vehicle
+  rolls to rest (or the backend drops it).
 """
 
 from __future__ import annotations
@@ -63,16 +66,15 @@ def _vec(values: np.ndarray) -> Vec3:
 
 
 class OmniLiveVehicle:
-    """A ground writer at rest at its start, motors disabled until :meth:`enable`."""
+    """A ground writer at rest at its start, motors on."""
 
     def __init__(self, start_m_enu: Vec3, settings: OmniSettings, *, seed: int = 0) -> None:
         self.settings = settings
         self.dt_s = settings.control_dt_s
         self._writer = FloorWriter(settings, np.asarray(start_m_enu, dtype=np.float64), seed=seed)
-        self._writer.world.enabled[0] = False
 
     def enable(self, on: bool) -> None:
-        """Motors on (take-off) or off (landed, estop)."""
+        """Motors on, or off (estop: no torque, no marker)."""
         self._writer.world.enabled[0] = on
 
     def step(self, reference: MarkerReference) -> None:
