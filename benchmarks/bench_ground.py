@@ -115,26 +115,34 @@ def write(text: str, size_m: float) -> Written:
     return plan, flown, score_floor(plan, flown, DEFAULT_SETTINGS.marker_width_m), cpu
 
 
-def real_time_factor(n_vehicles: int, seconds: float) -> tuple[float, float, float]:
+def real_time_factor(
+    n_vehicles: int, seconds: float, *, shared: bool
+) -> tuple[float, float, float]:
     """(wall RTF, CPU RTF) of ``n_vehicles`` writers with their controllers, and the wall RTF of
-    the bare MuJoCo step of the same model (no Python control)."""
-    starts = tuple((0.0, 2.0 * k, 0.0, 0.0) for k in range(n_vehicles))
-    world = OmniWorld(RUBBER_ROLLERS, Terrain(), starts, seed=0)
+    the bare MuJoCo steps of the same model(s) (no Python control). ``shared``: all in one MuJoCo
+    model; else one world each (as the vehicle agents run them, one per vehicle)."""
     v = np.array([0.15, 0.05, 0.0])
+    if shared:
+        starts = tuple((0.0, 2.0 * k, 0.0, 0.0) for k in range(n_vehicles))
+        worlds = [(OmniWorld(RUBBER_ROLLERS, Terrain(), starts, seed=0), n_vehicles)]
+    else:
+        worlds = [
+            (OmniWorld(RUBBER_ROLLERS, Terrain(), ((0.0, 0.0, 0.0, 0.0),), seed=k), 1)
+            for k in range(n_vehicles)
+        ]
     wall, cpu = time.perf_counter(), time.process_time()
-    while world.t_s < seconds:
-        refs = np.stack(
-            [
+    while worlds[0][0].t_s < seconds:
+        for world, n in worlds:
+            refs = [
                 proposed_references(v, configuration_of(world.sense(k)), RUBBER_ROLLERS).rate_radps
-                for k in range(n_vehicles)
+                for k in range(n)
             ]
-        )
-        world.step(refs)
+            world.step(np.stack(refs))
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
     bare = time.perf_counter()
-    steps = int(seconds / world.model.opt.timestep)
-    for _ in range(steps):
-        mujoco.mj_step(world.model, world.data)
+    for world, _ in worlds:
+        for _ in range(int(seconds / world.model.opt.timestep)):
+            mujoco.mj_step(world.model, world.data)
     bare = time.perf_counter() - bare
     return seconds / wall, seconds / cpu, seconds / bare
 
@@ -189,14 +197,13 @@ def main() -> None:
     rmse_mm = 1e3 * score.rmse_pen_down_m
     print(f"  pen-down RMSE {rmse_mm:.2f} mm (target <= 5), IoU {score.iou:.3f} (target >= 0.85)")
     print(f"  drive CPU {cpu:.1f} s")
-
     seconds = 2.0 if args.quick else 10.0
     print("\nreal-time factor (writers with controllers | bare MuJoCo step, same model)")
-    for n in (1, 4):
-        wall, cpu_rtf, bare = real_time_factor(n, seconds)
-        print(
-            f"  {n} writer(s): {wall:6.2f} x wall, {cpu_rtf:6.2f} x CPU | bare {bare:6.2f} x wall"
-        )
+    runs = ((1, False, ""), (4, False, " (a world each)"), (4, True, " (one model)"))
+    for n, shared, how in runs:
+        wall, cpu_rtf, bare = real_time_factor(n, seconds, shared=shared)
+        label = f"{n} writer(s){how}"
+        print(f"  {label:28s} {wall:6.2f} x wall, {cpu_rtf:6.2f} x CPU | bare {bare:6.2f} x wall")
     figure(climbs, sweep, written).savefig(args.png, dpi=110)
     print(f"\nfigure: {args.png}")
 
