@@ -1,0 +1,4 @@
+"""The omnidirectional step-climbing ground writer (Chugo et al.): seven actuated wheels with free
+rollers, a passive suspension with free joint 1 at axle height, wheel references from the body
+configuration; it writes with a marker on the floor. The kind object is
+``vehicles.omni_wheel.kind.KIND`` (imported lazily: it pulls in MuJoCo)."""

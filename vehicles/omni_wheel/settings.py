@@ -1,0 +1,31 @@
+"""The room's typed settings from the show file's ``omni_wheel`` section."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from showfile.kind_omni import OmniWheelSettings
+from vehicles.omni_wheel.model import Step, Terrain
+from vehicles.omni_wheel.writing import DEFAULT_SETTINGS, OmniSettings
+
+
+def omni_settings(section: OmniWheelSettings) -> OmniSettings:
+    """:class:`OmniSettings` of a show's ``omni_wheel`` section (defaults where it says nothing)."""
+    geometry = replace(
+        DEFAULT_SETTINGS.geometry,
+        wheel_radius_m=section.wheel_radius_m,
+        running_speed_mps=section.running_speed_mps,
+        friction_static=section.roller_friction,
+    )
+    terrain = Terrain(
+        steps=tuple(Step(s.x_m, s.height_m) for s in section.steps),
+        half_width_m=section.terrain_half_width_m,
+    )
+    return replace(
+        DEFAULT_SETTINGS,
+        geometry=geometry,
+        accel_max_mps2=section.accel_max_mps2,
+        speed_max_mps=section.speed_max_mps,
+        marker_width_m=section.marker_width_m,
+        terrain=terrain,
+    )
