@@ -22,6 +22,7 @@ FULL: dict[str, list[str]] = {
     "bench_fleet.py": [],
     "bench_mavlink.py": [],
     "bench_tui.py": [],
+    "bench_cli.py": [],
 }
 QUICK: dict[str, list[str]] = {
     "bench_planner.py": ["--quick"],
@@ -31,6 +32,7 @@ QUICK: dict[str, list[str]] = {
     "bench_fleet.py": ["--skip-show"],
     "bench_mavlink.py": ["--seconds", "3"],
     "bench_tui.py": ["--seconds", "2"],
+    "bench_cli.py": ["--runs", "2"],
 }
 
 
