@@ -99,14 +99,22 @@ class Book:
     def etas(self, now_s: float) -> dict[str, tuple[int, float | None]]:
         """Queue position (1 = next) and ETA in [s] of every queued job."""
         queue = self.queue()
-        active = {j.vehicle_id: j for j in self.jobs.values() if j.active and j.vehicle_id}
-        usable = [
-            v.info.vehicle_id
-            for v in self.vehicles.values()
-            if v.alive and not (v.paused or v.held)
+        usable = {
+            vid: v.info.board_id
+            for vid, v in self.vehicles.items()
+            if v.alive and not v.lost and not (v.paused or v.held)
+        }
+        active = [j for j in self.jobs.values() if j.active]
+        busy = {j.vehicle_id for j in active}
+        landing = [
+            vid
+            for vid in usable
+            if vid not in busy and self.vehicles[vid].state in ("returning", "landing")
         ]
         etas = (
-            {} if self.queue_paused else queue_etas(queue, active, usable, now_s, self.config.eta)
+            {}
+            if self.queue_paused
+            else queue_etas(queue, active, usable, now_s, self.config.eta, landing=landing)
         )
         return {j.job_id: (i + 1, etas.get(j.job_id)) for i, j in enumerate(queue)}
 
