@@ -16,7 +16,7 @@ HERE = Path(__file__).parent
 
 FULL: dict[str, list[str]] = {
     "bench_planner.py": [],
-    "bench_show.py": [],
+    "bench_show.py": ["--eta"],
     "bench_sim.py": [],
     "bench_bus.py": [],
     "bench_fleet.py": [],
