@@ -20,14 +20,26 @@ Only the writing changes with the pace. Durations are computed, not simulated:
 
 Characters per hour for the show's four vehicles, each writing on its own board, one character
 after another: ``4 * 3600 / mean(cycle)``.
+
+ETAs (``--eta``, a real run): the Airshow show (router, orchestrator, four simulated agents as
+child processes, real Zenoh on loopback) at ``--eta-scale``; the corpus is submitted at once
+once every vehicle is ready, and after ``--settle`` seconds (planned durations replace the rough
+estimates) one snapshot gives each queued job's ETA. Predicted start = snapshot time + ETA;
+predicted finish = predicted start + the job's planned duration (as the vehicle reports it) over
+the time scale. Actual start and finish: the job's ``writing`` and ``done`` publications. Errors
+are (predicted - actual) / actual, both counted from the snapshot. The phases measured on the
+way (assignment -> writing, done -> the vehicle's next assignment) are printed in sim seconds.
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
 import statistics
 import sys
+import tempfile
+import threading
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -35,6 +47,19 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bus.messages import (  # noqa: E402
+    JobState,
+    SubmitReply,
+    SubmitRequest,
+)
+from bus.pubsub import subscribe  # noqa: E402
+from bus.rpc import (  # noqa: E402
+    NoReplyError,
+    RemoteError,
+    query_one,
+)
+from bus.session import Session  # noqa: E402
+from cli.showrun import ShowRun, Stagehand, derived_show, snapshot, wait_for_jobs  # noqa: E402
 from planner.glyphs import text_glyph  # noqa: E402
 from planner.pipeline import PlanOptions, plan_strokes  # noqa: E402
 from showfile import load_show  # noqa: E402
@@ -111,22 +136,162 @@ def per_hour(cycles: list[Cycle]) -> float:
     return VEHICLES * 3600.0 / statistics.mean(c.total for c in cycles)
 
 
+class JobTimeline:
+    """When each job was first seen in each state (orchestrator Unix time [s]), from ``jobs/*``."""
+
+    def __init__(self) -> None:
+        self.first: dict[tuple[str, str], float] = {}
+        self.last: dict[str, JobState] = {}
+        self._lock = threading.Lock()
+
+    def on_job(self, _key: str, job: JobState) -> None:
+        with self._lock:
+            self.first.setdefault((job.job_id, job.state), job.updated_at_s)
+            self.last[job.job_id] = job
+
+
+def _wait_ready(run: ShowRun, session: Session, vehicles: int, timeout_s: float) -> None:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        try:
+            snap = snapshot(session, run.keys, timeout_s=2.0)
+        except (NoReplyError, RemoteError):  # the orchestrator is starting
+            time.sleep(0.5)
+            continue
+        ready = [v for v in snap.vehicles if v.alive and v.state in ("idle", "landed")]
+        if len(ready) == vehicles:
+            return
+        time.sleep(0.5)
+    raise TimeoutError(f"vehicles not ready after {timeout_s:.0f} s")
+
+
+def _submit(session: Session, run: ShowRun, char: str, index: int) -> SubmitReply:
+    """Submit with an idempotency key, retrying while the orchestrator is slow to answer."""
+    request = SubmitRequest(text=char, client_id="bench", idempotency_key=f"eta-{index}")
+    for _ in range(20):
+        try:
+            reply = query_one(session, run.keys.submit, request, SubmitReply, timeout_s=10.0)
+        except (NoReplyError, RemoteError):
+            continue
+        if not reply.ok:
+            raise RuntimeError(f"{char!r} refused: {reply.error}")
+        return reply
+    raise TimeoutError(f"{char!r}: no answer to 20 submissions")
+
+
+def _spread(name: str, errors: list[float]) -> str:
+    ordered = sorted(errors)
+    p10 = ordered[int(0.1 * (len(ordered) - 1))]
+    p90 = ordered[round(0.9 * (len(ordered) - 1))]
+    within = sum(1 for e in errors if abs(e) <= 0.2)
+    return (
+        f"  {name:6} error: median {statistics.median(errors):+6.1%}, p10 {p10:+6.1%},"
+        f" p90 {p90:+6.1%}, worst {max(errors, key=abs):+6.1%};"
+        f" {within}/{len(errors)} within +-20 %"
+    )
+
+
+def eta_run(chars: str, scale: float, settle_s: float) -> None:
+    """Run the show, predict every queued job's start and finish, compare with what happened."""
+    timeline = JobTimeline()
+    with tempfile.TemporaryDirectory() as tmp:
+        path, show = derived_show(SHOW, Path(tmp), time_scale=scale)
+        with (
+            ShowRun(path, show, log_dir=Path(tmp) / "logs") as run,
+            run.client() as session,
+            Stagehand(session, run.keys),  # a fresh sheet where a requeued job left ink
+        ):
+            _sub = subscribe(session, run.keys.jobs_all, JobState, timeline.on_job)
+            _wait_ready(run, session, len(show.vehicles), timeout_s=120.0)
+            replies = [_submit(session, run, char, k) for k, char in enumerate(chars)]
+            time.sleep(settle_s)
+            snap = snapshot(session, run.keys)
+            ids = [str(r.job_id) for r in replies]
+            final = wait_for_jobs(session, run.keys, ids, timeout_s=60.0 + 200.0 * len(chars))
+            time.sleep(0.5)  # the last publications
+    t0 = snap.time_s
+    predicted = {j.job_id: t0 + j.eta_s for j in snap.jobs if j.eta_s is not None}
+    print(
+        f"ETAs: {len(chars)} characters at time_scale {scale:g}, {len(predicted)} queued at the"
+        f" snapshot ({settle_s:g} s after submission); seconds after the snapshot:"
+    )
+    print("  job  char vehicle   start: predicted actual  error   finish: predicted actual  error")
+    start_err, finish_err = [], []
+    for job in final:
+        begun = timeline.first.get((job.job_id, "writing"))
+        done = timeline.first.get((job.job_id, "done"))
+        if job.job_id not in predicted or begun is None or done is None:
+            continue
+        p_start = predicted[job.job_id] - t0
+        p_finish = p_start + (job.planned_duration_s or 0.0) / scale
+        a_start, a_finish = begun - t0, done - t0
+        start_err.append((p_start - a_start) / a_start)
+        finish_err.append((p_finish - a_finish) / a_finish)
+        print(
+            f"  {job.job_id[-4:]}  {job.label:4} {job.vehicle_id or '-':8}"
+            f" {p_start:16.1f} {a_start:6.1f} {start_err[-1]:+6.1%}"
+            f" {p_finish:17.1f} {a_finish:6.1f} {finish_err[-1]:+6.1%}"
+        )
+    if start_err:
+        print(_spread("start", start_err))
+        print(_spread("finish", finish_err))
+    _phases(timeline, final, scale)
+
+
+def _phases(timeline: JobTimeline, final: list[JobState], scale: float) -> None:
+    """Sim seconds from assignment to writing, and from done to the vehicle's next assignment."""
+    approach = [
+        (timeline.first[(j.job_id, "writing")] - timeline.first[(j.job_id, "assigned")]) * scale
+        for j in final
+        if (j.job_id, "writing") in timeline.first and (j.job_id, "assigned") in timeline.first
+    ]
+    turns: dict[str, list[tuple[float, float]]] = {}
+    for j in final:
+        key_a, key_d = (j.job_id, "assigned"), (j.job_id, "done")
+        if j.vehicle_id and key_a in timeline.first and key_d in timeline.first:
+            turns.setdefault(j.vehicle_id, []).append(
+                (timeline.first[key_a], timeline.first[key_d])
+            )
+    after = []
+    for jobs in turns.values():
+        jobs.sort()
+        after += [(b[0] - a[1]) * scale for a, b in itertools.pairwise(jobs)]
+    if approach and after:
+        print(
+            f"  measured (sim s): assignment -> writing median {statistics.median(approach):.1f};"
+            f" done -> next assignment median {statistics.median(after):.1f}"
+        )
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="4 characters")
     parser.add_argument("--vehicle", default="uav1", help="vehicle whose board is used")
+    parser.add_argument("--eta", action="store_true", help="also run the show and check ETAs")
+    parser.add_argument("--eta-only", action="store_true", help="only the ETA run")
+    parser.add_argument("--eta-scale", type=float, default=1.0, help="time_scale of that run (1)")
+    parser.add_argument("--settle", type=float, default=5.0, help="seconds before the snapshot")
     args = parser.parse_args()
-    show = load_show(SHOW)
     chars = QUICK_CORPUS if args.quick else CORPUS
+    if not args.eta_only:
+        throughput(chars, args.vehicle)
+    if args.eta or args.eta_only:
+        eta_run(chars, args.eta_scale, args.settle)
+    return 0
+
+
+def throughput(chars: str, vehicle_id: str) -> None:
+    """Plan every character at both paces and print the cycles and characters per hour."""
+    show = load_show(SHOW)
     plan_strokes(text_glyph("A").strokes, PlanOptions())  # warm-up: imports, caches
     cycles: dict[str, list[Cycle]] = {pace: [] for pace in PACES}
-    print(f"show throughput: {SHOW.name}, {len(chars)} characters on {args.vehicle}'s board")
+    print(f"show throughput: {SHOW.name}, {len(chars)} characters on {vehicle_id}'s board")
     print(
         "  char   writing [s]: nominal  limits   cycle [s]: nominal  limits  (climb+transit+"
         "back+land)"
     )
     for char in chars:
-        old, new = (cycle(show, args.vehicle, char, pace) for pace in PACES)
+        old, new = (cycle(show, vehicle_id, char, pace) for pace in PACES)
         cycles["nominal"].append(old)
         cycles["limits"].append(new)
         other = new.climb + new.transit + new.back + new.land
@@ -143,7 +308,6 @@ def main() -> int:
         )
     gain = per_hour(cycles["limits"]) / per_hour(cycles["nominal"])
     print(f"  throughput x{gain:.2f}; take-off, transit, return and landing are the same in both")
-    return 0
 
 
 if __name__ == "__main__":

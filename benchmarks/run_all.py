@@ -16,12 +16,13 @@ HERE = Path(__file__).parent
 
 FULL: dict[str, list[str]] = {
     "bench_planner.py": [],
-    "bench_show.py": [],
+    "bench_show.py": ["--eta"],
     "bench_sim.py": [],
     "bench_bus.py": [],
     "bench_fleet.py": [],
     "bench_mavlink.py": [],
     "bench_tui.py": [],
+    "bench_cli.py": [],
 }
 QUICK: dict[str, list[str]] = {
     "bench_planner.py": ["--quick"],
@@ -31,6 +32,7 @@ QUICK: dict[str, list[str]] = {
     "bench_fleet.py": ["--skip-show"],
     "bench_mavlink.py": ["--seconds", "3"],
     "bench_tui.py": ["--seconds", "2"],
+    "bench_cli.py": ["--runs", "2"],
 }
 
 

@@ -295,6 +295,9 @@ class ShowSnapshot(State, frozen=True):
     """Boards left half-written (a job requeued after writing started): no job is assigned there
     until the operator confirms a fresh sheet (``fresh_sheet``; v1 addition)."""
     """The latest lines of the event log, oldest first (``snapshot`` replies only; v1 addition)."""
+    job_counts: dict[str, int] = {}
+    """How many jobs of the show are in each state, all of them: ``jobs`` may leave out older
+    finished ones (states with no job are absent; v1 addition)."""
 
 
 class Event(State, frozen=True):

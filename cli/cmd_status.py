@@ -14,7 +14,9 @@ HELP = "Show the jobs and vehicles of a running show (--json for programs)."
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("show", type=Path, help="show file (YAML)")
     parser.add_argument(
-        "--json", action="store_true", help='print {"jobs": [...], "vehicles": [...]}'
+        "--json",
+        action="store_true",
+        help="print JSON: jobs (older finished ones left out), vehicles, job_counts (all jobs)",
     )
     parser.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for a reply")
 
@@ -39,6 +41,7 @@ def run(args: argparse.Namespace) -> int:
                 {
                     "jobs": data["jobs"],
                     "vehicles": data["vehicles"],
+                    "job_counts": snap.job_counts,
                     "queue_paused": snap.queue_paused,
                     "time_s": snap.time_s,
                 },
@@ -48,6 +51,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     paused = " (queue paused)" if snap.queue_paused else ""
     print(f"show {snap.show_id}{paused}")
+    counts = ", ".join(f"{n} {state}" for state, n in snap.job_counts.items())
+    print(f"  jobs: {sum(snap.job_counts.values())} ({counts or 'none'})")
     for v in snap.vehicles:
         alive = "up" if v.alive else "down"
         print(

@@ -3,7 +3,8 @@
 Every module ``cli/cmd_*.py`` is a subcommand. It defines ``NAME`` (the subcommand), optionally
 ``ALIASES`` (other names, space-separated), ``HELP`` (one line), ``add_arguments(parser)`` and
 ``run(args) -> int`` (the exit status). Modules are imported only when their subcommand runs, so
-a heavy dependency of one command never slows another.
+a heavy dependency of one command never slows another; a subcommand named after its file
+(``sim-mavlink`` -> ``cmd_sim_mavlink.py``) is found without reading the other files.
 """
 
 from __future__ import annotations
@@ -11,20 +12,18 @@ from __future__ import annotations
 import argparse
 import ast
 import importlib
-import pkgutil
 import sys
 from pathlib import Path
 from types import ModuleType
+
+_PACKAGE_DIR = Path(__file__).parent
 
 
 def _discover() -> dict[str, tuple[str, str]]:
     """Map subcommand name -> (module name, help line), read without importing the modules."""
     commands: dict[str, tuple[str, str]] = {}
-    package_dir = Path(__file__).parent
-    for info in pkgutil.iter_modules([str(package_dir)]):
-        if not info.name.startswith("cmd_"):
-            continue
-        tree = ast.parse((package_dir / f"{info.name}.py").read_text(encoding="utf-8"))
+    for path in sorted(_PACKAGE_DIR.glob("cmd_*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
         constants: dict[str, str] = {}
         for node in tree.body:
             if (
@@ -35,10 +34,10 @@ def _discover() -> dict[str, tuple[str, str]]:
                 and isinstance(node.value.value, str)
             ):
                 constants[node.targets[0].id] = node.value.value
-        name = constants.get("NAME", info.name.removeprefix("cmd_").replace("_", "-"))
-        commands[name] = (f"cli.{info.name}", constants.get("HELP", ""))
+        name = constants.get("NAME", path.stem.removeprefix("cmd_").replace("_", "-"))
+        commands[name] = (f"cli.{path.stem}", constants.get("HELP", ""))
         for alias in constants.get("ALIASES", "").split():  # e.g. ``stop`` for ``down``
-            commands[alias] = (f"cli.{info.name}", f"same as {name}")
+            commands[alias] = (f"cli.{path.stem}", f"same as {name}")
     return dict(sorted(commands.items()))
 
 
@@ -55,14 +54,26 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, str]]:
     return parser, modules
 
 
+def _named_module(name: str) -> ModuleType | None:
+    """The module of subcommand ``name`` when its file is named after it, else None."""
+    stem = "cmd_" + name.replace("-", "_")
+    if not stem.isidentifier() or not (_PACKAGE_DIR / f"{stem}.py").is_file():
+        return None
+    module = importlib.import_module(f"cli.{stem}")
+    names = [getattr(module, "NAME", name), *getattr(module, "ALIASES", "").split()]
+    return module if name in names else None
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    parser, modules = build_parser()
-    if not argv or argv[0] not in modules:
-        parser.parse_args(argv or ["--help"])
-        return 2
+    module = _named_module(argv[0]) if argv else None
+    if module is None:
+        parser, modules = build_parser()
+        if not argv or argv[0] not in modules:
+            parser.parse_args(argv or ["--help"])
+            return 2
+        module = importlib.import_module(modules[argv[0]])
     name = argv[0]
-    module: ModuleType = importlib.import_module(modules[name])
     command_parser = argparse.ArgumentParser(prog=f"skyquill {name}", description=module.HELP)
     module.add_arguments(command_parser)
     args = command_parser.parse_args(argv[1:])

@@ -12,7 +12,7 @@ duplicated; at most one active job per vehicle and per board; jobs are assigned 
 
 from __future__ import annotations
 
-from collections import deque
+from collections import Counter, deque
 from collections.abc import Iterable, Sequence
 
 import msgspec
@@ -62,6 +62,8 @@ class Book:
         self.jobs: dict[str, Job] = {}
         for job in jobs:  # restart: active jobs must be confirmed by their vehicle again
             self.jobs[job.job_id] = update(job, now_s, assigned_at_s=now_s) if job.active else job
+        self.job_counts: Counter[str] = Counter(j.state for j in self.jobs.values())
+        """Jobs per state, every job counted (kept as jobs change, not from a list)."""
         self.next_seq = max((j.seq for j in self.jobs.values()), default=0) + 1
         self.by_key: dict[tuple[str, str], str] = {
             (j.client_id, j.idempotency_key): j.job_id
@@ -97,14 +99,22 @@ class Book:
     def etas(self, now_s: float) -> dict[str, tuple[int, float | None]]:
         """Queue position (1 = next) and ETA in [s] of every queued job."""
         queue = self.queue()
-        active = {j.vehicle_id: j for j in self.jobs.values() if j.active and j.vehicle_id}
-        usable = [
-            v.info.vehicle_id
-            for v in self.vehicles.values()
-            if v.alive and not (v.paused or v.held)
+        usable = {
+            vid: v.info.board_id
+            for vid, v in self.vehicles.items()
+            if v.alive and not v.lost and not (v.paused or v.held)
+        }
+        active = [j for j in self.jobs.values() if j.active]
+        busy = {j.vehicle_id for j in active}
+        landing = [
+            vid
+            for vid in usable
+            if vid not in busy and self.vehicles[vid].state in ("returning", "landing")
         ]
         etas = (
-            {} if self.queue_paused else queue_etas(queue, active, usable, now_s, self.config.eta)
+            {}
+            if self.queue_paused
+            else queue_etas(queue, active, usable, now_s, self.config.eta, landing=landing)
         )
         return {j.job_id: (i + 1, etas.get(j.job_id)) for i, j in enumerate(queue)}
 
@@ -147,6 +157,7 @@ class Book:
             vehicles=vehicles,
             events=list(self.recent_events) if include_final else [],
             dirty_boards=sorted(self.dirty_boards),
+            job_counts={state: n for state, n in sorted(self.job_counts.items()) if n > 0},
         )
 
     # --- helpers ----------------------------------------------------------------------------
@@ -182,6 +193,10 @@ class Book:
         return eff
 
     def put(self, eff: Effects, job: Job) -> Job:
+        previous = self.jobs.get(job.job_id)
+        if previous is not None:
+            self.job_counts[previous.state] -= 1
+        self.job_counts[job.state] += 1
         self.jobs[job.job_id] = job
         eff.jobs[job.job_id] = job
         return job

@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
-"""Build planner/glyphs/data/hanzi_medians.json.gz from the npm package hanzi-writer-data.
+"""Build planner/glyphs/data/hanzi_medians.bin from the npm package hanzi-writer-data.
 
 The package holds, per character, Make Me a Hanzi's outline strokes and stroke *medians*
 (centrelines, in correct stroke order) in a 1024 grid whose y axis points UP with the font
 baseline at y = 0 (the em box spans x 0..1024, y -124..900). We keep only the medians, as
-integers, delta-encoded, and gzip them: see ``FORMAT`` below and docs/formats.md.
+integers, in an indexed store read one character at a time: see
+``planner/glyphs/hanzi_store.py`` and docs/formats.md.
 
 Usage:
     python scripts/build_hanzi_data.py            # npm pack hanzi-writer-data@2.0.1 in a temp dir
@@ -15,7 +16,6 @@ Usage:
 from __future__ import annotations
 
 import argparse
-import gzip
 import json
 import math
 import subprocess
@@ -26,18 +26,13 @@ from pathlib import Path
 
 PACKAGE = "hanzi-writer-data"
 VERSION = "2.0.1"
-FORMAT = "skyquill-hanzi-medians"
-FORMAT_VERSION = 1
-DATA_NAME = "hanzi_medians.json.gz"
+DATA_NAME = "hanzi_medians.bin"
 LICENSE_NAME = "LICENSE-hanzi-writer-data.txt"
 REPO_ROOT = Path(__file__).resolve().parents[1]
+if str(REPO_ROOT) not in sys.path:
+    sys.path.insert(0, str(REPO_ROOT))
 
-ENCODING_NOTE = (
-    "chars maps a character to its strokes in stroke order; a stroke is a flat list "
-    "[dx0, dy0, dx1, dy1, ...] of integer steps in the 1024 grid, each point relative to the "
-    "previous point of the same character (the first point relative to (0, 0)); y is up, "
-    "baseline at y = 0, em box x 0..1024, y -124..900; consecutive repeated points removed"
-)
+from planner.glyphs.hanzi_store import encode_store  # noqa: E402  (after the path above)
 
 ATTRIBUTION = f"""\
 Stroke data: planner/glyphs/data/{DATA_NAME}
@@ -122,30 +117,14 @@ def _round(value: float) -> int:
 
 
 def encode(chars: dict[str, list[list[tuple[int, int]]]]) -> bytes:
-    """Delta-encode and gzip deterministically (same input, same bytes)."""
-    out: dict[str, list[list[int]]] = {}
-    for char in sorted(chars):
-        prev_x, prev_y = 0, 0
-        strokes = []
-        for points in chars[char]:
-            flat: list[int] = []
-            for x, y in points:
-                flat += [x - prev_x, y - prev_y]
-                prev_x, prev_y = x, y
-            strokes.append(flat)
-        out[char] = strokes
-    doc = {
-        "format": FORMAT,
-        "version": FORMAT_VERSION,
+    """The store's bytes (deterministic: same input, same bytes)."""
+    meta = {
         "source": f"{PACKAGE}@{VERSION} (Make Me a Hanzi medians, Arphic Public License)",
         "grid": 1024,
         "y_min": -124,
         "y_max": 900,
-        "encoding": ENCODING_NOTE,
-        "chars": out,
     }
-    text = json.dumps(doc, ensure_ascii=False, separators=(",", ":"))
-    return gzip.compress(text.encode("utf-8"), compresslevel=9, mtime=0)
+    return encode_store(chars, meta)
 
 
 if __name__ == "__main__":

@@ -19,3 +19,15 @@ def test_unknown_subcommand_exits_with_usage_error(capsys: pytest.CaptureFixture
         main(["no-such-command"])
     assert exit_info.value.code == 2
     assert "invalid choice" in capsys.readouterr().err
+
+
+def test_subcommand_named_after_its_file_is_found_directly() -> None:
+    from cli.main import _named_module
+
+    plan = _named_module("plan")
+    assert plan is not None and plan.__name__ == "cli.cmd_plan"
+    stop = _named_module("stop")  # cmd_stop.py is "down", "stop" its alias
+    assert stop is not None and stop.__name__ == "cli.cmd_stop"
+    assert _named_module("down") is None  # no cmd_down.py: found by discovery instead
+    assert _named_module("../main") is None
+    assert _discover()["down"][0] == "cli.cmd_stop"

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections import Counter
+
 import msgspec
 import pytest
 from hypothesis import HealthCheck, settings
@@ -19,13 +21,21 @@ from bus.messages import (
     ErrorInfo,
     Event,
     JobMetrics,
+    JobStateName,
     OperatorCommand,
     SubmitRequest,
     VehicleStatus,
 )
 from orchestrator.core import Book, CoreConfig, Effects
 from orchestrator.fleet import VehicleInfo, ready_for_job
-from orchestrator.jobs import FINAL_STATES, TRANSITIONS, TransitionError, to_state, transition
+from orchestrator.jobs import (
+    FINAL_STATES,
+    TRANSITIONS,
+    Job,
+    TransitionError,
+    to_state,
+    transition,
+)
 
 # three vehicles, two of them share board b2
 VEHICLES = (
@@ -289,6 +299,35 @@ def test_queue_full_is_refused() -> None:
     assert not reply.ok and reply.error.code == "queue_full" and "j3" not in book.jobs
 
 
+def _finished_job(seq: int, state: JobStateName) -> Job:
+    return Job(
+        job_id=f"old{seq}",
+        seq=seq,
+        state=state,
+        kind="text",
+        text="L",
+        label="L",
+        client_id="c",
+        created_at_s=float(seq),
+        updated_at_s=float(seq),
+    )
+
+
+def test_job_counts_stay_exact_past_the_finished_jobs_listed() -> None:
+    old = [_finished_job(k + 1, "failed" if k % 100 == 0 else "done") for k in range(620)]
+    book = Book(_config(), old, now_s=1000.0)
+    _submit(book, "new1", 1000.0)
+    snap = book.snapshot(1000.0)
+    assert sum(1 for j in snap.jobs if j.state in FINAL_STATES) == 500  # the list is bounded
+    assert snap.job_counts == {"done": 613, "failed": 7, "queued": 1}
+    assert book.snapshot(1000.0, include_final=False).job_counts == snap.job_counts
+    eff = _online(book, "uav1", 1001.0)
+    assert _assigned(eff) == [("uav1", "new1")]
+    report = AgentReport(vehicle_id="uav1", job_id="new1", event="done", metrics=METRICS)
+    book.report(report, 1010.0)
+    assert book.snapshot(1010.0).job_counts == {"done": 614, "failed": 7}
+
+
 # --- properties ---------------------------------------------------------------------------------
 
 
@@ -415,6 +454,8 @@ class FleetMachine(RuleBasedStateMachine):
         assert sorted(self.book.jobs) == sorted(self.submitted)
         seqs = [j.seq for j in self.book.jobs.values()]
         assert len(seqs) == len(set(seqs))
+        counts = Counter(j.state for j in self.book.jobs.values())
+        assert self.book.snapshot(self.now, max_final=2).job_counts == dict(counts)
 
     @invariant()
     def subscribers_know_every_queue_position_and_eta(self) -> None:

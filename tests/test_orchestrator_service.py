@@ -34,6 +34,7 @@ from bus.rpc import query, query_one, serve
 from bus.session import BusSettings, Session, free_tcp_endpoint, open_session
 from cli.main import main as skyquill
 from orchestrator.app import serve_show
+from orchestrator.jobs import Job
 from orchestrator.store import JobStore
 from showfile import SecuritySettings, Show, dump_show, load_show
 
@@ -354,6 +355,39 @@ def test_bus_is_recorded_to_a_readable_mcap(tmp_path: Path, endpoint: str, clien
         assert schemas[topic].encoding == "jsonschema"
     final = [msgspec.json.decode(m.data) for t, m in messages if t == keys.job(job_id or "")]
     assert final[-1]["state"] == "done"
+
+
+def test_status_counts_every_job_past_the_listed_finished_ones(
+    tmp_path: Path, endpoint: str
+) -> None:
+    path, show = make_show(tmp_path, "many", endpoint)
+    old = [
+        Job(
+            job_id=f"old{k}",
+            seq=k,
+            state="failed" if k % 100 == 0 else "done",
+            kind="text",
+            text="L",
+            label="L",
+            client_id="c",
+            created_at_s=float(k),
+            updated_at_s=float(k),
+        )
+        for k in range(1, 621)
+    ]
+    with JobStore(show.database_path) as store:
+        store.save(old)
+    with RunningOrchestrator(show):
+        out = io.StringIO()
+        with redirect_stdout(out):
+            assert skyquill(["status", str(path), "--json"]) == 0
+        data = msgspec.json.decode(out.getvalue())
+        assert len(data["jobs"]) == 500  # the list is bounded ...
+        assert data["job_counts"] == {"done": 614, "failed": 6}  # ... the counts are not
+        out = io.StringIO()
+        with redirect_stdout(out):
+            assert skyquill(["status", str(path)]) == 0
+        assert "jobs: 620 (614 done, 6 failed)" in out.getvalue()
 
 
 def test_cli_submit_status_approve(tmp_path: Path, endpoint: str) -> None:

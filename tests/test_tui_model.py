@@ -21,6 +21,7 @@ from bus.messages import (
     VehicleSummary,
 )
 from tui import format as fmt
+from tui.format import job_totals_text
 from tui.inbox import Inbox
 from tui.inputs import BadPayload, OrchestratorPresence, VehiclePresence
 from tui.model import ConsoleModel
@@ -251,6 +252,23 @@ def test_finished_jobs_are_bounded_oldest_first() -> None:
         model.apply(job(f"j{i}", "done", updated=float(i)), 0.0)
     model.apply(job("q", "queued"), 0.0)
     assert [r.job.job_id for r in model.queue_rows()] == ["q", "j4", "j3", "j2"]
+
+
+def test_job_totals_come_from_the_orchestrators_counts_not_the_bounded_list() -> None:
+    model = ConsoleModel(SETTINGS, max_finished=100)
+    finished = [job(f"j{i}", "done", updated=float(i)) for i in range(600)]
+    full = msgspec.structs.replace(
+        snapshot(finished[-500:]), job_counts={"done": 600, "failed": 4, "queued": 1}
+    )
+    model.apply_snapshot(full, 10.0, full=True)
+    assert len(model.queue_rows()) == 100  # the list stays bounded
+    assert job_totals_text(model.job_counts) == "; 600 done, 4 failed"
+    version = model.status_version
+    fleet = msgspec.structs.replace(snapshot([], time_s=11.0), job_counts={"done": 601})
+    model.apply(fleet, 11.0)  # a fleet publication carries the totals too
+    assert job_totals_text(model.job_counts) == "; 601 done"
+    assert model.status_version > version  # the header redraws
+    assert job_totals_text({}) == ""  # nothing said before the first count
 
 
 def test_refused_commands_and_bad_payloads_are_logged() -> None:

@@ -22,6 +22,7 @@ from textual.widgets import Footer
 
 from bus.messages import CommandReply, ErrorInfo, JobState, OperatorCommand, Telemetry
 from tui import commands as cmd
+from tui.format import job_totals_text
 from tui.inbox import Inbox
 from tui.inputs import BusInput, OrchestratorPresence
 from tui.link import ConsoleLink
@@ -222,7 +223,8 @@ class ConsoleApp(App[None]):
         self._header.awaiting = m.awaiting_count()
         counts = m.state_counts()
         text = f"{sum(counts.values())} vehicles, {counts.get('writing', 0)} writing"
-        self._header.counts = text + (f", {counts['lost']} lost" if counts.get("lost") else "")
+        text += f", {counts['lost']} lost" if counts.get("lost") else ""
+        self._header.counts = text + job_totals_text(m.job_counts)
         if m.last_reply is not None:
             command, reply = m.last_reply
             self._header.last_reply = f"{command.command}: {_reply_text(reply)}"

@@ -136,3 +136,11 @@ def vehicle_state_text(state: str, held: bool) -> Text:
 def short_id(identifier: str, width: int = 8) -> str:
     """An identifier (or label) from the bus, cleaned and cut to ``width`` characters."""
     return clean(identifier, width)
+
+
+def job_totals_text(job_counts: dict[str, int]) -> str:
+    """``; 612 done, 3 failed`` from the orchestrator's job counts; empty before any count."""
+    if not job_counts:
+        return ""
+    done, failed = job_counts.get("done", 0), job_counts.get("failed", 0)
+    return f"; {done} done" + (f", {failed} failed" if failed else "")

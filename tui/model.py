@@ -70,6 +70,9 @@ class ConsoleModel:
         self.last_snapshot_s: float | None = None
         """Arrival time of the latest snapshot or fleet message."""
         self.queue_paused = False
+        self.job_counts: dict[str, int] = {}
+        """Jobs of the show per state, all of them, as the orchestrator last counted (the job
+        list keeps only the latest ``max_finished`` finished ones)."""
         self.dirty_boards: frozenset[str] = frozenset()
         """Boards left half-written: the orchestrator waits for the operator's fresh sheet."""
         self.last_reply: tuple[OperatorCommand, CommandReply] | None = None
@@ -272,6 +275,9 @@ class ConsoleModel:
             self.tracks_version += 1  # board titles say it
         if self.queue_paused != snapshot.queue_paused:
             self.queue_paused = snapshot.queue_paused
+            self.status_version += 1
+        if self.job_counts != snapshot.job_counts:
+            self.job_counts = dict(snapshot.job_counts)
             self.status_version += 1
         self.last_snapshot_s = now_s
         self.fleet_version += 1
