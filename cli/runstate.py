@@ -106,9 +106,11 @@ class RunFile:
             raise RunFileError(f"{path}: unreadable run file ({exc}); delete it") from exc
 
 
-def run_file_path(database_path: Path) -> Path:
-    """The run file of the show whose SQLite file is ``database_path``."""
-    return Path(database_path).parent / RUN_FILE_NAME
+def run_file_path(database_path: Path, host: str | None = None) -> Path:
+    """The run file of the show whose SQLite file is ``database_path`` (``up-<host>.json`` for
+    one host of a show across machines)."""
+    name = RUN_FILE_NAME if host is None else f"up-{host}.json"
+    return Path(database_path).parent / name
 
 
 class AdoptedProcess:

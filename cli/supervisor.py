@@ -100,6 +100,29 @@ class _Child:
     log: IO[bytes] | None = field(default=None, repr=False)
 
 
+@dataclass
+class StopReport:
+    """How a :meth:`Supervisor.stop` went."""
+
+    stop_s: dict[str, float] = field(default_factory=dict)
+    """Per child: [s] from its SIGTERM until it was gone."""
+    killed: list[str] = field(default_factory=list)
+    """Children that outlived their grace and got SIGKILL."""
+    total_s: float = 0.0
+    """Wall time of the whole stop, every group, in [s]."""
+
+    def summary(self) -> str:
+        """One line: how many stopped, how long, the slowest, how many were killed."""
+        if not self.stop_s:
+            return "nothing was running"
+        slowest = max(self.stop_s, key=lambda name: self.stop_s[name])
+        killed = ", ".join(self.killed) if self.killed else "none"
+        return (
+            f"stopped {len(self.stop_s)} processes in {self.total_s:.1f} s (slowest: {slowest}, "
+            f"{self.stop_s[slowest]:.1f} s); SIGKILLed: {killed}"
+        )
+
+
 def _die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
     try:
         libc = ctypes.CDLL("libc.so.6", use_errno=True)
@@ -209,36 +232,51 @@ class Supervisor:
                 self._spawn(child)
                 self._say(f"{name} restarted (pid {self.pid(name)})")
 
-    def stop(self, grace_s: float | None = None) -> None:
+    def stop(self, grace_s: float | None = None) -> StopReport:
         """Stop every child, group by group (``ChildSpec.stop_group``): SIGTERM, then wait for
         each child its own grace (``grace_s`` if given, else its ``stop_grace_s``), then SIGKILL
-        only the children that outlived theirs."""
+        only the children that outlived theirs. Returns how long each took."""
         self.stopping = True
+        started = time.monotonic()
+        report = StopReport()
         for group in sorted({c.spec.stop_group for c in self._children.values()}):
             members = [c for c in self._children.values() if c.spec.stop_group == group]
-            self._stop_group([c for c in members if c.process is not None], grace_s)
+            self._stop_group([c for c in members if c.process is not None], grace_s, report)
         for child in self._children.values():
             if child.log is not None:
                 child.log.close()
                 child.log = None
+        report.total_s = time.monotonic() - started
+        return report
 
-    def _stop_group(self, members: Sequence[_Child], grace_s: float | None) -> None:
-        deadlines: dict[str, tuple[float, float]] = {}
+    def _stop_group(
+        self, members: Sequence[_Child], grace_s: float | None, report: StopReport
+    ) -> None:
+        signalled_s = time.monotonic()
+        waiting: dict[str, _Child] = {}
         for child in members:
             assert child.process is not None
             if child.process.poll() is None:
                 child.process.send_signal(signal.SIGTERM)
-            grace = child.spec.stop_grace_s if grace_s is None else grace_s
-            deadlines[child.spec.name] = (grace, time.monotonic() + grace)
-        for child in members:
-            assert child.process is not None
-            grace, deadline = deadlines[child.spec.name]
-            try:
-                child.process.wait(timeout=max(0.0, deadline - time.monotonic()))
-            except subprocess.TimeoutExpired:
-                self._say(f"{child.spec.name} did not stop in {grace:.0f} s; killing it")
-                child.process.kill()
-                child.process.wait()
+            waiting[child.spec.name] = child
+        while waiting:
+            now = time.monotonic()
+            for name, child in list(waiting.items()):
+                assert child.process is not None
+                grace = child.spec.stop_grace_s if grace_s is None else grace_s
+                if child.process.poll() is not None:
+                    report.stop_s[name] = now - signalled_s
+                elif now - signalled_s >= grace:
+                    self._say(f"{name} did not stop in {grace:.0f} s; killing it")
+                    child.process.kill()
+                    child.process.wait()
+                    report.stop_s[name] = time.monotonic() - signalled_s
+                    report.killed.append(name)
+                else:
+                    continue
+                del waiting[name]
+            if waiting:
+                time.sleep(0.02)
 
     def run_until(self, done: Callable[[], bool], period_s: float = 0.1) -> None:
         """Poll until ``done()`` is true."""
@@ -291,12 +329,16 @@ def show_children(
     kiosk: bool = False,
     mavlink_sim: bool = False,
     router: bool = True,
+    services: bool = True,
+    host: str | None = None,
     log_dir: Path | None = None,
     verbose: bool = False,
 ) -> list[ChildSpec]:
     """The show's Zenoh router (``skyquill router``), optionally the simulated MAVLink vehicles
     (``skyquill sim-mavlink``), the orchestrator, one agent per vehicle, then optionally the
-    kiosk; stopped agents and kiosk first, the router last."""
+    kiosk; stopped agents and kiosk first, the router last. ``host``: one host of a show across
+    machines (its router); ``services``: whether the orchestrator (and kiosk, sim-mavlink) run
+    here, as on the ground station."""
     show = str(show_path)
 
     def log(name: str) -> Path | None:
@@ -304,20 +346,18 @@ def show_children(
 
     specs = []
     if router:
-        router_argv = skyquill_argv("router", show)
+        router_argv = skyquill_argv("router", show, *(() if host is None else ("--host", host)))
         specs.append(ChildSpec("router", router_argv, log("router"), ROUTER_RESTART, stop_group=3))
-    if mavlink_sim:
+    if mavlink_sim and services:
         argv = ["sim-mavlink", show]
         if time_scale is not None:
             argv += ["--time-scale", repr(time_scale)]
         specs.append(
             ChildSpec("sim-mavlink", skyquill_argv(*argv), log("sim-mavlink"), stop_group=2)
         )
-    specs.append(
-        ChildSpec(
-            "orchestrator", skyquill_argv("orchestrator", show), log("orchestrator"), stop_group=1
-        )
-    )
+    if services:
+        orchestrator = skyquill_argv("orchestrator", show)
+        specs.append(ChildSpec("orchestrator", orchestrator, log("orchestrator"), stop_group=1))
     for vehicle_id in vehicle_ids:
         argv = ["agent", show, "--vehicle", vehicle_id]
         if time_scale is not None:
@@ -328,6 +368,6 @@ def show_children(
             f"agent {vehicle_id}", skyquill_argv(*argv), log(vehicle_id), stop_grace_s=8.0
         )
         specs.append(spec)
-    if kiosk:
+    if kiosk and services:
         specs.append(ChildSpec("kiosk", skyquill_argv("kiosk", show), log("kiosk")))
     return specs
