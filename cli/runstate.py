@@ -36,6 +36,16 @@ def start_ticks(pid: int) -> int | None:
     return int(fields[19])
 
 
+def cpu_ticks(pid: int) -> int | None:
+    """CPU time process ``pid`` has used so far, user and system, in clock ticks (None: gone)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return None
+    fields = stat.rsplit(")", 1)[1].split()
+    return int(fields[11]) + int(fields[12])
+
+
 def command_line(pid: int) -> tuple[str, ...]:
     """The argv of process ``pid`` (empty when unknown)."""
     try:

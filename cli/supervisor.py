@@ -4,7 +4,11 @@
 Children run in their own session, so a Ctrl-C in the terminal reaches only the supervisor, which
 then stops them group by group (``ChildSpec.stop_group``: agents and kiosk, then the
 orchestrator, then simulated autopilots, then the router): each child of a group gets SIGTERM and
-its own grace period, and only a child that outlives its own grace gets SIGKILL.
+its own grace period, and only a child that outlives its own grace gets SIGKILL. The grace is
+measured against the child's progress: past it, a child still using CPU (stopping, only slowed
+by the others stopping beside it on a busy machine) is given up to ``stop_limit_s``; one that
+sits idle (stuck) is killed. Fifty agents stopping at once on two cores each need several
+seconds of wall time for well under one of CPU.
 
 Whether children outlive the supervisor is a choice (``die_with_supervisor``): ``ShowRun`` (the
 demo, tests) has them get SIGTERM when it dies (``PR_SET_PDEATHSIG``), so nothing is left behind;
@@ -23,9 +27,9 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Protocol
+from typing import IO, ClassVar, Protocol
 
-from cli.runstate import AdoptedProcess
+from cli.runstate import AdoptedProcess, cpu_ticks
 
 PR_SET_PDEATHSIG = 1
 
@@ -84,7 +88,10 @@ class ChildSpec:
     restart: RestartPolicy | None = None
     """Its own restart backoff (None: the supervisor's)."""
     stop_grace_s: float = 5.0
-    """How long in [s] it may take to stop after SIGTERM before it alone gets SIGKILL."""
+    """How long in [s] it may take to stop after SIGTERM before it alone gets SIGKILL, unless it
+    is still working on it (using CPU)."""
+    stop_limit_s: float = 60.0
+    """How long in [s] a child still using CPU may take to stop before it gets SIGKILL."""
     stop_group: int = 0
     """Lower groups are stopped first; the children of one group are stopped together."""
 
@@ -108,6 +115,8 @@ class StopReport:
     """Per child: [s] from its SIGTERM until it was gone."""
     killed: list[str] = field(default_factory=list)
     """Children that outlived their grace and got SIGKILL."""
+    slow: list[str] = field(default_factory=list)
+    """Children that took longer than their grace but were busy stopping, so were let finish."""
     total_s: float = 0.0
     """Wall time of the whole stop, every group, in [s]."""
 
@@ -119,8 +128,42 @@ class StopReport:
         killed = ", ".join(self.killed) if self.killed else "none"
         return (
             f"stopped {len(self.stop_s)} processes in {self.total_s:.1f} s (slowest: {slowest}, "
-            f"{self.stop_s[slowest]:.1f} s); SIGKILLed: {killed}"
+            f"{self.stop_s[slowest]:.1f} s; {len(self.slow)} busy past their grace); "
+            f"SIGKILLed: {killed}"
         )
+
+
+@dataclass
+class _Stopping:
+    """A child between its SIGTERM and its end."""
+
+    child: _Child
+    grace_s: float
+    limit_s: float
+    cpu_ticks: int | None
+    """Its CPU time at the last look (None: unknown)."""
+    looked_s: float = field(default_factory=time.monotonic)
+
+    PROGRESS_WINDOW_S: ClassVar[float] = 0.5
+    """How often in [s] its CPU time is looked at."""
+
+    def overdue(self, elapsed_s: float, now_s: float) -> bool:
+        """Whether to kill it now: past its limit, or past its grace and idle since the last
+        look (a stuck process, not a busy one)."""
+        if elapsed_s >= self.limit_s:
+            return True
+        if elapsed_s < self.grace_s or now_s - self.looked_s < self.PROGRESS_WINDOW_S:
+            return False
+        assert self.child.process is not None
+        before, self.cpu_ticks = self.cpu_ticks, cpu_ticks(self.child.process.pid)
+        self.looked_s = now_s
+        return before is None or self.cpu_ticks is None or self.cpu_ticks <= before
+
+    def why_killed(self, elapsed_s: float) -> str:
+        name = self.child.spec.name
+        if self.limit_s > self.grace_s and elapsed_s >= self.limit_s:
+            return f"{name} was still stopping after {self.limit_s:.0f} s; killing it"
+        return f"{name} did not stop in {self.grace_s:.0f} s; killing it"
 
 
 def _die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
@@ -253,27 +296,29 @@ class Supervisor:
         self, members: Sequence[_Child], grace_s: float | None, report: StopReport
     ) -> None:
         signalled_s = time.monotonic()
-        waiting: dict[str, _Child] = {}
+        waiting: dict[str, _Stopping] = {}
         for child in members:
             assert child.process is not None
             if child.process.poll() is None:
                 child.process.send_signal(signal.SIGTERM)
-            waiting[child.spec.name] = child
+            grace = child.spec.stop_grace_s if grace_s is None else grace_s
+            limit = max(grace, child.spec.stop_limit_s) if grace_s is None else grace_s
+            waiting[child.spec.name] = _Stopping(child, grace, limit, cpu_ticks(child.process.pid))
         while waiting:
             now = time.monotonic()
-            for name, child in list(waiting.items()):
-                assert child.process is not None
-                grace = child.spec.stop_grace_s if grace_s is None else grace_s
-                if child.process.poll() is not None:
-                    report.stop_s[name] = now - signalled_s
-                elif now - signalled_s >= grace:
-                    self._say(f"{name} did not stop in {grace:.0f} s; killing it")
-                    child.process.kill()
-                    child.process.wait()
-                    report.stop_s[name] = time.monotonic() - signalled_s
-                    report.killed.append(name)
-                else:
+            for name, stopping in list(waiting.items()):
+                process = stopping.child.process
+                assert process is not None
+                if process.poll() is None and not stopping.overdue(now - signalled_s, now):
                     continue
+                if process.poll() is None:
+                    self._say(stopping.why_killed(now - signalled_s))
+                    process.kill()
+                    process.wait()
+                    report.killed.append(name)
+                report.stop_s[name] = time.monotonic() - signalled_s
+                if name not in report.killed and report.stop_s[name] > stopping.grace_s:
+                    report.slow.append(name)
                 del waiting[name]
             if waiting:
                 time.sleep(0.02)

@@ -179,16 +179,16 @@ def wire(ns_a: str, dev_a: str, ns_b: str, dev_b: str) -> None:
     other = {ends[0]: ends[1], ends[1]: ends[0]}
     rng = random.Random(15)
     queue: list[tuple[float, int, int, bytes]] = []
-    cut, count = False, 0
+    cut, count, control = False, 0, sys.stdin.fileno()
     while True:
         wait_s = max(0.0, queue[0][0] - time.monotonic()) if queue else 1.0
-        ready, _, _ = select.select([*ends, sys.stdin], [], [], wait_s)
+        ready, _, _ = select.select([*ends, control], [], [], wait_s)
         for fd in ready:
-            if fd is sys.stdin:
-                line = sys.stdin.readline()
-                if not line:
+            if fd == control:
+                said = os.read(control, 256).split()
+                if not said:
                     return
-                cut = line.strip() == "cut"
+                cut = said[-1] == b"cut"
                 continue
             with contextlib.suppress(BlockingIOError):
                 while packet := os.read(fd, 65536):
