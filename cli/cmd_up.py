@@ -106,7 +106,7 @@ def host_plan(show: Show, host: str | None) -> HostPlan:
 def _prepare(args: argparse.Namespace, show: Show) -> tuple[HostPlan, RunFile | None, list[str]]:
     """The host's plan, an earlier run file of it, and the identities issued now."""
     from cli.runstate import RunFileError
-    from trust.hosts import host_of, router_identity
+    from trust.hosts import host_of
     from trust.settings import check_keys, ensure_show_keys, identities
 
     plan = host_plan(show, args.host)
@@ -119,9 +119,20 @@ def _prepare(args: argparse.Namespace, show: Show) -> tuple[HostPlan, RunFile | 
     if plan.services:
         return plan, previous, ensure_show_keys(show)
     assert plan.host is not None
-    router = router_identity(plan.host, show.zenoh.hosts[plan.host])
-    check_keys(show, [i for i in identities(show) if host_of(show, i) == plan.host] + [router])
+    check_keys(show, [i for i in identities(show) if host_of(show, i) == plan.host])
     return plan, previous, []
+
+
+def _viewers(args: argparse.Namespace, show: Show, plan: HostPlan) -> tuple[bool, bool]:
+    """Whether to run the console in the foreground, and the kiosk (both on the ground station
+    only: a companion host holds no operator's or kiosk's keys)."""
+    from cli.supervisor import has_command
+
+    terminal = sys.stdin.isatty() and sys.stdout.isatty()
+    tui = plan.services and not args.headless and has_command("tui") and terminal
+    enabled = getattr(show.kiosk, "enabled", "kiosk" in show.model_fields_set)
+    kiosk = plan.services and not args.no_kiosk and has_command("kiosk") and bool(enabled)
+    return tui, kiosk
 
 
 def _host_arg(host: str | None) -> str:
@@ -130,7 +141,7 @@ def _host_arg(host: str | None) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from cli.runstate import RunFileError
-    from cli.supervisor import child_env, has_command, show_children, skyquill_argv
+    from cli.supervisor import child_env, show_children, skyquill_argv
     from showfile import ShowError, load_show
     from trust.hosts import HostError
 
@@ -142,15 +153,12 @@ def run(args: argparse.Namespace) -> int:
     if args.time_scale is not None and not args.time_scale > 0.0:
         print("skyquill up: --time-scale must be positive", file=sys.stderr)
         return 2
-    terminal = sys.stdin.isatty() and sys.stdout.isatty()
-    tui = not args.headless and has_command("tui") and terminal
-    enabled = getattr(show.kiosk, "enabled", "kiosk" in show.model_fields_set)
-    kiosk = not args.no_kiosk and has_command("kiosk") and bool(enabled)
     try:
         plan, previous, made = _prepare(args, show)
     except (RunFileError, HostError, OSError) as exc:
         print(f"skyquill up: {exc}", file=sys.stderr)
         return 2 if isinstance(exc, HostError) else 1
+    tui, kiosk = _viewers(args, show, plan)
     if made:
         print(f"skyquill up: issued keys in {show.keys_dir}: {', '.join(made)}", file=sys.stderr)
     specs = show_children(
