@@ -4,12 +4,12 @@ many of its processes needed SIGKILL (the target: none).
     .venv/bin/python benchmarks/bench_stop.py [--vehicles 50] [--start-timeout 600]
 
 A real ``skyquill up --headless`` of the Airshow show widened to ``--vehicles`` sim vehicles (a
-board each, 2 m apart) is started; once every vehicle is present at the orchestrator, ``skyquill
-down`` stops it. The supervisor's own account (``up.log``: the slowest child's time from SIGTERM
-to gone, who was SIGKILLed, and how many took longer than their grace but were let finish as they
-were still busy stopping: the earlier supervisor killed those) is printed beside the same for a
-one-vehicle show (the peer, measured in the same run). Heavy: 50 agents take about 8 GB and both
-cores while they start; run it once, under ``nice``.
+board each, 2 m apart) is started; once every agent is on the bus (idle, as when a show ends),
+``skyquill down`` stops it. The supervisor's own account (``up.log``: the slowest child's time
+from SIGTERM to gone, who was SIGKILLed, and how many took longer than their grace but were let
+finish as they were still busy stopping: the earlier supervisor killed those) is printed beside
+the same for a one-vehicle show (the peer, measured in the same run). Heavy: 50 agents take
+about 8 GB and both cores while they start; run it once, under ``nice``.
 """
 
 from __future__ import annotations
@@ -25,9 +25,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bus.keys import ShowKeys  # noqa: E402
-from bus.rpc import NoReplyError, RemoteError  # noqa: E402
+from bus.pubsub import alive_keys  # noqa: E402
 from bus.session import open_session  # noqa: E402
-from cli.showrun import derived_show, snapshot  # noqa: E402
+from cli.showrun import derived_show  # noqa: E402
 from cli.supervisor import child_env, skyquill_argv  # noqa: E402
 from showfile import Show, load_show  # noqa: E402
 from trust.settings import ensure_show_keys, session_settings  # noqa: E402
@@ -55,18 +55,15 @@ def wide_show(out: Path, count: int) -> tuple[Path, Show]:
 
 
 def wait_present(show: Show, timeout_s: float) -> float:
-    """Seconds until every vehicle of ``show`` is alive at the orchestrator."""
+    """Seconds until every agent of ``show`` is on the bus (its liveliness token; the router
+    answers that even while fifty agents starting keep the orchestrator too busy to)."""
     started = time.monotonic()
     keys = ShowKeys(show.show_id)
-    wanted = {v.id for v in show.vehicles}
+    wanted = {keys.vehicle_alive(v.id) for v in show.vehicles}
     settings = session_settings(show, "operator")
     with open_session(settings, role="client", open_timeout_s=timeout_s) as session:
         while time.monotonic() - started < timeout_s:
-            try:
-                alive = {v.vehicle_id for v in snapshot(session, keys).vehicles if v.alive}
-            except (NoReplyError, RemoteError):  # busy starting fifty agents
-                alive = set()
-            if wanted <= alive:
+            if wanted <= alive_keys(session, keys.vehicles_alive_all, timeout_s=5.0):
                 return time.monotonic() - started
             time.sleep(1.0)
     raise TimeoutError(f"not every vehicle present after {timeout_s:.0f} s")

@@ -46,6 +46,23 @@ def cpu_ticks(pid: int) -> int | None:
     return int(fields[11]) + int(fields[12])
 
 
+def runnable(pid: int) -> bool:
+    """Whether a thread of process ``pid`` is running or waiting for a CPU (state ``R``): busy,
+    even when a loaded machine gives it no CPU time for a while."""
+    try:
+        tasks = list(Path(f"/proc/{pid}/task").iterdir())
+    except OSError:
+        return False
+    for task in tasks:
+        try:
+            stat = (task / "stat").read_text()
+        except OSError:
+            continue
+        if stat.rsplit(")", 1)[1].split()[0] == "R":
+            return True
+    return False
+
+
 def command_line(pid: int) -> tuple[str, ...]:
     """The argv of process ``pid`` (empty when unknown)."""
     try:

@@ -5,10 +5,10 @@ Children run in their own session, so a Ctrl-C in the terminal reaches only the 
 then stops them group by group (``ChildSpec.stop_group``: agents and kiosk, then the
 orchestrator, then simulated autopilots, then the router): each child of a group gets SIGTERM and
 its own grace period, and only a child that outlives its own grace gets SIGKILL. The grace is
-measured against the child's progress: past it, a child still using CPU (stopping, only slowed
-by the others stopping beside it on a busy machine) is given up to ``stop_limit_s``; one that
-sits idle (stuck) is killed. Fifty agents stopping at once on two cores each need several
-seconds of wall time for well under one of CPU.
+measured against the child's progress: past it, a child still using CPU or waiting for one
+(stopping, only slowed by the others stopping beside it on a busy machine) is given up to
+``stop_limit_s``; one that sits idle (stuck) is killed. Fifty agents stopping at once on two
+cores each need many seconds of wall time for about one of CPU.
 
 Whether children outlive the supervisor is a choice (``die_with_supervisor``): ``ShowRun`` (the
 demo, tests) has them get SIGTERM when it dies (``PR_SET_PDEATHSIG``), so nothing is left behind;
@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, ClassVar, Protocol
 
-from cli.runstate import AdoptedProcess, cpu_ticks
+from cli.runstate import AdoptedProcess, cpu_ticks, runnable
 
 PR_SET_PDEATHSIG = 1
 
@@ -148,16 +148,18 @@ class _Stopping:
     """How often in [s] its CPU time is looked at."""
 
     def overdue(self, elapsed_s: float, now_s: float) -> bool:
-        """Whether to kill it now: past its limit, or past its grace and idle since the last
-        look (a stuck process, not a busy one)."""
+        """Whether to kill it now: past its limit, or past its grace, idle since the last look and
+        not waiting for a CPU either (a stuck process, not a busy or a starved one)."""
         if elapsed_s >= self.limit_s:
             return True
         if elapsed_s < self.grace_s or now_s - self.looked_s < self.PROGRESS_WINDOW_S:
             return False
         assert self.child.process is not None
-        before, self.cpu_ticks = self.cpu_ticks, cpu_ticks(self.child.process.pid)
+        pid = self.child.process.pid
+        before, self.cpu_ticks = self.cpu_ticks, cpu_ticks(pid)
         self.looked_s = now_s
-        return before is None or self.cpu_ticks is None or self.cpu_ticks <= before
+        worked = before is not None and self.cpu_ticks is not None and self.cpu_ticks > before
+        return not worked and not runnable(pid)
 
     def why_killed(self, elapsed_s: float) -> str:
         name = self.child.spec.name
