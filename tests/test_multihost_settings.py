@@ -20,6 +20,7 @@ from cli.supervisor import child_env, show_children, skyquill_argv
 from showfile import Show, ShowError, dump_show, load_show
 from trust.acl import access_control
 from trust.hosts import HostError, check_hosts, endpoints, host_named
+from trust.pki import KeysError
 from trust.settings import check_keys, ensure_show_keys, identities, session_settings
 
 VENUE = Path(__file__).resolve().parent.parent / "shows" / "venue-multihost.yaml"
@@ -82,6 +83,17 @@ def test_a_companion_router_may_send_only_what_its_own_vehicles_may() -> None:
     assert not [key for m, key in granted if m == "query" and key.endswith("command")]
     assert not [key for key in keys if key.endswith("assign") and ("query", key) in granted]
     assert ("query", "skyquill/venue/orchestrator/report/uav1") in granted  # its vehicles' only
+
+
+def test_a_companion_host_never_makes_keys_it_names_the_folders_to_copy(tmp_path: Path) -> None:
+    _, show = _venue(tmp_path)
+    with pytest.raises(
+        KeysError, match=r"no valid certificate for router@rack2, uav3: copy ca.pem"
+    ):
+        check_keys(show, ["router@rack2", "uav3"])
+    assert not (tmp_path / "keys").exists()
+    ensure_show_keys(show)  # the ground station's `up`
+    check_keys(show, ["router@rack2", "uav3"])
 
 
 @pytest.mark.multiprocess
