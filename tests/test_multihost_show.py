@@ -2,205 +2,43 @@
 
 The venue of ``shows/venue-multihost.yaml``: a ground station (its router, the orchestrator) and
 two companion hosts (``rack1``: a router and agents uav1, uav2; ``rack2``: a router and uav3),
-each a network namespace with its own loopback, linked to the ground station (10.77.1.0/24,
-10.77.2.0/24). Each host runs ``skyquill up SHOW --host NAME`` unchanged; every link is mutual
-TLS, and each router enforces the generated access control.
-
-A link is a TUN device at each end and this file run as ``wire`` between them: every IP packet is
-50 ms late each way and 5 % are dropped, at random (as ``tc netem delay 50ms loss 5%`` would;
-this machine's kernel has no ``sch_netem``, and TCP sees real loss either way). The test's client
-lives on the ground station: this file run as ``observe`` submits, answers snapshots and records
-events and ink, over pipes and files.
+each a network namespace with its own loopback, linked to the ground station by a link that
+delays every packet 50 ms each way and drops 5 % (``test_multihost_venue.py``). Each host runs
+``skyquill up SHOW --host NAME`` unchanged; every link is mutual TLS, and each router enforces
+the generated access control. The test's client lives on the ground station: this file run as
+``observe`` submits, answers snapshots and records events and ink, over pipes and files.
 
 Checked: the show writes through delay and loss; a 10 s partition of the companion host whose
 vehicle is writing gets that job requeued within ``lost_after_s`` and finished on the other
 host; the vehicle, healed, comes back and never inks the reassigned job; every acknowledged
-submission is done, written completely exactly once; every host stops with no SIGKILL. Needs
-root (``ip netns``), iproute2 and ``/dev/net/tun``; skipped with the reason otherwise. The
-namespaces, their processes and links are removed at the end, also on failure.
+submission is done, written completely exactly once; every host stops with no SIGKILL. Skipped
+with the reason where namespaces are unavailable.
 """
 
 from __future__ import annotations
 
 import contextlib
-import ctypes
-import fcntl
-import heapq
 import json
-import os
-import random
-import select
-import shutil
-import signal
 import sqlite3
-import struct
 import subprocess
 import sys
 import threading
 import time
-from collections.abc import Iterator
+import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
 
 import pytest
+from test_multihost_venue import Venue, venue_fixture  # noqa: F401 (the fixture "venue")
 
 ROOT = Path(__file__).resolve().parent.parent
 VENUE = ROOT / "shows" / "venue-multihost.yaml"
 TIME_SCALE = 6.0
-DELAY_S = 0.050
-"""Every packet on a link between hosts is this late, each way, [s]."""
-LOSS = 0.05
-"""Share of the packets dropped on a link between hosts, each way."""
 PARTITION_S = 10.0
 JOB_TIMEOUT_S = 60.0
 
 pytestmark = [pytest.mark.multiprocess, pytest.mark.slow, pytest.mark.timeout(240)]
-
-
-def _why_no_namespaces() -> str | None:
-    if not sys.platform.startswith("linux"):
-        return "network namespaces are Linux only"
-    if os.geteuid() != 0:
-        return "creating network namespaces (ip netns) and TUN links needs root"
-    if shutil.which("ip") is None:
-        return "iproute2 (ip) is not installed"
-    if not Path("/dev/net/tun").exists():
-        return "no /dev/net/tun for the links between namespaces"
-    return None
-
-
-def _ip(*args: str) -> None:
-    done = subprocess.run(["ip", *args], capture_output=True, text=True, timeout=10)
-    if done.returncode != 0:
-        raise RuntimeError(f"ip {' '.join(args)}: {done.stderr.strip()}")
-
-
-@dataclass
-class Venue:
-    """Three namespaces and two impaired links; ``netns``: host -> namespace, ``wires``: the
-    companion host -> the process carrying its link."""
-
-    tag: str
-    netns: dict[str, str] = field(default_factory=dict)
-    wires: dict[str, subprocess.Popen[str]] = field(default_factory=dict)
-
-    def build(self) -> None:
-        for host in ("ground", "rack1", "rack2"):
-            name = f"{self.tag}{host[0]}{host[-1]}"
-            _ip("netns", "add", name)
-            self.netns[host] = name
-            _ip("-n", name, "link", "set", "lo", "up")
-        ground = self.netns["ground"]
-        for subnet, host in ((1, "rack1"), (2, "rack2")):
-            near, far, other = f"{self.tag}g{subnet}", f"{self.tag}h{subnet}", self.netns[host]
-            ends = (
-                (ground, near, f"10.77.{subnet}.1", f"10.77.{subnet}.2"),
-                (other, far, f"10.77.{subnet}.2", f"10.77.{subnet}.1"),
-            )
-            for netns, dev, local, peer in ends:
-                _ip("-n", netns, "tuntap", "add", "dev", dev, "mode", "tun")
-                _ip("-n", netns, "addr", "add", local, "peer", peer, "dev", dev)
-                _ip("-n", netns, "link", "set", dev, "up")
-            self.wires[host] = subprocess.Popen(
-                [sys.executable, __file__, "wire", ground, near, other, far],
-                stdin=subprocess.PIPE,
-                text=True,
-            )
-
-    def partition(self, host: str, cut: bool) -> None:
-        """Drop every packet on ``host``'s link (``cut``), or go back to delay and loss."""
-        stdin = self.wires[host].stdin
-        assert stdin is not None
-        stdin.write("cut\n" if cut else "heal\n")
-        stdin.flush()
-
-    def exec_argv(self, host: str, *argv: str) -> list[str]:
-        return ["ip", "netns", "exec", self.netns[host], *argv]
-
-    def tear_down(self) -> None:
-        """Kill what still runs in our namespaces (by pid), stop the wires, delete the
-        namespaces (their links go with them)."""
-        for netns in self.netns.values():
-            pids = subprocess.run(
-                ["ip", "netns", "pids", netns], capture_output=True, text=True, timeout=10
-            ).stdout.split()
-            for pid in pids:
-                with contextlib.suppress(ProcessLookupError):
-                    os.kill(int(pid), signal.SIGKILL)
-        for wire in self.wires.values():
-            wire.kill()
-            wire.wait()
-        for netns in self.netns.values():
-            subprocess.run(["ip", "netns", "del", netns], capture_output=True, timeout=10)
-
-
-@pytest.fixture
-def venue() -> Iterator[Venue]:
-    reason = _why_no_namespaces()
-    if reason is not None:
-        pytest.skip(reason)
-    built = Venue(tag=f"sq{os.getpid() % 100000}")
-    try:
-        try:
-            built.build()
-        except RuntimeError as exc:
-            pytest.skip(f"network namespaces unavailable here: {exc}")
-        yield built
-    finally:
-        built.tear_down()
-
-
-# --- the link between two namespaces: a userspace wire (this kernel may lack sch_netem) --------
-
-CLONE_NEWNET = 0x40000000
-TUNSETIFF = 0x400454CA
-IFF_TUN_NO_PI = 0x0001 | 0x1000
-
-
-def _open_tun(netns: str, dev: str) -> int:
-    """Enter ``netns`` (this whole process) and attach to its TUN device ``dev``."""
-    libc = ctypes.CDLL("libc.so.6", use_errno=True)
-    ns_fd = os.open(f"/var/run/netns/{netns}", os.O_RDONLY)
-    try:
-        if libc.setns(ns_fd, CLONE_NEWNET) != 0:
-            raise OSError(ctypes.get_errno(), f"setns {netns}")
-    finally:
-        os.close(ns_fd)
-    fd = os.open("/dev/net/tun", os.O_RDWR | os.O_NONBLOCK)
-    fcntl.ioctl(fd, TUNSETIFF, struct.pack("16sH", dev.encode(), IFF_TUN_NO_PI))
-    return fd
-
-
-def wire(ns_a: str, dev_a: str, ns_b: str, dev_b: str) -> None:
-    """Carry IP packets between two TUN devices: each one DELAY_S late, LOSS of them dropped,
-    all dropped while cut (``cut``/``heal`` lines on stdin; end of stdin ends it)."""
-    ends = [_open_tun(ns_a, dev_a), _open_tun(ns_b, dev_b)]
-    other = {ends[0]: ends[1], ends[1]: ends[0]}
-    rng = random.Random(15)
-    queue: list[tuple[float, int, int, bytes]] = []
-    cut, count, control = False, 0, sys.stdin.fileno()
-    while True:
-        wait_s = max(0.0, queue[0][0] - time.monotonic()) if queue else 1.0
-        ready, _, _ = select.select([*ends, control], [], [], wait_s)
-        for fd in ready:
-            if fd == control:
-                said = os.read(control, 256).split()
-                if not said:
-                    return
-                cut = said[-1] == b"cut"
-                continue
-            with contextlib.suppress(BlockingIOError):
-                while packet := os.read(fd, 65536):
-                    if not cut and rng.random() >= LOSS:
-                        count += 1
-                        heapq.heappush(
-                            queue, (time.monotonic() + DELAY_S, count, other[fd], packet)
-                        )
-        while queue and queue[0][0] <= time.monotonic():
-            _, _, out, packet = heapq.heappop(queue)
-            with contextlib.suppress(OSError):
-                os.write(out, packet)
 
 
 # --- the client on the ground station -----------------------------------------------------------
@@ -263,11 +101,10 @@ class Observer:
 def observe(show_path: str, out_dir: str) -> None:
     """The client: answers requests on stdin, appends events and ink to files in ``out_dir``."""
     from bus.keys import ShowKeys
-    from bus.messages import Event, Telemetry, encode
+    from bus.messages import Event, Telemetry
     from bus.pubsub import subscribe
-    from bus.rpc import NoReplyError, RemoteError
     from bus.session import open_session
-    from cli.showrun import Stagehand, snapshot, submit_texts
+    from cli.showrun import Stagehand
     from showfile import load_show
     from trust.settings import session_settings
 
@@ -298,16 +135,34 @@ def observe(show_path: str, out_dir: str) -> None:
         subscribe(session, keys.events, Event, on_event)
         subscribe(session, keys.telemetry_all, Telemetry, on_telemetry)
         for line in sys.stdin:
-            request = json.loads(line)
-            if "submit" in request:
-                (reply,) = submit_texts(session, keys, [request["submit"]], timeout_s=60.0)
-                answer = json.dumps({"job_id": reply.job_id})
-            else:
-                try:
-                    answer = encode(snapshot(session, keys, timeout_s=5.0)).decode()
-                except (NoReplyError, RemoteError):  # the orchestrator is not up yet
-                    answer = json.dumps({"jobs": [], "vehicles": []})
-            print(answer, flush=True)
+            print(_answer(session, keys, json.loads(line)), flush=True)
+
+
+def _answer(session: Any, keys: Any, request: dict[str, Any]) -> str:
+    """A submission, acknowledged (retried under one idempotency key while the orchestrator is
+    busy or away), or the orchestrator's snapshot (empty while it is not up)."""
+    from bus.messages import SubmitReply, SubmitRequest, encode
+    from bus.rpc import NoReplyError, RemoteError, query_one
+    from cli.showrun import snapshot
+
+    if "submit" not in request:
+        try:
+            return encode(snapshot(session, keys, timeout_s=5.0)).decode()
+        except (NoReplyError, RemoteError):
+            return json.dumps({"jobs": [], "vehicles": []})
+    submission = SubmitRequest(
+        text=request["submit"], client_id="multihost", idempotency_key=uuid.uuid4().hex
+    )
+    deadline = time.monotonic() + 60.0
+    while True:
+        try:
+            reply = query_one(session, keys.submit, submission, SubmitReply, timeout_s=5.0)
+            assert reply.ok, f"{submission.text} refused: {reply.error}"
+            return json.dumps({"job_id": reply.job_id})
+        except (NoReplyError, RemoteError):
+            pass
+        assert time.monotonic() < deadline, f"{submission.text} not acknowledged in 60 s"
+        time.sleep(0.5)
 
 
 # --- the show ------------------------------------------------------------------------------------
@@ -482,5 +337,3 @@ def _check_written_once(show: Any, observer: Observer) -> None:
 if __name__ == "__main__" and sys.argv[1:2] == ["observe"]:
     sys.path.insert(0, str(ROOT))
     observe(sys.argv[2], sys.argv[3])
-elif __name__ == "__main__" and sys.argv[1:2] == ["wire"]:
-    wire(*sys.argv[2:6])
