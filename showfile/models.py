@@ -69,7 +69,8 @@ class ZenohSettings(_Model):
     """How long clients and peers retry reaching the router at start, in [s]."""
     hosts: dict[Identifier, ZenohHost] = Field(default_factory=dict)
     """A show across several machines, by host name: one router per host (``skyquill up SHOW
-    --host NAME`` on each); the endpoints above are then unused. Empty: one machine."""
+    --host NAME`` on each); ``router_listen``, ``connect`` and ``router_connect`` above are then
+    unused. Empty: one machine."""
 
     @field_validator("hosts")
     @classmethod
