@@ -4,7 +4,8 @@ It reads ``<database dir>/up.json``. While that ``up`` runs, it sends it SIGTERM
 stops its processes as on Ctrl-C. When ``up`` is gone (killed) but its processes still run, it
 stops them itself in the same order: agents and kiosk, the orchestrator, simulated autopilots,
 the router last; each gets SIGTERM and its own grace period, and only one that outlives its own
-grace gets SIGKILL.
+grace gets SIGKILL. ``--host NAME`` stops one host of a show across machines (the processes in
+its ``up-<host>.json``).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from cli.cmd_up import HostPlan
     from cli.runstate import RunFile
     from showfile import Show
 
@@ -31,16 +33,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--timeout", type=float, default=60.0, help="how long to wait for the show to stop [s]"
     )
+    parser.add_argument("--host", default=None, help="the host to stop (a show across machines)")
 
 
 def run(args: argparse.Namespace) -> int:
-    from cli.runstate import RunFile, RunFileError, run_file_path
+    from cli.cmd_up import host_plan
+    from cli.runstate import RunFile, RunFileError
     from showfile import ShowError, load_show
+    from trust.hosts import HostError
 
     try:
         show = load_show(args.show)
-        runfile = RunFile.load(run_file_path(show.database_path))
-    except (ShowError, RunFileError) as exc:
+        plan = host_plan(show, args.host)
+        runfile = RunFile.load(plan.run_file)
+    except (ShowError, RunFileError, HostError) as exc:
         print(f"skyquill down: {exc}", file=sys.stderr)
         return 2
     if runfile is None:
@@ -61,10 +67,10 @@ def run(args: argparse.Namespace) -> int:
             time.sleep(0.1)
         print(f"skyquill down: show {show.show_id} stopped (skyquill up pid {up.pid})")
         return 0
-    return _stop_orphans(args.show, show, runfile)
+    return _stop_orphans(args.show, show, runfile, plan)
 
 
-def _stop_orphans(show_path: Path, show: Show, runfile: RunFile) -> int:
+def _stop_orphans(show_path: Path, show: Show, runfile: RunFile, plan: HostPlan) -> int:
     """``up`` is gone: stop the processes it left, as it would have."""
     from cli.runstate import AdoptedProcess
     from cli.supervisor import ChildSpec, Supervisor, show_children
@@ -72,7 +78,12 @@ def _stop_orphans(show_path: Path, show: Show, runfile: RunFile) -> int:
     known = {
         spec.name: spec
         for spec in show_children(
-            show_path, [v.id for v in show.vehicles], kiosk=True, mavlink_sim=True
+            show_path,
+            plan.vehicle_ids,
+            kiosk=True,
+            mavlink_sim=True,
+            services=plan.services,
+            host=plan.host,
         )
     }
     running = {name: record for name, record in runfile.children.items() if record.alive()}
@@ -80,7 +91,7 @@ def _stop_orphans(show_path: Path, show: Show, runfile: RunFile) -> int:
     supervisor = Supervisor(specs, say=lambda line: print(f"skyquill down: {line}"))
     for name, record in running.items():
         supervisor.adopt(name, AdoptedProcess(record))
-    supervisor.stop()
+    print(f"skyquill down: {supervisor.stop().summary()}")
     runfile.remove()
     names = ", ".join(running) or "nothing was left running"
     print(f"skyquill down: show {show.show_id} stopped ({names})")

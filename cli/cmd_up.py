@@ -11,6 +11,12 @@ is a viewer: quitting it leaves the show running (``up`` stays in the foreground
 console), a crash reopens it. The show stops only on purpose: Ctrl-C or SIGTERM to ``up``, or
 ``skyquill down SHOW`` from any shell. Each process then gets SIGTERM and its own grace period.
 
+A show across several machines (``zenoh.hosts`` in the show file) is started with ``--host NAME``
+on each: that host's router, and the orchestrator and kiosk on the ground station, the agents of
+its vehicles on a companion host. Only the ground station makes the show's keys; a companion host
+needs its identities copied there first. Its run file and logs are ``up-<host>.json`` and
+``logs/<host>/``.
+
 The children outlive ``up`` itself: a killed ``up``, or a hung-up terminal, never takes the
 router or a vehicle down. Started again, ``up`` adopts the processes that still run (same pid,
 same start time, same command line) and starts the missing ones; ``skyquill down`` stops them.
@@ -26,11 +32,16 @@ import sys
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from cli.runstate import AdoptedProcess, ProcessRecord, RunFile, command_line
 from cli.supervisor import ChildSpec, Supervisor
 from cli.viewer import ConsoleViewer, UpOutput, enter_pressed
+
+if TYPE_CHECKING:
+    from showfile import Show
 
 NAME = "up"
 HELP = "Start a whole show: Zenoh router, orchestrator and one agent per vehicle, supervised."
@@ -51,13 +62,88 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="simulated seconds per wall second for sim vehicles (default: the show's)",
     )
     parser.add_argument("-v", "--verbose", action="store_true", help="agents log every command")
+    parser.add_argument(
+        "--host", default=None, help="start only this host's processes (a show across machines)"
+    )
+
+
+@dataclass(frozen=True)
+class HostPlan:
+    """What one ``up`` runs: the whole show, or one host of a show across machines."""
+
+    host: str | None
+    """The host (None: a one-machine show)."""
+    vehicle_ids: tuple[str, ...]
+    """Agents to run here."""
+    services: bool
+    """Whether the orchestrator (and kiosk, simulated autopilots) run here."""
+    log_dir: Path
+    """Where the children's logs go."""
+    run_file: Path
+    """Where the run file is kept."""
+
+
+def host_plan(show: Show, host: str | None) -> HostPlan:
+    """The processes of ``host`` (HostError when the show and ``--host`` do not fit)."""
+    from cli.runstate import run_file_path
+    from trust.hosts import HostError, check_hosts, host_named
+
+    logs = show.database_path.parent / "logs"
+    if host is None:
+        if show.zenoh.hosts:
+            raise HostError(
+                f"show {show.show_id} spans hosts {', '.join(show.zenoh.hosts)}: "
+                f"give --host NAME on each"
+            )
+        vehicles = tuple(v.id for v in show.vehicles)
+        return HostPlan(None, vehicles, True, logs, run_file_path(show.database_path))
+    check_hosts(show)
+    spec = host_named(show, host)
+    run_file = run_file_path(show.database_path, host)
+    return HostPlan(host, spec.vehicles, spec.services, logs / host, run_file)
+
+
+def _prepare(args: argparse.Namespace, show: Show) -> tuple[HostPlan, RunFile | None, list[str]]:
+    """The host's plan, an earlier run file of it, and the identities issued now."""
+    from cli.runstate import RunFileError
+    from trust.hosts import host_of
+    from trust.settings import check_keys, ensure_show_keys, identities
+
+    plan = host_plan(show, args.host)
+    previous = RunFile.load(plan.run_file)
+    if previous is not None and previous.up is not None and previous.up.alive():
+        raise RunFileError(
+            f"show {show.show_id} runs already under skyquill up (pid {previous.up.pid}); "
+            f"`skyquill down {args.show}{_host_arg(plan.host)}` stops it"
+        )
+    if plan.services:
+        return plan, previous, ensure_show_keys(show)
+    assert plan.host is not None
+    check_keys(show, [i for i in identities(show) if host_of(show, i) == plan.host])
+    return plan, previous, []
+
+
+def _viewers(args: argparse.Namespace, show: Show, plan: HostPlan) -> tuple[bool, bool]:
+    """Whether to run the console in the foreground, and the kiosk (both on the ground station
+    only: a companion host holds no operator's or kiosk's keys)."""
+    from cli.supervisor import has_command
+
+    terminal = sys.stdin.isatty() and sys.stdout.isatty()
+    tui = plan.services and not args.headless and has_command("tui") and terminal
+    enabled = getattr(show.kiosk, "enabled", "kiosk" in show.model_fields_set)
+    kiosk = plan.services and not args.no_kiosk and has_command("kiosk") and bool(enabled)
+    return tui, kiosk
+
+
+def _host_arg(host: str | None) -> str:
+    return "" if host is None else f" --host {host}"
 
 
 def run(args: argparse.Namespace) -> int:
-    from cli.runstate import RunFileError, run_file_path
-    from cli.supervisor import child_env, has_command, show_children, skyquill_argv
+    from cli.runstate import RunFileError
+    from cli.supervisor import child_env, show_children, skyquill_argv
     from showfile import ShowError, load_show
-    from trust.settings import ensure_show_keys
+    from trust.hosts import HostError
 
     try:
         show = load_show(args.show)
@@ -67,37 +153,27 @@ def run(args: argparse.Namespace) -> int:
     if args.time_scale is not None and not args.time_scale > 0.0:
         print("skyquill up: --time-scale must be positive", file=sys.stderr)
         return 2
-    terminal = sys.stdin.isatty() and sys.stdout.isatty()
-    tui = not args.headless and has_command("tui") and terminal
-    enabled = getattr(show.kiosk, "enabled", "kiosk" in show.model_fields_set)
-    kiosk = not args.no_kiosk and has_command("kiosk") and bool(enabled)
-    log_dir = show.database_path.parent / "logs"
     try:
-        previous = RunFile.load(run_file_path(show.database_path))
-        if previous is not None and previous.up is not None and previous.up.alive():
-            raise RunFileError(
-                f"show {show.show_id} runs already under skyquill up (pid {previous.up.pid}); "
-                f"`skyquill down {args.show}` stops it"
-            )
-        made = ensure_show_keys(show)
-    except (RunFileError, OSError) as exc:
+        plan, previous, made = _prepare(args, show)
+    except (RunFileError, HostError, OSError) as exc:
         print(f"skyquill up: {exc}", file=sys.stderr)
-        return 1
+        return 2 if isinstance(exc, HostError) else 1
+    tui, kiosk = _viewers(args, show, plan)
     if made:
         print(f"skyquill up: issued keys in {show.keys_dir}: {', '.join(made)}", file=sys.stderr)
     specs = show_children(
         args.show,
-        [v.id for v in show.vehicles],
+        plan.vehicle_ids,
         time_scale=args.time_scale,
         kiosk=kiosk,
         mavlink_sim=show.mavlink_sim.enabled,
-        log_dir=log_dir,
+        services=plan.services,
+        host=plan.host,
+        log_dir=plan.log_dir,
         verbose=args.verbose,
     )
-    output = UpOutput(log_dir / "up.log")
-    runfile = RunFile(
-        run_file_path(show.database_path), show.show_id, ProcessRecord.of(os.getpid())
-    )
+    output = UpOutput(plan.log_dir / "up.log")
+    runfile = RunFile(plan.run_file, show.show_id, ProcessRecord.of(os.getpid()))
     supervisor = Supervisor(
         specs,
         env=child_env(),
@@ -112,8 +188,12 @@ def run(args: argparse.Namespace) -> int:
         supervisor.start()
         runfile.save()
         names = ", ".join(spec.name for spec in specs)
-        output.say(f"show {show.show_id} on {', '.join(show.zenoh.router_listen)}: {names}")
-        output.say(f"logs in {log_dir}/; stop with Ctrl-C or `skyquill down {args.show}`")
+        where = "" if plan.host is None else f" (host {plan.host})"
+        output.say(f"show {show.show_id}{where}: {names}")
+        output.say(
+            f"logs in {plan.log_dir}/; stop with Ctrl-C or `skyquill down {args.show}"
+            f"{_host_arg(plan.host)}`"
+        )
         if tui:
             viewer = ConsoleViewer(
                 skyquill_argv("tui", str(args.show)),
@@ -127,7 +207,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         output.quiet = False
         output.say("stopping")
-        supervisor.stop()
+        output.say(supervisor.stop().summary())
         runfile.remove()
         output.close()
     return 0

@@ -36,6 +36,33 @@ def start_ticks(pid: int) -> int | None:
     return int(fields[19])
 
 
+def cpu_ticks(pid: int) -> int | None:
+    """CPU time process ``pid`` has used so far, user and system, in clock ticks (None: gone)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return None
+    fields = stat.rsplit(")", 1)[1].split()
+    return int(fields[11]) + int(fields[12])
+
+
+def runnable(pid: int) -> bool:
+    """Whether a thread of process ``pid`` is running or waiting for a CPU (state ``R``): busy,
+    even when a loaded machine gives it no CPU time for a while."""
+    try:
+        tasks = list(Path(f"/proc/{pid}/task").iterdir())
+    except OSError:
+        return False
+    for task in tasks:
+        try:
+            stat = (task / "stat").read_text()
+        except OSError:
+            continue
+        if stat.rsplit(")", 1)[1].split()[0] == "R":
+            return True
+    return False
+
+
 def command_line(pid: int) -> tuple[str, ...]:
     """The argv of process ``pid`` (empty when unknown)."""
     try:
@@ -106,9 +133,11 @@ class RunFile:
             raise RunFileError(f"{path}: unreadable run file ({exc}); delete it") from exc
 
 
-def run_file_path(database_path: Path) -> Path:
-    """The run file of the show whose SQLite file is ``database_path``."""
-    return Path(database_path).parent / RUN_FILE_NAME
+def run_file_path(database_path: Path, host: str | None = None) -> Path:
+    """The run file of the show whose SQLite file is ``database_path`` (``up-<host>.json`` for
+    one host of a show across machines)."""
+    name = RUN_FILE_NAME if host is None else f"up-{host}.json"
+    return Path(database_path).parent / name
 
 
 class AdoptedProcess:

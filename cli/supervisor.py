@@ -4,7 +4,11 @@
 Children run in their own session, so a Ctrl-C in the terminal reaches only the supervisor, which
 then stops them group by group (``ChildSpec.stop_group``: agents and kiosk, then the
 orchestrator, then simulated autopilots, then the router): each child of a group gets SIGTERM and
-its own grace period, and only a child that outlives its own grace gets SIGKILL.
+its own grace period, and only a child that outlives its own grace gets SIGKILL. The grace is
+measured against the child's progress: past it, a child still using CPU or waiting for one
+(stopping, only slowed by the others stopping beside it on a busy machine) is given up to
+``stop_limit_s``; one that sits idle (stuck) is killed. Fifty agents stopping at once on two
+cores each need many seconds of wall time for about one of CPU.
 
 Whether children outlive the supervisor is a choice (``die_with_supervisor``): ``ShowRun`` (the
 demo, tests) has them get SIGTERM when it dies (``PR_SET_PDEATHSIG``), so nothing is left behind;
@@ -23,9 +27,9 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Protocol
+from typing import IO, ClassVar, Protocol
 
-from cli.runstate import AdoptedProcess
+from cli.runstate import AdoptedProcess, cpu_ticks, runnable
 
 PR_SET_PDEATHSIG = 1
 
@@ -84,7 +88,10 @@ class ChildSpec:
     restart: RestartPolicy | None = None
     """Its own restart backoff (None: the supervisor's)."""
     stop_grace_s: float = 5.0
-    """How long in [s] it may take to stop after SIGTERM before it alone gets SIGKILL."""
+    """How long in [s] it may take to stop after SIGTERM before it alone gets SIGKILL, unless it
+    is still working on it (using CPU)."""
+    stop_limit_s: float = 60.0
+    """How long in [s] a child still using CPU may take to stop before it gets SIGKILL."""
     stop_group: int = 0
     """Lower groups are stopped first; the children of one group are stopped together."""
 
@@ -98,6 +105,67 @@ class _Child:
     restart_at_s: float | None = None
     restarts: int = 0
     log: IO[bytes] | None = field(default=None, repr=False)
+
+
+@dataclass
+class StopReport:
+    """How a :meth:`Supervisor.stop` went."""
+
+    stop_s: dict[str, float] = field(default_factory=dict)
+    """Per child: [s] from its SIGTERM until it was gone."""
+    killed: list[str] = field(default_factory=list)
+    """Children that outlived their grace and got SIGKILL."""
+    slow: list[str] = field(default_factory=list)
+    """Children that took longer than their grace but were busy stopping, so were let finish."""
+    total_s: float = 0.0
+    """Wall time of the whole stop, every group, in [s]."""
+
+    def summary(self) -> str:
+        """One line: how many stopped, how long, the slowest, how many were killed."""
+        if not self.stop_s:
+            return "nothing was running"
+        slowest = max(self.stop_s, key=lambda name: self.stop_s[name])
+        killed = ", ".join(self.killed) if self.killed else "none"
+        return (
+            f"stopped {len(self.stop_s)} processes in {self.total_s:.1f} s (slowest: {slowest}, "
+            f"{self.stop_s[slowest]:.1f} s; {len(self.slow)} busy past their grace); "
+            f"SIGKILLed: {killed}"
+        )
+
+
+@dataclass
+class _Stopping:
+    """A child between its SIGTERM and its end."""
+
+    child: _Child
+    grace_s: float
+    limit_s: float
+    cpu_ticks: int | None
+    """Its CPU time at the last look (None: unknown)."""
+    looked_s: float = field(default_factory=time.monotonic)
+
+    PROGRESS_WINDOW_S: ClassVar[float] = 0.5
+    """How often in [s] its CPU time is looked at."""
+
+    def overdue(self, elapsed_s: float, now_s: float) -> bool:
+        """Whether to kill it now: past its limit, or past its grace, idle since the last look and
+        not waiting for a CPU either (a stuck process, not a busy or a starved one)."""
+        if elapsed_s >= self.limit_s:
+            return True
+        if elapsed_s < self.grace_s or now_s - self.looked_s < self.PROGRESS_WINDOW_S:
+            return False
+        assert self.child.process is not None
+        pid = self.child.process.pid
+        before, self.cpu_ticks = self.cpu_ticks, cpu_ticks(pid)
+        self.looked_s = now_s
+        worked = before is not None and self.cpu_ticks is not None and self.cpu_ticks > before
+        return not worked and not runnable(pid)
+
+    def why_killed(self, elapsed_s: float) -> str:
+        name = self.child.spec.name
+        if self.limit_s > self.grace_s and elapsed_s >= self.limit_s:
+            return f"{name} was still stopping after {self.limit_s:.0f} s; killing it"
+        return f"{name} did not stop in {self.grace_s:.0f} s; killing it"
 
 
 def _die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
@@ -209,36 +277,53 @@ class Supervisor:
                 self._spawn(child)
                 self._say(f"{name} restarted (pid {self.pid(name)})")
 
-    def stop(self, grace_s: float | None = None) -> None:
+    def stop(self, grace_s: float | None = None) -> StopReport:
         """Stop every child, group by group (``ChildSpec.stop_group``): SIGTERM, then wait for
         each child its own grace (``grace_s`` if given, else its ``stop_grace_s``), then SIGKILL
-        only the children that outlived theirs."""
+        only the children that outlived theirs. Returns how long each took."""
         self.stopping = True
+        started = time.monotonic()
+        report = StopReport()
         for group in sorted({c.spec.stop_group for c in self._children.values()}):
             members = [c for c in self._children.values() if c.spec.stop_group == group]
-            self._stop_group([c for c in members if c.process is not None], grace_s)
+            self._stop_group([c for c in members if c.process is not None], grace_s, report)
         for child in self._children.values():
             if child.log is not None:
                 child.log.close()
                 child.log = None
+        report.total_s = time.monotonic() - started
+        return report
 
-    def _stop_group(self, members: Sequence[_Child], grace_s: float | None) -> None:
-        deadlines: dict[str, tuple[float, float]] = {}
+    def _stop_group(
+        self, members: Sequence[_Child], grace_s: float | None, report: StopReport
+    ) -> None:
+        signalled_s = time.monotonic()
+        waiting: dict[str, _Stopping] = {}
         for child in members:
             assert child.process is not None
             if child.process.poll() is None:
                 child.process.send_signal(signal.SIGTERM)
             grace = child.spec.stop_grace_s if grace_s is None else grace_s
-            deadlines[child.spec.name] = (grace, time.monotonic() + grace)
-        for child in members:
-            assert child.process is not None
-            grace, deadline = deadlines[child.spec.name]
-            try:
-                child.process.wait(timeout=max(0.0, deadline - time.monotonic()))
-            except subprocess.TimeoutExpired:
-                self._say(f"{child.spec.name} did not stop in {grace:.0f} s; killing it")
-                child.process.kill()
-                child.process.wait()
+            limit = max(grace, child.spec.stop_limit_s) if grace_s is None else grace_s
+            waiting[child.spec.name] = _Stopping(child, grace, limit, cpu_ticks(child.process.pid))
+        while waiting:
+            now = time.monotonic()
+            for name, stopping in list(waiting.items()):
+                process = stopping.child.process
+                assert process is not None
+                if process.poll() is None and not stopping.overdue(now - signalled_s, now):
+                    continue
+                if process.poll() is None:
+                    self._say(stopping.why_killed(now - signalled_s))
+                    process.kill()
+                    process.wait()
+                    report.killed.append(name)
+                report.stop_s[name] = time.monotonic() - signalled_s
+                if name not in report.killed and report.stop_s[name] > stopping.grace_s:
+                    report.slow.append(name)
+                del waiting[name]
+            if waiting:
+                time.sleep(0.02)
 
     def run_until(self, done: Callable[[], bool], period_s: float = 0.1) -> None:
         """Poll until ``done()`` is true."""
@@ -291,12 +376,16 @@ def show_children(
     kiosk: bool = False,
     mavlink_sim: bool = False,
     router: bool = True,
+    services: bool = True,
+    host: str | None = None,
     log_dir: Path | None = None,
     verbose: bool = False,
 ) -> list[ChildSpec]:
     """The show's Zenoh router (``skyquill router``), optionally the simulated MAVLink vehicles
     (``skyquill sim-mavlink``), the orchestrator, one agent per vehicle, then optionally the
-    kiosk; stopped agents and kiosk first, the router last."""
+    kiosk; stopped agents and kiosk first, the router last. ``host``: one host of a show across
+    machines (its router); ``services``: whether the orchestrator (and kiosk, sim-mavlink) run
+    here, as on the ground station."""
     show = str(show_path)
 
     def log(name: str) -> Path | None:
@@ -304,20 +393,18 @@ def show_children(
 
     specs = []
     if router:
-        router_argv = skyquill_argv("router", show)
+        router_argv = skyquill_argv("router", show, *(() if host is None else ("--host", host)))
         specs.append(ChildSpec("router", router_argv, log("router"), ROUTER_RESTART, stop_group=3))
-    if mavlink_sim:
+    if mavlink_sim and services:
         argv = ["sim-mavlink", show]
         if time_scale is not None:
             argv += ["--time-scale", repr(time_scale)]
         specs.append(
             ChildSpec("sim-mavlink", skyquill_argv(*argv), log("sim-mavlink"), stop_group=2)
         )
-    specs.append(
-        ChildSpec(
-            "orchestrator", skyquill_argv("orchestrator", show), log("orchestrator"), stop_group=1
-        )
-    )
+    if services:
+        orchestrator = skyquill_argv("orchestrator", show)
+        specs.append(ChildSpec("orchestrator", orchestrator, log("orchestrator"), stop_group=1))
     for vehicle_id in vehicle_ids:
         argv = ["agent", show, "--vehicle", vehicle_id]
         if time_scale is not None:
@@ -328,6 +415,6 @@ def show_children(
             f"agent {vehicle_id}", skyquill_argv(*argv), log(vehicle_id), stop_grace_s=8.0
         )
         specs.append(spec)
-    if kiosk:
+    if kiosk and services:
         specs.append(ChildSpec("kiosk", skyquill_argv("kiosk", show), log("kiosk")))
     return specs

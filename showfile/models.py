@@ -7,6 +7,7 @@ radians (``yaw_rad``) for code.
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 from typing import Any, Literal
 
@@ -27,6 +28,28 @@ class _Model(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid", use_attribute_docstrings=True)
 
 
+class ZenohHost(_Model):
+    """One machine of a show that spans several (a ground station, companion computers): its own
+    router, linked to the ground station's, and the processes that run on it."""
+
+    router_listen: tuple[str, ...] = Field(min_length=1)
+    """Endpoints this host's router listens on (those its own processes and, on the ground
+    station, the companion routers reach it at)."""
+    connect: tuple[str, ...] = ()
+    """Endpoints this host's processes connect to (default: its router's first endpoint)."""
+    router_connect: tuple[str, ...] = ()
+    """The ground station router's endpoints as this host reaches them (a companion host)."""
+    services: bool = False
+    """The ground station: the orchestrator, the kiosk and the operators' clients run here."""
+    vehicles: tuple[Identifier, ...] = ()
+    """The vehicles whose agents run on this host (each vehicle on exactly one host)."""
+
+    @property
+    def local_connect(self) -> tuple[str, ...]:
+        """Where this host's processes reach its router."""
+        return self.connect or self.router_listen[:1]
+
+
 class ZenohSettings(_Model):
     """How processes of the show find each other (explicit endpoints; see bus/session.py)."""
 
@@ -44,6 +67,35 @@ class ZenohSettings(_Model):
     """Further Zenoh settings as ``{"path/in/config": value}``."""
     open_timeout_s: float = Field(default=5.0, ge=0.0)
     """How long clients and peers retry reaching the router at start, in [s]."""
+    hosts: dict[Identifier, ZenohHost] = Field(default_factory=dict)
+    """A show across several machines, by host name: one router per host (``skyquill up SHOW
+    --host NAME`` on each); ``router_listen``, ``connect`` and ``router_connect`` above are then
+    unused. Empty: one machine."""
+
+    @field_validator("hosts")
+    @classmethod
+    def _one_ground_station(cls, hosts: dict[str, ZenohHost]) -> dict[str, ZenohHost]:
+        if not hosts:
+            return hosts
+        for name in hosts:
+            if not re.match(_ID_PATTERN, name):
+                raise ValueError(f"host name {name!r} must match {_ID_PATTERN}")
+        ground = [name for name, host in hosts.items() if host.services]
+        if len(ground) != 1:
+            raise ValueError(
+                f"exactly one host must have services: true (the ground station), not {ground}"
+            )
+        seen: dict[str, str] = {}
+        for name, host in hosts.items():
+            if not host.services and not host.router_connect:
+                raise ValueError(f"host {name}: router_connect must name the ground router")
+            for vehicle_id in host.vehicles:
+                if vehicle_id in seen:
+                    raise ValueError(
+                        f"vehicle {vehicle_id} is on hosts {seen[vehicle_id]} and {name}"
+                    )
+                seen[vehicle_id] = name
+        return hosts
 
 
 class StorageSettings(_Model):

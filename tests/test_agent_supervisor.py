@@ -114,6 +114,32 @@ def test_each_child_gets_its_own_grace_and_only_a_stubborn_one_is_killed(tmp_pat
     assert 1.0 <= elapsed < 3.0  # the slow agent's 1 s, not its 3 s grace, nor the router's 5 s
 
 
+@pytest.mark.multiprocess
+def test_a_child_busy_stopping_outlives_its_grace_and_only_its_limit_ends_it() -> None:
+    """Past its grace, a child still using CPU is slow (a busy machine), not stuck."""
+    said: list[str] = []
+
+    def busy_for(seconds: float) -> tuple[str, ...]:
+        return python(
+            "import signal, sys, time\n"
+            f"def bye(*_):\n    end = time.monotonic() + {seconds}\n"
+            "    while time.monotonic() < end:\n        pass\n    sys.exit(0)\n"
+            "signal.signal(signal.SIGTERM, bye)\n"
+            "time.sleep(60)\n"
+        )
+
+    specs = [
+        ChildSpec("agent busy", busy_for(2.0), stop_grace_s=0.5, stop_limit_s=20.0),
+        ChildSpec("agent spinning", busy_for(60.0), stop_grace_s=0.5, stop_limit_s=3.0),
+    ]
+    supervisor = Supervisor(specs, say=said.append)
+    supervisor.start()
+    time.sleep(1.0)  # let the children install their handlers
+    report = supervisor.stop()
+    assert said == ["agent spinning was still stopping after 3 s; killing it"]
+    assert report.killed == ["agent spinning"] and 2.0 <= report.stop_s["agent busy"] < 20.0
+
+
 def test_an_adopted_process_is_supervised_and_replaced_when_it_dies() -> None:
     """A process a previous supervisor started: watched through /proc, restarted as ours."""
     stray = subprocess.Popen(python("import time; time.sleep(60)"))

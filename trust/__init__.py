@@ -3,7 +3,9 @@
 - ``trust.pki``: the show's certificate authority and the certificates it issues (files, 0600).
 - ``trust.acl``: the Zenoh ``access_control`` section of a show, default deny (pure).
 - ``trust.settings``: the bus settings of one identity (TLS files, endpoints, ACL on the router).
+- ``trust.hosts``: a show across machines: the host each identity runs on, its endpoints there.
 
 Identities are certificate common names: ``router``, ``orchestrator``, ``kiosk``, ``operator``
-(console and CLI), ``watcher`` and ``submitter`` (outside clients), and each vehicle's id.
+(console and CLI), ``watcher`` and ``submitter`` (outside clients), each vehicle's id, and
+``router@<host>`` for the router of each companion host of a show across machines.
 """

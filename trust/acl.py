@@ -15,12 +15,14 @@ What each identity may send:
 - ``operator``: operator commands, submissions, snapshots and vehicle commands (never an
   assignment); it watches everything;
 - ``watcher``: snapshot queries; it watches everything;
-- ``router``: anything (another router of the show, at a venue with several hosts).
+- ``router``: anything (the ground station's router, as a companion host's router sees it);
+- ``router@<host>``, a companion host's router: what the vehicles on that host may send, and
+  nothing else (``trust/hosts.py``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 from bus.keys import ShowKeys
@@ -79,8 +81,22 @@ def _egress(keys: ShowKeys) -> dict[str, Any]:
     return rule
 
 
-def access_control(show_id: str, vehicle_ids: Sequence[str]) -> dict[str, Any]:
-    """The ``access_control`` section for the show's router (default deny)."""
+def _companion(keys: ShowKeys, router: str, vehicle_ids: Sequence[str]) -> list[dict[str, Any]]:
+    """A companion router forwards its vehicles' messages: their rules, under its own name."""
+    rules = []
+    for vehicle_id in vehicle_ids:
+        for rule in _vehicle(keys, vehicle_id):
+            rules.append({**rule, "id": f"{router}: {rule['id']}"})
+    return rules
+
+
+def access_control(
+    show_id: str,
+    vehicle_ids: Sequence[str],
+    companion_routers: Mapping[str, Sequence[str]] | None = None,
+) -> dict[str, Any]:
+    """The ``access_control`` section for the show's routers (default deny);
+    ``companion_routers``: each companion host's router identity and its vehicles."""
     keys = ShowKeys(show_id)
     everything = [f"{keys.prefix}/**"]
     egress = _egress(keys)
@@ -98,6 +114,8 @@ def access_control(show_id: str, vehicle_ids: Sequence[str]) -> dict[str, Any]:
     }
     for vehicle_id in vehicle_ids:
         per_subject[vehicle_id] = _vehicle(keys, vehicle_id)
+    for router, carried in (companion_routers or {}).items():
+        per_subject[router] = _companion(keys, router, carried)
     rules = [egress]
     subjects = []
     policies = []

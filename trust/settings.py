@@ -16,6 +16,7 @@ from bus.session import BusSettings
 from showfile import Show
 from showfile.security import SERVICE_ROLES
 from trust.acl import access_control
+from trust.hosts import GROUND_ROUTER, all_endpoints, companion_routers, endpoints
 from trust.pki import IdentityFiles, KeysError, identity_files, is_valid, issue
 
 log = logging.getLogger(__name__)
@@ -31,9 +32,9 @@ def _host(endpoint: str) -> str | None:
 
 
 def show_hosts(show: Show) -> list[str]:
-    """Host names and addresses the router is reached at, for its certificate."""
-    endpoints = [*show.zenoh.router_listen, *show.zenoh.connect, *show.zenoh.router_connect]
-    hosts = [h for h in (_host(e) for e in endpoints) if h and h not in ("0.0.0.0", "::")]
+    """Host names and addresses the routers are reached at, for their certificates."""
+    named = [_host(e) for e in all_endpoints(show)]
+    hosts = [h for h in named if h and h not in ("0.0.0.0", "::")]
     return list(dict.fromkeys(hosts))
 
 
@@ -43,8 +44,8 @@ def as_tls(endpoints: Sequence[str]) -> tuple[str, ...]:
 
 
 def identities(show: Show) -> list[str]:
-    """Every identity a show runs: the services and one per vehicle."""
-    return [*SERVICE_ROLES, *(v.id for v in show.vehicles)]
+    """Every identity a show runs: the services, one per vehicle, one per companion router."""
+    return [*SERVICE_ROLES, *(v.id for v in show.vehicles), *companion_routers(show)]
 
 
 def ensure_show_keys(show: Show) -> list[str]:
@@ -59,6 +60,21 @@ def ensure_show_keys(show: Show) -> list[str]:
             issue(show.keys_dir, files, show_id=show.show_id, hosts=hosts)
             issued.append(identity)
     return issued
+
+
+def check_keys(show: Show, wanted: Sequence[str]) -> None:
+    """Raise :class:`KeysError` unless every identity in ``wanted`` has valid files: a companion
+    host never makes keys (it has no CA key); they are copied from the ground station."""
+    if show.security.mode == "none":
+        return
+    hosts = show_hosts(show)
+    bad = [i for i in wanted if not is_valid(identity_files(show.keys_dir, i), hosts)]
+    if bad:
+        raise KeysError(
+            f"{show.keys_dir}: no valid certificate for {', '.join(bad)}: copy ca.pem and the "
+            f"folders {', '.join(bad)} from the ground station's keys folder (where `skyquill up "
+            f"--host` of the ground station makes them)"
+        )
 
 
 def tls_section(files: IdentityFiles, *, router: bool) -> dict[str, Any]:
@@ -76,6 +92,11 @@ def tls_section(files: IdentityFiles, *, router: bool) -> dict[str, Any]:
     return section
 
 
+def is_router(identity: str) -> bool:
+    """Whether ``identity`` is a router's (the ground router or a companion host's)."""
+    return identity == GROUND_ROUTER or identity.startswith(f"{GROUND_ROUTER}@")
+
+
 def secured(show: Show, files: IdentityFiles, *, router: bool) -> BusSettings:
     """The show's bus settings for the identity in ``files``."""
     for path in (files.cert, files.key, files.ca):
@@ -85,16 +106,33 @@ def secured(show: Show, files: IdentityFiles, *, router: bool) -> BusSettings:
                 f"{show.source_path or show.show_id}` (or start it with `skyquill up`)"
             )
     z = show.zenoh
+    where = endpoints(show, files.common_name)
+    acl = access_control(show.show_id, [v.id for v in show.vehicles], companion_routers(show))
     return BusSettings(
-        router_listen=as_tls(z.router_listen),
-        connect=as_tls(z.connect),
+        router_listen=as_tls(where.router_listen),
+        connect=as_tls(where.connect),
         multicast_scouting=z.multicast_scouting,
-        router_connect=as_tls(z.router_connect),
+        router_connect=as_tls(where.router_connect),
         peer_listen=as_tls(z.peer_listen),
         tls=tls_section(files, router=router),
-        access_control=(
-            access_control(show.show_id, [v.id for v in show.vehicles]) if router else None
-        ),
+        access_control=acl if router else None,
+        extra=dict(z.extra),
+        open_timeout_s=z.open_timeout_s,
+    )
+
+
+def plain(show: Show, identity: str) -> Any:
+    """Settings of ``security: none``: the show's own, or its host's endpoints."""
+    if not show.zenoh.hosts:
+        return show.zenoh
+    where = endpoints(show, identity)
+    z = show.zenoh
+    return BusSettings(
+        router_listen=where.router_listen,
+        connect=where.connect,
+        multicast_scouting=z.multicast_scouting,
+        router_connect=where.router_connect,
+        peer_listen=z.peer_listen,
         extra=dict(z.extra),
         open_timeout_s=z.open_timeout_s,
     )
@@ -109,11 +147,11 @@ def session_settings(show: Show, identity: str) -> Any:
                 "show %s runs with security: none: anyone who reaches its bus can command it",
                 show.show_id,
             )
-        return show.zenoh
+        return plain(show, identity)
     if identity not in identities(show):
         raise KeysError(f"{identity!r} is not an identity of show {show.show_id}")
     files = identity_files(show.keys_dir, identity)
-    return secured(show, files, router=identity == "router")
+    return secured(show, files, router=is_router(identity))
 
 
 def client_session_settings(show: Show, client_dir: Path) -> BusSettings:
