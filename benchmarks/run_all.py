@@ -23,6 +23,8 @@ FULL: dict[str, list[str]] = {
     "bench_mavlink.py": [],
     "bench_tui.py": [],
     "bench_cli.py": [],
+    "bench_stop.py": [],
+    "bench_ground.py": [],
 }
 QUICK: dict[str, list[str]] = {
     "bench_planner.py": ["--quick"],
@@ -33,6 +35,8 @@ QUICK: dict[str, list[str]] = {
     "bench_mavlink.py": ["--seconds", "3"],
     "bench_tui.py": ["--seconds", "2"],
     "bench_cli.py": ["--runs", "2"],
+    "bench_stop.py": ["--vehicles", "4"],
+    "bench_ground.py": ["--quick"],
 }
 
 

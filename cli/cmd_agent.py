@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 from pathlib import Path
 
@@ -52,4 +53,10 @@ def run(args: argparse.Namespace) -> int:
         return 1
     except KeyboardInterrupt:
         pass
-    return 0
+    # The session is closed and the job pictures are written: skip the interpreter's teardown,
+    # which spends about a second of CPU unloading modules (50 agents stopping at once on two
+    # cores then overrun their grace period).
+    logging.shutdown()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(0)

@@ -45,6 +45,7 @@ def _client_config(endpoints: list[str], folder: Path) -> dict[str, object]:
 def run(args: argparse.Namespace) -> int:
     from showfile import ShowError, load_show
     from showfile.security import RESERVED_IDS
+    from trust.hosts import endpoints
     from trust.pki import KeysError, client_files, issue
     from trust.settings import as_tls, ensure_show_keys, show_hosts
 
@@ -75,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"skyquill keys: {exc}", file=sys.stderr)
         return 1
     config_path = files.cert.parent / "zenoh-client.json5"
-    config = _client_config(list(as_tls(show.zenoh.connect)), files.cert.parent)
+    config = _client_config(list(as_tls(endpoints(show, "operator").connect)), files.cert.parent)
     config_path.write_text(json.dumps(config, indent=2) + "\n", encoding="utf-8")
     print(f"client {name} ({args.role}) of {show.show_id}: {files.cert.parent}")
     print(f"Zenoh config: {config_path} (copy the folder; the key is secret)")
