@@ -51,6 +51,7 @@ from vehicle_agent.service import (
     run_until_signalled,
 )
 from vehicle_agent.trace import FlownTrace
+from vehicle_agent.written_ink import written_ink_of_trace
 
 LOSS_LAND_AFTER_S = 10.0
 """Agent time in [s] a vehicle hovers after losing the orchestrator before it lands."""
@@ -223,6 +224,7 @@ def job_metrics(setup: VehicleSetup, prepared: PreparedJob, trace: FlownTrace) -
         max_error_m=scores.max_error_m,
         iou=scores.iou if math.isfinite(scores.iou) else None,
         duration_s=trace.duration_s,
+        written=written_ink_of_trace(trace, setup.board_frame.to_board, setup.writing_area_m),
     )
 
 
