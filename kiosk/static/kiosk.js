@@ -424,11 +424,12 @@
     const facts = window.SkyquillStatus.resultWords(job);
     if (!written) facts.push(["no_written", {}]);
     const box = $("result-facts");
+    const gap = document.documentElement.lang.startsWith("zh") ? "" : " ";  // no spaces in Chinese
     box.textContent = "";
     for (const [key, args] of facts) {
       const span = document.createElement("span");
       word(span, key, args);
-      box.append(span, " ");
+      box.append(span, gap);
     }
   }
 
