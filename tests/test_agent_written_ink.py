@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bus.messages import WrittenInk, decode, encode
+from bus.messages import JobAssignment, WrittenInk, decode, encode
 from planner.board import BoardFrame
+from showfile import load_show
+from vehicle_agent.agent import job_metrics, prepare_job, vehicle_setup
 from vehicle_agent.trace import FlownTrace
 from vehicle_agent.written_ink import (
     MAX_SIDE_PX,
@@ -20,6 +23,7 @@ from vehicle_agent.written_ink import (
 )
 
 AREA_M = (1.2, 1.2)
+SHOWS = Path(__file__).resolve().parents[1] / "shows"
 
 
 def pixel_of(ink: WrittenInk, x_m: float, y_m: float) -> tuple[int, int]:
@@ -122,3 +126,20 @@ def test_a_trace_is_pictured_in_its_boards_frame() -> None:
     pixels = ink_pixels(ink)
     assert pixels[pixel_of(ink, 0.25, 0.3)] and not pixels[pixel_of(ink, -0.25, 0.3)]
     assert written_ink_of_trace(trace_with_tip(None), frame.to_board, AREA_M) is None
+
+
+def test_the_agents_metrics_carry_the_picture_of_the_flown_job() -> None:
+    setup = vehicle_setup(load_show(SHOWS / "solo.yaml"), "uav1")
+    prepared = prepare_job(setup, JobAssignment(job_id="j1", text="L"))
+    s = prepared.samples
+    tip = s.position_m_enu - np.array([0.0, 0.0, 0.25])  # hanging straight down onto the board
+    width = np.where(s.pen_down, 0.02, 0.0)
+    args = ("j1", 1, s.t_s, s.position_m_enu, s.velocity_mps_enu, s.position_m_enu, s.pen_down)
+    metrics = job_metrics(setup, prepared, FlownTrace(*args, s.pen_down.copy(), tip, width))
+    ink = metrics.written
+    assert ink is not None and decode(encode(metrics), type(metrics)) == metrics
+    pixels = ink_pixels(ink)
+    on_board = setup.board_frame.to_board(s.position_m_enu[s.pen_down])
+    assert all(pixels[pixel_of(ink, x, y)] for x, y in on_board)  # the whole path is inked
+    assert not pixels[pixel_of(ink, *(-on_board.mean(axis=0)))]  # and not the mirrored spot
+    assert job_metrics(setup, prepared, FlownTrace(*args, None)).written is None  # no brush data
