@@ -9,8 +9,10 @@ flight per character, to see a longer drawing refused before it is sent.
 
 from __future__ import annotations
 
+import socket
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -66,7 +68,8 @@ class Shows:
 def shows(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Shows]:
     tmp = tmp_path_factory.mktemp("kiosk-words")
     path = tmp / "show.yaml"
-    path.write_text(SHOW_YAML.format(endpoint=free_tcp_endpoint(), tmp=tmp))
+    endpoint = free_tcp_endpoint()
+    path.write_text(SHOW_YAML.format(endpoint=endpoint, tmp=tmp))
     loaded = load_show(path)
     keys = ShowKeys(loaded.show_id)
     log = (tmp / "orchestrator.log").open("wb")
@@ -76,6 +79,7 @@ def shows(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Shows]:
     )  # fmt: skip
     settings = settings_from_show(loaded, port=0)
     try:
+        _wait_for_router(endpoint, proc)
         with open_session(loaded.zenoh, role="client", open_timeout_s=START_WAIT_S) as bus:
             _wait_for_orchestrator(bus, keys, proc)
             short = replace(settings, max_flight_s=SHORT_FLIGHT_S)
@@ -92,6 +96,34 @@ def shows(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Shows]:
             proc.kill()
             proc.wait(5)
         log.close()
+
+
+def _wait_for_router(endpoint: str, proc: subprocess.Popen[bytes]) -> None:
+    """Until the orchestrator's router listens (it starts slowly on a busy machine)."""
+    host, port = endpoint.removeprefix("tcp/").rsplit(":", 1)
+    deadline = time.monotonic() + 2 * START_WAIT_S
+    while time.monotonic() < deadline:
+        assert proc.poll() is None, "the orchestrator exited"
+        try:
+            socket.create_connection((host, int(port)), timeout=1.0).close()
+            return
+        except OSError:
+            time.sleep(0.2)
+    raise AssertionError(f"the orchestrator's router did not listen on {endpoint}")
+
+
+def tap_until_sent(page: object, selector: str, request: str) -> None:
+    """Tap ``selector`` until the page sends ``request``: headless Chromium drops some taps that
+    follow synthetic touches (a visitor taps again too)."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+    for _ in range(5):
+        try:
+            with page.expect_request(request, timeout=3_000):  # type: ignore[attr-defined]
+                page.tap(selector)  # type: ignore[attr-defined]
+            return
+        except sync_api.TimeoutError:
+            continue
+    raise AssertionError(f"tapping {selector} never sent {request}")
 
 
 def open_page(browser: object, url: str, locale: str, device: dict[str, object]) -> object:
@@ -235,8 +267,7 @@ def test_a_drawing_longer_than_the_flight_limit_is_refused_before_it_is_sent(
     for k in range(4):  # four long strokes: far more than 5 s of flight
         y = 0.15 + 0.2 * k
         touch_stroke(page, [(0.1, y), (0.9, y + 0.05), (0.1, y + 0.1)])
-    page.wait_for_timeout(600)  # Chromium drops a tap that follows a synthetic touch at once
-    page.tap("#preview")
+    tap_until_sent(page, "#preview", "**/api/preview")
     message = page.locator("#message")
     # the kiosk plans the whole drawing before it can say (slow on a busy machine)
     message.filter(has_text="5 seconds").wait_for(timeout=PLAN_WAIT_MS)
