@@ -126,6 +126,47 @@ class SubmitReply(State, frozen=True):
 # --- jobs ---------------------------------------------------------------------------------------
 
 
+MAX_INK_PX = 256
+"""Most pixels along either side of a :class:`WrittenInk` raster."""
+MAX_INK_BYTES = MAX_INK_PX * MAX_INK_PX // 8
+"""Most bytes of a :class:`WrittenInk` raster's packed bits (8 kB; base64 on the wire)."""
+InkPixels = Annotated[int, msgspec.Meta(ge=1, le=MAX_INK_PX)]
+
+
+class WrittenInk(State, frozen=True, kw_only=True):
+    """The ink a vehicle left on its board for one job: a 1-bit raster for pictures, not scores.
+
+    Pixel (row, column) covers board x from ``x_min + column * w`` and board y from
+    ``y_max - (row + 1) * h`` (``w``, ``h``: extent over width/height in pixels): row 0 is the top
+    (largest board y). ``bits`` holds the rows top first, each left to right, 8 pixels a byte,
+    the first pixel in the most significant bit, no padding between rows (the last byte is
+    padded with zeros); 1 is ink. On the wire ``bits`` is standard base64 (JSON string).
+    """
+
+    format: Literal["bitmap1"] = "bitmap1"
+    """Layout of ``bits``; a new layout gets a new name."""
+    width_px: InkPixels
+    """Pixels per row (along board x)."""
+    height_px: InkPixels
+    """Rows (along board y)."""
+    extent_m_board: tuple[float, float, float, float]
+    """``(x_min, y_min, x_max, y_max)`` of the raster's outer pixel edges in the board frame
+    (origin at the writing area's centre, x right, y up as the visitor sees the board), [m]."""
+    bits: Annotated[bytes, msgspec.Meta(max_length=MAX_INK_BYTES)]
+    """The packed pixels (see above): exactly ``ceil(width_px * height_px / 8)`` bytes."""
+
+    def __post_init__(self) -> None:
+        need = -(-self.width_px * self.height_px // 8)
+        if len(self.bits) != need:
+            raise ValueError(
+                f"bits has {len(self.bits)} bytes; {self.width_px}x{self.height_px} pixels need "
+                f"{need}"
+            )
+        x_min, y_min, x_max, y_max = self.extent_m_board
+        if not all(np.isfinite(self.extent_m_board)) or not (x_max > x_min and y_max > y_min):
+            raise ValueError(f"extent_m_board {self.extent_m_board} is not a finite box")
+
+
 class JobMetrics(State, frozen=True):
     """How well a character was written (see the simulator's metrics.json)."""
 
@@ -134,6 +175,9 @@ class JobMetrics(State, frozen=True):
     max_error_m: float
     iou: float | None
     duration_s: float
+    written: WrittenInk | None = None
+    """The ink left on the board, when the vehicle knows its brush (sent with the ``done``
+    report and on ``jobs/<id>``; the orchestrator keeps it out of ``fleet``)."""
 
 
 class JobState(State, frozen=True):

@@ -117,7 +117,8 @@ class Kiosk:
             if job is not None:
                 self.link.apply(_initial_state(reply, job.label, request))
         else:
-            book.refuse(ticket, _reply_rejection(reply).message)
+            rejection = _reply_rejection(reply)
+            book.refuse(ticket, rejection.message, rejection.code)
 
 
 def _ok(payload: dict[str, Any], client: Client | None = None, *, secure: bool = False) -> Response:

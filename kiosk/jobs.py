@@ -9,6 +9,7 @@ Pure bookkeeping: no I/O. The bus link feeds :class:`JobState` messages in; the 
 
 from __future__ import annotations
 
+import base64
 import hmac
 import secrets
 from collections import OrderedDict
@@ -16,7 +17,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from bus.messages import JobState
+import msgspec
+
+from bus.messages import JobMetrics, JobState, WrittenInk
 from kiosk import wording
 
 FINAL_STATES = frozenset({"done", "failed", "cancelled", "rejected"})
@@ -59,6 +62,8 @@ class KioskJob:
     """Orchestrator's job id, once it acknowledged the submission."""
     refusal: str | None = None
     """What to tell the visitor when a late answer refused the submission."""
+    refusal_code: str | None = None
+    """The code of that refusal (the page words it)."""
 
     @property
     def pending(self) -> bool:
@@ -66,20 +71,39 @@ class KioskJob:
         return self.job_id is None and self.refusal is None
 
 
-def job_view(state: JobState, places: Mapping[str, str] | None = None) -> dict[str, Any]:
-    """What the page is told about a job: public fields and a sentence to show.
+def written_view(ink: WrittenInk | None) -> dict[str, Any] | None:
+    """The ink picture for the page (drawn on a canvas as data; see docs/protocol.md)."""
+    if ink is None:
+        return None
+    return {
+        "format": ink.format,
+        "width_px": ink.width_px,
+        "height_px": ink.height_px,
+        "extent_m_board": list(ink.extent_m_board),
+        "bits": base64.b64encode(ink.bits).decode("ascii"),
+    }
 
-    ``places``: vehicle id -> where its board is, in the visitor's words."""
-    metrics = None
-    if state.metrics is not None:
-        m = state.metrics
-        metrics = {
-            "rmse_pen_down_m": m.rmse_pen_down_m,
-            "max_error_m": m.max_error_m,
-            "iou": m.iou,
-            "duration_s": m.duration_s,
-        }
-    place = (places or {}).get(state.vehicle_id or "")
+
+def metrics_view(m: JobMetrics | None) -> dict[str, Any] | None:
+    """The public part of a job's result: errors, overlap, time and the ink picture."""
+    if m is None:
+        return None
+    return {
+        "rmse_pen_down_m": m.rmse_pen_down_m,
+        "max_error_m": m.max_error_m,
+        "iou": m.iou,
+        "duration_s": m.duration_s,
+        "written": written_view(m.written),
+    }
+
+
+def job_view(state: JobState, places: Mapping[str, int] | None = None) -> dict[str, Any]:
+    """What the page is told about a job: public fields and a sentence to show (English; the
+    page words the fields in the visitor's language).
+
+    ``places``: vehicle id -> position of its board from the left (1 first)."""
+    board = (places or {}).get(state.vehicle_id or "")
+    place = wording.place_words(board)
     return {
         "job_id": state.job_id,
         "state": state.state,
@@ -89,9 +113,10 @@ def job_view(state: JobState, places: Mapping[str, str] | None = None) -> dict[s
         "eta_s": state.eta_s,
         "vehicle_id": state.vehicle_id,
         "place": place,
+        "board": board,
         "attempts": state.attempts,
         "progress": state.progress,
-        "metrics": metrics,
+        "metrics": metrics_view(state.metrics),
         "updated_at_s": state.updated_at_s,
         "status_text": wording.status_text(
             state.state,
@@ -124,6 +149,8 @@ def ticket_view(job: KioskJob) -> dict[str, Any]:
         "eta_s": None,
         "vehicle_id": None,
         "place": None,
+        "board": None,
+        "refusal": job.refusal_code,
         "attempts": 0,
         "progress": 0.0,
         "metrics": None,
@@ -179,11 +206,12 @@ class JobBook:
             self._tickets_of[job_id] = ticket
         return job
 
-    def refuse(self, ticket: str, message: str) -> None:
+    def refuse(self, ticket: str, message: str, code: str = "refused") -> None:
         """The orchestrator refused ``ticket`` (answer to a later try)."""
         job = self._jobs.get(ticket)
         if job is not None:
             job.refusal = message
+            job.refusal_code = code
 
     def drop(self, ticket: str) -> None:
         """Forget a ticket whose refusal the page was told directly."""
@@ -218,6 +246,9 @@ class JobBook:
             return False
         if old is not None and old.state in FINAL_STATES and state.state not in FINAL_STATES:
             return False
+        state = _keep_written(old, state)
+        if old == state:
+            return False
         self._states[state.job_id] = state
         self._states.move_to_end(state.job_id)
         while len(self._states) > self._max_states:
@@ -227,7 +258,18 @@ class JobBook:
     def state(self, job_id: str) -> JobState | None:
         return self._states.get(job_id)
 
-    def view(self, job: KioskJob, places: Mapping[str, str] | None = None) -> dict[str, Any]:
+    def view(self, job: KioskJob, places: Mapping[str, int] | None = None) -> dict[str, Any]:
         """What the page shows of ``job`` now."""
         state = self._states.get(job.job_id) if job.job_id is not None else None
         return job_view(state, places) if state is not None else ticket_view(job)
+
+
+def _keep_written(old: JobState | None, new: JobState) -> JobState:
+    """``new``, with the ink picture of ``old`` when ``new`` has none (only ``jobs/<id>`` and
+    some snapshot replies carry it)."""
+    if old is None or old.metrics is None or old.metrics.written is None:
+        return new
+    if new.metrics is None or new.metrics.written is not None:
+        return new
+    metrics = msgspec.structs.replace(new.metrics, written=old.metrics.written)
+    return msgspec.structs.replace(new, metrics=metrics)

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from kiosk.limits import SubmissionLimits
-from kiosk.wording import board_places
+from kiosk.wording import board_numbers
 from planner.pipeline import BoardFrame, PlanOptions
 from showfile.planning import plan_options
 
@@ -40,8 +40,8 @@ class KioskSettings:
     """How long to wait for the orchestrator's answer to a submission, in [s]."""
     secure_cookie: bool = False
     """Mark the session cookie Secure (when served over HTTPS behind a proxy)."""
-    places: dict[str, str] = field(default_factory=dict)
-    """Vehicle id -> where its board is, in the visitors' words ("board 2 from the left")."""
+    places: dict[str, int] = field(default_factory=dict)
+    """Vehicle id -> position of its board from the left (1 first); the page words it."""
     max_pending: int = 200
     """Submissions waiting for the orchestrator's first answer at once; beyond, new ones are
     refused before they are sent."""
@@ -83,7 +83,7 @@ def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
         plan=plan,
         max_flight_s=kiosk.max_flight_s,
         idle_reset_s=kiosk.idle_reset_s,
-        places=board_places(
+        places=board_numbers(
             {vehicle.id: vehicle.board for vehicle in show.vehicles},
             [b.id for b in show.boards],
         ),

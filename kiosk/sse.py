@@ -31,7 +31,7 @@ async def job_events(
     ticket: str,
     *,
     stale_after_s: float,
-    places: Mapping[str, str] | None = None,
+    places: Mapping[str, int] | None = None,
     beat_s: float = BEAT_S,
 ) -> AsyncIterator[str]:
     """Frames for one ticket's page; ends after the first final view."""

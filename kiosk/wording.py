@@ -110,10 +110,16 @@ def _percent(fraction: float) -> str:
     return f"{round(100.0 * max(0.0, min(1.0, fraction)))}%"
 
 
-def board_places(board_of_vehicle: dict[str, str], board_order: list[str]) -> dict[str, str]:
-    """Vehicle id -> "board N from the left" (the show file lists boards left to right)."""
-    places = {}
-    for vehicle_id, board_id in board_of_vehicle.items():
-        if board_id in board_order:
-            places[vehicle_id] = f"board {board_order.index(board_id) + 1} from the left"
-    return places
+def board_numbers(board_of_vehicle: dict[str, str], board_order: list[str]) -> dict[str, int]:
+    """Vehicle id -> position of its board from the left, 1 first (the show file lists boards
+    left to right)."""
+    return {
+        vehicle_id: board_order.index(board_id) + 1
+        for vehicle_id, board_id in board_of_vehicle.items()
+        if board_id in board_order
+    }
+
+
+def place_words(board_number: int | None) -> str | None:
+    """Where a board is, in the visitors' words: "board 2 from the left"."""
+    return None if board_number is None else f"board {board_number} from the left"

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal
 
-from bus.messages import Event, VehicleCommand
+from bus.messages import Event, VehicleCommand, WrittenInk
 from orchestrator.fleet import EtaModel, VehicleInfo
 from orchestrator.jobs import Job
 
@@ -54,6 +54,9 @@ class Effects:
     """The fleet snapshot should be republished now."""
     settings_changed: bool = False
     """Queue pause or vehicle pauses changed (store them)."""
+    written: dict[str, WrittenInk] = field(default_factory=dict)
+    """Job id -> the ink picture of a job just done (kept out of ``jobs``): store it with the
+    job, and send it on that job's ``jobs/<id>`` publication."""
 
 
 Level = Literal["info", "warning", "alert"]

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 from bus.messages import AgentReport, CommandReply, ErrorInfo, VehicleCommand
 from orchestrator.core_types import Effects
 from orchestrator.jobs import Job, transition, update
+from orchestrator.written import split_written
 
 if TYPE_CHECKING:
     from orchestrator.core import Book
@@ -58,16 +59,19 @@ def _not_assigned(job: Job, rep: AgentReport, eff: Effects) -> CommandReply:
 def _done(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
     owner = job.vehicle_id if job.active else None
     planned = rep.planned_duration_s or job.planned_duration_s
+    metrics, written = split_written(rep.metrics)
     done = transition(
         job,
         "done",
         now_s,
         vehicle_id=rep.vehicle_id,
         progress=1.0,
-        metrics=rep.metrics,
+        metrics=metrics,
         planned_duration_s=planned,
     )
     book.put(eff, done)
+    if written is not None:
+        eff.written[job.job_id] = written
     book.event(
         eff,
         now_s,

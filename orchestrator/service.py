@@ -46,6 +46,7 @@ from orchestrator.fleet import EtaModel, VehicleInfo
 from orchestrator.jobs import to_state
 from orchestrator.store import JobStore
 from orchestrator.submissions import SubmissionError, planned_duration_s, validate_submission
+from orchestrator.written import attach_written, with_written
 from showfile import Show
 
 log = logging.getLogger(__name__)
@@ -61,6 +62,9 @@ estimate."""
 SNAPSHOT_STROKES_BYTES = 300_000
 """JSON bytes of waiting jobs' strokes a ``snapshot`` reply carries at most (replies stay well
 under ``bus.messages.MAX_PAYLOAD_BYTES``); ``jobs/<id>`` publications always carry them."""
+SNAPSHOT_WRITTEN_BYTES = 100_000
+"""JSON bytes of done jobs' ink pictures a ``snapshot`` reply carries at most, newest first
+(about 25 jobs); strokes and pictures together stay under half the payload limit."""
 
 
 def core_config(show: Show) -> CoreConfig:
@@ -139,7 +143,7 @@ class OrchestratorService:
                 "paused_vehicles": [v for v, view in self.book.vehicles.items() if view.paused],
             }
         try:
-            self.store.save(eff.jobs.values(), eff.events, **settings)
+            self.store.save(eff.jobs.values(), eff.events, written=eff.written, **settings)
         except Exception as exc:
             # Memory and disk may now disagree: stop, and let the supervisor restart us from
             # the database (crash-only). The caller's query gets an ``internal`` error.
@@ -157,6 +161,7 @@ class OrchestratorService:
             position, eta = etas.get(job.job_id, (None, None))
             with_strokes = job.job_id in eff.jobs
             state = to_state(job, queue_position=position, eta_s=eta, with_strokes=with_strokes)
+            state = with_written(state, eff.written.get(job.job_id))
             self._publish(self.keys.job(job.job_id), state)
         for event in eff.events:
             self._publish(self.keys.events, event)
@@ -274,7 +279,8 @@ class OrchestratorService:
         return reply
 
     async def on_snapshot(self, _: None) -> ShowSnapshot:
-        return self.book.snapshot(self.clock(), strokes_budget_bytes=SNAPSHOT_STROKES_BYTES)
+        snapshot = self.book.snapshot(self.clock(), strokes_budget_bytes=SNAPSHOT_STROKES_BYTES)
+        return attach_written(snapshot, self.store.written, SNAPSHOT_WRITTEN_BYTES)
 
     # --- subscriptions ------------------------------------------------------------------------
     async def _follow_presence(self, changes: FifoChannel[tuple[str, bool]]) -> None:

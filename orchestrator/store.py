@@ -15,19 +15,20 @@ from __future__ import annotations
 
 import json
 import sqlite3
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
 
 import msgspec
 
-from bus.messages import Event
+from bus.messages import Event, WrittenInk
 from orchestrator.jobs import Job
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 """1: jobs, events, settings. 2: ``jobs.idempotency_key`` (client id and key of a submission,
-unique), added in place to a version-1 database."""
+unique). 3: ``jobs.written`` (the ink picture of a done job, WrittenInk JSON). Both added in place
+to an older database."""
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS jobs (
@@ -55,6 +56,7 @@ _KEY_INDEX = (
 
 _job_decoder = msgspec.json.Decoder(Job)
 _event_decoder = msgspec.json.Decoder(Event)
+_ink_decoder = msgspec.json.Decoder(WrittenInk)
 
 
 class StoreError(RuntimeError):
@@ -85,7 +87,7 @@ class JobStore:
             self._db.execute("PRAGMA synchronous=FULL")
             self._db.execute("PRAGMA busy_timeout=5000")
             version = self._db.execute("PRAGMA user_version").fetchone()[0]
-            if version not in (0, 1, SCHEMA_VERSION):  # 0: new file; 1: migrated below
+            if version not in (0, 1, 2, SCHEMA_VERSION):  # 0: new file; 1, 2: migrated below
                 raise StoreError(
                     f"{self.path}: schema version {version}, expected {SCHEMA_VERSION}"
                 )
@@ -96,11 +98,13 @@ class JobStore:
             raise StoreError(f"{self.path}: {exc}") from exc
 
     def _migrate(self) -> None:
-        """Bring a version-1 (or new) jobs table to the current columns, in one transaction."""
+        """Bring an older (or new) jobs table to the current columns, in one transaction."""
         columns = {row[1] for row in self._db.execute("PRAGMA table_info(jobs)")}
         with _Transaction(self._db):
             if "idempotency_key" not in columns:
                 self._db.execute("ALTER TABLE jobs ADD COLUMN idempotency_key TEXT")
+            if "written" not in columns:
+                self._db.execute("ALTER TABLE jobs ADD COLUMN written BLOB")
             self._db.execute(_KEY_INDEX)
 
     def __enter__(self) -> JobStore:
@@ -124,21 +128,24 @@ class JobStore:
         *,
         queue_paused: bool | None = None,
         paused_vehicles: Iterable[str] | None = None,
+        written: Mapping[str, WrittenInk] | None = None,
     ) -> None:
-        """Write changed jobs, new events and settings in one durable transaction."""
+        """Write changed jobs, new events, settings and ink pictures (job id -> picture of a job
+        in ``jobs`` or stored before) in one durable transaction."""
         job_rows = [
             (j.job_id, j.seq, j.state, msgspec.json.encode(j), _scoped_key(j)) for j in jobs
         ]
+        ink_rows = [(msgspec.json.encode(ink), job_id) for job_id, ink in (written or {}).items()]
         event_rows = [(e.time_s, msgspec.json.encode(e)) for e in events]
         settings: list[tuple[str, str]] = []
         if queue_paused is not None:
             settings.append(("queue_paused", json.dumps(queue_paused)))
         if paused_vehicles is not None:
             settings.append(("paused_vehicles", json.dumps(sorted(paused_vehicles))))
-        if not (job_rows or event_rows or settings):
+        if not (job_rows or event_rows or settings or ink_rows):
             return
         try:
-            self._write(job_rows, event_rows, settings)
+            self._write(job_rows, event_rows, settings, ink_rows)
         except sqlite3.Error as exc:
             raise StoreError(f"{self.path}: {exc}") from exc
 
@@ -147,6 +154,7 @@ class JobStore:
         job_rows: Sequence[tuple[str, int, str, bytes, str | None]],
         event_rows: Sequence[tuple[float, bytes]],
         settings: Sequence[tuple[str, str]],
+        ink_rows: Sequence[tuple[bytes, str]] = (),
     ) -> None:
         with _Transaction(self._db):
             self._db.executemany(
@@ -161,6 +169,7 @@ class JobStore:
                 "ON CONFLICT(key) DO UPDATE SET value=excluded.value",
                 settings,
             )
+            self._db.executemany("UPDATE jobs SET written = ? WHERE job_id = ?", ink_rows)
 
     def load(self) -> StoredState:
         """Every job and the settings."""
@@ -179,6 +188,21 @@ class JobStore:
         """One job as stored."""
         row = self._db.execute("SELECT data FROM jobs WHERE job_id = ?", (job_id,)).fetchone()
         return _job_decoder.decode(row[0]) if row else None
+
+    def written(self, job_ids: Iterable[str]) -> dict[str, WrittenInk]:
+        """The stored ink pictures of ``job_ids`` (jobs without one are left out)."""
+        ids = list(dict.fromkeys(job_ids))
+        found: dict[str, WrittenInk] = {}
+        for start in range(0, len(ids), 500):  # SQLite's bound parameters per statement
+            chunk = ids[start : start + 500]
+            marks = ",".join("?" * len(chunk))
+            rows = self._db.execute(
+                "SELECT job_id, written FROM jobs "
+                f"WHERE written IS NOT NULL AND job_id IN ({marks})",
+                chunk,
+            )
+            found.update((job_id, _ink_decoder.decode(data)) for job_id, data in rows)
+        return found
 
     def events(self, limit: int = 200) -> list[Event]:
         """The latest events, oldest first."""

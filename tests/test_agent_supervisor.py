@@ -241,6 +241,7 @@ def test_skyquill_up_runs_a_show_and_stops_every_process_on_ctrl_c(tmp_path: Pat
             (reply,) = submit_texts(session, keys, ["一"], timeout_s=60.0)
             (job,) = wait_for_jobs(session, keys, [str(reply.job_id)], timeout_s=60.0)
         assert job.state == "done" and job.metrics is not None
+        assert job.metrics.written is not None and job.metrics.written.width_px == 160
         children = _children_of(up.pid)
         assert len(children) == 3  # router, orchestrator and one agent
         up.send_signal(signal.SIGINT)

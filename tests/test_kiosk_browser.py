@@ -231,7 +231,7 @@ def test_draw_preview_submit_and_follow_on_a_phone(browser: object, show: Show) 
     show.relay(job_id, "done", vehicle_id="uav1", progress=1.0, metrics=done_metrics())
     status.filter(has_text="Done!").wait_for(timeout=UI_WAIT_MS)
     page.wait_for_selector("#result:not([hidden])", timeout=UI_WAIT_MS)
-    facts = page.inner_text("#result-facts")
+    facts = page.inner_text("#result-facts").replace("\xa0", " ")  # 1.2 cm: one unbroken line
     assert "1.2 cm" in facts and "close to" in facts and "board 1 from the left" in facts
     page.screenshot(path=str(SHOTS_DIR / "phone-done.png"))
 

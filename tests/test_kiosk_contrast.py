@@ -67,6 +67,6 @@ def test_the_rules_use_the_checked_colours() -> None:
     assert "border: 2px solid var(--border)" in rule("#pad {")
     assert "color: var(--hint)" in rule(".pad-hint {")
     assert "color: var(--hint)" in rule(".hint {")
-    js = (Path(__file__).resolve().parents[1] / "kiosk" / "static" / "kiosk.js").read_text()
+    js = (Path(__file__).resolve().parents[1] / "kiosk" / "static" / "pictures.js").read_text()
     assert _variables()["air"] in js and _variables()["ink"] in js  # the canvas uses them too
     assert "--line" not in CSS  # the old low-contrast border colour is gone

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from typing import Any
 
+import msgspec
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from bus.messages import JobState, JobStateName
+from bus.messages import JobMetrics, JobState, JobStateName, WrittenInk
 from kiosk import wording
 from kiosk.addresses import (
     BadProxySettingError,
@@ -193,8 +194,28 @@ def test_status_text_says_what_happens_in_plain_words() -> None:
         "writing", attempts=2, vehicle_id="uav2", progress=0.3, place="board 2 from the left"
     )
     assert "another drone" in again and "board 2 from the left" in again and "30%" in again
-    assert wording.board_places({"u1": "b1", "u2": "b2"}, ["b2", "b1"]) == {
-        "u1": "board 2 from the left", "u2": "board 1 from the left"
+    assert wording.board_numbers({"u1": "b1", "u2": "b2", "u3": "gone"}, ["b2", "b1"]) == {
+        "u1": 2, "u2": 1
     }  # fmt: skip
+    placed = job_view(state("j", "writing", 1.0, vehicle_id="u1"), {"u1": 2})
+    assert placed["board"] == 2 and placed["place"] == "board 2 from the left"
     view = job_view(state("j", "rejected", 1.0))
     assert view["final"] and "not approve" in view["status_text"]
+
+
+def test_the_ink_picture_is_kept_when_a_later_state_of_the_job_has_none() -> None:
+    ink = WrittenInk(
+        width_px=8, height_px=2, extent_m_board=(-0.6, -0.15, 0.6, 0.15), bits=b"\x81\x18"
+    )
+    metrics = JobMetrics(rmse_pen_down_m=0.01, rmse_m=0.01, max_error_m=0.02, iou=0.8, duration_s=9)
+    book = JobBook()
+    job = book.add(session_id="s", label="A", preview=None)
+    book.bind(job.ticket, "j")
+    with_ink = msgspec.structs.replace(metrics, written=ink)
+    assert book.update(state("j", "done", 5.0, metrics=with_ink))
+    assert not book.update(state("j", "done", 5.0, metrics=metrics))  # a snapshot without it
+    written = book.view(job)["metrics"]["written"]
+    assert written == {
+        "format": "bitmap1", "width_px": 8, "height_px": 2,
+        "extent_m_board": [-0.6, -0.15, 0.6, 0.15], "bits": "gRg=",
+    }  # fmt: skip

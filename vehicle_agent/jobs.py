@@ -17,6 +17,7 @@ from vehicle_agent.job_picture import PICTURE_NAME, PictureWorker, save_png
 from vehicle_agent.job_runner import PreparedJob
 from vehicle_agent.setup import VehicleSetup
 from vehicle_agent.trace import FlownTrace
+from vehicle_agent.written_ink import written_ink_of_trace
 from vehicles.jobs import plan_job
 from vehicles.kind import FlownWriting, WritingPlan
 
@@ -85,6 +86,7 @@ def job_metrics(setup: VehicleSetup, prepared: PreparedJob, trace: FlownTrace) -
         max_error_m=score.max_error_m,
         iou=score.iou,
         duration_s=trace.duration_s,
+        written=written_ink_of_trace(trace, setup.board_frame.to_board, setup.writing_area_m),
     )
 
 

@@ -4,6 +4,8 @@
 
 (() => {
   const $ = (id) => document.getElementById(id);
+  const { t, set: word } = window.SkyquillI18n;
+  const { fitCanvas, drawGuides, drawPath, animatePath, drawInk } = window.SkyquillPictures;
   const config = {
     max_strokes: 60, max_points: 5000, max_text_chars: 1, writing_area_m: [1.2, 1.2],
     idle_reset_s: 60,
@@ -16,7 +18,8 @@
     lastT: 0,
     pending: null,      // what the preview was made of: { text } or { strokes }
     preview: null,
-    job: null,          // { ticket, token, job_id, preview, title }
+    job: null,          // { ticket, token, job_id, code, preview, text }
+    lastJob: null,      // the latest view of that job (reworded after a language switch)
     events: null,       // EventSource
     lastLive: 0,        // Date.now() of the last frame of the status stream
     serverStale: false, // the kiosk says the orchestrator's news stopped
@@ -26,12 +29,32 @@
   const SAVED = "skyquill-tickets";  // localStorage: my characters, newest first
   const CURRENT = "skyquill-current";
 
-  // --- messages ---------------------------------------------------------------------------
-  function say(text, good = false) {
+  // --- messages (a catalogue key and its arguments; "" clears) ------------------------------
+  function say(key, args) {
     const box = $("message");
-    box.textContent = text;
-    box.classList.toggle("good", good);
-    box.hidden = !text;
+    box.hidden = !key;
+    if (key) word(box, key, args); else { box.textContent = ""; delete box.dataset.i18n; }
+  }
+
+  // A refusal of the API, worded from its stable code in the visitor's language.
+  function sayError(error, context = {}) {
+    say(...errorWords(error, context));
+  }
+
+  function errorWords(error, context = {}) {
+    const code = (error && error.code) || "internal";
+    const args = {
+      n: code === "too_many_strokes" ? config.max_strokes : config.max_text_chars,
+      secs: Math.max(1, Math.round((error && error.retry_after_s) || 60)),
+      limit: Math.round(config.max_flight_s || 90),
+      char: context.text || "",
+    };
+    if (code === "text_too_long" && config.max_text_chars === 1) return ["err_text_one_char", args];
+    if (code === "unknown_job" && context.byCode) return ["err_unknown_code", args];
+    if (code === "no_glyph" && !context.text) return ["err_unplannable", args];
+    if (code === "paused") return ["err_queue_full", args];
+    const key = `err_${code}`;
+    return [t(key) === key ? "err_refused" : key, args];
   }
 
   async function callApi(path, body) {
@@ -44,46 +67,18 @@
         credentials: "same-origin",
       });
     } catch (err) {
-      return { ok: false, error: { message: "No connection to the kiosk. Please check the network and try again." } };
+      return { ok: false, error: { code: "no_connection" } };
     }
     try {
       return await response.json();
     } catch (err) {
-      return { ok: false, error: { message: "Something went wrong. Please try again." } };
+      return { ok: false, error: { code: "internal" } };
     }
   }
 
   // --- drawing pad ------------------------------------------------------------------------
   const pad = $("pad");
   const padCtx = pad.getContext("2d");
-
-  function fitCanvas(canvas) {
-    const rect = canvas.getBoundingClientRect();
-    const dpr = window.devicePixelRatio || 1;
-    const w = Math.max(1, Math.round(rect.width * dpr));
-    const h = Math.max(1, Math.round(rect.height * dpr));
-    if (canvas.width !== w || canvas.height !== h) {
-      canvas.width = w;
-      canvas.height = h;
-    }
-    const ctx = canvas.getContext("2d");
-    ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
-    return { ctx, w: rect.width, h: rect.height };
-  }
-
-  function drawGuides(ctx, w, h) {
-    ctx.save();
-    ctx.strokeStyle = "#efe6d3";
-    ctx.lineWidth = 1;
-    ctx.setLineDash([6, 6]);
-    ctx.beginPath();
-    ctx.moveTo(w / 2, 0); ctx.lineTo(w / 2, h);
-    ctx.moveTo(0, h / 2); ctx.lineTo(w, h / 2);
-    ctx.moveTo(0, 0); ctx.lineTo(w, h);
-    ctx.moveTo(w, 0); ctx.lineTo(0, h);
-    ctx.stroke();
-    ctx.restore();
-  }
 
   function strokeWidth(p) {
     return 4 + 8 * Math.min(1, Math.max(0, p || 0.5));
@@ -137,7 +132,7 @@
     const last = pts[pts.length - 1];
     if (last && Math.hypot(p[0] - last[0], p[1] - last[1]) < 2) return;
     if (pointCount() >= config.max_points) {
-      say("That is plenty of detail! Lift your finger, then preview your character.");
+      say("err_plenty");
       return;
     }
     pts.push(p);
@@ -151,7 +146,7 @@
   pad.addEventListener("pointerdown", (event) => {
     if (state.active || (event.pointerType === "mouse" && event.button !== 0)) return;
     if (state.strokes.length >= config.max_strokes) {
-      say(`That is a lot of strokes (at most ${config.max_strokes}). Please preview or clear it.`);
+      say("err_many_strokes", { n: config.max_strokes });
       return;
     }
     event.preventDefault();
@@ -222,12 +217,11 @@
     const n = state.strokes.length;
     $("undo").disabled = n === 0;
     $("clear").disabled = n === 0;
-    $("stroke-count").textContent = n ? `${n} stroke${n === 1 ? "" : "s"}` : "";
+    if (n) word($("stroke-count"), "strokes", { n }); else clearWords($("stroke-count"));
     const empty = currentSubmission() === null;
     $("preview").disabled = empty;
     $("preview-why").hidden = !empty;  // a disabled button says why
-    $("preview-why").textContent = state.mode === "type"
-      ? "Type a character first." : "Draw a character in the box first.";
+    word($("preview-why"), state.mode === "type" ? "why_type" : "why_draw");
   }
 
   // --- tabs (ARIA tabs pattern: one tab stop, arrow keys move between tabs) -----------------
@@ -261,86 +255,6 @@
     if (e.key === "Enter" && !e.isComposing && !$("preview").disabled) $("preview").click();
   });
 
-  // --- planned path pictures --------------------------------------------------------------
-  // Runs of equal pen state: [start, end, down]; the air moves show as dashes.
-  function penRuns(path) {
-    const runs = [];
-    let start = 0;
-    while (start < path.length - 1) {
-      const down = Boolean(path[start + 1][2] && path[start][2]);
-      let end = start + 1;
-      while (end < path.length - 1 && Boolean(path[end + 1][2] && path[end][2]) === down) end += 1;
-      runs.push([start, end, down]);
-      start = end;
-    }
-    return runs;
-  }
-
-  // The path up to sample ``upto``: air moves first, ink over them (never air over ink).
-  function drawPath(canvas, preview, upto = Infinity) {
-    const { ctx, w, h } = fitCanvas(canvas);
-    ctx.clearRect(0, 0, w, h);
-    drawGuides(ctx, w, h);
-    const [aw, ah] = preview.writing_area_m;
-    const scale = Math.min(w / aw, h / ah) * 0.92;
-    const map = (p) => [w / 2 + p[0] * scale, h / 2 - p[1] * scale];
-    ctx.lineCap = "round";
-    ctx.lineJoin = "round";
-    const path = preview.path;   // [x, y, pen_down]
-    const runs = penRuns(path);
-    for (const layer of [false, true]) {
-      for (const [start, end, down] of runs) {
-        if (down !== layer || start >= upto) continue;
-        ctx.strokeStyle = down ? "#14213d" : "#6f7a91";
-        ctx.lineWidth = down ? 6 : 1.5;
-        ctx.setLineDash(down ? [] : [5, 5]);
-        ctx.beginPath();
-        const first = map(path[start]);
-        ctx.moveTo(first[0], first[1]);
-        for (let i = start + 1; i <= Math.min(end, upto); i += 1) {
-          const p = map(path[i]);
-          ctx.lineTo(p[0], p[1]);
-        }
-        ctx.stroke();
-      }
-    }
-    ctx.setLineDash([]);
-    if (upto < path.length) {  // where the brush is now
-      const [x, y] = map(path[Math.max(0, Math.floor(upto))]);
-      ctx.fillStyle = "#b44703";
-      ctx.beginPath();
-      ctx.arc(x, y, 6, 0, 2 * Math.PI);
-      ctx.fill();
-      return;
-    }
-    ctx.fillStyle = "#e85d04";
-    for (const stroke of preview.turning_points) {
-      for (const p of stroke) {
-        const [x, y] = map(p);
-        ctx.beginPath();
-        ctx.arc(x, y, 4, 0, 2 * Math.PI);
-        ctx.fill();
-      }
-    }
-  }
-
-  // The writing order, played in about 3 s (at once for visitors who ask for less motion).
-  function animatePath(canvas, preview) {
-    const n = preview.path.length;
-    const still = window.matchMedia("(prefers-reduced-motion: reduce)").matches;
-    canvas.dataset.drawn = "0";
-    const t0 = performance.now();
-    const frame = (now) => {
-      if (canvas.dataset.playing !== String(t0)) return;  // a newer preview took over
-      const upto = still ? n : Math.floor((n * (now - t0)) / 3000);
-      drawPath(canvas, preview, upto >= n ? Infinity : upto);
-      if (upto >= n) { canvas.dataset.drawn = "1"; return; }
-      requestAnimationFrame(frame);
-    };
-    canvas.dataset.playing = String(t0);
-    requestAnimationFrame(frame);
-  }
-
   function show(section) {
     for (const id of ["compose", "confirm", "status"]) $(id).hidden = id !== section;
     window.scrollTo(0, 0);
@@ -353,25 +267,21 @@
     say("");
     const reply = await callApi("/api/preview", submission);
     $("preview").disabled = false;
-    if (!reply.ok) { say(reply.error.message); return; }
+    if (!reply.ok) { sayError(reply.error, submission); return; }
     state.pending = submission;
     state.preview = reply.preview;
     show("confirm");
     animatePath($("preview-canvas"), reply.preview);
-    const secs = Math.round(reply.preview.duration_s);
-    $("preview-facts").textContent =
-      `${reply.preview.turning_point_count} turning points, about ${secs} seconds of flying.`;
-    $("preview-canvas").setAttribute("aria-label", describePath(reply.preview));
+    const facts = {
+      n: reply.preview.stroke_count,
+      turns: reply.preview.turning_point_count,
+      secs: Math.round(reply.preview.duration_s),
+    };
+    word($("preview-facts"), "preview_facts", facts);
+    // the text alternative: what a sighted visitor reads off the picture
+    word($("preview-canvas"), "describe_path", facts, "aria-label");
     $("confirm-title").focus();
   });
-
-  // The text alternative of a planned path: what a sighted visitor reads off the picture.
-  function describePath(preview) {
-    const n = preview.stroke_count;
-    return `Planned flight: the drone writes ${n} stroke${n === 1 ? "" : "s"} with the brush, ` +
-      `lifting it between strokes, with ${preview.turning_point_count} turning points, ` +
-      `in about ${Math.round(preview.duration_s)} seconds.`;
-  }
 
   $("back").addEventListener("click", () => { show("compose"); redrawPad(); });
 
@@ -380,12 +290,11 @@
     $("submit").disabled = true;
     const reply = await callApi("/api/submit", state.pending);
     $("submit").disabled = false;
-    if (!reply.ok) { say(reply.error.message); return; }
+    if (!reply.ok) { sayError(reply.error, state.pending); return; }
     say("");
-    const title = state.pending.text ? `Your character: ${state.pending.text}` : "Your drawing";
     state.job = {
       ticket: reply.ticket, token: reply.token, job_id: reply.job_id, code: reply.code,
-      preview: reply.preview || state.preview, title,
+      preview: reply.preview || state.preview, text: state.pending.text || null,
     };
     saveTicket(state.job);
     showJob(reply.job);
@@ -417,7 +326,7 @@
       const button = document.createElement("button");
       button.type = "button";
       button.className = "link";
-      button.textContent = t.title;  // text, never markup
+      titleOf(button, t);  // text, never markup
       button.addEventListener("click", () => resumeTicket(t));
       li.append(button);
       ul.append(li);
@@ -427,10 +336,12 @@
   function showJob(job) {
     show("status");
     $("job-id").textContent = state.job.job_id || "-";
-    $("status-title").textContent = state.job.title;
+    titleOf($("status-title"), state.job);
     showCode(state.job);
-    $("result").hidden = false;
-    $("result-facts").textContent = "This is the path the drone will fly.";
+    $("result").hidden = !state.job.preview;
+    $("written-figure").hidden = true;
+    $("planned-caption").hidden = true;
+    word($("result-facts"), "plan_note");
     if (state.job.preview) drawPath($("result-canvas"), state.job.preview);
     render(job);
     follow(state.job.ticket, state.job.token);
@@ -445,7 +356,7 @@
     $("code").textContent = pretty;
     $("code-link").textContent = link;
     $("qr").src = `/api/jobs/${encodeURIComponent(job.ticket)}/qr.svg?token=${encodeURIComponent(job.token)}`;
-    $("qr").alt = `QR code of the link ${link}`;
+    word($("qr"), "qr_alt", { link }, "alt");
   }
 
   function stopFollowing() {
@@ -483,34 +394,53 @@
 
   function render(job) {
     if (!job) return;
+    state.lastJob = job;
     if (job.job_id && state.job) {
       state.job.job_id = job.job_id;
       $("job-id").textContent = job.job_id;
     }
-    $("status-text").textContent = job.status_text;
+    word($("status-text"), ...window.SkyquillStatus.words(job, errorWords));
     const waiting = job.state === "queued";
     $("queue-place").textContent = waiting && job.queue_position ? `${job.queue_position}` : "-";
-    $("eta").textContent = waiting && job.eta_s != null
-      ? (job.eta_s < 60 ? "under a minute" : `${Math.round(job.eta_s / 60)} min`) : "-";
+    if (waiting && job.eta_s != null) {
+      if (job.eta_s < 60) word($("eta"), "eta_soon");
+      else word($("eta"), "eta_minutes", { n: Math.round(job.eta_s / 60) });
+    } else clearWords($("eta"), "-");
     const bar = $("progress");
     bar.hidden = job.state !== "writing";
     bar.value = job.progress || 0;
     if (job.final && job.state !== "done") $("result").hidden = true;
-    if (job.state === "done" && state.job) {
-      const m = job.metrics;
-      const where = job.place ? ` Look for it at ${job.place}.` : "";
-      let facts = `Written!${where}`;
-      if (m) {
-        const cm = m.rmse_pen_down_m * 100;
-        const close = cm < 1 ? "very close to" : cm < 3 ? "close to" : "a little off";
-        facts = `Written in ${Math.round(m.duration_s)} s.${where} The brush stayed ${close} ` +
-          `the planned path: on average within ${cm.toFixed(1)} cm.`;
-        if (m.iou != null) facts += ` Ink and plan overlap ${Math.round(m.iou * 100)}%.`;
-      }
-      // The picture stays the planned path (the agent does not send its ink image yet): say so.
-      facts += " The picture above is the planned path.";
-      $("result-facts").textContent = facts;
+    if (job.state === "done" && state.job) showResult(job);
+  }
+
+  // The finished character: the plan and the ink the drone left, with words a visitor reads.
+  function showResult(job) {
+    const written = job.metrics && job.metrics.written;
+    const area = state.job.preview ? state.job.preview.writing_area_m : null;
+    $("result").hidden = false;
+    $("planned-caption").hidden = !written;
+    $("written-figure").hidden = !written;
+    if (written) drawInk($("written-canvas"), written, area);
+    const facts = window.SkyquillStatus.resultWords(job);
+    if (!written) facts.push(["no_written", {}]);
+    const box = $("result-facts");
+    const gap = document.documentElement.lang.startsWith("zh") ? "" : " ";  // no spaces in Chinese
+    box.textContent = "";
+    for (const [key, args] of facts) {
+      const span = document.createElement("span");
+      word(span, key, args);
+      box.append(span, gap);
     }
+  }
+
+  function clearWords(el, text = "") {
+    delete el.dataset.i18n;
+    delete el.dataset.i18nArgs;
+    el.textContent = text;
+  }
+
+  function titleOf(el, job) {
+    if (job.text) word(el, "title_text", { text: job.text }); else word(el, "title_drawing");
   }
 
   $("again").addEventListener("click", () => {
@@ -545,11 +475,10 @@
   async function openCode(code) {
     const reply = await callApi(`/api/t/${encodeURIComponent(code)}`);
     history.replaceState(null, "", "/");
-    if (!reply.ok) { say(reply.error.message); return; }
-    const title = reply.label.startsWith("drawing") ? "Your drawing" : `Your character: ${reply.label}`;
+    if (!reply.ok) { sayError(reply.error, { byCode: true }); return; }
     state.job = {
       ticket: reply.ticket, token: reply.token, job_id: reply.job.job_id, code: reply.code,
-      preview: reply.preview, title,
+      preview: reply.preview, text: reply.label.startsWith("drawing (") ? null : reply.label,
     };
     saveTicket(state.job);
     showJob(reply.job);
@@ -589,12 +518,13 @@
   }
 
   async function start() {
-    const reply = await callApi("/api/config");
+    const [reply] = await Promise.all([callApi("/api/config"), window.SkyquillI18n.load()]);
     if (reply.ok) Object.assign(config, reply.config);
     if (config.max_text_chars > 1) {
-      document.querySelector(".type-label").textContent =
-        `A letter, a Chinese character or a short word (at most ${config.max_text_chars})`;
+      word(document.querySelector(".type-label"), "type_label_many", { n: config.max_text_chars });
     }
+    // pictures are drawn, not worded: draw the finished one again after a switch (sizes move)
+    window.SkyquillI18n.onChange(() => { if (state.lastJob) render(state.lastJob); });
     new ResizeObserver(() => { if (!$("compose").hidden) redrawPad(); }).observe(pad);
     redrawPad();
     renderSaved();
