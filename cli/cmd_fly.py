@@ -14,32 +14,44 @@ import time
 from pathlib import Path
 from typing import Any
 
+QUADROTOR = "quadrotor-brush"
+"""The Airshow brush quadrotor: the kind whose wind, brush and gains ``fly`` can set."""
+BRUSH_OPTIONS = {"wind": 0.0, "wind_heading_deg": 0.0, "stroke_width": 0.02, "gains": "default"}
+"""Options of the brush quadrotor's world and controller, with their defaults."""
 NAME = "fly"
 HELP = "Plan, fly in the simulator and score a strokes file or text (metrics.json, report.png)."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from vehicles import kind_names
+
+    parser.add_argument(
+        "--kind",
+        choices=kind_names(),
+        default=QUADROTOR,
+        help=f"vehicle kind ({QUADROTOR}); the options below marked [brush] are its own",
+    )
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--strokes", metavar="FILE", help="strokes JSON (docs/formats.md)")
     source.add_argument("--text", metavar="TEXT", help="Latin (Hershey) or Chinese text")
     parser.add_argument("--seed", type=int, default=0, help="random seed of wind and mocap (0)")
     parser.add_argument(
-        "--wind", type=float, default=0.0, metavar="M_PER_S", help="mean wind speed [m/s] (0)"
+        "--wind", type=float, default=0.0, metavar="M_PER_S", help="[brush] mean wind [m/s] (0)"
     )
     parser.add_argument(
-        "--wind-heading-deg", type=float, default=0.0, help="wind blows towards [deg from east]"
+        "--wind-heading-deg", type=float, default=0.0, help="[brush] wind towards [deg from east]"
     )
     parser.add_argument("--report", metavar="DIR", help="write metrics.json and report.png here")
     parser.add_argument("--height", type=float, default=1.0, help="character height [m] (1.0)")
     parser.add_argument(
-        "--stroke-width", type=float, default=0.02, help="nominal stroke width [m] (0.02)"
+        "--stroke-width", type=float, default=0.02, help="[brush] nominal stroke width [m] (0.02)"
     )
     add_bound_arguments(parser)
     parser.add_argument(
         "--gains",
         choices=("default", "paper"),
         default="default",
-        help="controller: shipped default or the paper's published set",
+        help="[brush] controller: shipped default or the paper's published set",
     )
 
 
@@ -74,7 +86,7 @@ def add_bound_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"... for longer than this [s] ({d.deviation_window_s})")  # fmt: skip
 
 
-def _glyph(args: argparse.Namespace) -> Any:
+def glyph_of(args: argparse.Namespace) -> Any:
     from planner.glyphs import parse_strokes_json, text_glyph
 
     if args.text is not None:
@@ -115,15 +127,26 @@ def _settings(args: argparse.Namespace) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.kind != QUADROTOR:
+        from cli.fly_kind import run_kind
+        from showfile.safety import SafetySettings
+
+        d = SafetySettings()
+        brush_only = {
+            **BRUSH_OPTIONS,
+            "deviation_bound": d.deviation_bound_m,
+            "deviation_window": d.deviation_window_s,
+        }
+        return run_kind(args, {k: getattr(args, k) != v for k, v in brush_only.items()})
     from planner.errors import PlannerError
     from vehicle_agent.safety import WritingBounds, writing_verdict
     from vehicles.jobs import plan_glyph
     from vehicles.registry import vehicle_kind
     from vehicles.surface import Surface
 
-    kind = vehicle_kind("quadrotor-brush")
+    kind = vehicle_kind(QUADROTOR)
     try:
-        glyph = _glyph(args)
+        glyph = glyph_of(args)
         settings = _settings(args)
         surface = Surface.of("horizontal", (0.0, 0.0, 0.0), 0.0)
         area = (100.0 * args.height, args.height)  # the character is --height tall

@@ -10,7 +10,7 @@ import math
 from collections.abc import Iterator
 
 from showfile.models import KIND_ORIENTATION, Board, Show
-from vehicles import ROOMS
+from vehicles import LIVE_KINDS, ROOMS
 
 Loc = tuple[str | int, ...]
 Problem = tuple[Loc, str]
@@ -99,6 +99,15 @@ def cross_check(show: Show) -> list[Problem]:
                     ("vehicles", i, "kind"),
                     f"no vehicle kind {vehicle.kind!r} is built yet; the kinds are: "
                     + ", ".join(sorted(ROOMS)),
+                )
+            )
+        elif vehicle.kind not in LIVE_KINDS:
+            problems.append(
+                (
+                    ("vehicles", i, "kind"),
+                    f"vehicle kind {vehicle.kind!r} writes only in `skyquill fly --kind "
+                    f"{vehicle.kind}` so far: a show's agent cannot fly it yet; show kinds: "
+                    + ", ".join(sorted(LIVE_KINDS)),
                 )
             )
         target = board_ids.get(vehicle.board)

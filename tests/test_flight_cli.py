@@ -57,3 +57,23 @@ def test_fly_below_its_ink_bound_exits_non_zero(capsys: pytest.CaptureFixture[st
                    "--iou-min", "0.99"])  # fmt: skip
     assert status == 1
     assert "writing out of bounds: ink IoU" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_fly_another_kind_through_its_room(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "floor"
+    status = main(["fly", "--kind", "omni-wheel", "--strokes", str(DATA / "l_tick_m_up.json"),
+                   "--height", "1.0", "--report", str(out)])  # fmt: skip
+    assert status == 0, capsys.readouterr().err
+    metrics = json.loads((out / "metrics.json").read_text(encoding="utf-8"))
+    assert metrics["kind"] == "omni-wheel" and metrics["within_bounds"] is True
+    assert 0.0 < metrics["rmse_pen_down_m"] < 0.005 and metrics["iou"] > 0.8
+    assert (out / "report.png").read_bytes().startswith(b"\x89PNG")
+
+
+def test_a_brush_option_is_refused_for_another_kind(capsys: pytest.CaptureFixture[str]) -> None:
+    status = main(["fly", "--kind", "omni-wheel", "--text", "I", "--wind", "3"])
+    assert status == 2
+    assert "--wind is an option of quadrotor-brush, not of omni-wheel" in capsys.readouterr().err

@@ -134,6 +134,17 @@ def test_a_kind_without_a_room_is_refused_naming_the_kinds(monkeypatch: Any) -> 
     assert "'quadrotor-brush'" in message and message.endswith("the kinds are: omni-wheel")
 
 
+def test_a_kind_the_live_agent_cannot_fly_is_refused_in_a_show() -> None:
+    show = SOLO.replace("    board: b1\n", "    board: b1\n    kind: omni-wheel\n").replace(
+        "    size_m:", "    orientation: floor\n    size_m:"
+    )
+    err = _problem(show)
+    message = {p.field: p for p in err.problems}["vehicles[0].kind"].message
+    assert "skyquill fly --kind omni-wheel" in message and message.endswith(
+        "show kinds: quadrotor-brush"
+    )
+
+
 MAVLINK_SOLO = SOLO.replace(
     "    board: b1\n",
     "    board: b1\n    backend: mavlink\n    mavlink_url: udp:127.0.0.1:14561\n",

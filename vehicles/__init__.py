@@ -9,8 +9,14 @@ from __future__ import annotations
 
 ROOMS: dict[str, str] = {
     "quadrotor-brush": "vehicles.quadrotor_brush.kind",
+    "omni-wheel": "vehicles.omni_wheel.kind",
 }
 """Kind name (as in show files) -> the module whose ``KIND`` implements it."""
+
+LIVE_KINDS: frozenset[str] = frozenset({"quadrotor-brush"})
+"""Kinds a show's live agent flies. The other rooms plan, fly, score and report in a batch
+(``skyquill fly --kind``) but the agent's job runner still has a flying vehicle's phases (climb,
+cruise height, land), so a show refuses them until their phases come from the kind."""
 
 
 class UnknownKindError(LookupError):
