@@ -15,7 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.linalg import solveh_banded
+from scipy.linalg import LinAlgError, solve_banded, solveh_banded
 
 from planner.bspline import (
     ClampedCubicSpline,
@@ -231,5 +231,22 @@ def closed_form_from_normal_equations(
     fixed = fixed_indices(n)
     tau[fixed] = fixed_control_points(problem)
     rhs_free = (rhs - banded_matvec(ab, tau))[3 : n - 3]
-    tau[3 : n - 3] = solveh_banded(ab[:, 3 : n - 3], rhs_free, check_finite=False)
+    band = ab[:, 3 : n - 3]
+    try:
+        tau[3 : n - 3] = solveh_banded(band, rhs_free, check_finite=False)
+    except LinAlgError:
+        # Round-off made the (positive semi-definite) normal matrix indefinite, as heavily
+        # re-weighted refinements can: solve it by banded LU with pivoting instead.
+        tau[3 : n - 3] = solve_banded_symmetric(band, rhs_free)
     return tau
+
+
+def solve_banded_symmetric(ab_upper: FloatArray, rhs: FloatArray) -> FloatArray:
+    """Solve ``A x = rhs`` for a symmetric band matrix given in upper form (``ab_upper[u + i -
+    j, j] == A[i, j]``, as :func:`scipy.linalg.solveh_banded` takes it) by LU with pivoting."""
+    u, n = ab_upper.shape[0] - 1, ab_upper.shape[1]
+    full = np.zeros((2 * u + 1, n))
+    full[: u + 1] = ab_upper
+    for k in range(1, u + 1):
+        full[u + k, : n - k] = ab_upper[u - k, k:]
+    return np.asarray(solve_banded((u, u), full, rhs, check_finite=False))

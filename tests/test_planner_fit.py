@@ -156,3 +156,19 @@ def test_speed_polytope_is_inscribed_in_the_ball() -> None:
     assert np.min(support) >= SPEED_POLYTOPE_APOTHEM - 1e-12
     # and the bound is tight: a vertex direction (1, 1, sqrt(2)-ish) gets close to it
     assert np.min(support) < SPEED_POLYTOPE_APOTHEM * 1.01
+
+
+def test_the_symmetric_band_fallback_solves_like_a_dense_solve() -> None:
+    from planner.minjerk import solve_banded_symmetric
+
+    rng = np.random.default_rng(7)
+    n, u = 40, 3
+    dense = np.zeros((n, n))
+    for k in range(u + 1):
+        values = rng.normal(size=n - k)
+        dense += np.diag(values, k) + (np.diag(values, -k) if k else 0.0)
+    upper = np.zeros((u + 1, n))
+    for k in range(u + 1):
+        upper[u - k, k:] = np.diag(dense, k)
+    rhs = rng.normal(size=(n, 3))
+    np.testing.assert_allclose(solve_banded_symmetric(upper, rhs), np.linalg.solve(dense, rhs))

@@ -20,11 +20,12 @@ L_TICK = [
     np.array([[0.55, 0.05], [0.6, 0.0], [0.75, 0.2]]) - 0.3,
 ]
 BOARD = BoardFrame(center_m_enu=(2.0, -1.0, 0.75), yaw_rad=0.3)
+OPTIONS = PlanOptions(board=BOARD)
 
 
 @pytest.fixture(scope="module")
 def planned() -> object:
-    return plan_strokes(L_TICK, PlanOptions(board=BOARD))
+    return plan_strokes(L_TICK, OPTIONS)
 
 
 def test_rest_to_rest_above_first_and_last_stroke(planned: object) -> None:
@@ -33,8 +34,9 @@ def test_rest_to_rest_above_first_and_last_stroke(planned: object) -> None:
     p, v, a, _ = traj.evaluate(t_end)
     np.testing.assert_allclose(v, 0.0, atol=1e-9)
     np.testing.assert_allclose(a, 0.0, atol=1e-9)
-    start = BOARD.to_world(L_TICK[0][:1])[0] + [0, 0, 0.30 + 0.08]
-    end = BOARD.to_world(L_TICK[1][-1:])[0] + [0, 0, 0.30 + 0.08]
+    above = OPTIONS.write_height_m + OPTIONS.clearance_m
+    start = BOARD.to_world(L_TICK[0][:1])[0] + [0, 0, above]
+    end = BOARD.to_world(L_TICK[1][-1:])[0] + [0, 0, above]
     np.testing.assert_allclose(p, [start, end], atol=1e-9)
 
 
@@ -45,8 +47,9 @@ def test_pen_down_only_at_writing_height_during_strokes(planned: object) -> None
     assert samples.rate_hz == pytest.approx(100.0, rel=1e-3)
     assert not samples.pen_down[0] and not samples.pen_down[-1]
     height = BOARD.height_above_m(samples.position_m_enu)
-    assert np.all(height[samples.pen_down] <= 0.30 + 0.005 + 1e-12)
-    assert np.min(height) >= 0.30 - 1e-6  # never below writing height (QP floor)
+    write_m = OPTIONS.write_height_m
+    assert np.all(height[samples.pen_down] <= write_m + 0.005 + 1e-12)
+    assert np.min(height) >= write_m - 1e-6  # never below writing height (QP floor)
     # two separate pen-down runs, one per stroke
     runs = np.count_nonzero(np.diff(samples.pen_down.astype(int)) == 1)
     assert runs == 2
