@@ -459,5 +459,7 @@ def create_backend(setup: Any, **kwargs: Any) -> MavlinkBackend:
             ),
         )
     world = world_params(setup)
+    settings = replace(settings, mocap_latency_s=world.mocap.latency_s,
+                       mocap_noise_std_m=world.mocap.noise_std_m)  # fmt: skip
     kwargs.setdefault("brush", BrushModel(world.brush, world.board_height_m, on_board(setup)))
     return MavlinkBackend(settings, **kwargs)

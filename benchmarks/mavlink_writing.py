@@ -1,0 +1,164 @@
+"""One character written by the agent's own job code, per autopilot: pen-down RMSE and ink IoU.
+
+The pure agent code (JobRunner, prepare_job, job_metrics; the bus left out) flies one job on one
+board against each target: ``sim`` (the in-process simulator), ``mavsim`` (the project's
+simulated ArduCopter over UDP), ``ardupilot`` and ``px4`` (real SITL started with
+scripts/sitl/start.py from $SKYQUILL_ARDUCOPTER_SITL / $SKYQUILL_PX4_SITL, flying on the
+simulator's truth as mocap, metrics from the truth). Used by ``bench_mavlink.py --writing`` and
+the SITL tests.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import importlib.util
+import os
+import shutil
+import socket
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+from bus.messages import JobAssignment, JobMetrics, VehicleCommand
+from showfile import parse_show
+from vehicle_agent.agent import job_metrics, make_backend, prepare_job, vehicle_setup
+from vehicle_agent.backends.base import VehicleBackend
+from vehicle_agent.backends.mavlink import MavlinkBackend
+from vehicle_agent.clock import TickClock
+from vehicle_agent.job_runner import JobRunner
+
+ROOT = Path(__file__).resolve().parents[1]
+HOME_M_ENU = (0.0, -1.0, 0.0)
+SITL_INDEX = 6
+"""SITL instance number used here (ports apart from shows and the conformance suite)."""
+SHOW = """
+show_id: mavlink-writing
+boards:
+  - {{id: b1, center_m_enu: [0.0, 0.0, 0.75], size_m: [1.4, 1.4], writing_area_m: [0.6, 0.6]}}
+vehicles:
+  - {{id: v1, board: b1, home_m_enu: [0.0, -1.0, 0.0], {vehicle}}}
+planning: {{write_height_m: 0.25, clearance_m: 0.05, pace: nominal}}
+"""
+TARGETS = ("sim", "mavsim", "ardupilot", "px4")
+
+
+@dataclass(frozen=True)
+class Written:
+    """What one target wrote."""
+
+    target: str
+    metrics: JobMetrics
+    lead_s: float | None
+    """The lead in [s] the backend applied at the end (None: not a MAVLink backend)."""
+
+
+def launcher() -> ModuleType:
+    """scripts/sitl/start.py, imported by path (once)."""
+    if "sitl_start" in sys.modules:
+        return sys.modules["sitl_start"]
+    spec = importlib.util.spec_from_file_location("sitl_start", ROOT / "scripts/sitl/start.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["sitl_start"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def sitl_available(kind: str) -> bool:
+    return bool(os.environ.get(launcher().ENV_BINARY[kind]))
+
+
+async def fly_job(
+    backend: VehicleBackend, setup: Any, text: str, *, paced: bool, limit_s: float = 240.0
+) -> JobMetrics:
+    """The agent's control loop without the bus: assign, fly, measure; back on the ground.
+    ``paced``: in real time (an autopilot); otherwise as fast as the simulator goes."""
+    runner = JobRunner(setup.runner_config)
+    assignment = JobAssignment(job_id="j1", text=text)
+    prepared = prepare_job(setup, assignment)
+    snapshot = await backend.start()
+    if not runner.handle_command(VehicleCommand(command="assign", job=assignment), 0.0).ok:
+        raise RuntimeError("the runner refused the job")
+    clock = TickClock(backend.control_period_s, time_scale=1.0, skip_when_late=True)
+    metrics: JobMetrics | None = None
+    while clock.now_s < limit_s:
+        if paced:
+            await asyncio.sleep(clock.delay_s())
+        now = clock.now_s
+        actions = runner.step(snapshot, now)
+        if actions.plan_request is not None:
+            runner.plan_ready(prepared)
+        failed = [r for r in actions.reports if r.event == "failed"]
+        if failed:
+            raise RuntimeError(f"job failed: {failed[0]}")
+        if actions.backend_command is not None:
+            name, hover = actions.backend_command
+            await (backend.takeoff(hover) if name == "takeoff" else backend.land())  # type: ignore[arg-type]
+        snapshot = await backend.tick(actions.setpoint, now)
+        if actions.finished is not None:
+            metrics = job_metrics(setup, prepared, actions.finished)
+        if metrics is not None and runner.phase == "ground":
+            return metrics
+        clock.advance()
+    raise RuntimeError(f"job not finished in {limit_s:.0f} s: {runner.state}/{runner.phase}")
+
+
+def write(target: str, text: str) -> Written:
+    """Fly ``text`` on ``target`` (one of :data:`TARGETS`)."""
+    if target == "sim":
+        setup = vehicle_setup(parse_show(SHOW.format(vehicle="backend: sim")), "v1")
+        metrics = asyncio.run(fly_job(make_backend(setup), setup, text, paced=False))
+        return Written(target, metrics, None)
+    if target == "mavsim":
+        return _write_mavsim(text)
+    return _write_sitl(target, text)
+
+
+def _write_mavsim(text: str) -> Written:
+    from mavsim.server import MavsimServer
+    from mavsim.show import vehicle_configs
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = int(sock.getsockname()[1])
+    vehicle = f'backend: mavlink, mavlink_url: "udp:127.0.0.1:{port}", mavlink_system_id: 1'
+    show = parse_show(SHOW.format(vehicle=vehicle))
+    with MavsimServer(vehicle_configs(show, position_source_delay_s=0.0)):
+        return _fly_mavlink("mavsim", show, text)
+
+
+def _write_sitl(kind: str, text: str) -> Written:
+    launch = launcher()
+    binary = launch.binary_for(kind)
+    run_dir = Path(tempfile.mkdtemp(prefix=f"skyquill-writing-{kind}-"))
+    inst = launch.Instance(kind, SITL_INDEX, SITL_INDEX + 1, launch.home_lla(HOME_M_ENU), binary,
+                           run_dir, mocap=True)  # fmt: skip
+    process = launch.start(inst)
+    try:
+        launch.wait_ready(inst, process, launch.READY_TIMEOUT_S)
+        vehicle = (
+            f'backend: mavlink, mavlink_url: "{inst.url}", mavlink_system_id: {inst.system_id}, '
+            "mavlink_truth: sitl, mavlink_mocap: vision_position_estimate"
+        )
+        return _fly_mavlink(kind, parse_show(SHOW.format(vehicle=vehicle)), text)
+    finally:
+        launch.stop(process)
+        shutil.rmtree(run_dir, ignore_errors=True)
+
+
+def _fly_mavlink(target: str, show: Any, text: str) -> Written:
+    setup = vehicle_setup(show, "v1")
+    backend = make_backend(setup)
+
+    async def run() -> Written:
+        try:
+            metrics = await fly_job(backend, setup, text, paced=True)
+        finally:
+            await backend.close()
+        lead_s = backend.aid.lead_s if isinstance(backend, MavlinkBackend) else None
+        return Written(target, metrics, lead_s)
+
+    return asyncio.run(run())
