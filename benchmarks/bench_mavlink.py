@@ -207,23 +207,26 @@ def writing(texts: list[str], targets: list[str]) -> None:
     """Pen-down RMSE and IoU of each character on each target, side by side."""
     print("\nwriting, 2 cm brush: pen-down RMSE [mm] / IoU (lead [s] the backend applied)")
     print("  " + "".join(f"{t:>24}" for t in targets))
-    for text in texts:
+    columns = []
+    for target in targets:
+        if target in ("ardupilot", "px4") and not mavlink_writing.sitl_available(target):
+            columns.append(["no SITL binary"] * len(texts))
+            continue
+        try:
+            flown = mavlink_writing.write(target, texts)
+        except (RuntimeError, OSError) as exc:
+            print(f"  {target}: {exc}", file=sys.stderr)
+            columns.append(["failed"] * len(texts))
+            continue
         cells = []
-        for target in targets:
-            if target in ("ardupilot", "px4") and not mavlink_writing.sitl_available(target):
-                cells.append("no SITL binary")
-                continue
-            try:
-                w = mavlink_writing.write(target, text)
-            except (RuntimeError, OSError) as exc:
-                print(f"  {target} {text}: {exc}", file=sys.stderr)
-                cells.append("failed")
-                continue
+        for w in flown:
             m = w.metrics
             lead = "" if w.lead_s is None else f" ({w.lead_s:.3f})"
             iou = "-" if m.iou is None else f"{m.iou:.2f}"
             cells.append(f"{1000 * m.rmse_pen_down_m:.1f} / {iou}{lead}")
-        print(f"{text:>2}" + "".join(f"{c:>24}" for c in cells))
+        columns.append(cells)
+    for k, text in enumerate(texts):
+        print(f"{text:>2}" + "".join(f"{column[k]:>24}" for column in columns))
 
 
 def main() -> None:

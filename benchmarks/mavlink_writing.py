@@ -71,53 +71,61 @@ def sitl_available(kind: str) -> bool:
     return bool(os.environ.get(launcher().ENV_BINARY[kind]))
 
 
-async def fly_job(
-    backend: VehicleBackend, setup: Any, text: str, *, paced: bool, limit_s: float = 240.0
-) -> JobMetrics:
-    """The agent's control loop without the bus: assign, fly, measure; back on the ground.
+async def fly_jobs(
+    backend: VehicleBackend, setup: Any, texts: list[str], *, paced: bool, limit_s: float = 240.0
+) -> list[JobMetrics]:
+    """The agent's control loop without the bus: start the backend, then for each text assign,
+    fly, measure, back on the ground (the next job on the same vehicle, as a show runs).
     ``paced``: in real time (an autopilot); otherwise as fast as the simulator goes."""
-    runner = JobRunner(setup.runner_config)
-    assignment = JobAssignment(job_id="j1", text=text)
-    prepared = prepare_job(setup, assignment)
     snapshot = await backend.start()
-    if not runner.handle_command(VehicleCommand(command="assign", job=assignment), 0.0).ok:
-        raise RuntimeError("the runner refused the job")
     clock = TickClock(backend.control_period_s, time_scale=1.0, skip_when_late=True)
-    metrics: JobMetrics | None = None
-    while clock.now_s < limit_s:
-        if paced:
-            await asyncio.sleep(clock.delay_s())
-        now = clock.now_s
-        actions = runner.step(snapshot, now)
-        if actions.plan_request is not None:
-            runner.plan_ready(prepared)
-        failed = [r for r in actions.reports if r.event == "failed"]
-        if failed:
-            raise RuntimeError(f"job failed: {failed[0]}")
-        if actions.backend_command is not None:
-            name, hover = actions.backend_command
-            await (backend.takeoff(hover) if name == "takeoff" else backend.land())  # type: ignore[arg-type]
-        snapshot = await backend.tick(actions.setpoint, now)
-        if actions.finished is not None:
-            metrics = job_metrics(setup, prepared, actions.finished)
-        if metrics is not None and runner.phase == "ground":
-            return metrics
-        clock.advance()
-    raise RuntimeError(f"job not finished in {limit_s:.0f} s: {runner.state}/{runner.phase}")
+    done: list[JobMetrics] = []
+    for k, text in enumerate(texts):
+        runner = JobRunner(setup.runner_config)
+        assignment = JobAssignment(job_id=f"j{k}", text=text)
+        prepared = prepare_job(setup, assignment)
+        if not runner.handle_command(VehicleCommand(command="assign", job=assignment),
+                                     clock.now_s).ok:  # fmt: skip
+            raise RuntimeError(f"the runner refused job {k}")
+        metrics: JobMetrics | None = None
+        t_end = clock.now_s + limit_s
+        while metrics is None or runner.phase != "ground":
+            if clock.now_s > t_end:
+                raise RuntimeError(f"job {k} not done in {limit_s:.0f} s: {runner.phase}")
+            if paced:
+                await asyncio.sleep(clock.delay_s())
+            now = clock.now_s
+            actions = runner.step(snapshot, now)
+            if actions.plan_request is not None:
+                runner.plan_ready(prepared)
+            failed = [r for r in actions.reports if r.event == "failed"]
+            if failed:
+                raise RuntimeError(f"job {k} failed: {failed[0]}")
+            if actions.backend_command is not None:
+                name, hover = actions.backend_command
+                await (backend.takeoff(hover) if name == "takeoff" else backend.land())  # type: ignore[arg-type]
+            snapshot = await backend.tick(actions.setpoint, now)
+            if snapshot.fault is not None:
+                raise RuntimeError(f"job {k}: vehicle fault: {snapshot.fault}")
+            if actions.finished is not None:
+                metrics = job_metrics(setup, prepared, actions.finished)
+            clock.advance()
+        done.append(metrics)
+    return done
 
 
-def write(target: str, text: str) -> Written:
-    """Fly ``text`` on ``target`` (one of :data:`TARGETS`)."""
+def write(target: str, texts: list[str]) -> list[Written]:
+    """Fly ``texts`` one after the other on ``target`` (one of :data:`TARGETS`)."""
     if target == "sim":
         setup = vehicle_setup(parse_show(SHOW.format(vehicle="backend: sim")), "v1")
-        metrics = asyncio.run(fly_job(make_backend(setup), setup, text, paced=False))
-        return Written(target, metrics, None)
+        flown = asyncio.run(fly_jobs(make_backend(setup), setup, texts, paced=False))
+        return [Written(target, m, None) for m in flown]
     if target == "mavsim":
-        return _write_mavsim(text)
-    return _write_sitl(target, text)
+        return _write_mavsim(texts)
+    return _write_sitl(target, texts)
 
 
-def _write_mavsim(text: str) -> Written:
+def _write_mavsim(texts: list[str]) -> list[Written]:
     from mavsim.server import MavsimServer
     from mavsim.show import vehicle_configs
 
@@ -127,10 +135,10 @@ def _write_mavsim(text: str) -> Written:
     vehicle = f'backend: mavlink, mavlink_url: "udp:127.0.0.1:{port}", mavlink_system_id: 1'
     show = parse_show(SHOW.format(vehicle=vehicle))
     with MavsimServer(vehicle_configs(show, position_source_delay_s=0.0)):
-        return _fly_mavlink("mavsim", show, text)
+        return _fly_mavlink("mavsim", show, texts)
 
 
-def _write_sitl(kind: str, text: str) -> Written:
+def _write_sitl(kind: str, texts: list[str]) -> list[Written]:
     launch = launcher()
     binary = launch.binary_for(kind)
     run_dir = Path(tempfile.mkdtemp(prefix=f"skyquill-writing-{kind}-"))
@@ -143,22 +151,23 @@ def _write_sitl(kind: str, text: str) -> Written:
             f'backend: mavlink, mavlink_url: "{inst.url}", mavlink_system_id: {inst.system_id}, '
             "mavlink_truth: sitl, mavlink_mocap: vision_position_estimate"
         )
-        return _fly_mavlink(kind, parse_show(SHOW.format(vehicle=vehicle)), text)
+        return _fly_mavlink(kind, parse_show(SHOW.format(vehicle=vehicle)), texts)
     finally:
         launch.stop(process)
-        shutil.rmtree(run_dir, ignore_errors=True)
+        if not os.environ.get("SKYQUILL_KEEP_SITL_RUN"):
+            shutil.rmtree(run_dir, ignore_errors=True)
 
 
-def _fly_mavlink(target: str, show: Any, text: str) -> Written:
+def _fly_mavlink(target: str, show: Any, texts: list[str]) -> list[Written]:
     setup = vehicle_setup(show, "v1")
     backend = make_backend(setup)
 
-    async def run() -> Written:
+    async def run() -> list[Written]:
         try:
-            metrics = await fly_job(backend, setup, text, paced=True)
+            flown = await fly_jobs(backend, setup, texts, paced=True)
         finally:
             await backend.close()
         lead_s = backend.aid.lead_s if isinstance(backend, MavlinkBackend) else None
-        return Written(target, metrics, lead_s)
+        return [Written(target, m, lead_s) for m in flown]
 
     return asyncio.run(run())
