@@ -80,8 +80,8 @@ async def fly_jobs(
     snapshot = await backend.start()
     clock = TickClock(backend.control_period_s, time_scale=1.0, skip_when_late=True)
     done: list[JobMetrics] = []
+    runner = JobRunner(setup.runner_config)  # one per vehicle, as the agent has
     for k, text in enumerate(texts):
-        runner = JobRunner(setup.runner_config)
         assignment = JobAssignment(job_id=f"j{k}", text=text)
         prepared = prepare_job(setup, assignment)
         if not runner.handle_command(VehicleCommand(command="assign", job=assignment),
