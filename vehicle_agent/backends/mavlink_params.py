@@ -130,6 +130,8 @@ def mocap_params(flavor: Flavor) -> list[ParamSpec]:
             ParamSpec("EKF2_HGT_REF", PX4_HGT_REF_VISION, MAV_PARAM_TYPE_INT32,
                       why="height from mocap"),
             ParamSpec("EKF2_GPS_CTRL", 0, MAV_PARAM_TYPE_INT32, why="position from mocap only"),
+            ParamSpec("EKF2_EVP_NOISE", 0.01, MAV_PARAM_TYPE_REAL32,
+                      why="mocap is millimetre-grade (its smallest value)"),
         ]  # fmt: skip
     return [
         ParamSpec("VISO_TYPE", 1, MAV_PARAM_TYPE_INT8, why="mocap over MAVLink",
@@ -140,6 +142,8 @@ def mocap_params(flavor: Flavor) -> list[ParamSpec]:
                   why="height from mocap"),
         ParamSpec("EK3_SRC1_VELXY", 0, MAV_PARAM_TYPE_INT8, why="no velocity source but mocap"),
         ParamSpec("EK3_SRC1_VELZ", 0, MAV_PARAM_TYPE_INT8, why="no velocity source but mocap"),
+        ParamSpec("VISO_POS_M_NSE", 0.1, MAV_PARAM_TYPE_REAL32,
+                  why="mocap is millimetre-grade (the smallest documented value)"),
     ]  # fmt: skip
 
 
