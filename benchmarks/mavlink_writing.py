@@ -43,6 +43,8 @@ vehicles:
 planning: {{write_height_m: 0.25, clearance_m: 0.05, pace: nominal}}
 """
 TARGETS = ("sim", "mavsim", "ardupilot", "px4")
+WARM_UP_S = 8.0
+"""An autopilot's time on the ground after connect (mocap fused, sources switched) before a job."""
 
 
 @dataclass(frozen=True)
@@ -79,6 +81,10 @@ async def fly_jobs(
     ``paced``: in real time (an autopilot); otherwise as fast as the simulator goes."""
     snapshot = await backend.start()
     clock = TickClock(backend.control_period_s, time_scale=1.0, skip_when_late=True)
+    while paced and clock.now_s < WARM_UP_S:  # the EKF re-converges on the parameters just set
+        await asyncio.sleep(clock.delay_s())
+        snapshot = await backend.tick(None, clock.now_s)
+        clock.advance()
     done: list[JobMetrics] = []
     runner = JobRunner(setup.runner_config)  # one per vehicle, as the agent has
     for k, text in enumerate(texts):

@@ -35,9 +35,12 @@ ARDUPILOT_FENCE_ACTION_LAND = 2
 PX4_GF_ACTION_LAND = 5
 ARDUPILOT_SOURCE_EXTERNAL_NAV = 6
 """EK3_SRC*_POS*/VEL*/YAW: ExternalNav."""
-PX4_EV_CTRL_POSITION = 3
-"""EKF2_EV_CTRL bits 0 and 1: fuse external-vision horizontal and vertical position."""
-PX4_HGT_REF_VISION = 3
+PX4_EV_CTRL_POSITION = 1
+"""EKF2_EV_CTRL bit 0: fuse external-vision horizontal position (bit 1, vertical, beside the
+barometer as height reference, left PX4 v1.16 SIH refusing to arm: "system health failures")."""
+PX4_HGT_REF_BARO = 0
+"""EKF2_HGT_REF: barometer. With 3 (vision) and GPS off, PX4 v1.16 SIH reported LOCAL_POSITION_NED
+z = -583.5 m on the ground (its home altitude): not usable yet."""
 
 Flavor = Literal["ardupilot", "px4"]
 
@@ -121,14 +124,14 @@ def show_params(
 def mocap_params(flavor: Flavor) -> list[ParamSpec]:
     """What fusing forwarded motion capture needs: ArduPilot's EKF3 takes position from
     ExternalNav (VISO_TYPE 1, MAVLink; read at boot) with yaw from its compass; PX4's EKF2 fuses
-    external-vision position horizontally and vertically as its height reference, GPS off (a
-    consumer GPS next to it would pull the estimate off by decimetres)."""
+    external-vision horizontal position with GPS off (a consumer GPS next to it would pull the
+    estimate off by decimetres), height from its barometer (see PX4_HGT_REF_BARO)."""
     if flavor == "px4":
         return [
             ParamSpec("EKF2_EV_CTRL", PX4_EV_CTRL_POSITION, MAV_PARAM_TYPE_INT32,
                       why="fuse mocap position"),
-            ParamSpec("EKF2_HGT_REF", PX4_HGT_REF_VISION, MAV_PARAM_TYPE_INT32,
-                      why="height from mocap"),
+            ParamSpec("EKF2_HGT_REF", PX4_HGT_REF_BARO, MAV_PARAM_TYPE_INT32,
+                      why="height reference: barometer (vision: LOCAL z off by the home altitude)"),
             ParamSpec("EKF2_GPS_CTRL", 0, MAV_PARAM_TYPE_INT32, why="position from mocap only"),
             ParamSpec("EKF2_EVP_NOISE", 0.01, MAV_PARAM_TYPE_REAL32,
                       why="mocap is millimetre-grade (its smallest value)"),
