@@ -32,8 +32,8 @@ from vehicle_agent.job_runner import JobRunner
 
 ROOT = Path(__file__).resolve().parents[1]
 HOME_M_ENU = (0.0, -1.0, 0.0)
-SITL_INDEX = 6
-"""SITL instance number used here (ports apart from shows and the conformance suite)."""
+SITL_INDEX = 7
+"""SITL instance number used here (apart from shows, probe 4, step_response 5, conformance 6)."""
 SHOW = """
 show_id: mavlink-writing
 boards:
