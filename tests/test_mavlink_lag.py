@@ -104,3 +104,13 @@ def test_closed_loop_identifies_the_lag_and_leading_cancels_most_of_it() -> None
     assert identified == pytest.approx(0.12, abs=0.01)
     assert late > 0.05  # 0.47 m/s along a 0.3 m circle, 0.12 s late: 5.6 cm
     assert led < 0.1 * late
+
+
+def test_a_response_that_is_no_delay_leaves_the_lead_alone() -> None:
+    """A vehicle that does not follow (here: stuck) fits the longest delay; it is not taken."""
+    estimator = ResponseDelayEstimator()
+    for k in range(200):
+        t = k * DT_S
+        estimator.sent(t, (0.3 * math.cos(t), 0.3 * math.sin(t), 1.0))
+        estimator.measured(t, (0.3, 0.0, 1.0))
+    assert estimator.fits and estimator.delay_s is None

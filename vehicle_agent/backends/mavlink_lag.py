@@ -37,6 +37,8 @@ class LagSettings:
     """Time in [s] between fits while the setpoint moves."""
     smoothing: float = 0.5
     """Weight of a new fit in the running delay (1: take each fit as it is)."""
+    explained_fraction: float = 0.5
+    """A fit is taken only when it leaves at most this fraction of the zero-delay RMS error."""
 
 
 @dataclass(frozen=True)
@@ -120,6 +122,14 @@ class ResponseDelayEstimator:
         if t_s - self._last_fit_s >= self.settings.refit_every_s:
             self._refit(t_s)
 
+    def plausible(self, fit: DelayFit) -> bool:
+        """A delay explains the response: inside the search range (not at its end) and leaving at
+        most ``explained_fraction`` of the error at zero delay; otherwise the vehicle is not
+        following the setpoints as a delay (it is disturbed, saturated or elsewhere) and the lead
+        stays as it is."""
+        inside = fit.delay_s < self.settings.max_delay_s - self.settings.step_s
+        return inside and fit.rms_m <= self.settings.explained_fraction * fit.rms_at_zero_m
+
     def _trim(self, now_s: float) -> None:
         horizon = now_s - self.settings.window_s - self.settings.max_delay_s
         for history in (self._sent, self._measured):
@@ -138,6 +148,8 @@ class ResponseDelayEstimator:
             return
         self._last_fit_s = now_s
         self.fits.append(fit)
+        if not self.plausible(fit):
+            return
         if self.delay_s is None:
             self.delay_s = fit.delay_s
         else:
