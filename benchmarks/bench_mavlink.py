@@ -1,6 +1,13 @@
-"""MAVLink numbers: setpoint rate sustained per vehicle, and latency from setpoint to vehicle.
+"""MAVLink numbers: writing quality per autopilot, setpoint rate and latency per vehicle.
 
     .venv/bin/python benchmarks/bench_mavlink.py [--vehicles 4] [--seconds 10] [--rates 50 100]
+        [--writing 一 永] [--targets sim mavsim ardupilot px4]
+
+Writing (first): the agent's job code writes each ``--writing`` character once per target
+(benchmarks/mavlink_writing.py): the in-process simulator, mavsim, and ArduCopter / PX4 SITL when
+$SKYQUILL_ARDUCOPTER_SITL / $SKYQUILL_PX4_SITL name their binaries (real time, about a minute
+each, plus the autopilot's start); pen-down RMSE and ink IoU (2 cm brush) side by side, with the
+lead the backend identified. ``--writing`` with no character skips it.
 
 The vehicles (``mavsim``: simulated ArduCopters, real time) run in a child process, as
 ``skyquill sim-mavlink`` would; this process flies N MavlinkBackends on one asyncio loop at the
@@ -30,6 +37,9 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import mavlink_writing  # noqa: E402  (beside this file)
 
 from mavsim.config import VehicleConfig  # noqa: E402
 from mavsim.server import MavsimServer  # noqa: E402
@@ -193,12 +203,43 @@ def run(vehicles: int, seconds: float, rate_hz: float) -> None:
           f"  faults: {result['faults'] or 'none'}")  # fmt: skip
 
 
+def writing(texts: list[str], targets: list[str]) -> None:
+    """Pen-down RMSE and IoU of each character on each target, side by side."""
+    print("\nwriting, 2 cm brush: pen-down RMSE [mm] / IoU (lead [s] the backend applied)")
+    print("  " + "".join(f"{t:>24}" for t in targets))
+    columns = []
+    for target in targets:
+        if target in ("ardupilot", "px4") and not mavlink_writing.sitl_available(target):
+            columns.append(["no SITL binary"] * len(texts))
+            continue
+        try:
+            flown = mavlink_writing.write(target, texts)
+        except (RuntimeError, OSError) as exc:
+            print(f"  {target}: {exc}", file=sys.stderr)
+            columns.append(["failed"] * len(texts))
+            continue
+        cells = []
+        for w in flown:
+            m = w.metrics
+            lead = "" if w.lead_s is None else f" ({w.lead_s:.3f})"
+            iou = "-" if m.iou is None else f"{m.iou:.2f}"
+            cells.append(f"{1000 * m.rmse_pen_down_m:.1f} / {iou}{lead}")
+        columns.append(cells)
+    for k, text in enumerate(texts):
+        print(f"{text:>2}" + "".join(f"{column[k]:>24}" for column in columns))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--vehicles", type=int, default=4)
     parser.add_argument("--seconds", type=float, default=10.0)
     parser.add_argument("--rates", type=float, nargs="+", default=[50.0, 100.0])
+    parser.add_argument("--writing", nargs="*", default=["一"], metavar="CHAR")
+    parser.add_argument("--targets", nargs="+", default=list(mavlink_writing.TARGETS),
+                        choices=mavlink_writing.TARGETS)  # fmt: skip
     args = parser.parse_args()
+    if args.writing:
+        writing(args.writing, args.targets)
     for rate in args.rates:
         run(args.vehicles, args.seconds, rate)
 

@@ -296,6 +296,13 @@ class Vehicle(_Model):
     mavlink_mocap: Literal["none", "vision_position_estimate", "att_pos_mocap"] = "none"
     """Forward motion-capture poses to the autopilot with this message (indoor flight); needs a
     mocap source handed to the backend (mavlink backend only)."""
+    mavlink_truth: Literal["none", "sitl"] = "none"
+    """``sitl``: the autopilot is a simulator that sends its true state (ArduPilot SIM_STATE, PX4
+    HIL_STATE_QUATERNION): job metrics measure it, and it is the mocap source for
+    ``mavlink_mocap`` with the show's mocap noise and latency (mavlink backend only)."""
+    mavlink_lead_s: float | None = Field(default=None, ge=0.0, le=0.5)
+    """How far in [s] ahead on the plan position setpoints are sent, cancelling the autopilot's
+    lag; None: identified in flight from the vehicle's response (mavlink backend only)."""
     limits: Limits | None = None
     """Limits of this vehicle, replacing the show's ``limits``."""
 

@@ -338,8 +338,9 @@ def test_mocap_poses_are_forwarded_in_local_ned() -> None:
     pose = MocapPose(position_m_enu=(1.0, -1.0, 0.0))
 
     async def scenario(server: MavsimServer) -> None:
+        # mavsim has no fusion parameters (VISO_TYPE, EK3_SRC1_*): forwarding alone here
         async with connected(server, mocap="vision_position_estimate", mocap_rate_hz=50.0,
-                             ) as (backend, driver):  # fmt: skip
+                             set_params=False) as (backend, driver):  # fmt: skip
             backend._mocap.source = lambda _t: pose
             for _ in range(50):
                 await driver.tick()

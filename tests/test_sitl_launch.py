@@ -7,6 +7,7 @@ import importlib.util
 import math
 import os
 import sys
+from dataclasses import replace
 from pathlib import Path
 from types import ModuleType
 
@@ -87,6 +88,9 @@ def test_arducopter_starts_with_its_defaults_sysid_home_and_serial0_not_waiting(
     assert pairs["--defaults"] == str(defaults.resolve())
     assert pairs["--home"] == "-35.0000000,149.0000000,584.00,0"
     assert argv[-2:] == ["--serial0", "tcp:0"]
+    with_mocap = launch.command(replace(inst, mocap=True))[0]
+    mocap_parm = str(tmp_path / "run" / "mocap.parm")
+    assert with_mocap[with_mocap.index("--defaults") + 1] == f"{defaults.resolve()},{mocap_parm}"
 
 
 def test_px4_starts_sih_at_its_home(launch: ModuleType, tmp_path: Path) -> None:

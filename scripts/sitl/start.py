@@ -45,6 +45,9 @@ REFERENCE_LLA = (-35.363261, 149.165230, 584.0)
 """Geodetic point (lat [deg], lon [deg], alt [m]) of the show frame's origin (ArduPilot's CMAC)."""
 EARTH_RADIUS_M = 6_378_137.0
 ARDUPILOT_BASE_PORT = 5760
+MOCAP_PARM = "mocap.parm"
+MOCAP_BOOT_PARAMS = "VISO_TYPE 1\n"
+"""ArduCopter parameters read only at boot that fusing forwarded mocap needs."""
 PX4_OFFBOARD_REMOTE_PORT = 14540
 MAV_SYS_STATUS_PREARM_CHECK = 0x10000000
 READY_TIMEOUT_S = 180.0
@@ -71,6 +74,9 @@ class Instance:
     """The arducopter or px4 executable."""
     run_dir: Path
     """Working directory of this instance (created)."""
+    mocap: bool = False
+    """The agent forwards motion capture: ArduCopter boots with VISO_TYPE 1 (read only at boot;
+    the agent sets and verifies the EKF sources itself at connect)."""
 
     @property
     def url(self) -> str:
@@ -145,7 +151,7 @@ def command(inst: Instance) -> tuple[list[str], dict[str, str]]:
             "--home",
             f"{lat:.7f},{lon:.7f},{alt:.2f},0",
             "--defaults",
-            str(defaults),
+            ",".join([str(defaults)] + ([str(inst.run_dir / MOCAP_PARM)] if inst.mocap else [])),
             "--wipe",
             "--serial0",
             "tcp:0",
@@ -188,6 +194,8 @@ def start(inst: Instance) -> subprocess.Popen[bytes]:
     check_instance(inst)
     argv, env = command(inst)
     inst.run_dir.mkdir(parents=True, exist_ok=True)
+    if inst.mocap and inst.kind == "ardupilot":
+        (inst.run_dir / MOCAP_PARM).write_text(MOCAP_BOOT_PARAMS)
     with open(inst.run_dir / "console.log", "wb") as console:
         return subprocess.Popen(
             argv,
@@ -303,6 +311,7 @@ def show_instances(show_path: Path, run_dir: Path, binaries: dict[str, str | Non
             home_lla(vehicle.home_m_enu),
             binary_for(kind, binaries[kind]),
             run_dir / f"{kind}-{index}",
+            mocap=vehicle.mavlink_mocap != "none",
         )
         check_instance(inst)
         found.append((vehicle.id, inst))

@@ -95,6 +95,9 @@ class VehicleSnapshot:
     autopilot_mode: str | None = None
     """The autopilot's own name of its flight mode (``GUIDED``, ``OFFBOARD``, ``AUTO.LAND``...),
     for the event log; None for a backend without an autopilot."""
+    true_position_m_enu: Vec3 | None = None
+    """Where the vehicle reference point truly is in [m], ENU, when the backend knows it apart
+    from the vehicle's own estimate (a simulator's truth behind an autopilot); None otherwise."""
 
 
 @runtime_checkable

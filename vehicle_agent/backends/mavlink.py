@@ -44,8 +44,10 @@ from vehicle_agent.backends.mavlink_params import (
     ParamChannel,
     ParamError,
     autopilot_fence,
+    mocap_params,
     show_params,
 )
+from vehicle_agent.backends.mavlink_response import ResponseAid
 from vehicle_agent.backends.mavlink_settings import MavlinkSettings, settings_from_show
 from vehicle_agent.backends.mavlink_state import (
     MAV_AUTOPILOT_INVALID,
@@ -93,7 +95,10 @@ class MavlinkBackend:
         self.events: deque[tuple[int, str]] = deque(maxlen=200)
         """STATUSTEXTs of the autopilot (severity, text), newest last, for the event log."""
         self._on_text = on_text
-        self._mocap = MocapForwarder(settings, self.frame, mocap_source)
+        self.aid = ResponseAid(settings, seed=settings.system_id or 0)
+        """The vehicle's true state (SITL) and its identified lag."""
+        source = mocap_source if mocap_source is not None else self.aid.mocap_source()
+        self._mocap = MocapForwarder(settings, self.frame, source)
         self._link: MavlinkLink | None = None
         self._heartbeat_seen = asyncio.Event()
         self.commands = CommandChannel(lambda: self.link, self.state,
@@ -168,6 +173,8 @@ class MavlinkBackend:
         s = self.settings
         specs = show_params(self._flavor().name, setpoint_timeout_s=s.setpoint_timeout_s,
                             attitude=s.setpoints == "attitude", fence=s.fence)  # fmt: skip
+        if s.mocap != "none":
+            specs += mocap_params(self._flavor().name)
         for spec in specs:
             try:
                 self.params_set[spec.name] = await self.params.ensure(spec)
@@ -182,6 +189,9 @@ class MavlinkBackend:
             self.commands.send(CMD_SET_MESSAGE_INTERVAL, message_id, fast_us)
         for message_id in SLOW:
             self.commands.send(CMD_SET_MESSAGE_INTERVAL, message_id, 1e6)
+        truth = self.aid.truth_message(self._flavor().name)
+        if truth is not None:
+            self.commands.send(CMD_SET_MESSAGE_INTERVAL, truth, fast_us)
 
     def _on_message(self, message: Any) -> None:
         kind = self.state.absorb(message)
@@ -191,6 +201,8 @@ class MavlinkBackend:
             self.commands.on_ack(message)
         elif kind == "PARAM_VALUE":
             self.params.on_param_value(message)
+        elif kind in ("SIM_STATE", "HIL_STATE_QUATERNION"):
+            self.aid.on_message(message, self._now_s, resting_at_home=not self.state.armed)
         elif kind == "STATUSTEXT":
             severity, text = self.state.recent_texts[-1]
             self.commands.on_text(text)
@@ -225,6 +237,7 @@ class MavlinkBackend:
         flavor = self._flavor()
         here = self._position_m_enu()
         self.stream.new_flight(await self._heading_now())
+        self.aid.lag.reset()
         if flavor.name == "px4":
             await self._prove_life(Setpoint(position_m_enu=here))
         await self._set_mode(flavor.offboard_mode)
@@ -380,7 +393,7 @@ class MavlinkBackend:
             if self.mode != "offboard":
                 self._set_backend_mode("offboard")
             self._hold = Setpoint(position_m_enu=setpoint.position_m_enu)
-            target = setpoint
+            target = setpoint if self.settings.setpoints == "attitude" else self.aid.lead(setpoint)
         elif self.mode in ("hold", "offboard") and self._hold is not None:
             if self.mode == "offboard":
                 self._set_backend_mode("hold")
@@ -389,7 +402,12 @@ class MavlinkBackend:
             target = self._climb.setpoint(now_s)
         else:
             return
+        sent = self.stream.sent
         self.stream.send(target, now_s, self._position_m_enu())
+        if self.mode in ("hold", "offboard") and self.state.position_ned is not None:
+            if self.stream.sent > sent:
+                self.aid.sent(now_s, target.position_m_enu)
+            self.aid.measured(now_s, self._position_m_enu())
 
     # --- state out ---------------------------------------------------------------------------
     def _position_m_enu(self) -> Vec3:
@@ -400,9 +418,12 @@ class MavlinkBackend:
         st = self.state
         on_ground = st.landed_state == 1 if st.landed_state is not None else not st.armed
         position = self._position_m_enu()
+        truth = self.aid.true_state(now_s)
+        body, attitude = (position, st.attitude_ned) if truth is None else (
+            truth.position_m_enu, truth.attitude_ned_rad)  # fmt: skip
         brush = None
-        if self.brush is not None and st.attitude_ned is not None:
-            brush = self.brush.read(position, st.attitude_ned)
+        if self.brush is not None and attitude is not None:
+            brush = self.brush.read(body, attitude)
         return VehicleSnapshot(
             t_s=now_s,
             position_m_enu=position,
@@ -416,6 +437,7 @@ class MavlinkBackend:
             pen_width_m=None if brush is None else brush.width_m,
             pen_contact=None if brush is None else brush.contact,
             autopilot_mode=None if st.flavor is None else st.flavor.mode_name(st.custom_mode or 0),
+            true_position_m_enu=None if truth is None else truth.position_m_enu,
         )
 
 
@@ -436,5 +458,7 @@ def create_backend(setup: VehicleSetup, **kwargs: Any) -> MavlinkBackend:
             ),
         )
     world = world_params(setup)
+    settings = replace(settings, mocap_latency_s=world.mocap.latency_s,
+                       mocap_noise_std_m=world.mocap.noise_std_m)  # fmt: skip
     kwargs.setdefault("brush", BrushModel(world.brush, world.board_height_m, on_board(setup)))
     return MavlinkBackend(settings, **kwargs)

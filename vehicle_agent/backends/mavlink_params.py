@@ -33,6 +33,14 @@ ARDUPILOT_FENCE_CIRCLE_AND_ALT_MAX = 3
 """ArduCopter FENCE_TYPE: bit 0 maximum altitude, bit 1 circle around home."""
 ARDUPILOT_FENCE_ACTION_LAND = 2
 PX4_GF_ACTION_LAND = 5
+ARDUPILOT_SOURCE_EXTERNAL_NAV = 6
+"""EK3_SRC*_POS*/VEL*/YAW: ExternalNav."""
+PX4_EV_CTRL_POSITION = 1
+"""EKF2_EV_CTRL bit 0: fuse external-vision horizontal position (bit 1, vertical, beside the
+barometer as height reference, left PX4 v1.16 SIH refusing to arm: "system health failures")."""
+PX4_HGT_REF_BARO = 0
+"""EKF2_HGT_REF: barometer. With 3 (vision) and GPS off, PX4 v1.16 SIH reported LOCAL_POSITION_NED
+z = -583.5 m on the ground (its home altitude): not usable yet."""
 
 Flavor = Literal["ardupilot", "px4"]
 
@@ -55,6 +63,9 @@ class ParamSpec:
     """``value`` is a bitmask OR-ed into the current value (other bits kept)."""
     why: str = ""
     """Why the show needs it (for the error message)."""
+    needs_reboot: bool = False
+    """The autopilot reads it only at boot: found otherwise, it is set and the vehicle refused
+    until rebooted (SITL: give it in the instance's defaults)."""
 
 
 @dataclass(frozen=True)
@@ -108,6 +119,35 @@ def show_params(
             ParamSpec("FENCE_ENABLE", 1, MAV_PARAM_TYPE_INT8, why="fence"),
         ]  # fmt: skip
     return specs
+
+
+def mocap_params(flavor: Flavor) -> list[ParamSpec]:
+    """What fusing forwarded motion capture needs: ArduPilot's EKF3 takes position from
+    ExternalNav (VISO_TYPE 1, MAVLink; read at boot) with yaw from its compass; PX4's EKF2 fuses
+    external-vision horizontal position with GPS off (a consumer GPS next to it would pull the
+    estimate off by decimetres), height from its barometer (see PX4_HGT_REF_BARO)."""
+    if flavor == "px4":
+        return [
+            ParamSpec("EKF2_EV_CTRL", PX4_EV_CTRL_POSITION, MAV_PARAM_TYPE_INT32,
+                      why="fuse mocap position"),
+            ParamSpec("EKF2_HGT_REF", PX4_HGT_REF_BARO, MAV_PARAM_TYPE_INT32,
+                      why="height reference: barometer (vision: LOCAL z off by the home altitude)"),
+            ParamSpec("EKF2_GPS_CTRL", 0, MAV_PARAM_TYPE_INT32, why="position from mocap only"),
+            ParamSpec("EKF2_EVP_NOISE", 0.01, MAV_PARAM_TYPE_REAL32,
+                      why="mocap is millimetre-grade (its smallest value)"),
+        ]  # fmt: skip
+    return [
+        ParamSpec("VISO_TYPE", 1, MAV_PARAM_TYPE_INT8, why="mocap over MAVLink",
+                  needs_reboot=True),
+        ParamSpec("EK3_SRC1_POSXY", ARDUPILOT_SOURCE_EXTERNAL_NAV, MAV_PARAM_TYPE_INT8,
+                  why="horizontal position from mocap"),
+        ParamSpec("EK3_SRC1_POSZ", ARDUPILOT_SOURCE_EXTERNAL_NAV, MAV_PARAM_TYPE_INT8,
+                  why="height from mocap"),
+        ParamSpec("EK3_SRC1_VELXY", 0, MAV_PARAM_TYPE_INT8, why="no velocity source but mocap"),
+        ParamSpec("EK3_SRC1_VELZ", 0, MAV_PARAM_TYPE_INT8, why="no velocity source but mocap"),
+        ParamSpec("VISO_POS_M_NSE", 0.1, MAV_PARAM_TYPE_REAL32,
+                  why="mocap is millimetre-grade (the smallest documented value)"),
+    ]  # fmt: skip
 
 
 def encode_value(flavor: Flavor, value: float, param_type: int) -> float:
@@ -178,9 +218,16 @@ class ParamChannel:
     async def ensure(self, spec: ParamSpec) -> float:
         """Set ``spec`` and read it back; raises :class:`ParamError` unless it holds."""
         want = spec.value
-        if spec.bits:
+        if spec.bits or spec.needs_reboot:
             current = await self.read(spec.name)
-            want = float(int(current) | int(spec.value))
+            if spec.bits:
+                want = float(int(current) | int(spec.value))
+            elif not same_value(current, want):
+                await self.write(spec.name, want, spec.param_type)
+                raise ParamError(
+                    f"parameter {spec.name} ({spec.why}) was {current:g}; set to {want:g}, it "
+                    "takes effect only after the autopilot reboots"
+                )
         echoed = await self.write(spec.name, want, spec.param_type)
         read_back = await self.read(spec.name)
         if not (same_value(echoed, want) and same_value(read_back, want)):

@@ -16,6 +16,7 @@ from vehicles.quadrotor_brush.control.controller import (
 
 SetpointKind = Literal["position", "attitude"]
 MocapMessage = Literal["none", "vision_position_estimate", "att_pos_mocap"]
+TruthSource = Literal["none", "sitl"]
 
 
 @dataclass(frozen=True)
@@ -66,6 +67,17 @@ class MavlinkSettings:
     """Forward motion-capture poses from ``mocap_source`` with this message."""
     mocap_rate_hz: float = 50.0
     """Rate of forwarded mocap poses in [Hz]."""
+    truth: TruthSource = "none"
+    """``sitl``: read the simulator's true state off the link (ArduPilot SIM_STATE, PX4
+    HIL_STATE_QUATERNION); the brush and the job metrics use it, and with ``mocap`` it is the
+    mocap source (with ``mocap_latency_s`` and ``mocap_noise_std_m``)."""
+    mocap_latency_s: float = 0.005
+    """Age in [s] of a mocap pose made from the truth."""
+    mocap_noise_std_m: float = 0.0002
+    """Noise in [m] per axis of a mocap pose made from the truth."""
+    lead_s: float | None = None
+    """How far in [s] ahead on the plan position setpoints are sent, to cancel the autopilot's
+    lag; None: identified in flight (:mod:`~vehicle_agent.backends.mavlink_lag`)."""
     mass_kg: float = 1.0
     """Vehicle mass (attitude setpoints: thrust normalisation)."""
     thrust_max_n: float = 19.6
@@ -83,6 +95,10 @@ class MavlinkSettings:
             raise BackendError("mavlink setpoint_rate_hz cannot exceed the control rate")
         if self.command_attempts < 1:
             raise BackendError("mavlink command_attempts must be >= 1")
+        if self.lead_s is not None and not 0.0 <= self.lead_s <= 0.5:
+            raise BackendError("mavlink lead_s must be in 0..0.5 s")
+        if self.mocap_latency_s < 0 or self.mocap_noise_std_m < 0:
+            raise BackendError("mavlink mocap latency and noise must be >= 0")
         if not 0.1 <= self.setpoint_timeout_s <= 10.0:
             raise BackendError("mavlink setpoint_timeout_s must be in 0.1..10 s")
 
@@ -110,6 +126,8 @@ def settings_from_show(
         setpoint_rate_hz=float(vehicle.mavlink_setpoint_rate_hz),
         setpoints=vehicle.mavlink_setpoints,
         mocap=vehicle.mavlink_mocap,
+        truth=vehicle.mavlink_truth,
+        lead_s=vehicle.mavlink_lead_s,
         mass_kg=float(limits.mass_kg),
         thrust_max_n=float(limits.thrust_max_n),
         controller=_controller(show),

@@ -1,0 +1,179 @@
+"""One character written by the agent's own job code, per autopilot: pen-down RMSE and ink IoU.
+
+The pure agent code (JobRunner, prepare_job, job_metrics; the bus left out) flies one job on one
+board against each target: ``sim`` (the in-process simulator), ``mavsim`` (the project's
+simulated ArduCopter over UDP), ``ardupilot`` and ``px4`` (real SITL started with
+scripts/sitl/start.py from $SKYQUILL_ARDUCOPTER_SITL / $SKYQUILL_PX4_SITL, flying on the
+simulator's truth as mocap, metrics from the truth). Used by ``bench_mavlink.py --writing`` and
+the SITL tests.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import importlib.util
+import os
+import shutil
+import socket
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+from bus.messages import JobAssignment, JobMetrics, VehicleCommand
+from showfile import parse_show
+from vehicle_agent.agent import job_metrics, make_backend, prepare_job, vehicle_setup
+from vehicle_agent.backends.base import VehicleBackend
+from vehicle_agent.backends.mavlink import MavlinkBackend
+from vehicle_agent.clock import TickClock
+from vehicle_agent.job_runner import JobRunner
+
+ROOT = Path(__file__).resolve().parents[1]
+HOME_M_ENU = (0.0, -1.0, 0.0)
+SITL_INDEX = 7
+"""SITL instance number used here (apart from shows, probe 4, step_response 5, conformance 6)."""
+SHOW = """
+show_id: mavlink-writing
+boards:
+  - {{id: b1, center_m_enu: [0.0, 0.0, 0.75], size_m: [1.4, 1.4], writing_area_m: [0.6, 0.6]}}
+vehicles:
+  - {{id: v1, board: b1, home_m_enu: [0.0, -1.0, 0.0], {vehicle}}}
+planning: {{write_height_m: 0.25, clearance_m: 0.05, pace: nominal}}
+"""
+TARGETS = ("sim", "mavsim", "ardupilot", "px4")
+WARM_UP_S = 8.0
+"""An autopilot's time on the ground after connect (mocap fused, sources switched) before a job."""
+
+
+@dataclass(frozen=True)
+class Written:
+    """What one target wrote."""
+
+    target: str
+    metrics: JobMetrics
+    lead_s: float | None
+    """The lead in [s] the backend applied at the end (None: not a MAVLink backend)."""
+
+
+def launcher() -> ModuleType:
+    """scripts/sitl/start.py, imported by path (once)."""
+    if "sitl_start" in sys.modules:
+        return sys.modules["sitl_start"]
+    spec = importlib.util.spec_from_file_location("sitl_start", ROOT / "scripts/sitl/start.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["sitl_start"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def sitl_available(kind: str) -> bool:
+    return bool(os.environ.get(launcher().ENV_BINARY[kind]))
+
+
+async def fly_jobs(
+    backend: VehicleBackend, setup: Any, texts: list[str], *, paced: bool, limit_s: float = 240.0
+) -> list[JobMetrics]:
+    """The agent's control loop without the bus: start the backend, then for each text assign,
+    fly, measure, back on the ground (the next job on the same vehicle, as a show runs).
+    ``paced``: in real time (an autopilot); otherwise as fast as the simulator goes."""
+    snapshot = await backend.start()
+    clock = TickClock(backend.control_period_s, time_scale=1.0, skip_when_late=True)
+    while paced and clock.now_s < WARM_UP_S:  # the EKF re-converges on the parameters just set
+        await asyncio.sleep(clock.delay_s())
+        snapshot = await backend.tick(None, clock.now_s)
+        clock.advance()
+    done: list[JobMetrics] = []
+    runner = JobRunner(setup.runner_config)  # one per vehicle, as the agent has
+    for k, text in enumerate(texts):
+        assignment = JobAssignment(job_id=f"j{k}", text=text)
+        prepared = prepare_job(setup, assignment)
+        if not runner.handle_command(VehicleCommand(command="assign", job=assignment),
+                                     clock.now_s).ok:  # fmt: skip
+            raise RuntimeError(f"the runner refused job {k}")
+        metrics: JobMetrics | None = None
+        t_end = clock.now_s + limit_s
+        while metrics is None or runner.phase != "ground":
+            if clock.now_s > t_end:
+                raise RuntimeError(f"job {k} not done in {limit_s:.0f} s: {runner.phase}")
+            if paced:
+                await asyncio.sleep(clock.delay_s())
+            now = clock.now_s
+            actions = runner.step(snapshot, now)
+            if actions.plan_request is not None:
+                runner.plan_ready(prepared)
+            failed = [r for r in actions.reports if r.event == "failed"]
+            if failed:
+                raise RuntimeError(f"job {k} failed: {failed[0]}")
+            if actions.backend_command is not None:
+                name, hover = actions.backend_command
+                await (backend.takeoff(hover) if name == "takeoff" else backend.land())  # type: ignore[arg-type]
+            snapshot = await backend.tick(actions.setpoint, now)
+            if snapshot.fault is not None:
+                raise RuntimeError(f"job {k}: vehicle fault: {snapshot.fault}")
+            if actions.finished is not None:
+                metrics = job_metrics(setup, prepared, actions.finished)
+            clock.advance()
+        done.append(metrics)
+    return done
+
+
+def write(target: str, texts: list[str]) -> list[Written]:
+    """Fly ``texts`` one after the other on ``target`` (one of :data:`TARGETS`)."""
+    if target == "sim":
+        setup = vehicle_setup(parse_show(SHOW.format(vehicle="backend: sim")), "v1")
+        flown = asyncio.run(fly_jobs(make_backend(setup), setup, texts, paced=False))
+        return [Written(target, m, None) for m in flown]
+    if target == "mavsim":
+        return _write_mavsim(texts)
+    return _write_sitl(target, texts)
+
+
+def _write_mavsim(texts: list[str]) -> list[Written]:
+    from mavsim.server import MavsimServer
+    from mavsim.show import vehicle_configs
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = int(sock.getsockname()[1])
+    vehicle = f'backend: mavlink, mavlink_url: "udp:127.0.0.1:{port}", mavlink_system_id: 1'
+    show = parse_show(SHOW.format(vehicle=vehicle))
+    with MavsimServer(vehicle_configs(show, position_source_delay_s=0.0)):
+        return _fly_mavlink("mavsim", show, texts)
+
+
+def _write_sitl(kind: str, texts: list[str]) -> list[Written]:
+    launch = launcher()
+    binary = launch.binary_for(kind)
+    run_dir = Path(tempfile.mkdtemp(prefix=f"skyquill-writing-{kind}-"))
+    inst = launch.Instance(kind, SITL_INDEX, SITL_INDEX + 1, launch.home_lla(HOME_M_ENU), binary,
+                           run_dir, mocap=True)  # fmt: skip
+    process = launch.start(inst)
+    try:
+        launch.wait_ready(inst, process, launch.READY_TIMEOUT_S)
+        vehicle = (
+            f'backend: mavlink, mavlink_url: "{inst.url}", mavlink_system_id: {inst.system_id}, '
+            "mavlink_truth: sitl, mavlink_mocap: vision_position_estimate"
+        )
+        return _fly_mavlink(kind, parse_show(SHOW.format(vehicle=vehicle)), texts)
+    finally:
+        launch.stop(process)
+        if not os.environ.get("SKYQUILL_KEEP_SITL_RUN"):
+            shutil.rmtree(run_dir, ignore_errors=True)
+
+
+def _fly_mavlink(target: str, show: Any, texts: list[str]) -> list[Written]:
+    setup = vehicle_setup(show, "v1")
+    backend = make_backend(setup)
+
+    async def run() -> list[Written]:
+        try:
+            flown = await fly_jobs(backend, setup, texts, paced=True)
+        finally:
+            await backend.close()
+        lead_s = backend.aid.lead_s if isinstance(backend, MavlinkBackend) else None
+        return [Written(target, m, lead_s) for m in flown]
+
+    return asyncio.run(run())

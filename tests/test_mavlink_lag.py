@@ -1,0 +1,116 @@
+"""The autopilot's response delay: identified from flight data, compensated by leading the plan."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from vehicle_agent.backends.base import Setpoint
+from vehicle_agent.backends.mavlink_lag import (
+    LagSettings,
+    ResponseDelayEstimator,
+    fit_delay,
+    lead_setpoint,
+)
+
+DT_S = 0.02
+
+
+def path(t: np.ndarray, amplitude: float, w: float, phase: float) -> np.ndarray:
+    """A smooth writing-like path (m) at times t (s): two sinusoids, not a straight line."""
+    return np.column_stack(
+        [amplitude * np.cos(w * t + phase), 0.6 * amplitude * np.sin(1.7 * w * t), np.ones_like(t)]
+    )
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    delay_s=st.floats(0.0, 0.3),
+    amplitude=st.floats(0.1, 0.5),
+    w=st.floats(0.8, 3.0),
+    phase=st.floats(0.0, 6.28),
+)
+def test_fit_recovers_a_known_delay(
+    delay_s: float, amplitude: float, w: float, phase: float
+) -> None:
+    t = np.arange(0.0, 3.0, DT_S)
+    sent = path(t, amplitude, w, phase)
+    measured = path(t - delay_s, amplitude, w, phase)
+    fit = fit_delay(t, sent, t, measured, LagSettings())
+    assert fit is not None
+    assert fit.delay_s == pytest.approx(delay_s, abs=0.004)
+    assert fit.rms_m <= fit.rms_at_zero_m
+
+
+def test_a_hover_tells_nothing() -> None:
+    t = np.arange(0.0, 3.0, DT_S)
+    still = np.tile([0.0, 0.0, 1.0], (t.size, 1)) + 1e-4 * np.sin(t)[:, None]
+    assert fit_delay(t, still, t, still, LagSettings()) is None
+
+
+def test_a_straight_leg_is_not_mistaken_for_an_offset() -> None:
+    """Along a straight line a delay and a constant offset look alike; the fit has no offset."""
+    t = np.arange(0.0, 3.0, DT_S)
+    line = np.column_stack([0.4 * t, np.zeros_like(t), np.ones_like(t)])
+    late = np.column_stack([0.4 * (t - 0.12), np.zeros_like(t), np.ones_like(t)])
+    fit = fit_delay(t, line, t, late, LagSettings())
+    assert fit is not None and fit.delay_s == pytest.approx(0.12, abs=0.003)
+
+
+def test_lead_is_exact_for_constant_acceleration_and_leaves_a_hold_alone() -> None:
+    p0, v0, a0 = np.array([0.1, -0.2, 1.0]), np.array([0.3, 0.1, 0.0]), np.array([-0.5, 0.2, 0.1])
+    setpoint = Setpoint(tuple(p0), tuple(v0), tuple(a0), pen_down=True)
+    led = lead_setpoint(setpoint, 0.12)
+    assert led.position_m_enu == pytest.approx(tuple(p0 + v0 * 0.12 + 0.5 * a0 * 0.12**2))
+    assert led.velocity_mps_enu == pytest.approx(tuple(v0 + a0 * 0.12))
+    assert led.pen_down
+    hold = Setpoint((1.0, 2.0, 3.0))
+    assert lead_setpoint(hold, 0.12) == hold
+
+
+def delayed_response(
+    delay_s: float, lead: bool, seconds: float = 8.0
+) -> tuple[float, float | None]:
+    """Fly a circle through a plant that is the setpoint ``delay_s`` late; (RMS error to the
+    plan in the last 3 s [m], identified delay [s])."""
+    estimator = ResponseDelayEstimator()
+    r, w = 0.3, 2 * math.pi / 4.0
+    history: list[tuple[float, np.ndarray]] = []
+    errors = []
+    for k in range(int(seconds / DT_S)):
+        now = k * DT_S
+        c, s = math.cos(w * now), math.sin(w * now)
+        plan = Setpoint((r * c, r * s, 1.0), (-r * w * s, r * w * c, 0.0),
+                        (-r * w * w * c, -r * w * w * s, 0.0))  # fmt: skip
+        target = lead_setpoint(plan, estimator.delay_s or 0.0) if lead else plan
+        history.append((now, np.array(target.position_m_enu)))
+        estimator.sent(now, target.position_m_enu)
+        t_hist = np.array([h[0] for h in history])
+        sent = np.array([h[1] for h in history])
+        here = [float(np.interp(now - delay_s, t_hist, sent[:, i])) for i in range(3)]
+        estimator.measured(now, (here[0], here[1], here[2]))
+        if now > seconds - 3.0:
+            errors.append(math.dist(here, plan.position_m_enu))
+    return float(np.sqrt(np.mean(np.square(errors)))), estimator.delay_s
+
+
+def test_closed_loop_identifies_the_lag_and_leading_cancels_most_of_it() -> None:
+    late, _ = delayed_response(0.12, lead=False)
+    led, identified = delayed_response(0.12, lead=True)
+    assert identified == pytest.approx(0.12, abs=0.01)
+    assert late > 0.05  # 0.47 m/s along a 0.3 m circle, 0.12 s late: 5.6 cm
+    assert led < 0.1 * late
+
+
+def test_a_response_that_is_no_delay_leaves_the_lead_alone() -> None:
+    """A vehicle that does not follow (here: stuck) fits the longest delay; it is not taken."""
+    estimator = ResponseDelayEstimator()
+    for k in range(200):
+        t = k * DT_S
+        estimator.sent(t, (0.3 * math.cos(t), 0.3 * math.sin(t), 1.0))
+        estimator.measured(t, (0.3, 0.0, 1.0))
+    assert estimator.fits and estimator.delay_s is None

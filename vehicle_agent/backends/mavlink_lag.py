@@ -1,0 +1,179 @@
+"""The autopilot's position response, identified in flight and compensated (pure).
+
+An autopilot's position loop (ArduCopter's, PX4's) follows a p, v, a setpoint stream with a lag:
+on ArduCopter SITL the vehicle sits 0.10-0.13 s behind the target along the path, at a gain of
+about one. :class:`ResponseDelayEstimator` measures that delay from the flight itself (any leg
+where the setpoint moves: the transit to the first stroke comes before the brush goes down): it
+keeps the last seconds of setpoints sent and positions read back and finds the delay ``d`` that
+best explains ``measured(t) = sent(t - d)`` (no free offset: along a straight leg a delay and an
+offset would be the same thing). :func:`lead_setpoint` then streams the
+setpoint that lies ``d`` ahead on the plan, extrapolated along its velocity and acceleration, so
+the vehicle is where the plan is when the plan is there.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from vehicle_agent.backends.base import Setpoint, Vec3
+
+
+@dataclass(frozen=True)
+class LagSettings:
+    """How the response delay is identified and compensated."""
+
+    window_s: float = 3.0
+    """Length in [s] of the history a delay is fitted on."""
+    min_path_m: float = 0.15
+    """Least setpoint travel in [m] inside the window for a fit (a hover says nothing)."""
+    max_delay_s: float = 0.4
+    """Largest delay in [s] considered (and so the largest lead ever applied)."""
+    step_s: float = 0.005
+    """Grid step in [s] of the delay search."""
+    refit_every_s: float = 0.5
+    """Time in [s] between fits while the setpoint moves."""
+    smoothing: float = 0.5
+    """Weight of a new fit in the running delay (1: take each fit as it is)."""
+    explained_fraction: float = 0.5
+    """A fit is taken only when it leaves at most this fraction of the zero-delay RMS error."""
+
+
+@dataclass(frozen=True)
+class DelayFit:
+    """One fit of the delay."""
+
+    delay_s: float
+    """Delay in [s] of the measured position behind the setpoint."""
+    rms_m: float
+    """RMS in [m] of what the delay does not explain."""
+    rms_at_zero_m: float
+    """The same RMS in [m] with no delay, for comparison."""
+
+
+def fit_delay(
+    t_sent_s: np.ndarray,
+    sent_m: np.ndarray,
+    t_measured_s: np.ndarray,
+    measured_m: np.ndarray,
+    settings: LagSettings,
+) -> DelayFit | None:
+    """The delay of ``measured`` (K, 3) behind ``sent`` (N, 3), both positions in [m] in one frame
+    at times in [s]; None when the setpoint did not move far enough to tell."""
+    if t_sent_s.size < 3 or t_measured_s.size < 3:
+        return None
+    travel = float(np.sum(np.linalg.norm(np.diff(sent_m, axis=0), axis=1)))
+    if travel < settings.min_path_m:
+        return None
+    usable = t_measured_s - settings.max_delay_s >= t_sent_s[0]
+    if np.count_nonzero(usable) < 3:
+        return None
+    t, measured = t_measured_s[usable], measured_m[usable]
+    delays = np.arange(0.0, settings.max_delay_s + 1e-9, settings.step_s)
+    costs = np.array([_residual_rms(t_sent_s, sent_m, t - d, measured) for d in delays])
+    best = int(np.argmin(costs))
+    delay = float(delays[best])
+    if 0 < best < delays.size - 1:  # parabola through the three best points
+        c0, c1, c2 = costs[best - 1], costs[best], costs[best + 1]
+        curvature = c0 - 2 * c1 + c2
+        if curvature > 0:
+            delay += 0.5 * settings.step_s * float(c0 - c2) / float(curvature)
+    return DelayFit(delay, float(costs[best]), float(costs[0]))
+
+
+def _residual_rms(
+    t_sent: np.ndarray, sent: np.ndarray, t: np.ndarray, measured: np.ndarray
+) -> float:
+    shifted = np.column_stack([np.interp(t, t_sent, sent[:, k]) for k in range(3)])
+    residual = measured - shifted
+    return float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))
+
+
+class ResponseDelayEstimator:
+    """Keeps the recent setpoints and positions of one vehicle and refits its delay."""
+
+    def __init__(self, settings: LagSettings | None = None) -> None:
+        self.settings = settings or LagSettings()
+        self.delay_s: float | None = None
+        """The running delay in [s]; None until a leg of motion has been seen."""
+        self.fits: list[DelayFit] = []
+        """Every fit so far, oldest first."""
+        self._sent: deque[tuple[float, Vec3]] = deque()
+        self._measured: deque[tuple[float, Vec3]] = deque()
+        self._last_fit_s = -np.inf
+
+    def reset(self) -> None:
+        """A new flight: forget the history (the delay identified so far stays)."""
+        self._sent.clear()
+        self._measured.clear()
+
+    def sent(self, t_s: float, position_m: Vec3) -> None:
+        """A setpoint position in [m] went out at agent time ``t_s`` [s]."""
+        self._sent.append((t_s, position_m))
+        self._trim(t_s)
+
+    def measured(self, t_s: float, position_m: Vec3) -> None:
+        """The vehicle's position in [m] (same frame) read at agent time ``t_s`` [s]; refits the
+        delay when due."""
+        self._measured.append((t_s, position_m))
+        self._trim(t_s)
+        if t_s - self._last_fit_s >= self.settings.refit_every_s:
+            self._refit(t_s)
+
+    def plausible(self, fit: DelayFit) -> bool:
+        """A delay explains the response: inside the search range (not at its end) and leaving at
+        most ``explained_fraction`` of the error at zero delay; otherwise the vehicle is not
+        following the setpoints as a delay (it is disturbed, saturated or elsewhere) and the lead
+        stays as it is."""
+        inside = fit.delay_s < self.settings.max_delay_s - self.settings.step_s
+        return inside and fit.rms_m <= self.settings.explained_fraction * fit.rms_at_zero_m
+
+    def _trim(self, now_s: float) -> None:
+        horizon = now_s - self.settings.window_s - self.settings.max_delay_s
+        for history in (self._sent, self._measured):
+            while history and history[0][0] < horizon:
+                history.popleft()
+
+    def _refit(self, now_s: float) -> None:
+        if len(self._sent) < 3 or len(self._measured) < 3:
+            return
+        t_sent = np.array([t for t, _ in self._sent])
+        sent = np.array([p for _, p in self._sent])
+        t_meas = np.array([t for t, _ in self._measured])
+        meas = np.array([p for _, p in self._measured])
+        fit = fit_delay(t_sent, sent, t_meas, meas, self.settings)
+        if fit is None:
+            return
+        self._last_fit_s = now_s
+        self.fits.append(fit)
+        if not self.plausible(fit):
+            return
+        if self.delay_s is None:
+            self.delay_s = fit.delay_s
+        else:
+            w = self.settings.smoothing
+            self.delay_s = (1 - w) * self.delay_s + w * fit.delay_s
+
+
+def lead_setpoint(setpoint: Setpoint, lead_s: float) -> Setpoint:
+    """The setpoint ``lead_s`` [s] ahead along its own velocity and acceleration (constant
+    acceleration over the lead); a hold (v = a = 0) is unchanged."""
+    if lead_s <= 0:
+        return setpoint
+    p = np.asarray(setpoint.position_m_enu, dtype=np.float64)
+    v = np.asarray(setpoint.velocity_mps_enu, dtype=np.float64)
+    a = np.asarray(setpoint.acceleration_mps2_enu, dtype=np.float64)
+    p_lead = p + v * lead_s + 0.5 * a * lead_s**2
+    v_lead = v + a * lead_s
+    return Setpoint(
+        position_m_enu=_vec(p_lead),
+        velocity_mps_enu=_vec(v_lead),
+        acceleration_mps2_enu=setpoint.acceleration_mps2_enu,
+        pen_down=setpoint.pen_down,
+    )
+
+
+def _vec(x: np.ndarray) -> Vec3:
+    return (float(x[0]), float(x[1]), float(x[2]))

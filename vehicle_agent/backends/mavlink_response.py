@@ -1,0 +1,79 @@
+"""What the backend learns of one vehicle in flight: its true state (SITL) and its lag.
+
+:class:`ResponseAid` bundles the simulator's truth (:mod:`~vehicle_agent.backends.mavlink_truth`,
+when the settings ask for it) and the identified response delay of the autopilot's position loop
+(:mod:`~vehicle_agent.backends.mavlink_lag`), and leads the plan's setpoints by that delay.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+from vehicle_agent.backends.base import Setpoint, Vec3
+from vehicle_agent.backends.mavlink_lag import ResponseDelayEstimator, lead_setpoint
+from vehicle_agent.backends.mavlink_mocap import MocapSource
+from vehicle_agent.backends.mavlink_settings import MavlinkSettings
+from vehicle_agent.backends.mavlink_truth import (
+    TRUTH_MESSAGES,
+    TruthSample,
+    TruthTracker,
+    truth_mocap,
+)
+
+log = logging.getLogger(__name__)
+
+
+class ResponseAid:
+    """Truth and lag of one vehicle; leads its setpoints."""
+
+    def __init__(self, settings: MavlinkSettings, *, seed: int = 0) -> None:
+        self.settings = settings
+        self.truth = TruthTracker(settings.origin_m_enu) if settings.truth == "sitl" else None
+        """The simulator's state (None: not asked for)."""
+        self.lag = ResponseDelayEstimator()
+        self._seed = seed
+        self._logged_lead = -1.0
+
+    @property
+    def lead_s(self) -> float:
+        """The lead in [s] applied to position setpoints now."""
+        if self.settings.lead_s is not None:
+            return self.settings.lead_s
+        return self.lag.delay_s or 0.0
+
+    def mocap_source(self) -> MocapSource | None:
+        """The truth as a mocap source (the show's latency and noise); None without truth."""
+        if self.truth is None:
+            return None
+        s = self.settings
+        return truth_mocap(self.truth, s.mocap_latency_s, s.mocap_noise_std_m, self._seed)
+
+    def truth_message(self, flavor: str) -> int | None:
+        """The message id to ask the autopilot for (None: no truth wanted)."""
+        return TRUTH_MESSAGES.get(flavor) if self.truth is not None else None
+
+    def on_message(self, message: Any, now_s: float, *, resting_at_home: bool) -> None:
+        if self.truth is not None:
+            self.truth.absorb(message, now_s, resting_at_home=resting_at_home)
+
+    def true_state(self, now_s: float) -> TruthSample | None:
+        """The latest truth if it is fresh (younger than half a second)."""
+        sample = None if self.truth is None else self.truth.latest
+        if sample is None or now_s - sample.time_s > 0.5:
+            return None
+        return sample
+
+    def lead(self, setpoint: Setpoint) -> Setpoint:
+        """The plan's setpoint led by the autopilot's delay (position setpoints only)."""
+        lead_s = self.lead_s
+        if abs(lead_s - self._logged_lead) >= 0.01:
+            self._logged_lead = lead_s
+            log.info("leading setpoints by %.3f s", lead_s)
+        return lead_setpoint(setpoint, lead_s)
+
+    def sent(self, now_s: float, position_m_enu: Vec3) -> None:
+        self.lag.sent(now_s, position_m_enu)
+
+    def measured(self, now_s: float, position_m_enu: Vec3) -> None:
+        self.lag.measured(now_s, position_m_enu)
