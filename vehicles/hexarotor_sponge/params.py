@@ -58,6 +58,20 @@ class HexarotorParams:
         x, y, z = self.arm_base_m_body
         return (x + self.arm_length_m, y, z)
 
+    @property
+    def arm_com_m_sensor(self) -> tuple[float, float, float]:
+        """Centre of mass of arm and pen together, from the F/T sensor, sensor axes, in [m]."""
+        arm_x = self.arm_mass_kg * self.arm_length_m / 2.0
+        pen_x = self.pen_mass_kg * (self.arm_length_m - 0.02)
+        return ((arm_x + pen_x) / (self.arm_mass_kg + self.pen_mass_kg), 0.0, 0.0)
+
+    @property
+    def com_m_body(self) -> tuple[float, float, float]:
+        """Centre of mass of the whole vehicle in the body frame in [m] (the arm shifts it)."""
+        m_arm = self.arm_mass_kg + self.pen_mass_kg
+        x = m_arm * (self.arm_base_m_body[0] + self.arm_com_m_sensor[0]) / self.mass_kg
+        return (x, 0.0, 0.0)
+
     def compression_m(self, force_n: float) -> float:
         """Pen slide in [m] at a normal force in [N] (0 below the preload)."""
         return max(force_n - self.pen_preload_n, 0.0) / self.pen_stiffness_npm
