@@ -56,6 +56,9 @@ class Limits:
     """Cost weight of the control force's change between steps, per [N^2 s]."""
     time_weight: float = 1.0
     """gamma: cost per second of writing (eq. 7a)."""
+    weight_force: float = 20.0
+    """Cost weight per [N^2 s] of the force's departure from the waypoint forces interpolated
+    along the stroke (an addition to eq. 7a: the wanted width holds between waypoints too)."""
 
 
 @dataclass(frozen=True)
@@ -117,6 +120,7 @@ def solve_period(period: Period, params: HexarotorParams, limits: Limits) -> Per
         return ca.vertcat(xs[3:6], acc, us[3])
 
     cost: Any = 0
+    force_path = np.interp(np.arange(n + 1), nodes, period.force_n)
     hover = ca.DM([0.0, m * GRAVITY_MPS2, 0.0])
     for k in range(n):
         xk, uk, hk = x[:, k], u[:, k], h[k]
@@ -130,6 +134,7 @@ def solve_period(period: Period, params: HexarotorParams, limits: Limits) -> Per
             limits.weight_v * ca.sumsqr(xk[3:6])
             + limits.weight_u * ca.sumsqr(uk[0:3] - hover)
             + limits.weight_du * ca.sumsqr(du)
+            + limits.weight_force * (xk[6] - force_path[k]) ** 2
             + limits.time_weight
         )
         cost += stage * hk

@@ -40,6 +40,8 @@ class HexarotorParams:
     """Pen spring stiffness in [N/m]."""
     pen_preload_n: float = 0.5
     """Spring preload in [N]: below it the pen does not slide back."""
+    pen_damping_nspm: float = 10.0
+    """Damping of the pen's slide in [N s/m] (the sponge)."""
     pen_travel_m: float = 0.03
     """Longest slide of the pen into its holder in [m]."""
     wall_friction: float = 0.4

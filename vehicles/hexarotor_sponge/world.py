@@ -75,7 +75,8 @@ class Truth:
     tip_m_enu: FloatArray
     """(3,) sponge tip in [m]."""
     contact_force_n: float
-    """Normal force in [N] between pen and wall (0 without contact)."""
+    """Normal force in [N] between pen and wall over the last control period (mean of the
+    physics steps; 0 without contact)."""
 
 
 def facing_rotation(surface: Surface) -> FloatArray:
@@ -140,7 +141,7 @@ def build_mjcf(params: HexarotorParams, surface: Surface, dt_s: float) -> str:
         <body name="pen" pos="{length} 0 0">
           <joint name="pen_slide" type="slide" axis="-1 0 0" limited="true"
                  range="0 {params.pen_travel_m}" stiffness="{params.pen_stiffness_npm}"
-                 springref="{springref}" damping="3"/>
+                 springref="{springref}" damping="{params.pen_damping_nspm}"/>
           <inertial pos="-0.02 0 0" mass="{params.pen_mass_kg}" diaginertia="1e-5 1e-5 1e-5"/>
           <geom name="sponge" type="mesh" mesh="cone" contype="2" conaffinity="1"
                 friction="{mu} 0.005 0.0001" mass="0"/>
@@ -189,6 +190,7 @@ class WallWorld:
         lag = max(0, round(noise.mocap_latency_s / self.control_dt_s))
         self._delayed: deque[tuple[FloatArray, FloatArray, FloatArray]] = deque(maxlen=lag + 1)
         self._delayed.append(self._pose_now())
+        self._mean_force_n = 0.0
 
     @property
     def time_s(self) -> float:
@@ -199,8 +201,11 @@ class WallWorld:
         """Hold rotor thrusts in [N] for one control period."""
         self.data.ctrl[:] = thrust_n
         self._update_wind()
+        force = 0.0
         for _ in range(self.substeps):
             mujoco.mj_step(self.model, self.data)
+            force += self._contact_force_n()
+        self._mean_force_n = force / self.substeps
         self._delayed.append(self._pose_now())
 
     def _update_wind(self) -> None:
@@ -240,7 +245,7 @@ class WallWorld:
         return Truth(
             base_m_enu=self.data.xpos[self._base_id].copy(),
             tip_m_enu=self.data.xpos[self._pen_id].copy(),
-            contact_force_n=self._contact_force_n(),
+            contact_force_n=self._mean_force_n,
         )
 
     def _contact_force_n(self) -> float:
