@@ -14,10 +14,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.errors import PlannerError
+from planner.errors import InfeasibleTrajectoryError, PlannerError
 from planner.samples import TrajectorySamples
+from vehicles.hexarotor_sponge.allocation import Allocator
 from vehicles.hexarotor_sponge.nlp import Limits, PeriodSolution, solve_period
-from vehicles.hexarotor_sponge.params import HexarotorParams
+from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
 from vehicles.hexarotor_sponge.waypoints import Period, periods_of, stroke_forces_n
 from vehicles.kind import StrokeInput, WritingPlan
 from vehicles.surface import Surface
@@ -73,8 +74,33 @@ def _checked_strokes(
             raise PlannerError(
                 err.message, stroke_index=k, point_index=err.point_index, field="w"
             ) from None
+        _check_static_thrust(float(forces[-1].max()), k, settings.params)
         out.append(stroke)
     return out, forces, clamped
+
+
+def _check_static_thrust(force_n: float, stroke_index: int, params: HexarotorParams) -> None:
+    """Refuse a stroke whose hover-and-press wrench (weight, the stroke's largest force with
+    sliding friction, their moments) already needs a rotor beyond its limits."""
+    alloc = Allocator(params)
+    friction = params.wall_friction * force_n
+    force_body = np.array([force_n, 0.0, params.mass_kg * GRAVITY_MPS2 + friction])
+    weight_body = np.array([0.0, 0.0, -params.mass_kg * GRAVITY_MPS2])
+    contact_body = np.array([-force_n, 0.0, -friction])
+    torque = -np.cross(params.com_m_body, weight_body) - np.cross(params.tip_m_body, contact_body)
+    out = alloc.allocate(np.concatenate([force_body, torque]))
+    if out.saturated:
+        need = float(np.max(alloc.inverse @ np.concatenate([force_body, torque])))
+        raise InfeasibleTrajectoryError(
+            f"pressing {force_n:.2f} N while hovering needs a rotor thrust of {need:.1f} N, "
+            f"beyond the rotors' {params.thrust_max_n:.1f} N",
+            limit="thrust",
+            axis=None,
+            t_s=0.0,
+            value=need,
+            bound=params.thrust_max_n,
+            stroke_index=stroke_index,
+        )
 
 
 def plan_writing(
