@@ -104,3 +104,23 @@ def test_live_vehicle_hovers_at_its_start() -> None:
     state = vehicle.state()
     assert np.linalg.norm(np.asarray(state.pen_tip_m_enu) - start) < 0.01
     assert not state.pen_contact and state.pen_width_m == 0.0
+
+
+def test_show_settings_become_the_kinds_settings() -> None:
+    from pydantic import ValidationError
+
+    from showfile.kind_hexarotor import HexarotorKindSettings, PenSettings
+    from vehicles.hexarotor_sponge.kind import settings_from
+
+    model = HexarotorKindSettings(
+        v_max_mps=0.33, rotor_tilt_deg=30.0, pen=PenSettings(preload_n=0.8)
+    )
+    settings = settings_from(model, SURFACE)
+    assert settings.plan.limits.v_max_mps == 0.33
+    assert settings.plan.params.rotor_tilt_rad == pytest.approx(np.pi / 6)
+    assert settings.fly.params.pen_preload_n == 0.8
+    assert settings.surface == SURFACE
+    with pytest.raises(ValidationError, match="force_max_n must be above force_min_n"):
+        PenSettings(force_min_n=3.0, force_max_n=2.0)
+    with pytest.raises(ValidationError, match="extra"):
+        HexarotorKindSettings.model_validate({"v_max": 1.0})

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
@@ -9,9 +10,13 @@ from typing import Any, Protocol
 import numpy as np
 
 from planner.samples import TrajectorySamples
+from showfile.kind_hexarotor import HexarotorKindSettings
 from vehicles.hexarotor_sponge.flight import FlySettings, fly_plan
 from vehicles.hexarotor_sponge.live import WallVehicle
 from vehicles.hexarotor_sponge.metrics import score_writing
+from vehicles.hexarotor_sponge.nlp import Limits
+from vehicles.hexarotor_sponge.params import HexarotorParams
+from vehicles.hexarotor_sponge.pen import PenCurve
 from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing
 from vehicles.hexarotor_sponge.report import report_figure
 from vehicles.hexarotor_sponge.widths import default_width_profile
@@ -30,6 +35,35 @@ class WallSettings:
     """Simulated world and controller."""
     surface: Surface | None = None
     """The wall of a live simulated vehicle (None: no live vehicle can be made)."""
+
+
+def settings_from(model: HexarotorKindSettings, surface: Surface | None = None) -> WallSettings:
+    """The kind's typed settings from a show file's ``hexarotor-sponge`` section."""
+    pen = model.pen
+    params = HexarotorParams(
+        rotor_tilt_rad=math.radians(model.rotor_tilt_deg),
+        thrust_max_n=model.thrust_max_n,
+        arm_length_m=model.arm_length_m,
+        wall_friction=model.wall_friction,
+        pen_stiffness_npm=pen.stiffness_npm,
+        pen_preload_n=pen.preload_n,
+        pen=PenCurve(pen.width_coefficients_m, pen.force_min_n, pen.force_max_n),
+    )
+    limits = Limits(
+        v_max_mps=model.v_max_mps,
+        a_max_mps2=model.a_max_mps2,
+        force_rate_max_nps=model.force_rate_max_nps,
+    )
+    return WallSettings(
+        plan=PlanSettings(
+            params=params,
+            limits=limits,
+            default_width_m=pen.default_width_m,
+            clamp_widths=pen.clamp_widths,
+        ),
+        fly=FlySettings(params=params),
+        surface=surface,
+    )
 
 
 class _Show(Protocol):
