@@ -190,6 +190,10 @@ def main() -> None:
         )
     )
     _figure(table, sweep, first_plan, args.out / "bench_wall.png")
+    flown = fly_plan(first_plan, FlySettings(), seed=0)
+    report = KIND.report(first_plan, flown, None, f"hexarotor-sponge: {glyphs[0]}, seed 0")
+    report.savefig(args.out / "bench_wall_report.png", dpi=100)
+    print(f"report: {args.out / 'bench_wall_report.png'}")
 
 
 def _cell(value: tuple[float, float], scale: float) -> str:
