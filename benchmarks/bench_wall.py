@@ -82,7 +82,8 @@ def ablation(
         equal = plan_equal_distance(strokes, SURFACE, PlanSettings())
         print(
             f"{char}: planned {plan.duration_s:.1f} s of writing in {plan_s:.1f} s "
-            f"(IPOPT {plan.feasibility['ipopt_solve_s']:.2f} s, "
+            f"(IPOPT {plan.feasibility['ipopt_solve_s']:.2f} s, with building the solvers "
+            f"{plan.feasibility['build_and_solve_s']:.2f} s, "
             f"{plan.feasibility['ipopt_iterations']} iterations)",
             flush=True,
         )
