@@ -81,11 +81,10 @@ def with_default_widths(
     ]
 
 
-@dataclass(frozen=True)
 class HexarotorSpongeKind:
     """The Flying Calligrapher: a fully-actuated hexarotor writing on a wall with a sponge."""
 
-    name: str = "hexarotor-sponge"
+    name = "hexarotor-sponge"
     """Kind name in show files."""
     orientation: Orientation = "vertical"
     """It writes on walls."""
