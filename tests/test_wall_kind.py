@@ -79,6 +79,21 @@ def test_typed_text_gets_a_tapered_width_profile_within_the_pen() -> None:
     assert stroke.width_m[15] > stroke.width_m[2] > stroke.width_m[0]
 
 
+def test_a_two_point_stroke_gets_knots_so_its_profile_survives_planning() -> None:
+    from vehicles.hexarotor_sponge.waypoints import periods_of, stroke_forces_n
+
+    pen = HexarotorParams().pen
+    (stroke,) = with_default_widths(
+        [StrokeInput(np.array([[0.0, 0.0], [0.0, 0.5]]))], WallSettings()
+    )
+    assert stroke.xy_m[:, 1].tolist() == pytest.approx([0.0, 0.04, 0.25, 0.46, 0.5])
+    force = stroke_forces_n(stroke, pen, 9e-3)
+    (_, contact, _) = periods_of([stroke], [force], start_m=np.array([0, 0, 0.06]), standoff_m=0.03)
+    # All five profile points stay waypoints (touch, press, 5 points, release).
+    assert contact.force_n.size == 7
+    assert contact.force_n[3] == pytest.approx(float(pen.force_n(np.array([stroke.width_m[2]]))[0]))
+
+
 def test_kind_names_and_refuses_foreign_settings() -> None:
     assert KIND.name == "hexarotor-sponge"
     assert KIND.orientation == "vertical"

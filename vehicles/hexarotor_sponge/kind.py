@@ -19,7 +19,7 @@ from vehicles.hexarotor_sponge.params import HexarotorParams
 from vehicles.hexarotor_sponge.pen import PenCurve
 from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing
 from vehicles.hexarotor_sponge.report import report_figure
-from vehicles.hexarotor_sponge.widths import default_width_profile
+from vehicles.hexarotor_sponge.widths import default_width_profile, with_profile_knots
 from vehicles.kind import FlownWriting, StrokeInput, WritingPlan, WritingScore
 from vehicles.surface import Orientation, Surface, Vec3
 
@@ -75,10 +75,14 @@ def with_default_widths(
 ) -> list[StrokeInput]:
     """Strokes with no widths get the typed-text width profile."""
     pen = settings.plan.params.pen
-    return [
-        s if s.width_m is not None else StrokeInput(s.xy_m, default_width_profile(s.xy_m, pen))
-        for s in strokes
-    ]
+    out = []
+    for s in strokes:
+        if s.width_m is not None:
+            out.append(s)
+            continue
+        xy = with_profile_knots(s.xy_m)
+        out.append(StrokeInput(xy, default_width_profile(xy, pen)))
+    return out
 
 
 class HexarotorSpongeKind:

@@ -23,6 +23,11 @@ from vehicles.kind import StrokeInput
 FloatArray = NDArray[np.float64]
 
 
+FORCE_TO_M = 0.01
+"""Scale of force against position when waypoints are thinned: 0.2 N of width change counts as
+much as 2 mm off the line (so a width profile survives thinning)."""
+
+
 @dataclass(frozen=True)
 class Period:
     """One free-flight or contact period between rest states."""
@@ -37,25 +42,25 @@ class Period:
     """Which part of the job, for error messages (``stroke 2``, ``flight to stroke 3``)."""
 
 
-def simplify(points_m: FloatArray, tolerance_m: float) -> NDArray[np.intp]:
-    """Indices of a polyline kept by Douglas-Peucker at ``tolerance_m`` (ends always kept)."""
-    keep = np.zeros(points_m.shape[0], dtype=bool)
+def simplify(points: FloatArray, tolerance: float) -> NDArray[np.intp]:
+    """Indices of a polyline (n, d) kept by Douglas-Peucker at ``tolerance`` (ends always kept)."""
+    keep = np.zeros(points.shape[0], dtype=bool)
     keep[0] = keep[-1] = True
-    stack = [(0, points_m.shape[0] - 1)]
+    stack = [(0, points.shape[0] - 1)]
     while stack:
         i, j = stack.pop()
         if j <= i + 1:
             continue
-        a, b = points_m[i], points_m[j]
-        ab = b - a
-        rel = points_m[i + 1 : j] - a
-        length = float(np.hypot(ab[0], ab[1]))
+        ab = points[j] - points[i]
+        rel = points[i + 1 : j] - points[i]
+        length = float(np.linalg.norm(ab))
         if length < 1e-12:
-            dist = np.hypot(rel[:, 0], rel[:, 1])
+            dist = np.linalg.norm(rel, axis=1)
         else:
-            dist = np.abs(ab[0] * rel[:, 1] - ab[1] * rel[:, 0]) / length
+            along = rel @ ab / length
+            dist = np.linalg.norm(rel - np.outer(along, ab / length), axis=1)
         k = int(np.argmax(dist))
-        if dist[k] > tolerance_m:
+        if dist[k] > tolerance:
             keep[i + 1 + k] = True
             stack += [(i, i + 1 + k), (i + 1 + k, j)]
     return np.flatnonzero(keep)
@@ -83,7 +88,7 @@ def periods_of(
     for k, (stroke, force) in enumerate(zip(strokes, forces_n, strict=True)):
         if np.any(force <= 0.0):
             raise PlannerError("a contact stroke needs a positive force", stroke_index=k)
-        idx = simplify(stroke.xy_m, tolerance_m)
+        idx = simplify(np.column_stack([stroke.xy_m, force * FORCE_TO_M]), tolerance_m)
         on_wall = np.column_stack([stroke.xy_m[idx], np.zeros(idx.size)])
         first, last = on_wall[0], on_wall[-1]
         lift = np.array([0.0, 0.0, standoff_m])
