@@ -23,6 +23,7 @@ ANNOTATIONS = {"$schema", "$id", "title", "description", "$defs"}
 ASSERTIONS = {
     "$ref", "type", "enum", "required", "properties", "additionalProperties", "items",
     "prefixItems", "minItems", "maxItems", "minimum", "maximum", "exclusiveMinimum", "maxLength",
+    "oneOf", "dependentRequired",
 }  # fmt: skip
 TYPES = {
     "object": lambda v: isinstance(v, dict),
@@ -37,6 +38,10 @@ def schema_errors(value: Any, schema: dict[str, Any], path: str = "$") -> list[s
     if "$ref" in schema:
         name = schema["$ref"].removeprefix("#/$defs/")
         return schema_errors(value, SCHEMA["$defs"][name], path)
+    if "oneOf" in schema:
+        passing = sum(not schema_errors(value, sub, path) for sub in schema["oneOf"])
+        if passing != 1:
+            return [f"{path}: matches {passing} of oneOf"]
     if "type" in schema and not TYPES[schema["type"]](value):
         return [f"{path}: not {schema['type']}"]
     errors = []
@@ -44,6 +49,9 @@ def schema_errors(value: Any, schema: dict[str, Any], path: str = "$") -> list[s
         errors.append(f"{path}: not in enum")
     if isinstance(value, dict):
         errors += [f"{path}: missing {k}" for k in schema.get("required", []) if k not in value]
+        for key, needs in schema.get("dependentRequired", {}).items():
+            if key in value:
+                errors += [f"{path}: {key} without {n}" for n in needs if n not in value]
         for key, sub in schema.get("properties", {}).items():
             if key in value:
                 errors += schema_errors(value[key], sub, f"{path}.{key}")
@@ -79,7 +87,7 @@ def keywords(schema: Any) -> set[str]:
                     found |= keywords(s)
             elif key in ("items", "additionalProperties"):
                 found |= keywords(sub)
-            elif key == "prefixItems":
+            elif key in ("prefixItems", "oneOf"):
                 for s in sub:
                     found |= keywords(s)
     return found
@@ -104,6 +112,8 @@ SCHEMA_VALID = [
     base(strokes=[[[0, 0], [1, 1]]] * 200),
     base(strokes=[[[0, 0], [0, 0], [1, 1]]]),
     base(strokes=[[[-1e6, 1e6], [1e6, -1e6]]], canvas={"width": 1e6, "height": 1}),
+    base(strokes=[[{"x": 0, "y": 0, "w": 0.01}, {"x": 1, "y": 1, "w": 1}]]),
+    base(strokes=[[{"x": 0, "y": 0, "t": 0, "pressure": 0.2}, {"x": 1, "y": 1, "t": 1}]]),
 ]
 SCHEMA_INVALID = [
     base(strokes=None),
@@ -130,6 +140,11 @@ SCHEMA_INVALID = [
     base(strokes=[[[0, 0], [1e308, 1]]]),
     base(strokes=[[[0, 0], [1, -1_000_001]]]),
     base(canvas={"width": 1e7, "height": 3}),
+    base(strokes=[[{"x": 0, "y": 0, "w": 0}, {"x": 1, "y": 1, "w": 0.01}]]),
+    base(strokes=[[{"x": 0, "y": 0, "w": 0.01}, {"x": 1, "y": 1, "w": 1.5}]]),
+    base(strokes=[[{"x": 0, "y": 0, "w": 0.01}, {"x": 1, "w": 0.01}]]),
+    base(strokes=[[{"x": 0, "y": 0, "w": 0.01}, {"x": 1, "y": 1, "q": 0.01}]]),
+    base(strokes=[[{"x": 0, "y": 0, "pressure": 1}, {"x": 1, "y": 1}]]),
 ]
 # valid by the schema, rejected by rules the schema cannot express (see docs/formats.md)
 SEMANTICALLY_INVALID = [
@@ -138,6 +153,7 @@ SEMANTICALLY_INVALID = [
     base(strokes=[[[0, 0, 1.0], [1, 1]]]),
     base(strokes=[[[0, 0, 5.0], [1, 1, 6.0]], [[2, 2, 1.0], [3, 3, 2.0]]]),
     base(strokes=[[[float(i), 0.0] for i in range(10_001)]] * 2),
+    base(strokes=[[{"x": 0, "y": 0, "w": 0.01}, {"x": 1, "y": 1}]]),
 ]
 
 

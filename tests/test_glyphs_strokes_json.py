@@ -138,7 +138,7 @@ def error_of(document: Any) -> PlannerError:
         (doc([[[0, 0], [True, 1]]]), "strokes", 0, 1, "x must be a number, got boolean"),
         (doc([[[0, 0], [1]]]), "strokes", 0, 1, "got 1 values"),
         (doc([[[0, 0], [1, 1, 2, 3, 4]]]), "strokes", 0, 1, "got 5 values"),
-        (doc([[[0, 0], {"x": 1}]]), "strokes", 0, 1, "got object"),
+        (doc([[[0, 0], {"x": 1}]]), "strokes", 0, 1, "a point object needs y"),
         (doc([[[0, 0], [1, math.nan]]]), "strokes", 0, 1, "y is not finite"),
         (doc([[[0, 0], [1, 1]], [[0, 0], [math.inf, 1]]]), "strokes", 1, 1, "x is not finite"),
         (doc([[[0, 0], [1, 10**400]]]), "strokes", 0, 1, "y is not finite"),

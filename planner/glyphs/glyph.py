@@ -36,6 +36,9 @@ class Glyph:
     frame: tuple[float, float, float, float] | None = None
     """The drawing area the strokes were drawn in, ``(x_min, y_min, x_max, y_max)`` in ``units``,
     y up (a strokes document's ``canvas``); None: the ink itself is the whole picture."""
+    widths_m: tuple[FloatArray | None, ...] = ()
+    """Per stroke the (n_i,) wanted line widths in [m] (physical, not scaled by layout) when
+    the source had them, else None; ``()``: no stroke has widths."""
 
     def __post_init__(self) -> None:
         if self.units not in GLYPH_UNITS:
@@ -55,6 +58,17 @@ class Glyph:
         )
         object.__setattr__(self, "strokes", strokes)
         object.__setattr__(self, "times_s", times)
+        if self.widths_m:
+            if len(self.widths_m) != len(self.strokes):
+                raise PlannerError(
+                    f"{len(self.widths_m)} width arrays for {len(self.strokes)} strokes",
+                    field="widths_m",
+                )
+            widths = tuple(
+                None if w is None else _frozen_widths(w, strokes[i].shape[0], i)
+                for i, w in enumerate(self.widths_m)
+            )
+            object.__setattr__(self, "widths_m", widths)
 
     @property
     def point_count(self) -> int:
@@ -106,11 +120,36 @@ def _frozen_times(times: FloatArray, n_points: int, stroke_index: int) -> FloatA
     return arr
 
 
+def _frozen_widths(widths: FloatArray, n_points: int, stroke_index: int) -> FloatArray:
+    arr = np.array(widths, dtype=np.float64)
+    if arr.shape != (n_points,):
+        raise PlannerError(
+            f"widths must have shape ({n_points},), got {arr.shape}",
+            stroke_index=stroke_index,
+            field="widths_m",
+        )
+    bad = np.flatnonzero(~np.isfinite(arr) | (arr <= 0.0))
+    if bad.size:
+        raise PlannerError(
+            "width must be finite and positive",
+            stroke_index=stroke_index,
+            point_index=int(bad[0]),
+            field="widths_m",
+        )
+    arr.flags.writeable = False
+    return arr
+
+
+def kept_points(points: FloatArray) -> NDArray[np.bool_]:
+    """(n,) True for each point kept by :func:`merge_repeated_points`."""
+    return np.asarray(np.r_[True, np.any(np.diff(points, axis=0) != 0.0, axis=1)])
+
+
 def merge_repeated_points(
     points: FloatArray, times: FloatArray | None
 ) -> tuple[FloatArray, FloatArray | None]:
     """Drop points equal to their predecessor (x and y both); the first of a run keeps its time."""
-    keep = np.r_[True, np.any(np.diff(points, axis=0) != 0.0, axis=1)]
+    keep = kept_points(points)
     return points[keep], (None if times is None else times[keep])
 
 
@@ -136,4 +175,14 @@ def concat_glyphs(parts: Sequence[Glyph], *, label: str, source: str) -> Glyph:
         raise PlannerError(f"cannot join glyphs in different units {sorted(units)}", field="units")
     strokes = tuple(s for g in parts for s in g.strokes)
     times = tuple(t for g in parts for t in g.times_s)
-    return Glyph(strokes=strokes, times_s=times, units=units.pop(), label=label, source=source)
+    widths: tuple[FloatArray | None, ...] = ()
+    if any(g.widths_m for g in parts):
+        widths = tuple(w for g in parts for w in (g.widths_m or (None,) * len(g.strokes)))
+    return Glyph(
+        strokes=strokes,
+        times_s=times,
+        units=units.pop(),
+        label=label,
+        source=source,
+        widths_m=widths,
+    )

@@ -8,13 +8,13 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any, TypeGuard
 
 import numpy as np
 
 from planner.errors import PlannerError
-from planner.glyphs.glyph import FloatArray, Glyph, merge_repeated_points
+from planner.glyphs.glyph import FloatArray, Glyph, kept_points, merge_repeated_points
 
 MAX_STROKES = 200
 """Most strokes one document may hold."""
@@ -26,6 +26,9 @@ UNITS = ("px", "m")
 """Units of a strokes document: canvas pixels or metres."""
 Y_AXES = ("down", "up")
 """Direction of +y in a strokes document: "down" as on screens, or "up"."""
+MAX_WIDTH_M = 1.0
+"""Largest per-point line width ``w`` in [m] a document may ask for (the vehicle kind checks
+its own pen's range)."""
 MAX_COORDINATE = 1e6
 """Largest |x|, |y| of a point and largest canvas side, in the document's units (px or m).
 Beyond it a drawing could not be scaled onto a board without overflowing floats."""
@@ -54,11 +57,13 @@ def parse_strokes_json(
         frame = (0.0, -height, width, 0.0) if y_axis == "down" else (0.0, 0.0, width, height)
     raw_strokes = _stroke_lists(data, source_name)
     timed = _has_time(raw_strokes[0][0])
+    wide = _has_width(raw_strokes[0][0])
     strokes: list[FloatArray] = []
     times: list[FloatArray | None] = []
+    widths: list[FloatArray | None] = []
     previous_end_s: float | None = None
     for i, raw in enumerate(raw_strokes):
-        points, t = _parse_stroke(raw, i, timed, source_name)
+        points, t, w = _parse_stroke(raw, i, (timed, wide), source_name)
         if t is not None:
             if previous_end_s is not None and t[0] < previous_end_s:
                 raise PlannerError(
@@ -71,6 +76,8 @@ def parse_strokes_json(
             previous_end_s = float(t[-1])
         if y_axis == "down":
             points[:, 1] = -points[:, 1]
+        if w is not None:
+            w = w[kept_points(points)]
         points, t = merge_repeated_points(points, t)
         if points.shape[0] < 2:
             raise PlannerError(
@@ -80,6 +87,7 @@ def parse_strokes_json(
             )
         strokes.append(points)
         times.append(t)
+        widths.append(w)
     return Glyph(
         strokes=tuple(strokes),
         times_s=tuple(times),
@@ -87,6 +95,7 @@ def parse_strokes_json(
         label=label if label is not None else source_name,
         source="strokes-json",
         frame=frame,
+        widths_m=tuple(widths) if wide else (),
     )
 
 
@@ -210,7 +219,13 @@ def _short(value: Any) -> str:
 
 
 def _has_time(point: Any) -> bool:
+    if isinstance(point, Mapping):
+        return "t" in point
     return isinstance(point, list) and len(point) >= 3
+
+
+def _has_width(point: Any) -> bool:
+    return isinstance(point, Mapping) and "w" in point
 
 
 def _is_number(value: Any) -> TypeGuard[int | float]:
@@ -226,23 +241,33 @@ def _as_float(value: int | float) -> float:
 
 
 def _parse_stroke(
-    raw: list[Any], stroke_index: int, timed: bool, source_name: str
-) -> tuple[FloatArray, FloatArray | None]:
+    raw: list[Any], stroke_index: int, first: tuple[bool, bool], source_name: str
+) -> tuple[FloatArray, FloatArray | None, FloatArray | None]:
+    """Points, times and widths of one stroke; ``first`` says whether the document's first
+    point had a time and a width (every point must then be the same)."""
+    timed, wide = first
     n = len(raw)
     points = np.empty((n, 2), dtype=np.float64)
     times = np.empty(n, dtype=np.float64) if timed else None
+    widths = np.empty(n, dtype=np.float64) if wide else None
     for j, point in enumerate(raw):
-        values = _point_values(point, stroke_index, j, source_name)
-        if (len(values) >= 3) != timed:
-            first = "has a time t" if timed else "has no time t"
-            raise PlannerError(
-                f"{source_name}: the first point of the document {first}; every point must "
-                "then be the same",
-                field="strokes",
-                stroke_index=stroke_index,
-                point_index=j,
-            )
+        values, width = _point_values(point, stroke_index, j, source_name)
+        for has, wanted, what in (
+            (len(values) >= 3, timed, "time t"),
+            (width is not None, wide, "width w"),
+        ):
+            if has != wanted:
+                first_has = "has a" if wanted else "has no"
+                raise PlannerError(
+                    f"{source_name}: the first point of the document {first_has} {what}; "
+                    "every point must then be the same",
+                    field="strokes",
+                    stroke_index=stroke_index,
+                    point_index=j,
+                )
         points[j] = values[0], values[1]
+        if widths is not None and width is not None:
+            widths[j] = width
         if times is not None:
             times[j] = values[2]
             if j > 0 and times[j] < times[j - 1]:
@@ -252,13 +277,17 @@ def _parse_stroke(
                     stroke_index=stroke_index,
                     point_index=j,
                 )
-    return points, times
+    return points, times, widths
 
 
 _COORD_NAMES = ("x", "y", "t", "pressure")
 
 
-def _point_values(point: Any, stroke_index: int, point_index: int, source_name: str) -> list[float]:
+def _point_values(
+    point: Any, stroke_index: int, point_index: int, source_name: str
+) -> tuple[list[float], float | None]:
+    """The point's numbers ``[x, y, (t, (pressure))]`` and its width ``w`` in [m] or None."""
+
     def fail(message: str) -> PlannerError:
         return PlannerError(
             f"{source_name}: {message}",
@@ -267,9 +296,15 @@ def _point_values(point: Any, stroke_index: int, point_index: int, source_name: 
             point_index=point_index,
         )
 
+    width: float | None = None
+    if isinstance(point, Mapping):
+        point, width = _object_point(point, fail)
     if not isinstance(point, list) or not 2 <= len(point) <= 4:
         got = f"{len(point)} values" if isinstance(point, list) else _kind(point)
-        raise fail(f"a point must be [x, y], [x, y, t] or [x, y, t, pressure], got {got}")
+        raise fail(
+            "a point must be [x, y], [x, y, t], [x, y, t, pressure] or an object "
+            f"{{x, y, t?, pressure?, w?}}, got {got}"
+        )
     values: list[float] = []
     for name, value in zip(_COORD_NAMES, point, strict=False):
         if not _is_number(value):
@@ -282,4 +317,27 @@ def _point_values(point: Any, stroke_index: int, point_index: int, source_name: 
         if name == "pressure" and number < 0.0:
             raise fail(f"pressure must be >= 0, got {number}")
         values.append(number)
-    return values
+    return values, width
+
+
+def _object_point(
+    point: Mapping[str, Any], fail: Callable[[str], PlannerError]
+) -> tuple[list[Any], float | None]:
+    """``{x, y, t?, pressure?, w?}`` -> the array form and the width in [m] (checked)."""
+    unknown = sorted(set(point) - {"x", "y", "t", "pressure", "w"})
+    if unknown:
+        raise fail(f"unknown point key {_short(unknown[0])}; expected x, y, t, pressure, w")
+    for key in ("x", "y"):
+        if key not in point:
+            raise fail(f"a point object needs {key}")
+    if "pressure" in point and "t" not in point:
+        raise fail("pressure needs t")
+    values = [point[k] for k in ("x", "y", "t", "pressure") if k in point]
+    if "w" not in point:
+        return values, None
+    w = point["w"]
+    if not _is_number(w) or not math.isfinite(_as_float(w)):
+        raise fail(f"w must be a finite number in metres, got {_short(w)}")
+    if not 0.0 < _as_float(w) <= MAX_WIDTH_M:
+        raise fail(f"w must be in (0, {MAX_WIDTH_M:g}] m, got {_as_float(w)!r}")
+    return values, _as_float(w)

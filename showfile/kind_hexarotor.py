@@ -1,0 +1,60 @@
+"""Settings of a ``hexarotor-sponge`` vehicle (the Flying Calligrapher) as a show file states them.
+
+Not wired into :class:`showfile.models.Show` yet: ``vehicles.hexarotor_sponge.kind.settings_from``
+turns one into the kind's typed settings. SI units; widths and lengths in metres.
+"""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid", use_attribute_docstrings=True)
+
+
+class PenSettings(_Model):
+    """The sponge pen's calibration (paper Fig. 4c) and spring."""
+
+    width_coefficients_m: tuple[float, ...] = (2.0e-3, 3.2e-3, -0.2e-3)
+    """Line width [m] as a polynomial of normal force [N], lowest order first."""
+    force_min_n: float = Field(default=1.0, gt=0.0)
+    """Lowest calibrated normal force in [N]."""
+    force_max_n: float = Field(default=6.0, gt=0.0)
+    """Highest calibrated normal force in [N]."""
+    stiffness_npm: float = Field(default=400.0, gt=0.0)
+    """Spring stiffness in [N/m]."""
+    preload_n: float = Field(default=0.5, ge=0.0)
+    """Spring preload in [N]."""
+    default_width_m: float = Field(default=9e-3, gt=0.0)
+    """Width in [m] where a stroke carries none and no profile applies."""
+    clamp_widths: bool = False
+    """Clamp wanted widths outside the pen's range (counted in the plan's report) instead of
+    refusing the job."""
+
+    @model_validator(mode="after")
+    def _range(self) -> PenSettings:
+        if self.force_max_n <= self.force_min_n:
+            raise ValueError("force_max_n must be above force_min_n")
+        return self
+
+
+class HexarotorKindSettings(_Model):
+    """A fully-actuated hexarotor with a one-link arm writing on a wall."""
+
+    rotor_tilt_deg: float = Field(default=29.8, ge=0.0, lt=60.0)
+    """Tilt of each rotor about its arm, alternating sign, in [deg]."""
+    thrust_max_n: float = Field(default=14.0, gt=0.0)
+    """Largest thrust of one rotor in [N]."""
+    arm_length_m: float = Field(default=0.40, gt=0.0, le=2.0)
+    """From the F/T sensor to the pen tip in [m]."""
+    wall_friction: float = Field(default=0.4, ge=0.0, le=2.0)
+    """Coulomb friction coefficient of pen on wall."""
+    v_max_mps: float = Field(default=0.20, gt=0.0)
+    """Largest writing speed in [m/s] (paper: 20 cm/s)."""
+    a_max_mps2: float = Field(default=0.20, gt=0.0)
+    """Largest acceleration in [m/s^2] (paper: 20 cm/s^2)."""
+    force_rate_max_nps: float = Field(default=2.0, gt=0.0)
+    """Largest change of the normal force in [N/s] (paper: 2 N/s)."""
+    pen: PenSettings = PenSettings()
+    """The sponge pen."""

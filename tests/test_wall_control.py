@@ -1,0 +1,58 @@
+"""The hexarotor in its MuJoCo world under the hybrid motion-force controller."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planner.samples import TrajectorySamples
+from vehicles.hexarotor_sponge.flight import FlySettings, fly_plan
+from vehicles.hexarotor_sponge.world import CALM, WorldNoise
+from vehicles.kind import StrokeInput, WritingPlan
+from vehicles.surface import Surface
+
+SURFACE = Surface.of("vertical", (1.0, 3.0, 2.0), 0.3)
+
+
+def _plan(t_s: np.ndarray, xy_m: np.ndarray, force_n: np.ndarray) -> WritingPlan:
+    """A hand-made reference on the wall (positions at the wall, given forces)."""
+    pos = SURFACE.to_world(xy_m, 0.0)
+    vel = np.gradient(pos, t_s, axis=0)
+    samples = TrajectorySamples(t_s, pos, vel, np.zeros_like(pos), force_n > 0.0)
+    strokes = (StrokeInput(np.array([[0.0, 0.0], [0.01, 0.0]])),)
+    return WritingPlan(samples, strokes, SURFACE, force_n=force_n)
+
+
+@pytest.mark.slow
+def test_holds_a_constant_force_on_a_static_wall() -> None:
+    t = np.arange(0.0, 5.0, 0.01)
+    force = np.clip(2.0 * t, 0.0, 3.0)
+    flown = fly_plan(_plan(t, np.zeros((t.size, 2)), force), FlySettings(noise=WorldNoise()))
+    assert flown.force_n is not None
+    hold = t > 2.5
+    assert np.mean(flown.force_n[hold]) == pytest.approx(3.0, abs=0.05)
+    assert np.std(flown.force_n[hold]) < 0.15
+    estimate = flown.extra["force_estimate_n"][hold]
+    assert np.mean(estimate) == pytest.approx(3.0, abs=0.05)
+    tip_on_wall = SURFACE.to_local(flown.writing_point_m_enu[hold])
+    assert np.abs(tip_on_wall[:, :2]).max() < 0.01
+    assert np.abs(tip_on_wall[:, 2]).max() < 2e-3
+    # Without force the pen is off the wall: no ink before contact.
+    assert flown.ink_width_m[0] == 0.0
+
+
+@pytest.mark.slow
+def test_contact_model_compensates_sliding_friction() -> None:
+    t = np.arange(0.0, 6.0, 0.01)
+    x = np.where(t > 2.0, 0.1 * (t - 2.0), 0.0)
+    xy = np.column_stack([x, np.zeros_like(x)])
+    force = np.clip(2.0 * t, 0.0, 2.5)
+    plan = _plan(t, xy, force)
+    ours = fly_plan(plan, FlySettings(noise=CALM))
+    baseline = fly_plan(plan, FlySettings(noise=CALM, contact_model=False))
+    sliding = t > 3.0
+    err_ours = np.linalg.norm(ours.writing_point_m_enu - ours.reference_m_enu, axis=1)[sliding]
+    err_base = np.linalg.norm(baseline.writing_point_m_enu - baseline.reference_m_enu, axis=1)
+    assert np.sqrt(np.mean(err_ours**2)) < 0.5 * np.sqrt(np.mean(err_base[sliding] ** 2))
+    assert ours.force_n is not None
+    assert np.mean(ours.force_n[sliding]) == pytest.approx(2.5, abs=0.15)

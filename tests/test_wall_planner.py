@@ -1,0 +1,122 @@
+"""Contact-aware motion-force planning of the hexarotor (paper eq. 7)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planner.errors import InfeasibleTrajectoryError, PlannerError
+from vehicles.hexarotor_sponge.nlp import Limits, solve_period
+from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
+from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing
+from vehicles.hexarotor_sponge.waypoints import periods_of
+from vehicles.kind import StrokeInput
+from vehicles.surface import Surface
+
+SURFACE = Surface.of("vertical", (0.0, 3.0, 2.0), 0.0)
+PARAMS = HexarotorParams()
+
+
+def test_contact_phases_follow_waypoint_forces() -> None:
+    strokes = [
+        StrokeInput(np.array([[0.0, 0.0], [0.1, 0.0]])),
+        StrokeInput(np.array([[0.0, 0.1], [0.0, 0.2]])),
+    ]
+    forces = [np.array([2.0, 3.0]), np.array([1.5, 1.5])]
+    periods = periods_of(strokes, forces, start_m=np.array([0.0, 0.0, 0.06]), standoff_m=0.03)
+    assert [p.contact for p in periods] == [False, True, False, True, False]
+    for p in periods:
+        if p.contact:
+            assert np.all(p.points_m[:, 2] == 0.0)
+            assert p.force_n[0] == 0.0 and p.force_n[-1] == 0.0
+            assert np.all(p.force_n[1:-1] > 0.0)
+        else:
+            assert np.all(p.force_n == 0.0)
+            assert np.all(p.points_m[1:-1, 2] > 0.0)
+    assert periods[1].force_n.tolist() == [0.0, 2.0, 3.0, 0.0]
+
+
+def test_zero_force_on_a_contact_stroke_is_refused() -> None:
+    strokes = [StrokeInput(np.array([[0.0, 0.0], [0.1, 0.0]]))]
+    with pytest.raises(PlannerError, match="stroke 0: a contact stroke needs a positive force"):
+        periods_of(strokes, [np.array([2.0, 0.0])], start_m=np.zeros(3) + 0.05, standoff_m=0.03)
+
+
+def _rk4(p: np.ndarray, v: np.ndarray, f: float, u: np.ndarray, df: float, h: float) -> np.ndarray:
+    """Independent integration of the planner's model (numpy, fine steps)."""
+    mu, m, g = PARAMS.wall_friction, PARAMS.mass_kg, np.array([0.0, -GRAVITY_MPS2, 0.0])
+
+    def deriv(x: np.ndarray) -> np.ndarray:
+        vv, ff = x[3:6], x[6]
+        speed = np.sqrt(vv[0] ** 2 + vv[1] ** 2 + 0.03**2)
+        alpha = np.array([-mu * vv[0] / speed, -mu * vv[1] / speed, 1.0])
+        return np.concatenate([vv, (u + ff * alpha) / m + g, [df]])
+
+    x = np.concatenate([p, v, [f]])
+    for _ in range(10):
+        k1 = deriv(x)
+        k2 = deriv(x + h / 20 * k1)
+        k3 = deriv(x + h / 20 * k2)
+        k4 = deriv(x + h / 10 * k3)
+        x = x + h / 60 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return x
+
+
+@pytest.mark.slow
+def test_planned_contact_period_obeys_dynamics_and_limits() -> None:
+    strokes = [StrokeInput(np.array([[0.0, 0.0], [0.08, 0.0], [0.08, 0.06]]))]
+    periods = periods_of(
+        strokes, [np.array([2.0, 3.0, 2.5])], start_m=np.array([0.0, 0.0, 0.06]), standoff_m=0.03
+    )
+    limits = Limits()
+    sol = solve_period(periods[1], PARAMS, limits)
+    assert sol.status == "Solve_Succeeded"
+    assert sol.iterations > 0 and 0.0 < sol.ipopt_s <= sol.solve_s
+    h = np.diff(sol.t_s)
+    assert np.all(h > 0.0) and np.all(h <= limits.h_max_s + 1e-6)
+    for k in range(h.size):
+        df = (sol.force_n[k + 1] - sol.force_n[k]) / h[k]
+        x = _rk4(sol.p_m[k], sol.v_mps[k], sol.force_n[k], sol.control_n[k], df, h[k])
+        assert x[0:3] == pytest.approx(sol.p_m[k + 1], abs=2e-4)
+        assert x[3:6] == pytest.approx(sol.v_mps[k + 1], abs=2e-3)
+    assert np.all(np.abs(sol.p_m[:, 2]) < 1e-6)
+    assert np.linalg.norm(sol.v_mps, axis=1).max() <= limits.v_max_mps + 1e-4
+    assert np.linalg.norm(sol.a_mps2, axis=1).max() <= limits.a_max_mps2 + 1e-4
+    assert np.max(np.abs(np.diff(sol.force_n)) / h) <= limits.force_rate_max_nps + 1e-4
+    # Waypoints are met: the stroke's corner at (0.08, 0) with 3 N.
+    hit = np.argmin(np.linalg.norm(sol.p_m - [0.08, 0.0, 0.0], axis=1))
+    assert sol.force_n[hit] == pytest.approx(3.0, abs=1e-5)
+
+
+@pytest.mark.slow
+def test_plan_reports_ipopt_and_keeps_limits() -> None:
+    plan = plan_writing([StrokeInput(np.array([[0.0, 0.0], [0.1, 0.0]]))], SURFACE, PlanSettings())
+    rep = plan.feasibility
+    assert all(p["ipopt_status"] == "Solve_Succeeded" for p in rep["periods"])
+    assert rep["ipopt_iterations"] > 0 and 0.0 < rep["ipopt_solve_s"] <= rep["build_and_solve_s"]
+    assert rep["peak_speed_mps"] <= 0.2 + 1e-3
+    assert plan.force_n is not None and plan.width_m is not None
+    assert plan.samples.pen_down.any()
+    down = plan.samples.pen_down
+    # Pen-down samples lie on the wall.
+    assert np.abs(SURFACE.standoff_m(plan.samples.position_m_enu[down])).max() < 1e-6
+
+
+def test_width_out_of_range_names_stroke_and_point() -> None:
+    strokes = [StrokeInput(np.array([[0.0, 0.0], [0.1, 0.0]]), np.array([8e-3, 30e-3]))]
+    with pytest.raises(PlannerError, match=r"field 'w', stroke 0, point 1: width 30.00 mm"):
+        plan_writing(strokes, SURFACE, PlanSettings())
+
+
+def test_wall_point_out_of_reach_is_refused() -> None:
+    strokes = [StrokeInput(np.array([[0.0, 0.0], [2.5, 0.0]]))]
+    with pytest.raises(PlannerError, match=r"stroke 0, point 1: .*beyond the reach"):
+        plan_writing(strokes, SURFACE, PlanSettings())
+
+
+def test_force_beyond_the_rotors_names_the_thrust_limit() -> None:
+    weak = PlanSettings(params=HexarotorParams(thrust_max_n=6.6))
+    strokes = [StrokeInput(np.array([[0.0, 0.0], [0.1, 0.0]]), np.array([14e-3, 14e-3]))]
+    with pytest.raises(InfeasibleTrajectoryError, match=r"stroke 0: pressing 6\.00 N") as info:
+        plan_writing(strokes, SURFACE, weak)
+    assert info.value.limit == "thrust"

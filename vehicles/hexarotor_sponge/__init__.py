@@ -1,0 +1,15 @@
+"""The Flying Calligrapher's room (Guo et al. 2024): a fully-actuated hexarotor with a one-link arm
+writes on a vertical wall with a sponge pen whose line width follows the contact force.
+
+``pen`` force <-> width; ``allocation`` wrench -> six tilted rotor thrusts; ``world`` MuJoCo;
+``waypoints``/``nlp``/``plan`` contact-aware motion-force planning (eq. 7); ``controller`` hybrid
+motion-force control (section V); ``flight`` the batch closed loop, ``live`` the agent's one;
+``metrics``/``report`` Table I's figures; ``kind`` the interface, ``KIND`` its instance.
+"""
+
+from vehicles.hexarotor_sponge.kind import HexarotorSpongeKind
+
+KIND = HexarotorSpongeKind()
+"""The kind as the registry sees it."""
+
+__all__ = ["KIND", "HexarotorSpongeKind"]

@@ -1,0 +1,137 @@
+"""The hexarotor sponge writer behind the vehicle-kind interface (``vehicles.kind``)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from planner.samples import TrajectorySamples
+from showfile.kind_hexarotor import HexarotorKindSettings
+from vehicles.hexarotor_sponge.flight import FlySettings, fly_plan
+from vehicles.hexarotor_sponge.live import WallVehicle
+from vehicles.hexarotor_sponge.metrics import score_writing
+from vehicles.hexarotor_sponge.nlp import Limits
+from vehicles.hexarotor_sponge.params import HexarotorParams
+from vehicles.hexarotor_sponge.pen import PenCurve
+from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing
+from vehicles.hexarotor_sponge.report import report_figure
+from vehicles.hexarotor_sponge.widths import default_width_profile, with_profile_knots
+from vehicles.kind import FlownWriting, StrokeInput, WritingPlan, WritingScore
+from vehicles.surface import Orientation, Surface, Vec3
+
+
+@dataclass(frozen=True)
+class WallSettings:
+    """Everything the kind needs: planning, the simulated flight, and the wall of a live
+    vehicle."""
+
+    plan: PlanSettings = field(default_factory=PlanSettings)
+    """Planner limits and the pen."""
+    fly: FlySettings = field(default_factory=FlySettings)
+    """Simulated world and controller."""
+    surface: Surface | None = None
+    """The wall of a live simulated vehicle (None: no live vehicle can be made)."""
+
+
+def settings_from(model: HexarotorKindSettings, surface: Surface | None = None) -> WallSettings:
+    """The kind's typed settings from a show file's ``hexarotor-sponge`` section."""
+    pen = model.pen
+    params = HexarotorParams(
+        rotor_tilt_rad=math.radians(model.rotor_tilt_deg),
+        thrust_max_n=model.thrust_max_n,
+        arm_length_m=model.arm_length_m,
+        wall_friction=model.wall_friction,
+        pen_stiffness_npm=pen.stiffness_npm,
+        pen_preload_n=pen.preload_n,
+        pen=PenCurve(pen.width_coefficients_m, pen.force_min_n, pen.force_max_n),
+    )
+    limits = Limits(
+        v_max_mps=model.v_max_mps,
+        a_max_mps2=model.a_max_mps2,
+        force_rate_max_nps=model.force_rate_max_nps,
+    )
+    return WallSettings(
+        plan=PlanSettings(
+            params=params,
+            limits=limits,
+            default_width_m=pen.default_width_m,
+            clamp_widths=pen.clamp_widths,
+        ),
+        fly=FlySettings(params=params),
+        surface=surface,
+    )
+
+
+class _Show(Protocol):
+    """Whatever show model the agent passes (not read yet: every section at its default)."""
+
+
+def with_default_widths(
+    strokes: Sequence[StrokeInput], settings: WallSettings
+) -> list[StrokeInput]:
+    """Strokes with no widths get the typed-text width profile."""
+    pen = settings.plan.params.pen
+    out = []
+    for s in strokes:
+        if s.width_m is not None:
+            out.append(s)
+            continue
+        xy = with_profile_knots(s.xy_m)
+        out.append(StrokeInput(xy, default_width_profile(xy, pen)))
+    return out
+
+
+class HexarotorSpongeKind:
+    """The Flying Calligrapher: a fully-actuated hexarotor writing on a wall with a sponge."""
+
+    name = "hexarotor-sponge"
+    """Kind name in show files."""
+    orientation: Orientation = "vertical"
+    """It writes on walls."""
+
+    def settings(self, show: _Show | None, vehicle_id: str | None) -> WallSettings:
+        """Default settings (show sections for this kind are not wired yet)."""
+        return WallSettings()
+
+    def plan(self, strokes: Sequence[StrokeInput], surface: Surface, settings: Any) -> WritingPlan:
+        """Contact-aware motion-force plan (strokes without widths get the default profile)."""
+        s = _settings(settings)
+        return plan_writing(with_default_widths(strokes, s), surface, s.plan)
+
+    def command_reference(self, plan: WritingPlan, settings: Any) -> TrajectorySamples:
+        """The controller tracks the writing point itself."""
+        return plan.samples
+
+    def fly(self, plan: WritingPlan, settings: Any, *, seed: int = 0) -> FlownWriting:
+        """Fly the plan in the MuJoCo world under the hybrid controller."""
+        return fly_plan(plan, _settings(settings).fly, seed=seed)
+
+    def score(self, plan: WritingPlan, flown: FlownWriting, settings: Any = None) -> WritingScore:
+        """Table I's metrics (``rmse_ee_m``, ``rmse_base_m``, ``force_rmse_n``, IoU)."""
+        s = _settings(settings)
+        return score_writing(plan, flown, s.fly.params, s.plan.default_width_m)
+
+    def report(self, plan: WritingPlan, flown: FlownWriting, settings: Any, title: str) -> Any:
+        """Images, tip error, force and width against time."""
+        s = _settings(settings)
+        score = self.score(plan, flown, s)
+        return report_figure(plan, flown, score, title, s.plan.default_width_m)
+
+    def simulated_vehicle(self, start_m_enu: Vec3, settings: Any, *, seed: int = 0) -> WallVehicle:
+        """A live vehicle, tip at ``start_m_enu``, hovering in front of the settings' wall."""
+        s = _settings(settings)
+        if s.surface is None:
+            raise ValueError("hexarotor-sponge: a live vehicle needs settings.surface (its wall)")
+        return WallVehicle(np.asarray(start_m_enu, dtype=np.float64), s.surface, s.fly, seed=seed)
+
+
+def _settings(settings: Any) -> WallSettings:
+    if settings is None:
+        return WallSettings()
+    if not isinstance(settings, WallSettings):
+        raise TypeError(f"hexarotor-sponge expects WallSettings, got {type(settings).__name__}")
+    return settings

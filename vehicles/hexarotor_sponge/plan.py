@@ -1,0 +1,239 @@
+"""The hexarotor's job plan: strokes on the wall -> optimised periods -> one stitched reference.
+
+``plan_writing`` is the paper's planner (eq. 7 per period, stitched, resampled at the control
+rate by linear interpolation, section IV). ``plan_equal_distance`` is the paper's planning
+baseline (section VII-C): the waypoints sampled at equal distance at constant speed, positions
+and forces only (no velocity, acceleration or contact-wrench feed-forward).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from planner.errors import InfeasibleTrajectoryError, PlannerError
+from planner.samples import TrajectorySamples
+from vehicles.hexarotor_sponge.allocation import Allocator
+from vehicles.hexarotor_sponge.nlp import Limits, PeriodSolution, solve_period
+from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
+from vehicles.hexarotor_sponge.waypoints import Period, periods_of, stroke_forces_n
+from vehicles.kind import StrokeInput, WritingPlan
+from vehicles.surface import Surface
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class PlanSettings:
+    """What the planner needs besides the strokes."""
+
+    params: HexarotorParams = field(default_factory=HexarotorParams)
+    """The vehicle."""
+    limits: Limits = field(default_factory=Limits)
+    """Speed, acceleration and force-rate limits, solver weights."""
+    default_width_m: float = 9e-3
+    """Line width in [m] of strokes that carry none."""
+    clamp_widths: bool = False
+    """Clamp widths outside the pen's range (counted in the feasibility report) instead of
+    refusing them."""
+    standoff_m: float = 0.03
+    """Distance in [m] from the wall of the free-flight waypoints."""
+    control_dt_s: float = 0.01
+    """Sample period of the reference in [s]."""
+    reach_m: float = 1.5
+    """Largest distance in [m] of a stroke point from the writing area's centre."""
+
+
+def _checked_strokes(
+    strokes: Sequence[StrokeInput], settings: PlanSettings
+) -> tuple[list[StrokeInput], list[FloatArray], int]:
+    """Strokes with widths clamped if asked, their forces, and how many widths were clamped."""
+    pen = settings.params.pen
+    out, forces, clamped = [], [], 0
+    if not strokes:
+        raise PlannerError("nothing to write", field="strokes")
+    for k, stroke in enumerate(strokes):
+        far = np.flatnonzero(np.linalg.norm(stroke.xy_m, axis=1) > settings.reach_m)
+        if far.size:
+            raise PlannerError(
+                f"point is {float(np.linalg.norm(stroke.xy_m[far[0]])):.2f} m from the wall's "
+                f"writing centre, beyond the reach {settings.reach_m} m",
+                stroke_index=k,
+                point_index=int(far[0]),
+            )
+        if stroke.width_m is not None and settings.clamp_widths:
+            widths, changed = pen.clamp_width_m(stroke.width_m)
+            clamped += changed
+            stroke = StrokeInput(stroke.xy_m, widths)
+        try:
+            forces.append(stroke_forces_n(stroke, pen, settings.default_width_m))
+        except PlannerError as err:
+            raise PlannerError(
+                err.message, stroke_index=k, point_index=err.point_index, field="w"
+            ) from None
+        _check_static_thrust(float(forces[-1].max()), k, settings.params)
+        out.append(stroke)
+    return out, forces, clamped
+
+
+def _check_static_thrust(force_n: float, stroke_index: int, params: HexarotorParams) -> None:
+    """Refuse a stroke whose hover-and-press wrench (weight, the stroke's largest force with
+    sliding friction, their moments) already needs a rotor beyond its limits."""
+    alloc = Allocator(params)
+    friction = params.wall_friction * force_n
+    force_body = np.array([force_n, 0.0, params.mass_kg * GRAVITY_MPS2 + friction])
+    weight_body = np.array([0.0, 0.0, -params.mass_kg * GRAVITY_MPS2])
+    contact_body = np.array([-force_n, 0.0, -friction])
+    torque = -np.cross(params.com_m_body, weight_body) - np.cross(params.tip_m_body, contact_body)
+    out = alloc.allocate(np.concatenate([force_body, torque]))
+    if out.saturated:
+        need = float(np.max(alloc.inverse @ np.concatenate([force_body, torque])))
+        raise InfeasibleTrajectoryError(
+            f"pressing {force_n:.2f} N while hovering needs a rotor thrust of {need:.1f} N, "
+            f"beyond the rotors' {params.thrust_max_n:.1f} N",
+            limit="thrust",
+            axis=None,
+            t_s=0.0,
+            value=need,
+            bound=params.thrust_max_n,
+            stroke_index=stroke_index,
+        )
+
+
+def plan_writing(
+    strokes: Sequence[StrokeInput], surface: Surface, settings: PlanSettings
+) -> WritingPlan:
+    """The contact-aware motion-force plan of ``strokes`` on a vertical ``surface``."""
+    checked, forces, clamped = _checked_strokes(strokes, settings)
+    first = checked[0].xy_m[0]
+    start = np.array([first[0], first[1], 2.0 * settings.standoff_m])
+    periods = periods_of(checked, forces, start_m=start, standoff_m=settings.standoff_m)
+    solutions = []
+    for period in periods:
+        solutions.append(solve_period(period, settings.params, settings.limits))
+    t, p, v, a, f = _stitch(solutions)
+    report = _report(periods, solutions, v, a, f, t, settings, clamped)
+    return _as_plan(t, p, v, a, f, checked, surface, settings, report)
+
+
+def plan_equal_distance(
+    strokes: Sequence[StrokeInput], surface: Surface, settings: PlanSettings
+) -> WritingPlan:
+    """Planning baseline: waypoints at equal distance, constant speed ``v_max``, q and F only."""
+    checked, forces, clamped = _checked_strokes(strokes, settings)
+    first = checked[0].xy_m[0]
+    start = np.array([first[0], first[1], 2.0 * settings.standoff_m])
+    periods = periods_of(checked, forces, start_m=start, standoff_m=settings.standoff_m)
+    pts = np.vstack([pp.points_m for pp in periods])
+    fs = np.concatenate([pp.force_n for pp in periods])
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+    step = settings.limits.v_max_mps * settings.control_dt_s
+    s = np.arange(0.0, arc[-1] + step, step)
+    keep = np.r_[True, np.diff(arc) > 0.0]
+    p = np.column_stack([np.interp(s, arc[keep], pts[keep, j]) for j in range(3)])
+    f = np.interp(s, arc[keep], fs[keep])
+    t = np.arange(s.size, dtype=np.float64) * settings.control_dt_s
+    zeros = np.zeros_like(p)
+    report = {"planner": "equal-distance baseline", "widths_clamped": clamped}
+    return _as_plan(t, p, zeros, zeros, f, checked, surface, settings, report)
+
+
+def _stitch(
+    solutions: Sequence[PeriodSolution],
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Concatenate the periods' nodes on one clock (each period starts where the last ended)."""
+    t, p, v, a, f = [], [], [], [], []
+    offset = 0.0
+    for i, sol in enumerate(solutions):
+        cut = 0 if i == 0 else 1
+        t.append(sol.t_s[cut:] + offset)
+        p.append(sol.p_m[cut:])
+        v.append(sol.v_mps[cut:])
+        a.append(sol.a_mps2[cut:])
+        f.append(sol.force_n[cut:])
+        offset += float(sol.t_s[-1])
+    return (
+        np.concatenate(t),
+        np.vstack(p),
+        np.vstack(v),
+        np.vstack(a),
+        np.concatenate(f),
+    )
+
+
+def _report(
+    periods: Sequence[Period],
+    solutions: Sequence[PeriodSolution],
+    v: FloatArray,
+    a: FloatArray,
+    f: FloatArray,
+    t: FloatArray,
+    settings: PlanSettings,
+    clamped: int,
+) -> dict[str, object]:
+    lim = settings.limits
+    rate = np.abs(np.diff(f)) / np.maximum(np.diff(t), 1e-9)
+    return {
+        "planner": "contact-aware motion-force (CasADi/IPOPT)",
+        "periods": [
+            {
+                "label": per.label,
+                "contact": per.contact,
+                "ipopt_status": sol.status,
+                "ipopt_iterations": sol.iterations,
+                "ipopt_s": round(sol.ipopt_s, 4),
+                "build_and_solve_s": round(sol.solve_s, 4),
+                "steps": int(sol.t_s.size - 1),
+                "duration_s": round(float(sol.t_s[-1]), 3),
+            }
+            for per, sol in zip(periods, solutions, strict=True)
+        ],
+        "ipopt_solve_s": round(sum(s.ipopt_s for s in solutions), 4),
+        "build_and_solve_s": round(sum(s.solve_s for s in solutions), 4),
+        "ipopt_iterations": sum(s.iterations for s in solutions),
+        "peak_speed_mps": round(float(np.linalg.norm(v, axis=1).max()), 4),
+        "v_max_mps": lim.v_max_mps,
+        "peak_acceleration_mps2": round(float(np.linalg.norm(a, axis=1).max()), 4),
+        "a_max_mps2": lim.a_max_mps2,
+        "peak_force_rate_nps": round(float(rate.max()), 4),
+        "force_rate_max_nps": lim.force_rate_max_nps,
+        "widths_clamped": clamped,
+    }
+
+
+def _as_plan(
+    t: FloatArray,
+    p: FloatArray,
+    v: FloatArray,
+    a: FloatArray,
+    f: FloatArray,
+    strokes: Sequence[StrokeInput],
+    surface: Surface,
+    settings: PlanSettings,
+    report: dict[str, object],
+) -> WritingPlan:
+    """Resample the nodes at the control rate and turn wall coordinates into world ENU."""
+    grid = np.arange(0.0, t[-1] + 1e-9, settings.control_dt_s)
+    if grid[-1] < t[-1] - 1e-9:
+        grid = np.append(grid, t[-1])
+
+    def at(values: FloatArray) -> FloatArray:
+        return np.column_stack([np.interp(grid, t, values[:, j]) for j in range(3)])
+
+    basis = np.column_stack([surface.x_axis_enu, surface.y_axis_enu, surface.normal_enu])
+    pos = surface.to_world(at(p)[:, :2], at(p)[:, 2])
+    force = np.interp(grid, t, f)
+    samples = TrajectorySamples(
+        t_s=grid,
+        position_m_enu=pos,
+        velocity_mps_enu=at(v) @ basis.T,
+        acceleration_mps2_enu=at(a) @ basis.T,
+        pen_down=force > 1e-3,
+    )
+    width = settings.params.pen.width_m(force)
+    return WritingPlan(
+        samples, tuple(strokes), surface, force_n=force, width_m=width, feasibility=report
+    )
