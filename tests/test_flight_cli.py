@@ -77,3 +77,15 @@ def test_a_brush_option_is_refused_for_another_kind(capsys: pytest.CaptureFixtur
     status = main(["fly", "--kind", "omni-wheel", "--text", "I", "--wind", "3"])
     assert status == 2
     assert "--wind is an option of quadrotor-brush, not of omni-wheel" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_fly_the_wall_hexarotor_reports_table_one(tmp_path: Path) -> None:
+    out = tmp_path / "wall"
+    status = main(["fly", "--kind", "hexarotor-sponge", "--text", "I", "--height", "0.3",
+                   "--report", str(out)])  # fmt: skip
+    assert status == 0
+    metrics = json.loads((out / "metrics.json").read_text(encoding="utf-8"))
+    assert metrics["rmse_ee_m"] < 0.015 and metrics["force_rmse_n"] < 0.6
+    assert metrics["rmse_base_m"] > 0.0 and metrics["iou"] > 0.6
+    assert metrics["feasibility"]["ipopt_iterations"]

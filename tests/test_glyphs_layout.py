@@ -135,3 +135,15 @@ def test_glyph_copies_its_input() -> None:
     assert g.strokes[0][0, 0] == 0.0
     assert glyphs_equal(g, Glyph((np.array([[0.0, 0.0], [1.0, 1.0]]),), (None,), "m", "x", "test"))
     assert not glyphs_equal(g, fit_to_area(g, width_m=1.0, height_m=1.0))
+
+
+def test_laying_out_keeps_the_pen_widths_of_each_point() -> None:
+    import numpy as np
+
+    from planner.glyphs import Glyph, fit_to_area
+
+    stroke = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 5.0]])
+    widths = np.array([0.005, 0.01, 0.012])
+    glyph = Glyph((stroke,), (None,), "px", "w", "test", widths_m=(widths,))
+    fitted = fit_to_area(glyph, width_m=1.0, height_m=1.0)
+    np.testing.assert_array_equal(fitted.widths_m[0], widths)

@@ -55,7 +55,11 @@ def plan_glyph(
 ) -> JobPlan:
     """Lay ``glyph`` out on the writing area and plan it with ``kind`` (raises PlannerError)."""
     fitted = lay_out(glyph, writing_area_m, margin_m)
-    strokes = tuple(StrokeInput(np.asarray(s, dtype=np.float64)) for s in fitted.strokes)
+    widths = fitted.widths_m or (None,) * len(fitted.strokes)
+    strokes = tuple(
+        StrokeInput(np.asarray(s, dtype=np.float64), width_m=w)
+        for s, w in zip(fitted.strokes, widths, strict=True)
+    )
     return JobPlan(fitted, kind.plan(strokes, surface, settings))
 
 

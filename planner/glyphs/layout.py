@@ -64,6 +64,7 @@ def fit_to_area(glyph: Glyph, *, width_m: float, height_m: float, margin_m: floa
         label=glyph.label,
         source=glyph.source,
         frame=frame,
+        widths_m=glyph.widths_m,  # pen widths are physical: laying out does not scale them
     )
 
 
