@@ -127,7 +127,7 @@ def test_mavlink_backend_needs_a_url_and_kind_needs_matching_board() -> None:
 
 def test_a_kind_without_a_room_is_refused_naming_the_kinds(monkeypatch: Any) -> None:
     monkeypatch.delitem(ROOMS, "quadrotor-brush")
-    monkeypatch.setitem(ROOMS, "omni-wheel", "vehicles.omni_wheel.kind")
+    monkeypatch.delitem(ROOMS, "hexarotor-sponge")
     err = _problem(SOLO)
     fields = {p.field: p for p in err.problems}
     message = fields["vehicles[0].kind"].message
