@@ -103,14 +103,23 @@ def _check_static_thrust(force_n: float, stroke_index: int, params: HexarotorPar
         )
 
 
-def plan_writing(
-    strokes: Sequence[StrokeInput], surface: Surface, settings: PlanSettings
-) -> WritingPlan:
-    """The contact-aware motion-force plan of ``strokes`` on a vertical ``surface``."""
+def _periods(
+    strokes: Sequence[StrokeInput], settings: PlanSettings
+) -> tuple[list[StrokeInput], list[Period], int]:
+    """The checked strokes, their free-flight and contact periods (from rest at twice the
+    standoff in front of the first point) and the count of clamped widths."""
     checked, forces, clamped = _checked_strokes(strokes, settings)
     first = checked[0].xy_m[0]
     start = np.array([first[0], first[1], 2.0 * settings.standoff_m])
     periods = periods_of(checked, forces, start_m=start, standoff_m=settings.standoff_m)
+    return checked, periods, clamped
+
+
+def plan_writing(
+    strokes: Sequence[StrokeInput], surface: Surface, settings: PlanSettings
+) -> WritingPlan:
+    """The contact-aware motion-force plan of ``strokes`` on a vertical ``surface``."""
+    checked, periods, clamped = _periods(strokes, settings)
     solutions = []
     for period in periods:
         solutions.append(solve_period(period, settings.params, settings.limits))
@@ -123,10 +132,7 @@ def plan_equal_distance(
     strokes: Sequence[StrokeInput], surface: Surface, settings: PlanSettings
 ) -> WritingPlan:
     """Planning baseline: waypoints at equal distance, constant speed ``v_max``, q and F only."""
-    checked, forces, clamped = _checked_strokes(strokes, settings)
-    first = checked[0].xy_m[0]
-    start = np.array([first[0], first[1], 2.0 * settings.standoff_m])
-    periods = periods_of(checked, forces, start_m=start, standoff_m=settings.standoff_m)
+    checked, periods, clamped = _periods(strokes, settings)
     pts = np.vstack([pp.points_m for pp in periods])
     fs = np.concatenate([pp.force_n for pp in periods])
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
