@@ -40,7 +40,7 @@ def has_hanzi(char: str) -> bool:
     return char in _store()
 
 
-@functools.lru_cache(maxsize=2048)
+@functools.lru_cache(maxsize=256)  # bounded: a long show must not keep every character it saw
 def hanzi_strokes_em(char: str) -> tuple[FloatArray, ...]:
     """Centrelines of ``char`` in stroke order, in em, y up, baseline at y = 0, cell x in [0, 1].
 
