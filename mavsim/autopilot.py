@@ -28,7 +28,7 @@ from enum import IntEnum
 from typing import Literal
 
 from mavsim.airframe import Airframe, AttitudeThrust
-from mavsim.auto_modes import climb, descend, go_home
+from mavsim.auto_modes import descend, go_home
 from mavsim.config import VehicleConfig
 from mavsim.control import PositionController, Target
 from mavsim.fence import fence_action, fence_breach
@@ -45,6 +45,7 @@ from mavsim.guided import (
 )
 from mavsim.modes import HOLDING_MODES, NEEDS_POSITION, NOT_ARMABLE, CopterMode, mode_name
 from mavsim.params import Flavor, ParamTable
+from mavsim.shaping import ShapeLimits, TargetShaper, shape_limits
 from mavsim.wire import AttitudeSetpoint, Control, GuidedSetpoint
 
 Vec3 = tuple[float, float, float]
@@ -73,6 +74,11 @@ class Autopilot:
     flavor: Flavor = "ardupilot"
     timeout_param = "GUID_TIMEOUT"
     """The parameter that holds the setpoint timeout in [s]."""
+    shapes_targets = True
+    """Guided targets are flown along ArduCopter's jerk-limited path (:mod:`mavsim.shaping`)."""
+    takeoff_owns_ground = True
+    """A setpoint before NAV_TAKEOFF has lifted the vehicle ends the take-off on the ground
+    (ArduCopter: guided position control does nothing while ``land_complete``)."""
 
     def __init__(self, config: VehicleConfig) -> None:
         self.config = config
@@ -80,7 +86,7 @@ class Autopilot:
         self.params = ParamTable(self.flavor, boot, frozen=config.frozen_params)
         self.airframe = Airframe(config)
         self.controller = PositionController(
-            config.gains,
+            config.position_gains,
             gravity_mps2=self.airframe.gravity_mps2,
             tilt_max_rad=config.tilt_max_rad,
             thrust_max_mps2=self.airframe.max_thrust_mps2,
@@ -89,6 +95,8 @@ class Autopilot:
         self.armed = False
         self.submode: Submode = "ground"
         self.target = Target(position_m_enu=config.home_m_enu)
+        self.shaper = TargetShaper()
+        """ArduCopter's jerk-limited path towards the guided target (:mod:`mavsim.shaping`)."""
         self.control: Control = "pos"
         """Which guided controller flies ``target`` (see mavsim.wire)."""
         self.heading = Heading()
@@ -104,6 +112,7 @@ class Autopilot:
         self.flight_time_s = 0.0
         self._armed_idle_since_s = 0.0
         self._on_ground_since_s: float | None = None
+        self._takeoff_since_s = 0.0
         self.texts: list[tuple[int, str]] = []
         """STATUSTEXTs (severity, text) waiting to be sent; the endpoint drains this list."""
 
@@ -152,7 +161,7 @@ class Autopilot:
         self.armed = True
         self._armed_idle_since_s = self.now_s
         self.submode = "ground"
-        self.controller.reset()
+        self._restart_control()
         self.say(SEVERITY_INFO, "Arming motors")
         return Result.ACCEPTED
 
@@ -202,7 +211,7 @@ class Autopilot:
         here = self.airframe.position_m_enu
         self.target = Target(position_m_enu=here, yaw_rad=self.target.yaw_rad)
         self.control, self.heading, self.attitude_hold = "pos", Heading(), None
-        self.controller.reset()
+        self._restart_control()
         if self.submode != "ground" or not self.on_ground:
             self.submode = "track"
         self.takeoff_alt_m = None
@@ -218,8 +227,14 @@ class Autopilot:
         self.takeoff_alt_m = self.config.home_m_enu[2] + altitude_m
         self.target = Target(position_m_enu=here, yaw_rad=self.target.yaw_rad)
         self.submode = "takeoff"
-        self.controller.reset()
+        self._takeoff_since_s = self.now_s
+        self._restart_control()
         return Result.ACCEPTED
+
+    def _restart_control(self) -> None:
+        """Forget the loop's integral and the shaped path: fly on from the vehicle's state."""
+        self.controller.reset()
+        self.shaper.reset()
 
     def land(self) -> Result:
         """MAV_CMD_NAV_LAND: switch to LAND."""
@@ -275,7 +290,8 @@ class Autopilot:
         return bool(int(self.params["GUID_OPTIONS"]) & GUID_OPTIONS_THRUST_AS_THRUST)
 
     def _took_setpoint(self, stamp_ms: int, submode: Submode) -> None:
-        self.submode = submode
+        landed = self.takeoff_owns_ground and self.submode == "takeoff" and self.on_ground
+        self.submode = "ground" if landed else submode
         self.takeoff_alt_m = None
         self.last_setpoint_s = self.now_s
         self.setpoint_stamp_ms = stamp_ms
@@ -288,6 +304,7 @@ class Autopilot:
         self.target = Target(self.airframe.position_m_enu, yaw_rad=self.airframe.attitude_rad[2])
         self.control, self.heading, self.attitude_hold = "pos", Heading(), None
         self.submode = "track"
+        self.shaper.reset()
 
     # --- the loop --------------------------------------------------------------------------------
     def step(self, now_s: float) -> None:
@@ -307,8 +324,10 @@ class Autopilot:
             return AttitudeThrust(0.0, 0.0, yaw, 0.0)
         if self.mode == CopterMode.GUIDED:
             self._guided_failsafe()
+            if self.submode == "takeoff" and self.on_ground:
+                return self._spool_up()
             if self.submode == "takeoff":
-                self._advance_takeoff(dt)
+                self._advance_takeoff()
             elif self.submode == "attitude" and self.attitude_hold is not None:
                 return self._attitude_command(dt)
         elif self.mode == CopterMode.LAND:
@@ -317,10 +336,34 @@ class Autopilot:
             self._advance_return(dt)
         elif self.mode not in HOLDING_MODES:
             return AttitudeThrust(0.0, 0.0, yaw, 0.0)
-        if self.mode == CopterMode.GUIDED and self.submode == "track":
-            self.target = propagate(self.target, self.heading, self.airframe.position_m_enu, dt)
         p, v = self.airframe.position_m_enu, self.airframe.velocity_mps_enu
-        return self.controller.update(self.target, p, v, dt)
+        flown = self.target
+        if self.mode == CopterMode.GUIDED and self.submode == "track":
+            self.target = propagate(self.target, self.heading, p, dt)
+            flown = self.target
+            if self.shapes_targets:
+                flown = self.shaper.step(self.target, p, v, self.shape_limits, dt)
+        elif self.mode == CopterMode.GUIDED and self.submode == "takeoff":
+            limits = self.shape_limits
+            speed = min(limits.speed_up_mps, self.config.takeoff_speed_mps)
+            flown = self.shaper.step(self.target, p, v, replace(limits, speed_up_mps=speed), dt)
+        return self.controller.update(flown, p, v, dt)
+
+    def _spool_up(self) -> AttitudeThrust:
+        """NAV_TAKEOFF on the ground: the throttle rises over TKOFF_SLEW_TIME until the vehicle
+        lifts; the climb starts from where it leaves the ground."""
+        slew_s = max(self.params["TKOFF_SLEW_TIME"], 0.1)
+        fraction = min((self.now_s - self._takeoff_since_s) / slew_s, 1.0)
+        here = self.airframe.position_m_enu
+        self.target = Target(position_m_enu=here, yaw_rad=self.target.yaw_rad)
+        return AttitudeThrust(
+            0.0, 0.0, self.target.yaw_rad, fraction * self.airframe.max_thrust_mps2
+        )
+
+    @property
+    def shape_limits(self) -> ShapeLimits:
+        """The shaped path's limits (WPNAV_*, PSC_JERK_*)."""
+        return shape_limits(self.params)
 
     def _attitude_command(self, dt: float) -> AttitudeThrust:
         hold = self.attitude_hold
@@ -331,7 +374,7 @@ class Autopilot:
             climb = climb_rate_mps(hold.setpoint.thrust, up, down)
             hold = replace(hold, climb_z_m=hold.climb_z_m + climb * dt)
             self.attitude_hold = hold
-        g = self.config.gains
+        g = self.config.position_gains
         return attitude_command(
             hold, z_m=self.airframe.position_m_enu[2], vz_mps=self.airframe.velocity_mps_enu[2],
             thrust_max_mps2=self.airframe.max_thrust_mps2, gravity_mps2=self.airframe.gravity_mps2,
@@ -375,15 +418,18 @@ class Autopilot:
             self.mode = action
             self._enter_mode()
 
-    def _advance_takeoff(self, dt: float) -> None:
+    def _advance_takeoff(self) -> None:
+        """NAV_TAKEOFF in the air: one shaped climb to the altitude (no faster than
+        ``takeoff_speed_mps``), then the guided hold from where the path is."""
         alt = self.takeoff_alt_m
         alt = alt if alt is not None else self.target.position_m_enu[2]
-        self.target = climb(self.target, alt, self.config.takeoff_speed_mps, dt)
-        reached = self.target.position_m_enu[2] >= alt
-        if reached and abs(self.airframe.position_m_enu[2] - alt) < 0.05:
+        x, y, _ = self.target.position_m_enu
+        self.target = Target((x, y, alt), yaw_rad=self.target.yaw_rad)
+        z, vz = self.airframe.position_m_enu[2], self.airframe.velocity_mps_enu[2]
+        if abs(z - alt) < 0.05 and abs(vz) < 0.1:
             self.submode = "track"
             self.takeoff_alt_m = None
-            self.target = replace(self.target, velocity_mps_enu=(0.0, 0.0, 0.0))
+            self.controller.reset()  # the lift-off's transient is not a hover error
 
     def _advance_descent(self, dt: float) -> None:
         speed = self.config.land_speed_mps

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal
 
 from mavsim.errors import MavsimError
@@ -19,11 +19,16 @@ def _pid(wn_radps: float, zeta: float, ki_radps: float, eps: float) -> tuple[flo
     return kp, kd, ki_radps * wn_radps**2 / eps**3
 
 
+def _cascade(pos_p: float, vel_p: float, vel_i: float) -> tuple[float, float, float]:
+    """(kp, kd, ki) of a P position loop feeding a PI velocity loop with feed-forward:
+    ``vel_p (v_ff + pos_p e - v) + vel_i integral(...)`` is ``(vel_p pos_p + vel_i) e + vel_p
+    e_v + vel_i pos_p integral(e)``."""
+    return vel_p * pos_p + vel_i, vel_p, vel_i * pos_p
+
+
 STIFF_EPS = 0.3
-"""Time scale of the default tune: the paper's poles 1/0.3 times faster (x, y about 5.9 rad/s,
-z about 7 rad/s), well inside the 25 rad/s inner loop."""
-_XY = _pid(1.772, 0.5, 0.2, STIFF_EPS)
-_Z = _pid(2.089, 0.66, 0.23, STIFF_EPS)
+"""Time scale of the stiff indoor tune (:meth:`PositionGains.from_poles`): the paper's poles
+1/0.3 times faster (x, y about 5.9 rad/s, z about 7 rad/s), well inside the 25 rad/s inner loop."""
 
 
 @dataclass(frozen=True)
@@ -31,25 +36,36 @@ class PositionGains:
     """Per-axis PID with feed-forward of the autopilot's position controller.
 
     ``a_cmd = a_ref + kp (p_ref - p) + kd (v_ref - v) + ki * integral(p_ref - p)``. The defaults
-    are a stiff indoor tune with the pole pattern of the paper's RPT design at ``STIFF_EPS``: the
-    autopilot's own position loop, independent of the show's outer-loop preset (which only flies
-    with attitude setpoints).
+    are ArduCopter's (PSC_POSXY_P 1, PSC_VELXY_P 2, PSC_VELXY_I 1; PSC_POSZ_P 1, PSC_VELZ_P 5,
+    with ki_z 2 standing in for its acceleration loop's integrator); :meth:`px4` gives PX4's
+    and :meth:`from_poles` the paper's pole pattern.
     """
 
-    kp_xy: float = _XY[0]
+    kp_xy: float = 3.0
     """Position gain in [1/s^2] on the horizontal axes."""
-    kd_xy: float = _XY[1]
+    kd_xy: float = 2.0
     """Velocity gain in [1/s] on the horizontal axes."""
-    ki_xy: float = _XY[2]
+    ki_xy: float = 1.0
     """Integral gain in [1/s^3] on the horizontal axes."""
-    kp_z: float = _Z[0]
+    kp_z: float = 7.0
     """Position gain in [1/s^2] on the vertical axis."""
-    kd_z: float = _Z[1]
+    kd_z: float = 5.0
     """Velocity gain in [1/s] on the vertical axis."""
-    ki_z: float = _Z[2]
+    ki_z: float = 2.0
     """Integral gain in [1/s^3] on the vertical axis."""
     integral_limit_m_s: float = 0.5
     """Anti-windup bound of each axis' error integral in [m s]."""
+
+    @classmethod
+    def ardupilot(cls) -> PositionGains:
+        """ArduCopter 4.7's defaults (AC_PosControl, multicopter)."""
+        return cls(*_cascade(1.0, 2.0, 1.0), *_cascade(1.0, 5.0, 2.0))
+
+    @classmethod
+    def px4(cls) -> PositionGains:
+        """PX4 v1.16's defaults: MPC_XY_P 0.95, MPC_XY_VEL_P_ACC 1.8, MPC_XY_VEL_I_ACC 0.4;
+        MPC_Z_P 1, MPC_Z_VEL_P_ACC 4, MPC_Z_VEL_I_ACC 2."""
+        return cls(*_cascade(0.95, 1.8, 0.4), *_cascade(1.0, 4.0, 2.0))
 
     @classmethod
     def from_poles(cls, eps: float) -> PositionGains:
@@ -99,14 +115,21 @@ class VehicleConfig:
     """Rate of the autopilot loop in [Hz] (the simulator's control rate; 4 physics substeps)."""
     battery_endurance_s: float = 900.0
     """Flight time in [s] from full to empty (linear model)."""
-    gains: PositionGains = field(default_factory=PositionGains)
-    """Position controller gains."""
+    gains: PositionGains | None = None
+    """Position controller gains; None: the autopilot's own defaults (:attr:`position_gains`)."""
     params: tuple[tuple[str, float], ...] = ()
     """Parameter values at boot besides the defaults (mavsim.params), e.g. ``(("GUID_OPTIONS",
     1),)``."""
     frozen_params: tuple[str, ...] = ()
     """Parameters that refuse every PARAM_SET (answered with the value kept): a misconfigured or
     locked vehicle, for tests and rehearsals."""
+
+    @property
+    def position_gains(self) -> PositionGains:
+        """The gains flown: ``gains``, or ArduCopter's or PX4's defaults."""
+        if self.gains is not None:
+            return self.gains
+        return PositionGains.px4() if self.autopilot == "px4" else PositionGains.ardupilot()
 
     def __post_init__(self) -> None:
         if not 1 <= self.system_id <= 254:

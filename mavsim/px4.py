@@ -32,6 +32,8 @@ class Px4Autopilot(Autopilot):
 
     flavor: Flavor = "px4"
     timeout_param = "COM_OF_LOSS_T"
+    shapes_targets = False
+    takeoff_owns_ground = False
 
     def __init__(self, config: VehicleConfig) -> None:
         super().__init__(config)
