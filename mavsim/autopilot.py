@@ -82,7 +82,9 @@ class Autopilot:
 
     def __init__(self, config: VehicleConfig) -> None:
         self.config = config
-        boot = {self.timeout_param: config.guided_timeout_s, **dict(config.params)}
+        boot = dict(config.params)
+        if config.guided_timeout_s is not None:
+            boot.setdefault(self.timeout_param, config.guided_timeout_s)
         self.params = ParamTable(self.flavor, boot, frozen=config.frozen_params)
         self.airframe = Airframe(config)
         self.controller = PositionController(
@@ -255,6 +257,9 @@ class Autopilot:
         """A decoded SET_POSITION_TARGET_LOCAL_NED; False when ignored (not GUIDED, not flying)."""
         if not self.accepts_setpoints():
             return False
+        if sp.control != self.control:  # ArduCopter starts the new sub-mode from the vehicle
+            self.shaper.reset()
+            self.target = replace(self.target, position_m_enu=self.airframe.position_m_enu)
         self.target = merge(sp, self.target, self.hold_position_m_enu())
         self.heading = heading_of(sp, self.wp_yaw_behavior)
         self.control = sp.control

@@ -101,8 +101,9 @@ class VehicleConfig:
     """Seconds after start before the estimator has a position source; arming is refused before."""
     arm_refusal: str | None = None
     """When set, every arming attempt is refused with this pre-arm reason (tests, rehearsal)."""
-    guided_timeout_s: float = 3.0
-    """GUID_TIMEOUT: with no setpoint for this long in GUIDED the vehicle stops where it is."""
+    guided_timeout_s: float | None = None
+    """The setpoint timeout at boot in [s] (ArduPilot GUID_TIMEOUT, PX4 COM_OF_LOSS_T); None:
+    the autopilot's default (3 s, 1 s)."""
     takeoff_speed_mps: float = 0.5
     """Climb rate of MAV_CMD_NAV_TAKEOFF in [m/s]."""
     land_speed_mps: float = 0.5
@@ -139,7 +140,7 @@ class VehicleConfig:
         positive = {
             "mass_kg": self.mass_kg,
             "thrust_max_n": self.thrust_max_n,
-            "guided_timeout_s": self.guided_timeout_s,
+            "guided_timeout_s": 1.0 if self.guided_timeout_s is None else self.guided_timeout_s,
             "takeoff_speed_mps": self.takeoff_speed_mps,
             "land_speed_mps": self.land_speed_mps,
             "telemetry_rate_hz": self.telemetry_rate_hz,

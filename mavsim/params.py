@@ -13,7 +13,8 @@ speeds), WPNAV_SPEED [cm/s], WPNAV_ACCEL and WPNAV_ACCEL_Z [cm/s^2], PSC_JERK_XY
 [m/s^3] (the guided target's shaped path, :mod:`mavsim.shaping`), TKOFF_SLEW_TIME [s] (the
 take-off's throttle ramp), FENCE_ENABLE, FENCE_TYPE (bit 0
 maximum altitude, bit 1 circle), FENCE_RADIUS [m], FENCE_ALT_MAX [m], FENCE_ACTION (0 report,
-2 land, others: RTL). PX4: COM_OF_LOSS_T [s], GF_MAX_HOR_DIST [m], GF_MAX_VER_DIST [m] (0: off),
+2 land, others: RTL). PX4: COM_OF_LOSS_T [s], COM_OBL_RC_ACT (what flies when the
+offboard stream is lost, :mod:`mavsim.px4`), GF_MAX_HOR_DIST [m], GF_MAX_VER_DIST [m] (0: off),
 GF_ACTION (0 none, 1 warning, 2 hold, 3 return, 5 land).
 """
 
@@ -61,6 +62,7 @@ ARDUPILOT_PARAMS = (
 )
 PX4_PARAMS = (
     ParamDef("COM_OF_LOSS_T", REAL32, 1.0),
+    ParamDef("COM_OBL_RC_ACT", INT32, 0),
     ParamDef("GF_MAX_HOR_DIST", REAL32, 0.0),
     ParamDef("GF_MAX_VER_DIST", REAL32, 0.0),
     ParamDef("GF_ACTION", INT32, 2),
