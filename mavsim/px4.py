@@ -28,7 +28,8 @@ import math
 from dataclasses import replace
 
 from mavsim.airframe import AttitudeThrust
-from mavsim.autopilot import SEVERITY_WARNING, Autopilot, Result
+from mavsim.autopilot import Autopilot
+from mavsim.autopilot_core import SEVERITY_WARNING, Result
 from mavsim.config import VehicleConfig
 from mavsim.control import Target
 from mavsim.modes import NOT_ARMABLE, CopterMode

@@ -9,7 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mavsim.autopilot import Autopilot, Result
+from mavsim.autopilot import Autopilot
+from mavsim.autopilot_core import Result
 from mavsim.config import PositionGains, VehicleConfig
 from mavsim.control import Target, thrust_to_attitude
 from mavsim.errors import MavsimError

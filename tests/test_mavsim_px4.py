@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from mavsim.autopilot import Result
+from mavsim.autopilot_core import Result
 from mavsim.config import VehicleConfig
 from mavsim.control import Target
 from mavsim.modes import CopterMode
