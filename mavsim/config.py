@@ -19,11 +19,10 @@ def _pid(wn_radps: float, zeta: float, ki_radps: float, eps: float) -> tuple[flo
     return kp, kd, ki_radps * wn_radps**2 / eps**3
 
 
-def _cascade(pos_p: float, vel_p: float, vel_i: float) -> tuple[float, float, float]:
-    """(kp, kd, ki) of a P position loop feeding a PI velocity loop with feed-forward:
-    ``vel_p (v_ff + pos_p e - v) + vel_i integral(...)`` is ``(vel_p pos_p + vel_i) e + vel_p
-    e_v + vel_i pos_p integral(e)``."""
-    return vel_p * pos_p + vel_i, vel_p, vel_i * pos_p
+def _cascade(pos_p: float, vel_p: float, vel_i: float) -> tuple[float, float, float, float]:
+    """(kp, kd, ki, kvi) of a P position loop feeding a PI velocity loop with feed-forward:
+    ``vel_p (v_ff + pos_p e - v) + vel_i integral(v_ff + pos_p e - v)``."""
+    return vel_p * pos_p, vel_p, vel_i * pos_p, vel_i
 
 
 STIFF_EPS = 0.3
@@ -35,44 +34,51 @@ STIFF_EPS = 0.3
 class PositionGains:
     """Per-axis PID with feed-forward of the autopilot's position controller.
 
-    ``a_cmd = a_ref + kp (p_ref - p) + kd (v_ref - v) + ki * integral(p_ref - p)``. The defaults
-    are ArduCopter's (PSC_POSXY_P 1, PSC_VELXY_P 2, PSC_VELXY_I 1; PSC_POSZ_P 1, PSC_VELZ_P 5,
-    with ki_z 2 standing in for its acceleration loop's integrator); :meth:`px4` gives PX4's
-    and :meth:`from_poles` the paper's pole pattern.
+    ``a_cmd = a_ref + kp e + kd e_v + ki integral(e) + kvi integral(e_v)`` with ``e = p_ref - p``
+    and ``e_v = v_ref - v``: the paper's PID (``kvi`` 0) or an autopilot's P-position, PI-velocity
+    cascade exactly (:meth:`ardupilot`, the default, and :meth:`px4`); :meth:`from_poles` gives
+    the paper's pole pattern.
     """
 
-    kp_xy: float = 3.0
-    """Position gain in [1/s^2] on the horizontal axes."""
+    kp_xy: float = 2.0
+    """Position gain in [1/s^2] on the horizontal axes (PSC_POSXY_P x PSC_VELXY_P)."""
     kd_xy: float = 2.0
-    """Velocity gain in [1/s] on the horizontal axes."""
+    """Velocity gain in [1/s] on the horizontal axes (PSC_VELXY_P)."""
     ki_xy: float = 1.0
-    """Integral gain in [1/s^3] on the horizontal axes."""
-    kp_z: float = 7.0
-    """Position gain in [1/s^2] on the vertical axis."""
+    """Position-error integral gain in [1/s^3] on the horizontal axes."""
+    kvi_xy: float = 1.0
+    """Velocity-error integral gain in [1/s^2] on the horizontal axes (PSC_VELXY_I)."""
+    kp_z: float = 5.0
+    """Position gain in [1/s^2] on the vertical axis (PSC_POSZ_P x PSC_VELZ_P)."""
     kd_z: float = 5.0
-    """Velocity gain in [1/s] on the vertical axis."""
+    """Velocity gain in [1/s] on the vertical axis (PSC_VELZ_P)."""
     ki_z: float = 2.0
-    """Integral gain in [1/s^3] on the vertical axis."""
+    """Position-error integral gain in [1/s^3] on the vertical axis."""
+    kvi_z: float = 2.0
+    """Velocity-error integral gain in [1/s^2] on the vertical axis: ArduCopter has none there,
+    its acceleration loop's integrator (hover throttle) does that work; 2 stands in for it."""
     integral_limit_m_s: float = 0.5
-    """Anti-windup bound of each axis' error integral in [m s]."""
+    """Anti-windup bound of each integral in [m s] (position) and [m] (velocity)."""
 
     @classmethod
     def ardupilot(cls) -> PositionGains:
         """ArduCopter 4.7's defaults (AC_PosControl, multicopter)."""
-        return cls(*_cascade(1.0, 2.0, 1.0), *_cascade(1.0, 5.0, 2.0))
+        (kp, kd, ki, kvi), (kpz, kdz, kiz, kviz) = _cascade(1.0, 2.0, 1.0), _cascade(1.0, 5.0, 2.0)
+        return cls(kp, kd, ki, kvi, kpz, kdz, kiz, kviz)
 
     @classmethod
     def px4(cls) -> PositionGains:
         """PX4 v1.16's defaults: MPC_XY_P 0.95, MPC_XY_VEL_P_ACC 1.8, MPC_XY_VEL_I_ACC 0.4;
         MPC_Z_P 1, MPC_Z_VEL_P_ACC 4, MPC_Z_VEL_I_ACC 2."""
-        return cls(*_cascade(0.95, 1.8, 0.4), *_cascade(1.0, 4.0, 2.0))
+        (kp, kd, ki, kvi), (kpz, kdz, kiz, kviz) = _cascade(0.95, 1.8, 0.4), _cascade(1.0, 4.0, 2.0)
+        return cls(kp, kd, ki, kvi, kpz, kdz, kiz, kviz)
 
     @classmethod
     def from_poles(cls, eps: float) -> PositionGains:
         """The paper's pole pattern (x, y: w_n 1.772, zeta 0.5, k_i 0.2; z: w_n 2.089,
         zeta 0.66, k_i 0.23) at time scale ``eps`` (1: the paper's own gains)."""
-        xy, z = _pid(1.772, 0.5, 0.2, eps), _pid(2.089, 0.66, 0.23, eps)
-        return cls(*xy, *z)
+        (kp, kd, ki), (kpz, kdz, kiz) = _pid(1.772, 0.5, 0.2, eps), _pid(2.089, 0.66, 0.23, eps)
+        return cls(kp, kd, ki, 0.0, kpz, kdz, kiz, 0.0)
 
 
 @dataclass(frozen=True)

@@ -277,7 +277,7 @@ def test_position_gains_place_the_papers_poles(eps: float) -> None:
 def test_each_autopilot_flies_its_own_default_gains() -> None:
     """PX4's cascade (MPC_XY_P 0.95, MPC_XY_VEL_P_ACC 1.8, MPC_XY_VEL_I_ACC 0.4) as one PID."""
     px4 = VehicleConfig(vehicle_id="v", system_id=1, port=0, autopilot="px4").position_gains
-    assert (px4.kp_xy, px4.kd_xy, px4.ki_xy) == pytest.approx((1.8 * 0.95 + 0.4, 1.8, 0.38))
+    assert (px4.kp_xy, px4.kd_xy, px4.ki_xy, px4.kvi_xy) == pytest.approx((1.71, 1.8, 0.38, 0.4))
     ardupilot = VehicleConfig(vehicle_id="v", system_id=1, port=0).position_gains
     assert ardupilot == PositionGains() != px4
     stiff = PositionGains.from_poles(0.3)
