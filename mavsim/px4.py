@@ -7,7 +7,8 @@
 - when the stream stops for COM_OF_LOSS_T, the failsafe COM_OBL_RC_ACT flies instead (PX4 v1.16's
   failsafe state machine): 0 (the default) Position mode, also without RC (PX4 PR 26289 stops
   that only after v1.16), 1 Altitude, 2 Stabilized, 3 Return, 4 Land, 5 Hold, 6 Terminate,
-  7 Disarm; the heartbeat shows that mode, the user's choice stays OFFBOARD, so a stream that
+  7 Disarm, announced as PX4's failsafe event words it ("Failsafe activated: switching to
+  Position"); the heartbeat shows that mode, the user's choice stays OFFBOARD, so a stream that
   comes back returns the vehicle to OFFBOARD, and a failsafe landing ends with OFFBOARD shown;
 - Position and Altitude mode without sticks get no valid setpoint; the position controller's own
   failsafe then holds zero velocity ("stop and wait"), not a position: the vehicle stops and
@@ -29,7 +30,7 @@ from dataclasses import replace
 
 from mavsim.airframe import AttitudeThrust
 from mavsim.autopilot import Autopilot
-from mavsim.autopilot_core import SEVERITY_WARNING, Result
+from mavsim.autopilot_core import SEVERITY_CRITICAL, SEVERITY_WARNING, Result
 from mavsim.config import VehicleConfig
 from mavsim.control import Target
 from mavsim.modes import NOT_ARMABLE, CopterMode
@@ -46,6 +47,9 @@ OFFBOARD_LOSS_MODES = {
     5: CopterMode.LOITER,  # Hold
 }
 """COM_OBL_RC_ACT -> the mode flown while the offboard signal is lost."""
+OFFBOARD_LOSS_NAMES = {0: "Position", 1: "Altitude", 2: "Stabilized", 3: "Return", 4: "Land",
+                       5: "Hold", 6: "Terminate", 7: "Disarm"}  # fmt: skip
+"""How PX4's failsafe announcement names each action (its event text, "switching to {action}")."""
 
 
 class Px4Autopilot(Autopilot):
@@ -150,8 +154,8 @@ class Px4Autopilot(Autopilot):
             return
         if self.failsafe_mode is None and not self.signal_alive:
             action = int(self.params["COM_OBL_RC_ACT"])
-            silent_s = self.now_s - self.signal_s
-            self.say(SEVERITY_WARNING, f"Failsafe: no offboard signal for {silent_s:.1f}s")
+            name = OFFBOARD_LOSS_NAMES.get(action, "Position")
+            self.say(SEVERITY_CRITICAL, f"Failsafe activated: switching to {name}")
             if action == OBL_TERMINATE:
                 self.terminate()
             elif action == OBL_DISARM:

@@ -71,7 +71,7 @@ def test_a_lost_stream_shows_position_mode_stops_and_a_stream_back_resumes_offbo
     assert sim.mode() == CopterMode.GUIDED  # COM_OF_LOSS_T is 1 s
     sim.run(0.3)
     assert sim.mode() == CopterMode.BRAKE and sim.ap.chosen_mode == CopterMode.GUIDED
-    assert any("offboard" in text for _, text in sim.ap.texts)
+    assert ("Failsafe activated: switching to Position") in [text for _, text in sim.ap.texts]
     here = sim.ap.airframe.position_m_enu
     sim.run(3.0)
     assert sim.ap.armed and math.dist(sim.ap.airframe.position_m_enu, here) < 0.05
