@@ -12,7 +12,9 @@
   comes back returns the vehicle to OFFBOARD, and a failsafe landing ends with OFFBOARD shown;
 - Position and Altitude mode without sticks get no valid setpoint; the position controller's own
   failsafe then holds zero velocity ("stop and wait"), not a position: the vehicle stops and
-  drifts as its velocity estimate does (PX4 SIH: 0.57 m down in 3 s);
+  drifts as its velocity estimate does. On PX4 SIH v1.16 (GPS-grade estimate) that drift was
+  0.57 m, 1.1 m (to the ground) and 0.05 m down in three runs, 0.2-0.3 m sideways; mavsim's
+  estimate is perfect, so it stops and stays;
 - a setpoint without a position (velocity only) is flown with no position loop at all;
 - setpoints ArduCopter would stop on are ignored (:func:`mavsim.wire.px4_view`), a yaw not given
   is held (PX4 has no WP_YAW_BEHAVIOR), attitude thrust is normalised thrust;

@@ -73,7 +73,7 @@ def test_a_lost_stream_shows_position_mode_stops_and_a_stream_back_resumes_offbo
     assert sim.mode() == CopterMode.BRAKE and sim.ap.chosen_mode == CopterMode.GUIDED
     assert ("Failsafe activated: switching to Position") in [text for _, text in sim.ap.texts]
     here = sim.ap.airframe.position_m_enu
-    sim.run(3.0)
+    sim.run(3.0)  # no sticks: zero velocity held (a perfect estimate does not drift)
     assert sim.ap.armed and math.dist(sim.ap.airframe.position_m_enu, here) < 0.05
     assert np.linalg.norm(sim.ap.airframe.velocity_mps_enu) < 0.02
     sim.hold = (HOME[0] + 0.5, HOME[1], HOME[2] + 1.0)
