@@ -1,5 +1,5 @@
-"""The autopilot's own motions, as targets moved one period at a time (pure): take-off climb,
-LAND descent, RTL's return at height."""
+"""The autopilot's own motions, as targets moved one period at a time (pure): LAND descent,
+RTL's return at height."""
 
 from __future__ import annotations
 
@@ -10,14 +10,6 @@ from mavsim.control import Target
 
 Vec3 = tuple[float, float, float]
 ZERO: Vec3 = (0.0, 0.0, 0.0)
-
-
-def climb(target: Target, altitude_m: float, speed_mps: float, dt_s: float) -> Target:
-    """MAV_CMD_NAV_TAKEOFF: the target rises at ``speed_mps`` to ``altitude_m`` (world z)."""
-    x, y, z = target.position_m_enu
-    z_next = min(z + speed_mps * dt_s, altitude_m)
-    vz = speed_mps if z_next < altitude_m else 0.0
-    return replace(target, position_m_enu=(x, y, z_next), velocity_mps_enu=(0.0, 0.0, vz))
 
 
 def descend(target: Target, speed_mps: float, ground_z_m: float, dt_s: float) -> Target:

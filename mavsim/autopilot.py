@@ -5,10 +5,14 @@ What it reproduces, where it matters for a companion computer (measured on ArduC
 - arming is refused (MAV_RESULT_FAILED + "PreArm: ..." text) until the estimator has a position
   source, ``position_source_delay_s`` after start; while disarmed any mode may be selected (as
   ArduCopter does), armed GUIDED/LOITER/RTL need the position too;
-- GUIDED (custom mode 4) is entered with MAV_CMD_DO_SET_MODE; MAV_CMD_NAV_TAKEOFF climbs to param 7
-  metres above home; SET_POSITION_TARGET_LOCAL_NED and SET_ATTITUDE_TARGET are honoured only in
+- GUIDED (custom mode 4) is entered with MAV_CMD_DO_SET_MODE; MAV_CMD_NAV_TAKEOFF ramps the
+  throttle over TKOFF_SLEW_TIME until the vehicle lifts, then climbs to param 7 metres above home;
+  a setpoint before it has lifted ends the take-off on the ground (ArduCopter's ``land_complete``);
+  SET_POSITION_TARGET_LOCAL_NED and SET_ATTITUDE_TARGET are honoured only in
   GUIDED and armed, read as ArduCopter reads them (:mod:`mavsim.wire`; an invalid one stops the
-  vehicle where it is) and flown as :mod:`mavsim.guided` says (GUID_TIMEOUT, yaw, thrust);
+  vehicle where it is) and flown as :mod:`mavsim.guided` says (GUID_TIMEOUT, yaw, thrust), along
+  ArduCopter's jerk-limited path towards the target (:mod:`mavsim.shaping`) with its PSC gains:
+  a 1 m step is half done in 1.2 s with about 5 % overshoot, a written path trails by 0.09 s;
 - parameters (:mod:`mavsim.params`) are set and read over MAVLink and change the behaviour;
 - its fence (FENCE_ENABLE, circle and maximum altitude around home) switches to FENCE_ACTION's mode
   on a breach;
@@ -24,270 +28,30 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from enum import IntEnum
-from typing import Literal
 
-from mavsim.airframe import Airframe, AttitudeThrust
-from mavsim.auto_modes import climb, descend, go_home
-from mavsim.config import VehicleConfig
-from mavsim.control import PositionController, Target
+from mavsim.airframe import AttitudeThrust
+from mavsim.auto_modes import descend, go_home
+from mavsim.autopilot_core import SEVERITY_CRITICAL, SEVERITY_INFO, AutopilotCore
+from mavsim.control import Target
 from mavsim.fence import fence_action, fence_breach
 from mavsim.guided import (
-    GUID_OPTIONS_THRUST_AS_THRUST,
     AttitudeHold,
     Heading,
     attitude_command,
     climb_rate_mps,
-    heading_of,
-    merge,
     propagate,
     timed_out,
 )
-from mavsim.modes import HOLDING_MODES, NEEDS_POSITION, NOT_ARMABLE, CopterMode, mode_name
-from mavsim.params import Flavor, ParamTable
-from mavsim.wire import AttitudeSetpoint, Control, GuidedSetpoint
+from mavsim.modes import HOLDING_MODES, CopterMode, mode_name
+from mavsim.shaping import ShapeLimits, shape_limits
+from mavsim.wire import AttitudeSetpoint
 
-Vec3 = tuple[float, float, float]
-Submode = Literal["ground", "takeoff", "track", "attitude"]
-
-SEVERITY_CRITICAL = 2
-SEVERITY_WARNING = 4
-SEVERITY_INFO = 6
 LANDED_DWELL_S = 1.0
 """Time on the ground in LAND before the autopilot disarms."""
 
 
-class Result(IntEnum):
-    """MAV_RESULT values."""
-
-    ACCEPTED = 0
-    TEMPORARILY_REJECTED = 1
-    DENIED = 2
-    UNSUPPORTED = 3
-    FAILED = 4
-
-
-class Autopilot:
-    """Modes, arming, takeoff, guided setpoints, land and failsafes of one vehicle."""
-
-    flavor: Flavor = "ardupilot"
-    timeout_param = "GUID_TIMEOUT"
-    """The parameter that holds the setpoint timeout in [s]."""
-
-    def __init__(self, config: VehicleConfig) -> None:
-        self.config = config
-        boot = {self.timeout_param: config.guided_timeout_s, **dict(config.params)}
-        self.params = ParamTable(self.flavor, boot, frozen=config.frozen_params)
-        self.airframe = Airframe(config)
-        self.controller = PositionController(
-            config.gains,
-            gravity_mps2=self.airframe.gravity_mps2,
-            tilt_max_rad=config.tilt_max_rad,
-            thrust_max_mps2=self.airframe.max_thrust_mps2,
-        )
-        self.mode = CopterMode.STABILIZE
-        self.armed = False
-        self.submode: Submode = "ground"
-        self.target = Target(position_m_enu=config.home_m_enu)
-        self.control: Control = "pos"
-        """Which guided controller flies ``target`` (see mavsim.wire)."""
-        self.heading = Heading()
-        self.attitude_hold: AttitudeHold | None = None
-        self.takeoff_alt_m: float | None = None
-        self.fence_breached = False
-        self.last_setpoint_s = -math.inf
-        self.setpoint_stamp_ms = 0
-        """``time_boot_ms`` of the setpoint being tracked, echoed in POSITION_TARGET_LOCAL_NED."""
-        self.setpoints_received = 0
-        self.mocap_received = 0
-        self.now_s = 0.0
-        self.flight_time_s = 0.0
-        self._armed_idle_since_s = 0.0
-        self._on_ground_since_s: float | None = None
-        self.texts: list[tuple[int, str]] = []
-        """STATUSTEXTs (severity, text) waiting to be sent; the endpoint drains this list."""
-
-    # --- state as telemetry sees it ------------------------------------------------------------
-    @property
-    def guided_timeout_s(self) -> float:
-        """The setpoint timeout in [s] (GUID_TIMEOUT; PX4 COM_OF_LOSS_T)."""
-        return self.params[self.timeout_param]
-
-    @property
-    def position_source_ready(self) -> bool:
-        """The estimator has a position source (arming and GUIDED allowed)."""
-        return self.now_s >= self.config.position_source_delay_s
-
-    @property
-    def on_ground(self) -> bool:
-        return self.airframe.on_ground
-
-    @property
-    def battery_fraction(self) -> float:
-        """Remaining battery 0..1 (linear in flight time)."""
-        return max(0.0, 1.0 - self.flight_time_s / self.config.battery_endurance_s)
-
-    @property
-    def landed_state(self) -> int:
-        """MAV_LANDED_STATE: 1 on ground, 2 in air, 3 taking off, 4 landing."""
-        if self.on_ground:
-            return 1
-        if self.submode == "takeoff":
-            return 3
-        return 4 if self.mode == CopterMode.LAND else 2
-
-    def say(self, severity: int, text: str) -> None:
-        """Queue a STATUSTEXT."""
-        self.texts.append((severity, text[:50]))
-
-    # --- commands --------------------------------------------------------------------------------
-    def arm(self) -> Result:
-        """MAV_CMD_COMPONENT_ARM_DISARM param1 = 1."""
-        if self.armed:
-            return Result.ACCEPTED
-        reason = self._arming_refusal()
-        if reason is not None:
-            self.say(SEVERITY_CRITICAL, reason)
-            return Result.FAILED
-        self.armed = True
-        self._armed_idle_since_s = self.now_s
-        self.submode = "ground"
-        self.controller.reset()
-        self.say(SEVERITY_INFO, "Arming motors")
-        return Result.ACCEPTED
-
-    def _arming_refusal(self) -> str | None:
-        if self.config.arm_refusal is not None:
-            return f"PreArm: {self.config.arm_refusal}"
-        if not self.position_source_ready:
-            return "PreArm: Need Position Estimate"
-        if self.mode in NOT_ARMABLE:
-            return "Arm: Mode not armable"
-        return None
-
-    def disarm(self, *, force: bool = False) -> Result:
-        """MAV_CMD_COMPONENT_ARM_DISARM param1 = 0 (param2 21196 forces it in the air)."""
-        if not self.armed:
-            return Result.ACCEPTED
-        if not self.on_ground and not force:
-            self.say(SEVERITY_CRITICAL, "Disarm: vehicle is flying")
-            return Result.FAILED
-        self._disarm()
-        return Result.ACCEPTED
-
-    def _disarm(self) -> None:
-        self.armed = False
-        self.submode = "ground"
-        self.attitude_hold = None
-        self.say(SEVERITY_INFO, "Disarming motors")
-
-    def set_mode(self, custom_mode: int) -> Result:
-        """MAV_CMD_DO_SET_MODE / SET_MODE with a custom mode; a pilot's switch goes here too.
-        Disarmed, any mode may be selected (ArduCopter skips the checks then)."""
-        try:
-            mode = CopterMode(custom_mode)
-        except ValueError:
-            self.say(SEVERITY_WARNING, f"Unknown mode {custom_mode}")
-            return Result.FAILED
-        if mode in NEEDS_POSITION and self.armed and not self.position_source_ready:
-            self.say(SEVERITY_WARNING, f"Mode change to {mode.name} failed: requires position")
-            return Result.FAILED
-        if mode != self.mode:
-            self.mode = mode
-            self._enter_mode()
-        return Result.ACCEPTED
-
-    def _enter_mode(self) -> None:
-        """Hold where the vehicle is; LAND and RTL start from here too."""
-        here = self.airframe.position_m_enu
-        self.target = Target(position_m_enu=here, yaw_rad=self.target.yaw_rad)
-        self.control, self.heading, self.attitude_hold = "pos", Heading(), None
-        self.controller.reset()
-        if self.submode != "ground" or not self.on_ground:
-            self.submode = "track"
-        self.takeoff_alt_m = None
-
-    def takeoff(self, altitude_m: float) -> Result:
-        """MAV_CMD_NAV_TAKEOFF: climb to ``altitude_m`` above home (GUIDED, armed, landed)."""
-        if self.mode != CopterMode.GUIDED or not self.armed or not self.on_ground:
-            self.say(SEVERITY_WARNING, "Takeoff: need GUIDED, armed and landed")
-            return Result.FAILED
-        if not altitude_m > 0.0:
-            return Result.DENIED
-        here = self.airframe.position_m_enu
-        self.takeoff_alt_m = self.config.home_m_enu[2] + altitude_m
-        self.target = Target(position_m_enu=here, yaw_rad=self.target.yaw_rad)
-        self.submode = "takeoff"
-        self.controller.reset()
-        return Result.ACCEPTED
-
-    def land(self) -> Result:
-        """MAV_CMD_NAV_LAND: switch to LAND."""
-        return self.set_mode(CopterMode.LAND)
-
-    def terminate(self) -> Result:
-        """MAV_CMD_DO_FLIGHTTERMINATION: motors off at once."""
-        if self.armed:
-            self._disarm()
-        return Result.ACCEPTED
-
-    # --- guided setpoints ------------------------------------------------------------------------
-    def accepts_setpoints(self) -> bool:
-        """GUIDED, armed and flying (or taking off): setpoints are honoured."""
-        return self.mode == CopterMode.GUIDED and self.armed and self.submode != "ground"
-
-    def guided_setpoint(self, sp: GuidedSetpoint, stamp_ms: int) -> bool:
-        """A decoded SET_POSITION_TARGET_LOCAL_NED; False when ignored (not GUIDED, not flying)."""
-        if not self.accepts_setpoints():
-            return False
-        self.target = merge(sp, self.target, self.hold_position_m_enu())
-        self.heading = heading_of(sp, self.wp_yaw_behavior)
-        self.control = sp.control
-        self._took_setpoint(stamp_ms, "track")
-        return True
-
-    def position_target(self, target: Target, stamp_ms: int) -> bool:
-        """Position, velocity, acceleration and heading at once (mask ``0x0800``)."""
-        sp = GuidedSetpoint("posvelaccel", target.position_m_enu, target.velocity_mps_enu,
-                            target.acceleration_mps2_enu, target.yaw_rad, None)  # fmt: skip
-        return self.guided_setpoint(sp, stamp_ms)
-
-    def attitude_setpoint(self, sp: AttitudeSetpoint, stamp_ms: int) -> bool:
-        """A decoded SET_ATTITUDE_TARGET; False when ignored."""
-        if not self.accepts_setpoints():
-            return False
-        use_thrust = self.thrust_is_thrust
-        z = self.airframe.position_m_enu[2]
-        if self.attitude_hold is not None and not self.attitude_hold.use_thrust:
-            z = self.attitude_hold.climb_z_m
-        self.attitude_hold = AttitudeHold(sp, use_thrust, z)
-        self._took_setpoint(stamp_ms, "attitude")
-        return True
-
-    @property
-    def wp_yaw_behavior(self) -> float:
-        """WP_YAW_BEHAVIOR: 0 never turns the vehicle on its own."""
-        return self.params["WP_YAW_BEHAVIOR"]
-
-    @property
-    def thrust_is_thrust(self) -> bool:
-        """SET_ATTITUDE_TARGET's thrust is thrust (GUID_OPTIONS bit 3), not a climb rate."""
-        return bool(int(self.params["GUID_OPTIONS"]) & GUID_OPTIONS_THRUST_AS_THRUST)
-
-    def _took_setpoint(self, stamp_ms: int, submode: Submode) -> None:
-        self.submode = submode
-        self.takeoff_alt_m = None
-        self.last_setpoint_s = self.now_s
-        self.setpoint_stamp_ms = stamp_ms
-        self.setpoints_received += 1
-
-    def stop_here(self) -> None:
-        """An invalid setpoint in GUIDED: brake and hold where the vehicle is (ArduCopter)."""
-        if not self.accepts_setpoints():
-            return
-        self.target = Target(self.airframe.position_m_enu, yaw_rad=self.airframe.attitude_rad[2])
-        self.control, self.heading, self.attitude_hold = "pos", Heading(), None
-        self.submode = "track"
+class Autopilot(AutopilotCore):
+    """Modes, arming, takeoff, guided setpoints, land and failsafes of one vehicle, flown."""
 
     # --- the loop --------------------------------------------------------------------------------
     def step(self, now_s: float) -> None:
@@ -307,8 +71,10 @@ class Autopilot:
             return AttitudeThrust(0.0, 0.0, yaw, 0.0)
         if self.mode == CopterMode.GUIDED:
             self._guided_failsafe()
+            if self.submode == "takeoff" and self.on_ground:
+                return self._spool_up()
             if self.submode == "takeoff":
-                self._advance_takeoff(dt)
+                self._advance_takeoff()
             elif self.submode == "attitude" and self.attitude_hold is not None:
                 return self._attitude_command(dt)
         elif self.mode == CopterMode.LAND:
@@ -317,10 +83,34 @@ class Autopilot:
             self._advance_return(dt)
         elif self.mode not in HOLDING_MODES:
             return AttitudeThrust(0.0, 0.0, yaw, 0.0)
-        if self.mode == CopterMode.GUIDED and self.submode == "track":
-            self.target = propagate(self.target, self.heading, self.airframe.position_m_enu, dt)
         p, v = self.airframe.position_m_enu, self.airframe.velocity_mps_enu
-        return self.controller.update(self.target, p, v, dt)
+        flown = self.target
+        if self.mode == CopterMode.GUIDED and self.submode == "track":
+            self.target = propagate(self.target, self.heading, p, dt)
+            flown = self.target
+            if self.shapes_targets:
+                flown = self.shaper.step(self.target, p, v, self.shape_limits, dt)
+        elif self.mode == CopterMode.GUIDED and self.submode == "takeoff":
+            limits = self.shape_limits
+            speed = min(limits.speed_up_mps, self.config.takeoff_speed_mps)
+            flown = self.shaper.step(self.target, p, v, replace(limits, speed_up_mps=speed), dt)
+        return self.controller.update(flown, p, v, dt)
+
+    def _spool_up(self) -> AttitudeThrust:
+        """NAV_TAKEOFF on the ground: the throttle rises over TKOFF_SLEW_TIME until the vehicle
+        lifts; the climb starts from where it leaves the ground."""
+        slew_s = max(self.params["TKOFF_SLEW_TIME"], 0.1)
+        fraction = min((self.now_s - self._takeoff_since_s) / slew_s, 1.0)
+        here = self.airframe.position_m_enu
+        self.target = Target(position_m_enu=here, yaw_rad=self.target.yaw_rad)
+        return AttitudeThrust(
+            0.0, 0.0, self.target.yaw_rad, fraction * self.airframe.max_thrust_mps2
+        )
+
+    @property
+    def shape_limits(self) -> ShapeLimits:
+        """The shaped path's limits (WPNAV_*, PSC_JERK_*)."""
+        return shape_limits(self.params)
 
     def _attitude_command(self, dt: float) -> AttitudeThrust:
         hold = self.attitude_hold
@@ -331,7 +121,7 @@ class Autopilot:
             climb = climb_rate_mps(hold.setpoint.thrust, up, down)
             hold = replace(hold, climb_z_m=hold.climb_z_m + climb * dt)
             self.attitude_hold = hold
-        g = self.config.gains
+        g = self.config.position_gains
         return attitude_command(
             hold, z_m=self.airframe.position_m_enu[2], vz_mps=self.airframe.velocity_mps_enu[2],
             thrust_max_mps2=self.airframe.max_thrust_mps2, gravity_mps2=self.airframe.gravity_mps2,
@@ -375,15 +165,18 @@ class Autopilot:
             self.mode = action
             self._enter_mode()
 
-    def _advance_takeoff(self, dt: float) -> None:
+    def _advance_takeoff(self) -> None:
+        """NAV_TAKEOFF in the air: one shaped climb to the altitude (no faster than
+        ``takeoff_speed_mps``), then the guided hold from where the path is."""
         alt = self.takeoff_alt_m
         alt = alt if alt is not None else self.target.position_m_enu[2]
-        self.target = climb(self.target, alt, self.config.takeoff_speed_mps, dt)
-        reached = self.target.position_m_enu[2] >= alt
-        if reached and abs(self.airframe.position_m_enu[2] - alt) < 0.05:
+        x, y, _ = self.target.position_m_enu
+        self.target = Target((x, y, alt), yaw_rad=self.target.yaw_rad)
+        z, vz = self.airframe.position_m_enu[2], self.airframe.velocity_mps_enu[2]
+        if abs(z - alt) < 0.05 and abs(vz) < 0.1:
             self.submode = "track"
             self.takeoff_alt_m = None
-            self.target = replace(self.target, velocity_mps_enu=(0.0, 0.0, 0.0))
+            self.controller.reset()  # the lift-off's transient is not a hover error
 
     def _advance_descent(self, dt: float) -> None:
         speed = self.config.land_speed_mps
@@ -394,12 +187,6 @@ class Autopilot:
         self.target = go_home(self.target, home, self.config.land_speed_mps, dt)
         if math.dist(self.airframe.position_m_enu[:2], home[:2]) < 0.1:
             self.mode = CopterMode.LAND
-
-    def hold_position_m_enu(self) -> Vec3:
-        """Where a setpoint without a position keeps the vehicle: the current target in flight."""
-        if self.submode == "track":
-            return self.target.position_m_enu
-        return self.airframe.position_m_enu
 
     def _landed(self) -> None:
         """LAND touched down and dwelt: disarm."""

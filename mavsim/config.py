@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal
 
 from mavsim.errors import MavsimError
@@ -19,44 +19,66 @@ def _pid(wn_radps: float, zeta: float, ki_radps: float, eps: float) -> tuple[flo
     return kp, kd, ki_radps * wn_radps**2 / eps**3
 
 
+def _cascade(pos_p: float, vel_p: float, vel_i: float) -> tuple[float, float, float, float]:
+    """(kp, kd, ki, kvi) of a P position loop feeding a PI velocity loop with feed-forward:
+    ``vel_p (v_ff + pos_p e - v) + vel_i integral(v_ff + pos_p e - v)``."""
+    return vel_p * pos_p, vel_p, vel_i * pos_p, vel_i
+
+
 STIFF_EPS = 0.3
-"""Time scale of the default tune: the paper's poles 1/0.3 times faster (x, y about 5.9 rad/s,
-z about 7 rad/s), well inside the 25 rad/s inner loop."""
-_XY = _pid(1.772, 0.5, 0.2, STIFF_EPS)
-_Z = _pid(2.089, 0.66, 0.23, STIFF_EPS)
+"""Time scale of the stiff indoor tune (:meth:`PositionGains.from_poles`): the paper's poles
+1/0.3 times faster (x, y about 5.9 rad/s, z about 7 rad/s), well inside the 25 rad/s inner loop."""
 
 
 @dataclass(frozen=True)
 class PositionGains:
     """Per-axis PID with feed-forward of the autopilot's position controller.
 
-    ``a_cmd = a_ref + kp (p_ref - p) + kd (v_ref - v) + ki * integral(p_ref - p)``. The defaults
-    are a stiff indoor tune with the pole pattern of the paper's RPT design at ``STIFF_EPS``: the
-    autopilot's own position loop, independent of the show's outer-loop preset (which only flies
-    with attitude setpoints).
+    ``a_cmd = a_ref + kp e + kd e_v + ki integral(e) + kvi integral(e_v)`` with ``e = p_ref - p``
+    and ``e_v = v_ref - v``: the paper's PID (``kvi`` 0) or an autopilot's P-position, PI-velocity
+    cascade exactly (:meth:`ardupilot`, the default, and :meth:`px4`); :meth:`from_poles` gives
+    the paper's pole pattern.
     """
 
-    kp_xy: float = _XY[0]
-    """Position gain in [1/s^2] on the horizontal axes."""
-    kd_xy: float = _XY[1]
-    """Velocity gain in [1/s] on the horizontal axes."""
-    ki_xy: float = _XY[2]
-    """Integral gain in [1/s^3] on the horizontal axes."""
-    kp_z: float = _Z[0]
-    """Position gain in [1/s^2] on the vertical axis."""
-    kd_z: float = _Z[1]
-    """Velocity gain in [1/s] on the vertical axis."""
-    ki_z: float = _Z[2]
-    """Integral gain in [1/s^3] on the vertical axis."""
+    kp_xy: float = 2.0
+    """Position gain in [1/s^2] on the horizontal axes (PSC_POSXY_P x PSC_VELXY_P)."""
+    kd_xy: float = 2.0
+    """Velocity gain in [1/s] on the horizontal axes (PSC_VELXY_P)."""
+    ki_xy: float = 1.0
+    """Position-error integral gain in [1/s^3] on the horizontal axes."""
+    kvi_xy: float = 1.0
+    """Velocity-error integral gain in [1/s^2] on the horizontal axes (PSC_VELXY_I)."""
+    kp_z: float = 5.0
+    """Position gain in [1/s^2] on the vertical axis (PSC_POSZ_P x PSC_VELZ_P)."""
+    kd_z: float = 5.0
+    """Velocity gain in [1/s] on the vertical axis (PSC_VELZ_P)."""
+    ki_z: float = 2.0
+    """Position-error integral gain in [1/s^3] on the vertical axis."""
+    kvi_z: float = 2.0
+    """Velocity-error integral gain in [1/s^2] on the vertical axis: ArduCopter has none there,
+    its acceleration loop's integrator (hover throttle) does that work; 2 stands in for it."""
     integral_limit_m_s: float = 0.5
-    """Anti-windup bound of each axis' error integral in [m s]."""
+    """Anti-windup bound of each integral in [m s] (position) and [m] (velocity)."""
+
+    @classmethod
+    def ardupilot(cls) -> PositionGains:
+        """ArduCopter 4.7's defaults (AC_PosControl, multicopter)."""
+        (kp, kd, ki, kvi), (kpz, kdz, kiz, kviz) = _cascade(1.0, 2.0, 1.0), _cascade(1.0, 5.0, 2.0)
+        return cls(kp, kd, ki, kvi, kpz, kdz, kiz, kviz)
+
+    @classmethod
+    def px4(cls) -> PositionGains:
+        """PX4 v1.16's defaults: MPC_XY_P 0.95, MPC_XY_VEL_P_ACC 1.8, MPC_XY_VEL_I_ACC 0.4;
+        MPC_Z_P 1, MPC_Z_VEL_P_ACC 4, MPC_Z_VEL_I_ACC 2."""
+        (kp, kd, ki, kvi), (kpz, kdz, kiz, kviz) = _cascade(0.95, 1.8, 0.4), _cascade(1.0, 4.0, 2.0)
+        return cls(kp, kd, ki, kvi, kpz, kdz, kiz, kviz)
 
     @classmethod
     def from_poles(cls, eps: float) -> PositionGains:
         """The paper's pole pattern (x, y: w_n 1.772, zeta 0.5, k_i 0.2; z: w_n 2.089,
         zeta 0.66, k_i 0.23) at time scale ``eps`` (1: the paper's own gains)."""
-        xy, z = _pid(1.772, 0.5, 0.2, eps), _pid(2.089, 0.66, 0.23, eps)
-        return cls(*xy, *z)
+        (kp, kd, ki), (kpz, kdz, kiz) = _pid(1.772, 0.5, 0.2, eps), _pid(2.089, 0.66, 0.23, eps)
+        return cls(kp, kd, ki, 0.0, kpz, kdz, kiz, 0.0)
 
 
 @dataclass(frozen=True)
@@ -85,8 +107,9 @@ class VehicleConfig:
     """Seconds after start before the estimator has a position source; arming is refused before."""
     arm_refusal: str | None = None
     """When set, every arming attempt is refused with this pre-arm reason (tests, rehearsal)."""
-    guided_timeout_s: float = 3.0
-    """GUID_TIMEOUT: with no setpoint for this long in GUIDED the vehicle stops where it is."""
+    guided_timeout_s: float | None = None
+    """The setpoint timeout at boot in [s] (ArduPilot GUID_TIMEOUT, PX4 COM_OF_LOSS_T); None:
+    the autopilot's default (3 s, 1 s)."""
     takeoff_speed_mps: float = 0.5
     """Climb rate of MAV_CMD_NAV_TAKEOFF in [m/s]."""
     land_speed_mps: float = 0.5
@@ -99,14 +122,21 @@ class VehicleConfig:
     """Rate of the autopilot loop in [Hz] (the simulator's control rate; 4 physics substeps)."""
     battery_endurance_s: float = 900.0
     """Flight time in [s] from full to empty (linear model)."""
-    gains: PositionGains = field(default_factory=PositionGains)
-    """Position controller gains."""
+    gains: PositionGains | None = None
+    """Position controller gains; None: the autopilot's own defaults (:attr:`position_gains`)."""
     params: tuple[tuple[str, float], ...] = ()
     """Parameter values at boot besides the defaults (mavsim.params), e.g. ``(("GUID_OPTIONS",
     1),)``."""
     frozen_params: tuple[str, ...] = ()
     """Parameters that refuse every PARAM_SET (answered with the value kept): a misconfigured or
     locked vehicle, for tests and rehearsals."""
+
+    @property
+    def position_gains(self) -> PositionGains:
+        """The gains flown: ``gains``, or ArduCopter's or PX4's defaults."""
+        if self.gains is not None:
+            return self.gains
+        return PositionGains.px4() if self.autopilot == "px4" else PositionGains.ardupilot()
 
     def __post_init__(self) -> None:
         if not 1 <= self.system_id <= 254:
@@ -116,7 +146,7 @@ class VehicleConfig:
         positive = {
             "mass_kg": self.mass_kg,
             "thrust_max_n": self.thrust_max_n,
-            "guided_timeout_s": self.guided_timeout_s,
+            "guided_timeout_s": 1.0 if self.guided_timeout_s is None else self.guided_timeout_s,
             "takeoff_speed_mps": self.takeoff_speed_mps,
             "land_speed_mps": self.land_speed_mps,
             "telemetry_rate_hz": self.telemetry_rate_hz,

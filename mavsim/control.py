@@ -1,8 +1,9 @@
 """The autopilot's own position controller (pure): p/v/a target -> attitude and thrust.
 
-A real autopilot closes the position loop onboard; so does this one. Per axis a PID with
-acceleration feed-forward (gains in :class:`mavsim.config.PositionGains`) gives an acceleration
-command; the thrust vector ``a_cmd + g e_z`` gives the collective thrust and, with the heading, the
+A real autopilot closes the position loop onboard; so does this one. Per axis a PID (with an
+integral of the velocity error too, for an autopilot's P-PI cascade) and acceleration
+feed-forward (gains in :class:`mavsim.config.PositionGains`) gives an acceleration command; the
+thrust vector ``a_cmd + g e_z`` gives the collective thrust and, with the heading, the
 roll and pitch commands of the inner loop. Horizontal acceleration is limited so the tilt stays
 within ``tilt_max_rad`` (altitude has priority, as in ArduPilot).
 """
@@ -63,10 +64,12 @@ class PositionController:
         self.tilt_max_rad = tilt_max_rad
         self.thrust_max_mps2 = thrust_max_mps2
         self._integral = [0.0, 0.0, 0.0]
+        self._velocity_integral = [0.0, 0.0, 0.0]
 
     def reset(self) -> None:
-        """Forget the error integral."""
+        """Forget the error integrals."""
         self._integral = [0.0, 0.0, 0.0]
+        self._velocity_integral = [0.0, 0.0, 0.0]
 
     def acceleration(
         self, target: Target, position_m_enu: Vec3, velocity_mps_enu: Vec3, dt_s: float
@@ -74,17 +77,20 @@ class PositionController:
         """Commanded acceleration in [m/s^2], ENU; integrates the error over ``dt_s``."""
         g = self.gains
         out = []
+        limit = g.integral_limit_m_s
         for axis in range(3):
-            kp, kd, ki = (g.kp_z, g.kd_z, g.ki_z) if axis == 2 else (g.kp_xy, g.kd_xy, g.ki_xy)
+            z = axis == 2
+            kp, kd = (g.kp_z, g.kd_z) if z else (g.kp_xy, g.kd_xy)
+            ki, kvi = (g.ki_z, g.kvi_z) if z else (g.ki_xy, g.kvi_xy)
             error = target.position_m_enu[axis] - position_m_enu[axis]
-            limit = g.integral_limit_m_s
+            error_v = target.velocity_mps_enu[axis] - velocity_mps_enu[axis]
             self._integral[axis] = min(max(self._integral[axis] + error * dt_s, -limit), limit)
+            summed = self._velocity_integral[axis] + error_v * dt_s
+            self._velocity_integral[axis] = min(max(summed, -limit), limit)
             out.append(
-                target.acceleration_mps2_enu[axis]
-                + kp * error
-                + kd * (target.velocity_mps_enu[axis] - velocity_mps_enu[axis])
-                + ki * self._integral[axis]
-            )
+                target.acceleration_mps2_enu[axis] + kp * error + kd * error_v
+                + ki * self._integral[axis] + kvi * self._velocity_integral[axis]
+            )  # fmt: skip
         return (out[0], out[1], out[2])
 
     def update(

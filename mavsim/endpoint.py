@@ -22,7 +22,8 @@ from collections.abc import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from mavsim.autopilot import Autopilot, Result
+from mavsim.autopilot import Autopilot
+from mavsim.autopilot_core import Result
 from mavsim.config import VehicleConfig
 from mavsim.errors import MavsimError
 from mavsim.frames import attitude_enu_to_ned, enu_to_ned

@@ -8,9 +8,13 @@ parameters bytewise into the float field (MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_B
 ArduCopter: GUID_TIMEOUT [s] (stop following when setpoints stop), WP_YAW_BEHAVIOR (0: never turn
 the vehicle on its own; otherwise face the direction of travel when a setpoint ignores yaw),
 GUID_OPTIONS (bit 3: SET_ATTITUDE_TARGET thrust is thrust, otherwise a climb rate),
-WPNAV_SPEED_UP/WPNAV_SPEED_DN [cm/s] (that climb rate's scale), FENCE_ENABLE, FENCE_TYPE (bit 0
+WPNAV_SPEED_UP/WPNAV_SPEED_DN [cm/s] (that climb rate's scale, and the shaped path's vertical
+speeds), WPNAV_SPEED [cm/s], WPNAV_ACCEL and WPNAV_ACCEL_Z [cm/s^2], PSC_JERK_XY and PSC_JERK_Z
+[m/s^3] (the guided target's shaped path, :mod:`mavsim.shaping`), TKOFF_SLEW_TIME [s] (the
+take-off's throttle ramp), FENCE_ENABLE, FENCE_TYPE (bit 0
 maximum altitude, bit 1 circle), FENCE_RADIUS [m], FENCE_ALT_MAX [m], FENCE_ACTION (0 report,
-2 land, others: RTL). PX4: COM_OF_LOSS_T [s], GF_MAX_HOR_DIST [m], GF_MAX_VER_DIST [m] (0: off),
+2 land, others: RTL). PX4: COM_OF_LOSS_T [s], COM_OBL_RC_ACT (what flies when the
+offboard stream is lost, :mod:`mavsim.px4`), GF_MAX_HOR_DIST [m], GF_MAX_VER_DIST [m] (0: off),
 GF_ACTION (0 none, 1 warning, 2 hold, 3 return, 5 land).
 """
 
@@ -44,6 +48,12 @@ ARDUPILOT_PARAMS = (
     ParamDef("GUID_OPTIONS", INT32, 0),
     ParamDef("WPNAV_SPEED_UP", REAL32, 250.0),
     ParamDef("WPNAV_SPEED_DN", REAL32, 150.0),
+    ParamDef("WPNAV_SPEED", REAL32, 1000.0),
+    ParamDef("WPNAV_ACCEL", REAL32, 250.0),
+    ParamDef("WPNAV_ACCEL_Z", REAL32, 100.0),
+    ParamDef("PSC_JERK_XY", REAL32, 5.0),
+    ParamDef("PSC_JERK_Z", REAL32, 5.0),
+    ParamDef("TKOFF_SLEW_TIME", REAL32, 2.0),
     ParamDef("FENCE_ENABLE", INT8, 0),
     ParamDef("FENCE_TYPE", INT8, 7),
     ParamDef("FENCE_RADIUS", REAL32, 300.0),
@@ -52,6 +62,7 @@ ARDUPILOT_PARAMS = (
 )
 PX4_PARAMS = (
     ParamDef("COM_OF_LOSS_T", REAL32, 1.0),
+    ParamDef("COM_OBL_RC_ACT", INT32, 0),
     ParamDef("GF_MAX_HOR_DIST", REAL32, 0.0),
     ParamDef("GF_MAX_VER_DIST", REAL32, 0.0),
     ParamDef("GF_ACTION", INT32, 2),

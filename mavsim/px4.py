@@ -4,8 +4,18 @@
   is alive ("proof of life": a setpoint within COM_OF_LOSS_T); setpoints are taken as proof of
   life in any mode;
 - in OFFBOARD and armed the vehicle follows setpoints from the ground: there is no NAV_TAKEOFF;
-- when the stream stops for COM_OF_LOSS_T it leaves OFFBOARD for Hold (AUTO.LOITER) and says so
-  ("Failsafe: ..."), which a companion sees as a mode change;
+- when the stream stops for COM_OF_LOSS_T, the failsafe COM_OBL_RC_ACT flies instead (PX4 v1.16's
+  failsafe state machine): 0 (the default) Position mode, also without RC (PX4 PR 26289 stops
+  that only after v1.16), 1 Altitude, 2 Stabilized, 3 Return, 4 Land, 5 Hold, 6 Terminate,
+  7 Disarm, announced as PX4's failsafe event words it ("Failsafe activated: switching to
+  Position"); the heartbeat shows that mode, the user's choice stays OFFBOARD, so a stream that
+  comes back returns the vehicle to OFFBOARD, and a failsafe landing ends with OFFBOARD shown;
+- Position and Altitude mode without sticks get no valid setpoint; the position controller's own
+  failsafe then holds zero velocity ("stop and wait"), not a position: the vehicle stops and
+  drifts as its velocity estimate does. On PX4 SIH v1.16 (GPS-grade estimate) that drift was
+  0.57 m, 1.1 m (to the ground) and 0.05 m down in three runs, 0.2-0.3 m sideways; mavsim's
+  estimate is perfect, so it stops and stays;
+- a setpoint without a position (velocity only) is flown with no position loop at all;
 - setpoints ArduCopter would stop on are ignored (:func:`mavsim.wire.px4_view`), a yaw not given
   is held (PX4 has no WP_YAW_BEHAVIOR), attitude thrust is normalised thrust;
 - after AUTO.LAND touches down it disarms and, in the same breath, reports the mode the pilot
@@ -18,13 +28,30 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
-from mavsim.autopilot import SEVERITY_WARNING, Autopilot, Result
+from mavsim.airframe import AttitudeThrust
+from mavsim.autopilot import Autopilot
+from mavsim.autopilot_core import SEVERITY_CRITICAL, SEVERITY_WARNING, Result
 from mavsim.config import VehicleConfig
 from mavsim.control import Target
-from mavsim.modes import CopterMode
+from mavsim.modes import NOT_ARMABLE, CopterMode
 from mavsim.params import Flavor
 from mavsim.wire import AttitudeSetpoint, GuidedSetpoint
+
+OBL_TERMINATE, OBL_DISARM = 6, 7
+OFFBOARD_LOSS_MODES = {
+    0: CopterMode.BRAKE,  # Position mode (shown as POSCTL)
+    1: CopterMode.ALT_HOLD,
+    2: CopterMode.STABILIZE,
+    3: CopterMode.RTL,
+    4: CopterMode.LAND,
+    5: CopterMode.LOITER,  # Hold
+}
+"""COM_OBL_RC_ACT -> the mode flown while the offboard signal is lost."""
+OFFBOARD_LOSS_NAMES = {0: "Position", 1: "Altitude", 2: "Stabilized", 3: "Return", 4: "Land",
+                       5: "Hold", 6: "Terminate", 7: "Disarm"}  # fmt: skip
+"""How PX4's failsafe announcement names each action (its event text, "switching to {action}")."""
 
 
 class Px4Autopilot(Autopilot):
@@ -32,13 +59,22 @@ class Px4Autopilot(Autopilot):
 
     flavor: Flavor = "px4"
     timeout_param = "COM_OF_LOSS_T"
+    shapes_targets = False
+    takeoff_owns_ground = False
 
     def __init__(self, config: VehicleConfig) -> None:
         super().__init__(config)
         self.signal_s = -math.inf
         """Vehicle time of the last setpoint (proof of life), in [s]."""
         self.chosen_mode = self.mode
-        """The mode last selected by a command (PX4's "user intention"), restored after LAND."""
+        """The mode last selected by a command (PX4's "user intention")."""
+        self.after_disarm_mode = self.mode
+        """The last chosen mode that allows arming: the user intention again once disarmed (so
+        after AUTO.LAND, OFFBOARD if the companion flew it)."""
+        self.failsafe_mode: CopterMode | None = None
+        """The offboard-loss failsafe's mode while it flies instead of OFFBOARD."""
+        self.velocity_only = False
+        """The last setpoint had no position: no position loop (PX4 takes NaN as "not held")."""
 
     @property
     def signal_alive(self) -> bool:
@@ -56,12 +92,12 @@ class Px4Autopilot(Autopilot):
         if custom_mode == CopterMode.GUIDED and not self.signal_alive:
             self.say(SEVERITY_WARNING, "Offboard mode rejected: no setpoint stream")
             return Result.FAILED
-        before = self.mode
         result = super().set_mode(custom_mode)
-        if result == Result.ACCEPTED and custom_mode == CopterMode.LAND:
-            self.chosen_mode = before if before != CopterMode.LAND else self.chosen_mode
-        elif result == Result.ACCEPTED:
-            self.chosen_mode = self.mode
+        if result == Result.ACCEPTED:
+            self.failsafe_mode = None
+            self.chosen_mode = CopterMode(custom_mode)
+            if self.chosen_mode not in NOT_ARMABLE:
+                self.after_disarm_mode = self.chosen_mode
         return result
 
     def _arming_refusal(self) -> str | None:
@@ -79,7 +115,10 @@ class Px4Autopilot(Autopilot):
 
     def guided_setpoint(self, sp: GuidedSetpoint, stamp_ms: int) -> bool:
         self.signal_s = self.now_s
-        return super().guided_setpoint(sp, stamp_ms)
+        taken = super().guided_setpoint(sp, stamp_ms)
+        if taken:
+            self.velocity_only = sp.position_m_enu is None
+        return taken
 
     def position_target(self, target: Target, stamp_ms: int) -> bool:
         self.signal_s = self.now_s
@@ -90,13 +129,55 @@ class Px4Autopilot(Autopilot):
         return super().attitude_setpoint(sp, stamp_ms)
 
     def _guided_failsafe(self) -> None:
-        if self.armed and not self.signal_alive:
-            silent_s = self.now_s - self.signal_s
-            self.mode = CopterMode.LOITER
-            self._enter_mode()
-            self.say(SEVERITY_WARNING, f"Failsafe: offboard lost for {silent_s:.1f}s, holding")
+        """Checked every loop in any mode instead (:meth:`_command`)."""
 
-    def _landed(self) -> None:
-        """Disarm, and show the mode chosen before LAND again in the same heartbeat."""
-        super()._landed()
-        self.mode = self.chosen_mode
+    def _command(self, dt: float) -> AttitudeThrust:
+        if self.armed:
+            self._watch_offboard_signal()
+        if self.armed and self._no_position_loop():
+            here = self.airframe.position_m_enu
+            self.target = replace(self.target, position_m_enu=here)
+            self.controller.reset()
+        return super()._command(dt)
+
+    def _no_position_loop(self) -> bool:
+        """Velocity-only OFFBOARD, or Position/Altitude mode without sticks (stop and wait)."""
+        if self.mode == CopterMode.GUIDED:
+            return self.velocity_only and self.submode == "track"
+        if self.mode in (CopterMode.BRAKE, CopterMode.ALT_HOLD):
+            self.target = replace(self.target, velocity_mps_enu=(0.0, 0.0, 0.0))
+            return True
+        return False
+
+    def _watch_offboard_signal(self) -> None:
+        """COM_OBL_RC_ACT while OFFBOARD is chosen and the stream is lost; OFFBOARD again when
+        it is back."""
+        if self.chosen_mode != CopterMode.GUIDED:
+            return
+        if self.failsafe_mode is None and not self.signal_alive:
+            action = int(self.params["COM_OBL_RC_ACT"])
+            name = OFFBOARD_LOSS_NAMES.get(action, "Position")
+            self.say(SEVERITY_CRITICAL, f"Failsafe activated: switching to {name}")
+            if action == OBL_TERMINATE:
+                self.terminate()
+            elif action == OBL_DISARM:
+                self.disarm(force=True)
+            else:
+                self._fly_failsafe(OFFBOARD_LOSS_MODES.get(action, CopterMode.BRAKE))
+        elif self.failsafe_mode is not None and self.signal_alive:
+            self.failsafe_mode = None
+            self.mode = CopterMode.GUIDED
+            self._enter_mode()
+
+    def _fly_failsafe(self, mode: CopterMode) -> None:
+        self.failsafe_mode = mode
+        self.mode = mode
+        self._enter_mode()
+        self.velocity_only = False
+
+    def _disarm(self) -> None:
+        """Disarm; in the same heartbeat the mode shown is the user's last armable choice (after
+        a LAND, commanded or failsafe: OFFBOARD if that was it)."""
+        super()._disarm()
+        self.failsafe_mode = None
+        self.chosen_mode = self.mode = self.after_disarm_mode

@@ -8,6 +8,7 @@ Positions are the autopilot's LOCAL_NED (x north, y east, z down) in [m].
 from __future__ import annotations
 
 import math
+import struct
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -21,8 +22,8 @@ Stream = Callable[["Gcs"], None]
 Vec3 = tuple[float, float, float]
 
 ARDUPILOT_MODES = {"GUIDED": 4, "LOITER": 5, "LAND": 9, "BRAKE": 17}
-PX4_MODES = {"GUIDED": (6, 0), "LOITER": (4, 3), "LAND": (4, 6)}
-"""PX4 (main, sub) of the same roles: OFFBOARD, AUTO.LOITER (Hold), AUTO.LAND."""
+PX4_MODES = {"GUIDED": (6, 0), "LOITER": (4, 3), "LAND": (4, 6), "POSCTL": (3, 0)}
+"""PX4 (main, sub) of the same roles: OFFBOARD, AUTO.LOITER (Hold), AUTO.LAND; and POSCTL."""
 
 
 @dataclass
@@ -55,6 +56,8 @@ class Gcs:
         self.stream_period_s = 0.05
         self.silent = False
         """True: send nothing at all (a lost link)."""
+        self.log: list[tuple[float, float, float, float, float]] | None = None
+        """When a list: every LOCAL_POSITION_NED as (monotonic time [s], x, y, z, vx)."""
         self._last_heartbeat = -math.inf
         self._last_setpoint = -math.inf
 
@@ -93,6 +96,8 @@ class Gcs:
             seen.heartbeat = m
         elif kind == "LOCAL_POSITION_NED":
             seen.position = m
+            if self.log is not None:
+                self.log.append((time.monotonic(), float(m.x), float(m.y), float(m.z), float(m.vx)))
         elif kind == "ATTITUDE":
             seen.attitude = m
         elif kind == "EXTENDED_SYS_STATE":
@@ -156,13 +161,17 @@ class Gcs:
 
     # --- parameters ------------------------------------------------------------------------------
     def set_param(self, name: str, value: float, param_type: int) -> float | None:
-        """PARAM_SET; the value of the PARAM_VALUE answer (None: no answer within 2 s)."""
+        """PARAM_SET; the value of the PARAM_VALUE answer (None: no answer within 2 s). PX4
+        carries integers bytewise in the float field (both ways)."""
+        bytewise = self.kind == "px4" and param_type == mav.MAV_PARAM_TYPE_INT32
+        raw = struct.unpack("<f", struct.pack("<i", int(value)))[0] if bytewise else value
         self.seen.params.pop(name, None)
-        self.conn.mav.param_set_send(self.system_id, self.component_id, name.encode(), value,
+        self.conn.mav.param_set_send(self.system_id, self.component_id, name.encode(), raw,
                                      param_type)  # fmt: skip
         if not self.pump(2.0, lambda s: name in s.params):
             return None
-        return self.seen.params[name][0]
+        answer = self.seen.params[name][0]
+        return float(struct.unpack("<i", struct.pack("<f", answer))[0]) if bytewise else answer
 
     # --- setpoints -------------------------------------------------------------------------------
     def send_target(self, mask: int, p: Vec3 = (0.0, 0.0, 0.0), v: Vec3 = (0.0, 0.0, 0.0),

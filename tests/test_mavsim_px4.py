@@ -1,0 +1,134 @@
+"""The simulated PX4 without sockets: OFFBOARD's proof of life and what flies when it is lost
+(PX4 v1.16's failsafe state machine, COM_OBL_RC_ACT), and the mode shown after a failsafe."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from mavsim.autopilot_core import Result
+from mavsim.config import VehicleConfig
+from mavsim.control import Target
+from mavsim.modes import CopterMode
+from mavsim.px4 import Px4Autopilot
+
+HOME = (0.5, 0.2, 0.0)
+
+
+class Sim:
+    """A PX4 autopilot, its clock and an OFFBOARD position stream (``hold``, None: silent)."""
+
+    def __init__(self, **params: float) -> None:
+        config = VehicleConfig(vehicle_id="v", system_id=1, port=0, home_m_enu=HOME,
+                               autopilot="px4", position_source_delay_s=0.0,
+                               params=tuple(params.items()))  # fmt: skip
+        self.ap = Px4Autopilot(config)
+        self.t = 0.0
+        self.hold: tuple[float, float, float] | None = HOME
+
+    def mode(self) -> CopterMode:
+        """The mode the heartbeat shows now."""
+        return self.ap.mode
+
+    def run(self, seconds: float) -> None:
+        for step in range(round(seconds / self.ap.airframe.dt_s)):
+            self.t += self.ap.airframe.dt_s
+            if self.hold is not None and step % 5 == 0:  # 20 Hz stream
+                self.ap.position_target(Target(self.hold), 0)
+            self.ap.step(self.t)
+
+    def airborne(self, height_m: float = 1.0) -> None:
+        self.run(0.5)
+        assert self.ap.set_mode(CopterMode.GUIDED) == Result.ACCEPTED
+        assert self.ap.arm() == Result.ACCEPTED
+        self.hold = (HOME[0], HOME[1], HOME[2] + height_m)
+        self.run(6.0)
+        self.hold = (HOME[0] + 1.0, HOME[1], HOME[2] + height_m)  # away from home (RTL)
+        self.run(8.0)
+        assert math.dist(self.ap.airframe.position_m_enu, self.hold) < 0.05
+
+
+def test_offboard_needs_a_live_stream_to_be_chosen_and_to_arm() -> None:
+    sim = Sim()
+    sim.hold = None
+    sim.run(0.5)
+    assert sim.ap.set_mode(CopterMode.GUIDED) == Result.FAILED
+    sim.hold = HOME
+    sim.run(0.3)
+    assert sim.ap.set_mode(CopterMode.GUIDED) == Result.ACCEPTED
+    assert sim.ap.arm() == Result.ACCEPTED
+
+
+def test_a_lost_stream_shows_position_mode_stops_and_a_stream_back_resumes_offboard() -> None:
+    """COM_OBL_RC_ACT 0 (default): POSCTL is shown (even without RC, as v1.16 does), the user's
+    choice stays OFFBOARD; the vehicle stops where it is; setpoints again: OFFBOARD again."""
+    sim = Sim()
+    sim.airborne()
+    sim.hold = None
+    sim.run(0.9)
+    assert sim.mode() == CopterMode.GUIDED  # COM_OF_LOSS_T is 1 s
+    sim.run(0.3)
+    assert sim.mode() == CopterMode.BRAKE and sim.ap.chosen_mode == CopterMode.GUIDED
+    assert ("Failsafe activated: switching to Position") in [text for _, text in sim.ap.texts]
+    here = sim.ap.airframe.position_m_enu
+    sim.run(3.0)  # no sticks: zero velocity held (a perfect estimate does not drift)
+    assert sim.ap.armed and math.dist(sim.ap.airframe.position_m_enu, here) < 0.05
+    assert np.linalg.norm(sim.ap.airframe.velocity_mps_enu) < 0.02
+    sim.hold = (HOME[0] + 0.5, HOME[1], HOME[2] + 1.0)
+    sim.run(0.1)
+    assert sim.mode() == CopterMode.GUIDED
+    sim.run(6.0)
+    assert math.dist(sim.ap.airframe.position_m_enu, sim.hold) < 0.1
+
+
+@pytest.mark.parametrize(
+    ("action", "shown"),
+    [(1, CopterMode.ALT_HOLD), (3, CopterMode.RTL), (4, CopterMode.LAND), (5, CopterMode.LOITER)],
+)
+def test_com_obl_rc_act_chooses_what_flies_when_the_stream_is_lost(
+    action: int, shown: CopterMode
+) -> None:
+    sim = Sim(COM_OBL_RC_ACT=action)
+    sim.airborne()
+    sim.hold = None
+    sim.run(1.2)
+    assert sim.mode() == shown and sim.ap.chosen_mode == CopterMode.GUIDED
+
+
+def test_a_failsafe_landing_ends_disarmed_with_offboard_shown() -> None:
+    """PX4 SITL: after a failsafe LAND the heartbeat that says disarmed says OFFBOARD (the
+    user's choice the failsafe replaced)."""
+    sim = Sim(COM_OBL_RC_ACT=4)
+    sim.airborne(0.6)
+    sim.hold = None
+    sim.run(1.2)
+    assert sim.mode() == CopterMode.LAND
+    for _ in range(12):
+        sim.run(1.0)
+        if not sim.ap.armed:
+            break
+    assert not sim.ap.armed and sim.ap.on_ground
+    assert sim.mode() == CopterMode.GUIDED
+
+
+def test_terminate_and_disarm_actions_stop_the_motors() -> None:
+    for action in (6, 7):
+        sim = Sim(COM_OBL_RC_ACT=action)
+        sim.airborne(0.5)
+        sim.hold = None
+        sim.run(1.2)
+        assert not sim.ap.armed
+
+
+def test_a_commanded_mode_ends_the_failsafe() -> None:
+    sim = Sim()
+    sim.airborne()
+    sim.hold = None
+    sim.run(1.2)
+    assert sim.ap.set_mode(CopterMode.LAND) == Result.ACCEPTED
+    assert sim.ap.failsafe_mode is None and sim.ap.chosen_mode == CopterMode.LAND
+    sim.hold = HOME
+    sim.run(0.5)
+    assert sim.mode() == CopterMode.LAND  # a stream back does not take it over again
