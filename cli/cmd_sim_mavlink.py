@@ -52,10 +52,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add(
         "--gains-eps",
         type=float,
-        default=0.3,
+        default=None,
         metavar="EPS",
         help="stiffness of the vehicles' position loop: the paper's poles divided by EPS "
-        "(default 0.3; 1 is the paper's own gains)",
+        "(0.3: the stiff indoor tune; 1: the paper's own gains). Default: each autopilot's own "
+        "response (ArduCopter's shaped target and PSC gains, PX4's MPC gains)",
     )
     add(
         "--time-scale",
@@ -74,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         show = load_show(args.show)
-        gains = PositionGains.from_poles(args.gains_eps)
+        gains = None if args.gains_eps is None else PositionGains.from_poles(args.gains_eps)
         refusals = dict(_pair(text) for text in args.refuse_arm)
         params = tuple((name, float(value)) for name, value in map(_param, args.param))
         configs = vehicle_configs(

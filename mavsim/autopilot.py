@@ -32,6 +32,7 @@ from dataclasses import replace
 from mavsim.airframe import AttitudeThrust
 from mavsim.auto_modes import descend, go_home
 from mavsim.autopilot_core import SEVERITY_CRITICAL, SEVERITY_INFO, AutopilotCore
+from mavsim.config import PositionGains
 from mavsim.control import Target
 from mavsim.fence import fence_action, fence_breach
 from mavsim.guided import (
@@ -58,12 +59,23 @@ class Autopilot(AutopilotCore):
         """One autopilot period ending at vehicle time ``now_s``: decide, then step the physics."""
         dt = self.airframe.dt_s
         self.now_s = now_s
+        self._follow_gain_params()
         command = self._command(dt)
         self.airframe.step(command)
         if self.armed:
             self.flight_time_s += dt
         self._after_step()
         self._check_fence()
+
+    def _follow_gain_params(self) -> None:
+        """ArduCopter flies PSC_POSXY_P, PSC_VELXY_P and PSC_VELXY_I as they are set now
+        (unless the configuration fixes the gains)."""
+        if self.flavor != "ardupilot" or self.config.gains is not None:
+            return
+        p = self.params
+        gains = PositionGains.ardupilot(p["PSC_POSXY_P"], p["PSC_VELXY_P"], p["PSC_VELXY_I"])
+        if gains != self.controller.gains:
+            self.controller.gains = gains
 
     def _command(self, dt: float) -> AttitudeThrust:
         yaw = self.target.yaw_rad

@@ -61,9 +61,13 @@ class PositionGains:
     """Anti-windup bound of each integral in [m s] (position) and [m] (velocity)."""
 
     @classmethod
-    def ardupilot(cls) -> PositionGains:
-        """ArduCopter 4.7's defaults (AC_PosControl, multicopter)."""
-        (kp, kd, ki, kvi), (kpz, kdz, kiz, kviz) = _cascade(1.0, 2.0, 1.0), _cascade(1.0, 5.0, 2.0)
+    def ardupilot(
+        cls, posxy_p: float = 1.0, velxy_p: float = 2.0, velxy_i: float = 1.0
+    ) -> PositionGains:
+        """ArduCopter 4.7's (AC_PosControl, multicopter): PSC_POSXY_P, PSC_VELXY_P and
+        PSC_VELXY_I as given (their defaults by default), the vertical ones its defaults."""
+        (kp, kd, ki, kvi) = _cascade(posxy_p, velxy_p, velxy_i)
+        (kpz, kdz, kiz, kviz) = _cascade(1.0, 5.0, 2.0)
         return cls(kp, kd, ki, kvi, kpz, kdz, kiz, kviz)
 
     @classmethod

@@ -11,7 +11,8 @@ GUID_OPTIONS (bit 3: SET_ATTITUDE_TARGET thrust is thrust, otherwise a climb rat
 WPNAV_SPEED_UP/WPNAV_SPEED_DN [cm/s] (that climb rate's scale, and the shaped path's vertical
 speeds), WPNAV_SPEED [cm/s], WPNAV_ACCEL and WPNAV_ACCEL_Z [cm/s^2], PSC_JERK_XY and PSC_JERK_Z
 [m/s^3] (the guided target's shaped path, :mod:`mavsim.shaping`), TKOFF_SLEW_TIME [s] (the
-take-off's throttle ramp), FENCE_ENABLE, FENCE_TYPE (bit 0
+take-off's throttle ramp), PSC_POSXY_P [1/s], PSC_VELXY_P [1/s] and PSC_VELXY_I [1/s^2] (the
+horizontal P-PI cascade), FENCE_ENABLE, FENCE_TYPE (bit 0
 maximum altitude, bit 1 circle), FENCE_RADIUS [m], FENCE_ALT_MAX [m], FENCE_ACTION (0 report,
 2 land, others: RTL). PX4: COM_OF_LOSS_T [s], COM_OBL_RC_ACT (what flies when the
 offboard stream is lost, :mod:`mavsim.px4`), GF_MAX_HOR_DIST [m], GF_MAX_VER_DIST [m] (0: off),
@@ -53,6 +54,9 @@ ARDUPILOT_PARAMS = (
     ParamDef("WPNAV_ACCEL_Z", REAL32, 100.0),
     ParamDef("PSC_JERK_XY", REAL32, 5.0),
     ParamDef("PSC_JERK_Z", REAL32, 5.0),
+    ParamDef("PSC_POSXY_P", REAL32, 1.0),
+    ParamDef("PSC_VELXY_P", REAL32, 2.0),
+    ParamDef("PSC_VELXY_I", REAL32, 1.0),
     ParamDef("TKOFF_SLEW_TIME", REAL32, 2.0),
     ParamDef("FENCE_ENABLE", INT8, 0),
     ParamDef("FENCE_TYPE", INT8, 7),
