@@ -69,6 +69,17 @@ FORCE_DISARM = 21196.0
 STREAMED = {32: "LOCAL_POSITION_NED", 30: "ATTITUDE", 85: "POSITION_TARGET_LOCAL_NED"}
 SLOW = {1: "SYS_STATUS", 147: "BATTERY_STATUS", 245: "EXTENDED_SYS_STATE"}
 TextHandler = Callable[[int, str], None]
+EKF_ORIGIN_LLA = (-35.363261, 149.165230, 584.0)
+"""EKF origin (lat [deg], lon [deg], alt [m]) given to an ArduPilot flying on forwarded mocap:
+its local frame is the mocap's whichever origin it has, but EKF3 needs one, and the one its GPS
+would set later while it fuses ExternalNav crashes ArduCopter 4.7 SITL (floating point exception
+at "origin set", measured); set first, the GPS leaves it alone."""
+ATTITUDE_REFUSED = (
+    "mavlink_setpoints: attitude is refused: our outer loop over SET_ATTITUDE_TARGET diverged on "
+    "ArduCopter SITL (pitch swinging to 27 degrees, deviation abort at 0.69 m in the first "
+    "transit) and leaves mavsim's shaped autopilots beyond the 0.15 m bound; fly position setpoints"
+)
+"""Why a vehicle configured for attitude setpoints is not flown (measured 2026-11-23)."""
 GCS_HEARTBEAT_PERIOD_S = 0.5
 """Our heartbeat period in [s]: PX4 drops a ground station unheard for 2.5 s (and its texts with
 it), so a stall of the agent of up to 2 s keeps the texts coming."""
@@ -114,6 +125,7 @@ class MavlinkBackend:
         self._commanded_mode: int | None = None
         self._commanded_at = 0  # heartbeat count when our last mode/arming change was accepted
         self._last_gcs_heartbeat_s = -math.inf
+        self._origin_sent = False
         self._hold: Setpoint | None = None
         self._climb: Move | None = None
         self._climb_to: tuple[Vec3, Vec3] | None = None  # (from, to): planned at the next tick
@@ -160,7 +172,9 @@ class MavlinkBackend:
                 "ArduPilot nor PX4"
             )
         self._request_telemetry()
-        if self.state.armed:
+        if self.settings.setpoints == "attitude":
+            self.fault = ATTITUDE_REFUSED
+        elif self.state.armed:
             self.fault = "vehicle already armed when the agent connected: the pilot has it"
         elif self.settings.set_params:
             await self._configure()
@@ -207,10 +221,24 @@ class MavlinkBackend:
             severity, text = self.state.recent_texts[-1]
             self.commands.on_text(text)
             self.events.append((severity, text))
+            if "using external nav" in text:
+                self._set_ekf_origin()
             log.log(logging.WARNING if severity <= SEVERITY_WARNING else logging.INFO,
                     "vehicle %s: %s", self.state.system_id, text)  # fmt: skip
             if self._on_text is not None:
                 self._on_text(severity, text)
+
+    def _set_ekf_origin(self) -> None:
+        """ArduPilot fusing our mocap: give its EKF an origin (once), before its GPS does."""
+        if self._origin_sent or self._link is None or self.settings.mocap == "none":
+            return
+        self._origin_sent = True
+        lat, lon, alt = EKF_ORIGIN_LLA
+        message = self._link.mav.set_gps_global_origin_encode(
+            self.state.system_id or 0, round(lat * 1e7), round(lon * 1e7), round(alt * 1000)
+        )
+        self._link.send(message)
+        log.info("vehicle %s: EKF origin set for mocap flight", self.state.system_id)
 
     # --- commands ----------------------------------------------------------------------------
     async def _set_mode(self, custom_mode: int) -> None:

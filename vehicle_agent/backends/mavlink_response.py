@@ -20,6 +20,7 @@ from vehicle_agent.backends.mavlink_truth import (
     TruthTracker,
     truth_mocap,
 )
+from vehicle_agent.backends.mavlink_truth_filter import SmoothedTruthTracker
 
 log = logging.getLogger(__name__)
 
@@ -29,8 +30,10 @@ class ResponseAid:
 
     def __init__(self, settings: MavlinkSettings, *, seed: int = 0) -> None:
         self.settings = settings
-        self.truth = TruthTracker(settings.origin_m_enu) if settings.truth == "sitl" else None
-        """The simulator's state (None: not asked for)."""
+        self.truth: TruthTracker | None = None
+        """The simulator's state, smoothed of its centimetre steps (None: not asked for)."""
+        if settings.truth == "sitl":
+            self.truth = SmoothedTruthTracker(settings.origin_m_enu)
         self.lag = ResponseDelayEstimator()
         self._seed = seed
         self._logged_lead = -1.0

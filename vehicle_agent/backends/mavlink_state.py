@@ -86,6 +86,8 @@ class LinkState:
         self.battery_fraction: float | None = None
         self._battery_from_status = False
         self.landed_state: int | None = None
+        self.prearm_good: bool | None = None
+        """SYS_STATUS says the pre-arm checks pass (None: no SYS_STATUS yet)."""
         self.target_stamps = 0
         self.target_stamp_ms: int | None = None
         """``time_boot_ms`` of the last POSITION_TARGET_LOCAL_NED (our stamp, on mavsim)."""
@@ -152,6 +154,7 @@ class LinkState:
             self._battery_from_status = True
 
     def _sys_status(self, m: Any) -> None:
+        self.prearm_good = bool(m.onboard_control_sensors_health & MAV_SYS_STATUS_PREARM_CHECK)
         if m.battery_remaining >= 0 and not self._battery_from_status:
             self.battery_fraction = m.battery_remaining / 100.0
 
@@ -174,6 +177,9 @@ class LinkState:
         self.target_stamp_ms = int(m.time_boot_ms)
         self.target_stamps += 1
 
+
+MAV_SYS_STATUS_PREARM_CHECK = 0x10000000
+"""SYS_STATUS sensor bit of the pre-arm checks (PX4 sets it in health only, ArduPilot in all)."""
 
 _HANDLERS = {
     "LOCAL_POSITION_NED": LinkState._local_position,
