@@ -214,7 +214,7 @@ def writing(texts: list[str], targets: list[str]) -> None:
             continue
         try:
             flown = mavlink_writing.write(target, texts)
-        except (RuntimeError, OSError) as exc:
+        except (RuntimeError, OSError, mavlink_writing.launcher().SitlError) as exc:
             print(f"  {target}: {exc}", file=sys.stderr)
             columns.append(["failed"] * len(texts))
             continue

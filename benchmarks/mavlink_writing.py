@@ -17,6 +17,7 @@ import shutil
 import socket
 import sys
 import tempfile
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -25,7 +26,7 @@ from typing import Any
 from bus.messages import JobAssignment, JobMetrics, VehicleCommand
 from showfile import parse_show
 from vehicle_agent.agent import job_metrics, make_backend, prepare_job, vehicle_setup
-from vehicle_agent.backends.base import VehicleBackend
+from vehicle_agent.backends.base import CommandRefusedError, VehicleBackend
 from vehicle_agent.backends.mavlink import MavlinkBackend
 from vehicle_agent.clock import TickClock
 from vehicle_agent.job_runner import JobRunner
@@ -44,7 +45,10 @@ planning: {{write_height_m: 0.25, clearance_m: 0.05, pace: nominal}}
 """
 TARGETS = ("sim", "mavsim", "ardupilot", "px4")
 WARM_UP_S = 8.0
-"""An autopilot's time on the ground after connect (mocap fused, sources switched) before a job."""
+"""An autopilot's least time on the ground after connect (mocap fused, sources switched)."""
+READY_LIMIT_S = 240.0
+"""Longest wait in [s] after connect for an autopilot to say its pre-arm checks pass (ArduCopter
+fusing forwarded mocap: its EKF takes about 40 s, and mocap flows only once the agent is on)."""
 
 
 @dataclass(frozen=True)
@@ -81,7 +85,10 @@ async def fly_jobs(
     ``paced``: in real time (an autopilot); otherwise as fast as the simulator goes."""
     snapshot = await backend.start()
     clock = TickClock(backend.control_period_s, time_scale=1.0, skip_when_late=True)
-    while paced and clock.now_s < WARM_UP_S:  # the EKF re-converges on the parameters just set
+    while paced and not _warm(backend, clock.now_s):  # the EKF converges on the forwarded mocap
+        if clock.now_s > READY_LIMIT_S:
+            raise RuntimeError(f"the autopilot's pre-arm checks do not pass {READY_LIMIT_S:.0f} s "
+                               f"after connect: {_last_texts(backend)}")  # fmt: skip
         await asyncio.sleep(clock.delay_s())
         snapshot = await backend.tick(None, clock.now_s)
         clock.advance()
@@ -109,7 +116,11 @@ async def fly_jobs(
                 raise RuntimeError(f"job {k} failed: {failed[0]}")
             if actions.backend_command is not None:
                 name, hover = actions.backend_command
-                await (backend.takeoff(hover) if name == "takeoff" else backend.land())  # type: ignore[arg-type]
+                if name == "takeoff":
+                    await _take_off(backend, hover, clock)
+                    now = clock.now_s
+                else:
+                    await backend.land()
             snapshot = await backend.tick(actions.setpoint, now)
             if snapshot.fault is not None:
                 raise RuntimeError(f"job {k}: vehicle fault: {snapshot.fault}")
@@ -118,6 +129,35 @@ async def fly_jobs(
             clock.advance()
         done.append(metrics)
     return done
+
+
+async def _take_off(backend: VehicleBackend, hover: Any, clock: TickClock) -> None:
+    """Take off; a refusal (pre-arm checks) is tried again every 2 s for up to a minute, the
+    backend ticked meanwhile (mocap flowing), as the agent does with its back-off."""
+    t_end = clock.now_s + 60.0
+    while True:
+        try:
+            await backend.takeoff(hover)
+            return
+        except CommandRefusedError:
+            if clock.now_s > t_end:
+                raise
+        t_retry = clock.now_s + 2.0
+        while clock.now_s < t_retry:
+            await asyncio.sleep(clock.delay_s())
+            await backend.tick(None, clock.now_s)
+            clock.advance()
+
+
+def _warm(backend: VehicleBackend, now_s: float) -> bool:
+    """Past the warm-up and, on a MAVLink autopilot, its pre-arm checks passing."""
+    if now_s < WARM_UP_S:
+        return False
+    return not isinstance(backend, MavlinkBackend) or backend.state.prearm_good is not False
+
+
+def _last_texts(backend: VehicleBackend) -> list[str]:
+    return [text for _, text in backend.events][-5:] if isinstance(backend, MavlinkBackend) else []
 
 
 def write(target: str, texts: list[str]) -> list[Written]:
@@ -152,7 +192,10 @@ def _write_sitl(kind: str, texts: list[str]) -> list[Written]:
                            run_dir, mocap=True)  # fmt: skip
     process = launch.start(inst)
     try:
-        launch.wait_ready(inst, process, launch.READY_TIMEOUT_S)
+        if kind == "ardupilot":  # its EKF waits for the mocap the agent forwards: the agent waits
+            _wait_port(inst.url, process)
+        else:
+            launch.wait_ready(inst, process, launch.READY_TIMEOUT_S)
         vehicle = (
             f'backend: mavlink, mavlink_url: "{inst.url}", mavlink_system_id: {inst.system_id}, '
             "mavlink_truth: sitl, mavlink_mocap: vision_position_estimate"
@@ -162,6 +205,19 @@ def _write_sitl(kind: str, texts: list[str]) -> list[Written]:
         launch.stop(process)
         if not os.environ.get("SKYQUILL_KEEP_SITL_RUN"):
             shutil.rmtree(run_dir, ignore_errors=True)
+
+
+def _wait_port(url: str, process: Any, timeout_s: float = 30.0) -> None:
+    """Wait until the TCP port of ``url`` (``tcp:HOST:PORT``) accepts a connection."""
+    host, port = url.split(":")[1:3]
+    deadline = time.monotonic() + timeout_s
+    while process.poll() is None and time.monotonic() < deadline:
+        try:
+            with socket.create_connection((host, int(port)), timeout=1.0):
+                return
+        except OSError:
+            time.sleep(0.5)
+    raise RuntimeError(f"SITL port {url} did not open within {timeout_s:.0f} s")
 
 
 def _fly_mavlink(target: str, show: Any, texts: list[str]) -> list[Written]:
