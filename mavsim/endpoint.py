@@ -48,6 +48,10 @@ BATTERY_FULL_V = 16.8
 BATTERY_EMPTY_V = 14.0
 
 
+PREARM_CHECK = 0x10000000
+"""SYS_STATUS sensor bit of the pre-arm checks (MAV_SYS_STATUS_PREARM_CHECK)."""
+
+
 class VehicleEndpoint:
     """A UDP socket, a MAVLink codec and the autopilot behind them."""
 
@@ -374,10 +378,12 @@ class VehicleEndpoint:
         amps = 10.0 if self.autopilot.armed else 0.5
         remaining = round(100 * fraction)
         if message_id == mavlink.MAVLINK_MSG_ID_SYS_STATUS:
-            sensors = 0
+            sensors = PREARM_CHECK  # present and enabled; healthy while arming would pass
+            ap = self.autopilot
+            healthy = ap.config.arm_refusal is None and ap.position_source_ready
             return self._mav.sys_status_encode(
-                sensors, sensors, sensors, 100, int(volts * 1000), int(amps * 100), remaining,
-                0, 0, 0, 0, 0, 0,
+                sensors, sensors, sensors if healthy else 0, 100, int(volts * 1000),
+                int(amps * 100), remaining, 0, 0, 0, 0, 0, 0,
             )  # fmt: skip
         if message_id == mavlink.MAVLINK_MSG_ID_BATTERY_STATUS:
             cells = [int(volts * 250)] * 4 + [65535] * 6

@@ -153,6 +153,7 @@ def test_take_off_follow_a_move_and_land_over_udp() -> None:
         ap = server.endpoints[0].autopilot
         async with connected(server, telemetry_rate_hz=100.0) as (backend, driver):
             assert backend.state.system_id == 7 and backend.state.flavor is ARDUPILOT
+            await driver.until(lambda _s: backend.state.prearm_good is True, 2.0)  # SYS_STATUS
             hold = await airborne(backend, driver)
             # telemetry asked with MAV_CMD_SET_MESSAGE_INTERVAL (LOCAL_POSITION_NED, SYS_STATUS)
             intervals = server.endpoints[0].intervals_s
