@@ -228,6 +228,9 @@ def test_px4_offboard_take_off_fly_land_and_offboard_loss() -> None:
             goal = (1.3, -1.0, 0.6)
             move = plan_move(HOVER, goal, driver.now, v_max_mps=0.6, a_max_mps2=0.8)
             await driver.until(lambda s: move.done(driver.now), 4.0, move.setpoint)
+            # PX4's MPC loop trails the move: land once there (its default gains, 1-3 s)
+            await driver.until(lambda s: math.dist(s.position_m_enu, goal) < 0.02, 4.0,
+                               lambda _t: Setpoint(goal))  # fmt: skip
             await backend.land()
             landed = await driver.until(lambda s: s.mode == "idle", 6.0)
             assert math.dist(landed.position_m_enu[:2], goal[:2]) < 0.03 and not landed.armed
