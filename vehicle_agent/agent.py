@@ -29,18 +29,10 @@ from vehicle_agent.service import (
 from vehicle_agent.setup import VehicleSetup, on_board, vehicle_setup
 from vehicle_agent.worker_client import ProcessJobWork
 
-__all__ = [
-    "job_metrics",
-    "make_backend",
-    "prepare_job",
-    "run_agent",
-    "vehicle_setup",
-    "write_job_picture",
-    "write_job_report",
-]
+__all__ = ["make_backend", "make_runner", "run_agent", "run_agent_blocking", "vehicle_setup"]
 
 JOB_FUNCTIONS = ("job_metrics", "prepare_job", "write_job_picture", "write_job_report")
-"""Names of :mod:`vehicle_agent.jobs` this module hands out (imported on first use)."""
+"""Names of :mod:`vehicle_agent.jobs` this module also hands out, importing it on first use."""
 
 
 def __getattr__(name: str) -> Any:

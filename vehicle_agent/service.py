@@ -29,7 +29,7 @@ import logging
 import signal
 import time
 from collections import deque
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import msgspec
 
@@ -45,7 +45,7 @@ from bus.messages import (
 )
 from bus.pubsub import MessagePublisher, declare_token, publish, watch_liveliness
 from bus.rpc import error_info_from_exception, serve_async
-from bus.session import ZenohSettings, open_session
+from bus.session import open_session
 from vehicle_agent.backends.base import (
     BackendError,
     CommandRefusedError,
@@ -61,6 +61,7 @@ from vehicle_agent.lease import JobLease
 from vehicle_agent.reports import ReportOutbox
 from vehicle_agent.rest import at_rest
 from vehicle_agent.runner_io import ACTIVE_PHASES, result_report
+from vehicle_agent.service_settings import ServiceSettings
 from vehicle_agent.trace import FlownTrace
 from vehicle_agent.work import JobWork
 
@@ -70,33 +71,6 @@ log = logging.getLogger(__name__)
 
 TICK_HISTORY = 4096
 """How many tick start times the service keeps (``AgentService.tick_starts_s``)."""
-
-
-@dataclass(frozen=True)
-class ServiceSettings:
-    """How the agent joins the bus and paces its loop."""
-
-    show_id: str
-    """Show id: the Zenoh namespace."""
-    zenoh: ZenohSettings
-    """Endpoints from the show file."""
-    time_scale: float = 1.0
-    """Agent seconds per wall second."""
-    skip_when_late: bool = False
-    """Real vehicles: jump ahead after a stall (see ``TickClock``)."""
-    report_retry_s: float = 0.5
-    """Wall time in [s] between attempts to deliver a report."""
-    report_timeout_s: float = 2.0
-    """Wall time in [s] to wait for the orchestrator's acknowledgement of one attempt."""
-    status_period_s: float = 1.0
-    """Wall time in [s] between status heartbeats, at most ``lost_after_s / 4`` (status is also
-    sent on every change)."""
-    lost_after_s: float = 1.5
-    """The show's ``policy.lost_after_s`` in [s]: the orchestrator takes a vehicle silent this
-    long as lost; the heartbeat and the job lease follow from it."""
-    rest_period_s: float | None = None
-    """Wall time in [s] between ticks of a vehicle at rest (landed, no job, motors off); None:
-    every control period, always (an autopilot needs its mocap and heartbeat streams)."""
 
 
 class AgentService:
@@ -144,7 +118,6 @@ class AgentService:
         """Wall (monotonic) times in [s] at which the latest ticks began: the loop's pace and
         period jitter, for measurements (``benchmarks/bench_agent.py``) and tests."""
         self._stalled_s = 0.0
-        self._next_probe_s = 0.0
         self._progress = 0.0
         self._snapshot: VehicleSnapshot | None = None
 
@@ -286,10 +259,7 @@ class AgentService:
         why = lease.breach(gap_s, wall_s)
         if why is not None:
             self._give_up(why)
-        elif (
-            lease.job_id is not None and lease.wants_probe(wall_s) and wall_s >= self._next_probe_s
-        ):
-            self._next_probe_s = wall_s + lease.probe_after_s
+        elif lease.job_id is not None and lease.probe_due(wall_s):
             probe = AgentReport(
                 vehicle_id=self.vehicle_id,
                 job_id=lease.job_id,

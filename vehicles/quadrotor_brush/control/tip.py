@@ -18,7 +18,6 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-
 from vehicles.quadrotor_brush.control.errors import ControlError
 
 FloatArray = NDArray[np.float64]
