@@ -339,14 +339,14 @@ class AgentService:
         self.runner.plan_ready(prepared)
 
     async def _finish(self, trace: FlownTrace) -> None:
+        """Measure the flown job, record it, then report it: a job reported done has its
+        record on disk (its picture may still be drawn)."""
         prepared = self._prepared[trace.job_id]
         metrics = None
         try:
             metrics = await self.work.measure(prepared, trace)
         except Exception:  # reported as unmeasured: done means within the writing bounds
             log.exception("%s: metrics of %s failed", self.vehicle_id, trace.job_id)
-        bounds = self.runner.safety.writing
-        self.reports.queue(result_report(self.vehicle_id, trace, metrics, bounds))
         try:
             where = await self.work.archive(prepared, trace, metrics)
         except Exception:
@@ -354,6 +354,8 @@ class AgentService:
         else:
             if where is not None:
                 log.info("%s: job %s recorded in %s", self.vehicle_id, trace.job_id, where)
+        bounds = self.runner.safety.writing
+        self.reports.queue(result_report(self.vehicle_id, trace, metrics, bounds))
 
     # --- outputs -------------------------------------------------------------------------------
     def _publish_status(self, *, only_if_changed: bool = False) -> None:
