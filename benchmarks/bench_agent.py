@@ -1,8 +1,8 @@
 """Light agents: what an idle vehicle agent costs, and how steady its control loop stays while a
 job is planned.
 
-    nice -n 15 .venv/bin/python benchmarks/bench_agent.py [--vehicles 10] [--peer-tree DIR]
-        [--idle-s 20] [--skip-fleet] [--skip-loop]
+    nice -n 15 .venv/bin/python benchmarks/bench_agent.py [--vehicles 10] [--idle-s 20]
+        [--peer-commit REV | --peer-tree DIR] [--skip-fleet] [--skip-loop]
 
 Two parts, each printed beside a peer measured in the same run:
 
@@ -10,8 +10,9 @@ Two parts, each printed beside a peer measured in the same run:
   sim vehicles (``bench_stop.wide_show``); once every agent is on the bus and has settled, for
   ``--idle-s``: each agent's RSS (VmRSS) and CPU share (utime+stime over wall time, from /proc),
   planning workers running, and the status and telemetry messages heard per vehicle per second.
-  The peer is the same show run from another checkout (``--peer-tree``, e.g. an export of the
-  code before this change: ``git archive <commit> | tar -x -C DIR``); without it, only ours.
+  The peer is the same show run from other code: ``--peer-commit REV`` (exported with
+  ``git archive`` into a temporary folder; 7b61496 is the code before the light agents) or an
+  exported ``--peer-tree DIR``; without either, only ours.
 - **loop under planning**: one agent service in this process (real Zenoh router and session, the
   show's simulated vehicle, the loop at 100 Hz: resting off) while five characters are planned
   through its job work. Period jitter = |tick interval - 10 ms|, p50/p99/max, with nothing
@@ -202,6 +203,7 @@ class LoopFigures:
     planning_ms: list[float]
     wall_s: list[float]
     cpu_s: list[float]
+    worker_rss_mib: float | None
 
 
 def jitter_ms(starts: Sequence[float], within: Sequence[tuple[float, float]]) -> list[float]:
@@ -278,6 +280,8 @@ async def loop_under_planning(in_process: bool, port: int) -> LoopFigures:
                 cpus.append(process_work.last_cpu_s)
             await asyncio.sleep(0.2)
         starts = list(service.tick_starts_s)
+        worker_pid = None if in_process else process_work.pid
+        worker_rss = None if worker_pid is None else rss_mib(worker_pid)
         stop.set()
         await task
         del ack
@@ -286,6 +290,7 @@ async def loop_under_planning(in_process: bool, port: int) -> LoopFigures:
         planning_ms=jitter_ms(starts, windows),
         wall_s=walls,
         cpu_s=cpu_of_plans if in_process else cpus,
+        worker_rss_mib=worker_rss,
     )
 
 
@@ -312,6 +317,15 @@ def print_loop(label: str, figures: LoopFigures) -> None:
         )
 
 
+def export_commit(rev: str, into: Path) -> Path:
+    """The files of commit ``rev`` of this repository, written under ``into``."""
+    archive = subprocess.run(
+        ["git", "-C", str(ROOT), "archive", rev], capture_output=True, check=True
+    ).stdout
+    subprocess.run(["tar", "-x", "-C", str(into)], input=archive, check=True)
+    return into
+
+
 def free_port() -> int:
     import socket
 
@@ -324,6 +338,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--vehicles", type=int, default=10)
     parser.add_argument("--peer-tree", type=Path, default=None)
+    parser.add_argument("--peer-commit", default=None)
     parser.add_argument("--idle-s", type=float, default=20.0)
     parser.add_argument("--start-timeout", type=float, default=900.0)
     parser.add_argument("--skip-fleet", action="store_true")
@@ -340,9 +355,13 @@ def main() -> None:
         )
     if not args.skip_fleet:
         print(f"idle fleet ({args.vehicles} sim vehicles, {args.idle_s:.0f} s idle):")
-        if args.peer_tree is not None:
-            peer = measure_idle(args.peer_tree, args.vehicles, args.idle_s, args.start_timeout)
-            print_idle(f"peer {args.peer_tree}", peer)
+        with tempfile.TemporaryDirectory() as tmp:
+            peer_tree = args.peer_tree
+            if args.peer_commit is not None:
+                peer_tree = export_commit(args.peer_commit, Path(tmp))
+            if peer_tree is not None:
+                peer = measure_idle(peer_tree, args.vehicles, args.idle_s, args.start_timeout)
+                print_idle(f"peer {args.peer_commit or peer_tree}", peer)
         ours = measure_idle(ROOT, args.vehicles, args.idle_s, args.start_timeout)
         print_idle("this tree", ours)
 
