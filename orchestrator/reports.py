@@ -91,34 +91,45 @@ def _done(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) ->
 def _failed(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
     if rep.retry_after_s is not None:
         return _handed_back(book, job, rep, eff, now_s, rep.retry_after_s)
-    book.put(eff, transition(job, "failed", now_s, error=rep.error))
     reason = rep.error.message if rep.error else "no reason given"
-    book.event(
-        eff,
-        now_s,
-        "alert",
-        "job_failed",
-        f"{job.label} failed on {rep.vehicle_id}: {reason}",
-        vehicle_id=rep.vehicle_id,
-        job_id=job.job_id,
-    )
-    eff.fleet_changed = True
-    book.assign(eff, now_s)
-    return CommandReply(ok=True, message="failure recorded")
+    return _fail(book, job, rep, eff, now_s, f"{job.label} failed on {rep.vehicle_id}: {reason}")
 
 
 def _handed_back(
     book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float, retry_after_s: float
 ) -> CommandReply:
-    """The vehicle could not start the job (take-off refused) but is healthy: the job goes back
-    to the queue without counting the attempt; the vehicle gets no job for ``retry_after_s``."""
+    """The vehicle gave the job back before its brush touched, and is healthy: the job goes back
+    to the queue and the vehicle gets no job for ``retry_after_s``. A take-off refusal (pre-arm
+    checks) does not count as an attempt; a safety abort (``not_settled``, ``deviation`` in
+    transit) does, so a job that no vehicle can fly fails after ``max_attempts`` instead of
+    going round for ever."""
     view = book.vehicles[rep.vehicle_id]
     view.refused_until_s = max(view.refused_until_s, now_s + max(0.0, retry_after_s))
     reason = rep.error.message if rep.error else "no reason given"
-    requeued = update(job, now_s, attempts=max(0, job.attempts - 1))
+    if rep.error is None or rep.error.code != "takeoff_refused":
+        if job.attempts >= book.config.max_attempts:
+            message = f"{job.label} failed on {rep.vehicle_id}: {reason}"
+            return _fail(
+                book, job, rep, eff, now_s, f"{message}; gave up after {job.attempts} tries"
+            )
+        requeued = job
+    else:
+        requeued = update(job, now_s, attempts=max(0, job.attempts - 1))
     book.requeue(eff, requeued, now_s, f"{rep.vehicle_id} could not start it: {reason}", lost=False)
     book.assign(eff, now_s)
     return CommandReply(ok=True, message="job back in the queue")
+
+
+def _fail(
+    book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float, message: str
+) -> CommandReply:
+    book.put(eff, transition(job, "failed", now_s, error=rep.error))
+    book.event(
+        eff, now_s, "alert", "job_failed", message, vehicle_id=rep.vehicle_id, job_id=job.job_id
+    )
+    eff.fleet_changed = True
+    book.assign(eff, now_s)
+    return CommandReply(ok=True, message="failure recorded")
 
 
 def _writing(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
