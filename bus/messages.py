@@ -335,10 +335,10 @@ class ShowSnapshot(State, frozen=True):
     jobs: list[JobState]
     vehicles: list[VehicleSummary]
     events: list[Event] = []
+    """The latest lines of the event log, oldest first (``snapshot`` replies only; v1 addition)."""
     dirty_boards: list[str] = []
     """Boards left half-written (a job requeued after writing started): no job is assigned there
     until the operator confirms a fresh sheet (``fresh_sheet``; v1 addition)."""
-    """The latest lines of the event log, oldest first (``snapshot`` replies only; v1 addition)."""
     job_counts: dict[str, int] = {}
     """How many jobs of the show are in each state, all of them: ``jobs`` may leave out older
     finished ones (states with no job are absent; v1 addition)."""

@@ -52,6 +52,8 @@ class Book:
         now_s: float,
         queue_paused: bool = False,
         paused_vehicles: Iterable[str] = (),
+        held_vehicles: Iterable[str] = (),
+        dirty_boards: Iterable[str] = (),
     ) -> None:
         self.config = config
         self.queue_paused = queue_paused
@@ -59,6 +61,9 @@ class Book:
         for vid in paused_vehicles:
             if vid in self.vehicles:
                 self.vehicles[vid].paused = True
+        for vid in held_vehicles:
+            if vid in self.vehicles:
+                self.vehicles[vid].paused = self.vehicles[vid].held = True
         self.jobs: dict[str, Job] = {}
         for job in jobs:  # restart: active jobs must be confirmed by their vehicle again
             self.jobs[job.job_id] = update(job, now_s, assigned_at_s=now_s) if job.active else job
@@ -73,9 +78,10 @@ class Book:
         """(client_id, idempotency_key) -> job id of every keyed submission."""
         self._announced: positions.Announced = {}
         self.recent_events: deque[Event] = deque(maxlen=RECENT_EVENTS)
-        self.dirty_boards: set[str] = set()
-        """Boards left half-written: no job there until the operator's ``fresh_sheet``."""
         """The latest events, for the ``snapshot`` reply (a late console shows recent history)."""
+        boards = {v.board_id for v in config.vehicles}
+        self.dirty_boards: set[str] = {b for b in dirty_boards if b in boards}
+        """Boards left half-written: no job there until the operator's ``fresh_sheet``."""
 
     # --- views ------------------------------------------------------------------------------
     def queue(self) -> list[Job]:

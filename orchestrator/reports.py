@@ -159,8 +159,8 @@ def _writing(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float)
 def _reclaim(book: Book, eff: Effects, job: Job, rep: AgentReport, now_s: float) -> bool:
     """A vehicle still writing a job that was requeued (e.g. after a liveliness flap)."""
     view = book.vehicles.get(rep.vehicle_id)
-    if job.state != "queued" or view is None or not view.alive:
-        return False
+    if job.state != "queued" or view is None or not view.alive or view.held:
+        return False  # held: the operator took the job away
     if book.active_job_of(rep.vehicle_id) is not None or view.info.board_id in book.busy_boards():
         return False
     book.put(

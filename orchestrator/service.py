@@ -124,6 +124,8 @@ class OrchestratorService:
             now_s=clock(),
             queue_paused=stored.queue_paused,
             paused_vehicles=stored.paused_vehicles,
+            held_vehicles=stored.held_vehicles,
+            dirty_boards=stored.dirty_boards,
         )
         self._planner = ThreadPoolExecutor(max_workers=1, thread_name_prefix="eta-planner")
         self._tasks: set[asyncio.Task[Any]] = set()
@@ -142,6 +144,8 @@ class OrchestratorService:
             settings = {
                 "queue_paused": self.book.queue_paused,
                 "paused_vehicles": [v for v, view in self.book.vehicles.items() if view.paused],
+                "held_vehicles": [v for v, view in self.book.vehicles.items() if view.held],
+                "dirty_boards": self.book.dirty_boards,
             }
         try:
             self.store.save(eff.jobs.values(), eff.events, written=eff.written, **settings)
