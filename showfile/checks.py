@@ -9,8 +9,9 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 
-from showfile.models import KIND_ORIENTATION, Board, Show
-from vehicles import LIVE_KINDS, ROOMS
+from showfile.models import KIND_ORIENTATION, Board, Show, Vehicle
+from vehicles import ROOMS
+from vehicles.omni_wheel.check_route import FloorArea, RouteError, check_route, terrain_of
 
 Loc = tuple[str | int, ...]
 Problem = tuple[Loc, str]
@@ -101,15 +102,6 @@ def cross_check(show: Show) -> list[Problem]:
                     + ", ".join(sorted(ROOMS)),
                 )
             )
-        elif vehicle.kind not in LIVE_KINDS:
-            problems.append(
-                (
-                    ("vehicles", i, "kind"),
-                    f"vehicle kind {vehicle.kind!r} writes only in `skyquill fly --kind "
-                    f"{vehicle.kind}` so far: a show's agent cannot fly it yet; show kinds: "
-                    + ", ".join(sorted(LIVE_KINDS)),
-                )
-            )
         target = board_ids.get(vehicle.board)
         if target is None:
             problems.append(
@@ -126,6 +118,10 @@ def cross_check(show: Show) -> list[Problem]:
                     f"but board {target.id!r} is {target.orientation}",
                 )
             )
+        else:
+            why = reach_problem(show, vehicle)
+            if why is not None:
+                problems.append((("vehicles", i, "board"), why))
         for j in range(i):
             neighbour = show.vehicles[j]
             if math.dist(vehicle.home_m_enu, neighbour.home_m_enu) < _MIN_HOME_SEPARATION_M:
@@ -157,3 +153,25 @@ def _mavlink_problems(show: Show) -> list[Problem]:
     if show.mavlink_sim.enabled and not mavlink:
         problems.append((("mavlink_sim", "enabled"), "no vehicle has backend: mavlink"))
     return problems
+
+
+def reach_problem(show: Show, vehicle: Vehicle) -> str | None:
+    """Why ``vehicle`` cannot reach its board from its home (a floor area behind a step higher
+    than a ground writer climbs, off the terrain, straddling a step, at the wrong height, too
+    far), in one line naming the area; None when it can."""
+    board = show.board(vehicle.board)
+    if board.orientation != "floor":
+        return None
+    section = show.omni_wheel
+    if section is None:
+        terrain = terrain_of((), 20.0)
+    else:
+        terrain = terrain_of(
+            ((s.x_m, s.height_m) for s in section.steps), section.terrain_half_width_m
+        )
+    area = FloorArea(board.id, board.center_m_enu, 0.5 * max(board.size_m))
+    try:
+        check_route(vehicle.home_m_enu, area, terrain)
+    except RouteError as exc:
+        return f"{vehicle.id} cannot write there: {exc}"
+    return None

@@ -1,6 +1,6 @@
 """Settings of a ``hexarotor-sponge`` vehicle (the Flying Calligrapher) as a show file states them.
 
-Not wired into :class:`showfile.models.Show` yet: ``vehicles.hexarotor_sponge.kind.settings_from``
+The show's ``hexarotor`` section; ``vehicles.hexarotor_sponge.kind.settings_from``
 turns one into the kind's typed settings. SI units; widths and lengths in metres.
 """
 

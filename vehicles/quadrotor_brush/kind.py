@@ -19,7 +19,7 @@ import numpy as np
 from planner.board import BoardFrame
 from planner.pipeline import plan_strokes
 from planner.samples import TrajectorySamples
-from vehicles.kind import FlownWriting, StrokeInput, WritingPlan, WritingScore
+from vehicles.kind import FlownWriting, JobPhases, StrokeInput, WritingPlan, WritingScore
 from vehicles.quadrotor_brush.control.controller import body_reference
 from vehicles.quadrotor_brush.flight import fly
 from vehicles.quadrotor_brush.loop import SimulatedQuadrotor
@@ -45,6 +45,10 @@ class QuadrotorBrush:
 
     name = "quadrotor-brush"
     orientation: Orientation = "horizontal"
+
+    def phases(self, settings: QuadrotorSettings) -> JobPhases:
+        """Takes off, flies above its board at the show's write height plus clearance, lands."""
+        return JobPhases(airborne=True, cruise="above_surface")
 
     def settings(self, show: Show | None, vehicle_id: str | None) -> QuadrotorSettings:
         """Settings of ``vehicle_id`` in ``show``, or a default show's with ``show`` None."""
