@@ -74,6 +74,8 @@ class Book:
         self._announced: positions.Announced = {}
         self.recent_events: deque[Event] = deque(maxlen=RECENT_EVENTS)
         self.dirty_boards: set[str] = set()
+        self.refused_kinds: dict[str, set[str]] = {}
+        """Job id -> the vehicle kinds whose planner refused it (it waits for another kind)."""
         """Boards left half-written: no job there until the operator's ``fresh_sheet``."""
         """The latest events, for the ``snapshot`` reply (a late console shows recent history)."""
 
@@ -114,7 +116,15 @@ class Book:
         etas = (
             {}
             if self.queue_paused
-            else queue_etas(queue, active, usable, now_s, self.config.eta, landing=landing)
+            else queue_etas(
+                queue,
+                active,
+                usable,
+                now_s,
+                self.config.eta,
+                landing=landing,
+                may_take=self.may_take,
+            )
         )
         return {j.job_id: (i + 1, etas.get(j.job_id)) for i, j in enumerate(queue)}
 
@@ -199,6 +209,8 @@ class Book:
         self.job_counts[job.state] += 1
         self.jobs[job.job_id] = job
         eff.jobs[job.job_id] = job
+        if job.final:
+            self.refused_kinds.pop(job.job_id, None)
         return job
 
     def requeue(self, eff: Effects, job: Job, now_s: float, reason: str, *, lost: bool) -> None:
@@ -307,6 +319,11 @@ class Book:
         return self.settle(eff, now_s)
 
     # --- assignment ---------------------------------------------------------------------------
+    def may_take(self, job: Job, vehicle_id: str) -> bool:
+        """The vehicle's kind has not refused to plan ``job`` (it writes it, as far as known)."""
+        refused = self.refused_kinds.get(job.job_id)
+        return refused is None or self.vehicles[vehicle_id].info.kind not in refused
+
     def assign(self, eff: Effects, now_s: float) -> None:
         """Give queued jobs, in order, to ready vehicles whose board is free."""
         if self.queue_paused:
@@ -326,7 +343,10 @@ class Book:
                 continue
             if not ready_for_job(view, now_s):
                 continue
-            job = queue.pop(0)
+            job = next((j for j in queue if self.may_take(j, vid)), None)
+            if job is None:
+                continue
+            queue.remove(job)
             job = self.put(
                 eff,
                 transition(

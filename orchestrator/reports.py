@@ -7,7 +7,9 @@ even after a requeue (the character is written) and whoever took the job over is
 ``started``/``progress`` from the last holder reclaim a job that is back in the queue and not yet
 given to another vehicle (a liveliness flap), otherwise the vehicle is told to stop
 (``not_assigned``); ``failed`` is acknowledged and ignored. A ``failed``
-report with ``retry_after_s`` hands the job back to the queue instead of failing it.
+report with ``retry_after_s`` hands the job back to the queue instead of failing it, and so does a
+``plan_failed`` one while a vehicle of another kind may still write the job (the vehicle's kind
+cannot write it: a width outside the sponge's range...); it then waits for such a vehicle.
 """
 
 from __future__ import annotations
@@ -18,6 +20,9 @@ from bus.messages import AgentReport, CommandReply, ErrorInfo, VehicleCommand
 from orchestrator.core_types import Effects
 from orchestrator.jobs import Job, transition, update
 from orchestrator.written import split_written
+
+PLAN_FAILED = "plan_failed"
+"""Error code of a job the vehicle's planner refused (``planner.errors.PlannerError.code``)."""
 
 if TYPE_CHECKING:
     from orchestrator.core import Book
@@ -91,6 +96,8 @@ def _done(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) ->
 def _failed(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
     if rep.retry_after_s is not None:
         return _handed_back(book, job, rep, eff, now_s, rep.retry_after_s)
+    if rep.error is not None and rep.error.code == PLAN_FAILED and _another_kind(book, job, rep):
+        return _handed_back(book, job, rep, eff, now_s, 0.0)
     book.put(eff, transition(job, "failed", now_s, error=rep.error))
     reason = rep.error.message if rep.error else "no reason given"
     book.event(
@@ -105,6 +112,16 @@ def _failed(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) 
     eff.fleet_changed = True
     book.assign(eff, now_s)
     return CommandReply(ok=True, message="failure recorded")
+
+
+def _another_kind(book: Book, job: Job, rep: AgentReport) -> bool:
+    """Record that the reporting vehicle's kind cannot plan ``job``; True when a vehicle of
+    another kind that has not refused it may still write it (the job then waits for it)."""
+    refused = book.refused_kinds.setdefault(job.job_id, set())
+    refused.add(book.vehicles[rep.vehicle_id].info.kind)
+    return any(
+        v.info.kind not in refused and v.info.cannot_write is None for v in book.vehicles.values()
+    )
 
 
 def _handed_back(

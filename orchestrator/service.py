@@ -48,6 +48,7 @@ from orchestrator.store import JobStore
 from orchestrator.submissions import SubmissionError, planned_duration_s, validate_submission
 from orchestrator.written import attach_written, with_written
 from showfile import Show
+from showfile.checks import cannot_write
 
 log = logging.getLogger(__name__)
 
@@ -72,7 +73,10 @@ def core_config(show: Show) -> CoreConfig:
     """The Book's policy from a show file."""
     return CoreConfig(
         show_id=show.show_id,
-        vehicles=tuple(VehicleInfo(v.id, v.kind, v.board) for v in show.vehicles),
+        vehicles=tuple(
+            VehicleInfo(v.id, v.kind, v.board, cannot_write=cannot_write(show, v))
+            for v in show.vehicles
+        ),
         moderation=show.policy.moderation,
         lost_after_s=show.policy.lost_after_s,
         max_queue=show.policy.max_queue,

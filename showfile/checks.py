@@ -175,3 +175,15 @@ def reach_problem(show: Show, vehicle: Vehicle) -> str | None:
     except RouteError as exc:
         return f"{vehicle.id} cannot write there: {exc}"
     return None
+
+
+def cannot_write(show: Show, vehicle: Vehicle) -> str | None:
+    """Why ``vehicle`` can write no job of ``show``, in one line (its kind does not write on its
+    board's surface, or it cannot reach the board: :func:`reach_problem`); None when it can."""
+    board = show.board(vehicle.board)
+    surface = KIND_ORIENTATION[vehicle.kind]
+    if surface != board.orientation:
+        return (
+            f"a {vehicle.kind} writes on a {surface} board, not on {board.orientation} {board.id!r}"
+        )
+    return reach_problem(show, vehicle)

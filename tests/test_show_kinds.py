@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from bus.messages import Telemetry
 from bus.keys import ShowKeys
+from bus.messages import Telemetry
 from bus.pubsub import subscribe
 from bus.rpc import NoReplyError
 from bus.session import Session
@@ -54,7 +54,10 @@ def test_a_mixed_show_writes_on_boards_a_wall_and_the_floor_at_once(tmp_path: Pa
         jobs = wait_for_jobs(session, run.keys, [str(r.job_id) for r in replies], timeout_s=240.0)
         subscriber.undeclare()  # type: ignore[no-untyped-call]
     logs = {p.name: p.read_text(errors="replace")[-1500:] for p in (tmp_path / "logs").glob("*")}
-    assert [j.state for j in jobs] == ["done"] * 4, ([(j.label, j.state, j.error) for j in jobs], logs)
+    assert [j.state for j in jobs] == ["done"] * 4, (
+        [(j.label, j.state, j.error) for j in jobs],
+        logs,
+    )
     by_vehicle = {j.vehicle_id: j for j in jobs}
     assert set(by_vehicle) == {"uav1", "uav2", "calligrapher", "ground1"}, by_vehicle
     for job in jobs:
