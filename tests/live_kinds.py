@@ -6,6 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from bus.messages import AgentReport, JobAssignment, Telemetry, VehicleCommand
+from bus.rpc import error_info_from_exception
+from planner.errors import PlannerError
 from showfile import Show
 from vehicle_agent.backends.sim import SimVehicle
 from vehicle_agent.job_runner import JobRunner
@@ -58,9 +60,7 @@ class LiveRun:
             name, hover = actions.backend_command
             getattr(self.vehicle, name)(*(() if hover is None else (hover,)))
         if actions.plan_request is not None:
-            prepared = prepare_job(self.setup, actions.plan_request)
-            self.prepared[prepared.job_id] = prepared
-            self.runner.plan_ready(prepared)
+            self._plan(actions.plan_request)
         self.reports += actions.reports
         if actions.telemetry is not None:
             self.telemetry.append(actions.telemetry)
@@ -74,6 +74,16 @@ class LiveRun:
             self.phases.append(self.runner.phase)
         self.vehicle.tick(actions.setpoint)
         self.ticks += 1
+
+    def _plan(self, assignment: JobAssignment) -> None:
+        """As the agent's service: plan, or report why it cannot."""
+        try:
+            prepared = prepare_job(self.setup, assignment)
+        except PlannerError as exc:
+            self.runner.plan_failed(assignment.job_id, error_info_from_exception(exc))
+            return
+        self.prepared[prepared.job_id] = prepared
+        self.runner.plan_ready(prepared)
 
     def until_back(self, max_s: float) -> None:
         """Tick until the job is over and the vehicle is back at rest (or ``max_s`` passed)."""
