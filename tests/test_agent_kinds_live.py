@@ -10,10 +10,10 @@ from typing import Any
 
 import numpy as np
 import pytest
+from live_kinds import LiveRun
 
 from bus.messages import JobAssignment
 from showfile import parse_show
-from live_kinds import LiveRun
 
 SHOWS = Path(__file__).resolve().parents[1] / "shows"
 WALL_SHOW = (SHOWS / "flying-calligrapher.yaml").read_text(encoding="utf-8")
