@@ -18,8 +18,6 @@ from vehicle_agent.job_runner import RunnerConfig
 from vehicle_agent.safety import DeviationLimit, SafetyLimits, WritingBounds, vehicle_fence
 from vehicles.jobs import board_surface
 from vehicles.kind import JobPhases, VehicleKind
-from vehicles.quadrotor_brush.params import WorldParams
-from vehicles.quadrotor_brush.settings import QuadrotorSettings
 from vehicles.registry import vehicle_kind
 from vehicles.surface import Surface
 
@@ -163,9 +161,14 @@ def on_board(setup: VehicleSetup) -> Callable[[Vec3], bool]:
     return inside
 
 
-def world_params(setup: VehicleSetup) -> WorldParams:
-    """The brush quadrotor's simulated world of this vehicle (its brush and board height), which
-    the MAVLink backend uses to follow a brush it cannot sense; ValueError for another kind."""
-    if not isinstance(setup.settings, QuadrotorSettings):
-        raise ValueError(f"vehicle {setup.vehicle_id}: a {setup.kind.name} has no brush model")
-    return setup.settings.flight.world
+def world_params(setup: VehicleSetup) -> Any:
+    """The simulated world an autopilot-flown vehicle of this kind follows its pen in (the brush
+    quadrotor's brush, board height and mocap, for the MAVLink backend); ValueError for a kind
+    that flies in the sim only."""
+    world = setup.kind.autopilot_world(setup.settings)
+    if world is None:
+        raise ValueError(
+            f"vehicle {setup.vehicle_id}: a {setup.kind.name} cannot fly behind an autopilot "
+            "(backend: mavlink) yet; use backend: sim"
+        )
+    return world

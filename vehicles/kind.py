@@ -266,3 +266,9 @@ class VehicleKind(Protocol):
     def phases(self, settings: Any) -> JobPhases:
         """How the live agent moves this kind between its home and its writing."""
         ...
+
+    def autopilot_world(self, settings: Any) -> Any | None:
+        """What a vehicle of this kind flown behind an autopilot (the MAVLink backend) takes from
+        its simulated world to follow a pen it cannot sense (the brush quadrotor: its
+        ``WorldParams``, brush, board height and mocap); None: the kind flies in the sim only."""
+        ...

@@ -114,6 +114,10 @@ class HexarotorSpongeKind:
             surface = Surface.of(board.orientation, board.center_m_enu, board.yaw_rad)
         return settings_from(show.hexarotor or HexarotorKindSettings(), surface)
 
+    def autopilot_world(self, settings: Any) -> None:
+        """No autopilot flies this kind yet: the sim backend only."""
+        return None
+
     def phases(self, settings: Any) -> JobPhases:
         """Takes off, flies level with the top of its writing area, then down to the first
         free-flight waypoint in front of the wall at its writing limits; the plan makes and

@@ -44,6 +44,10 @@ class OmniWheel:
         section = None if show is None else show.omni_wheel
         return DEFAULT_SETTINGS if section is None else omni_settings(section)
 
+    def autopilot_world(self, settings: Any) -> None:
+        """No autopilot flies this kind yet: the sim backend only."""
+        return None
+
     def phases(self, settings: OmniSettings) -> JobPhases:
         """Rests on the floor; drives to its area with the marker up, sideways first, then
         along x over the steps, within its planned speed and acceleration."""
