@@ -151,6 +151,7 @@ def queue_etas(
     *,
     landing: Iterable[str] = (),
     may_take: Callable[[Job, str], bool] | None = None,
+    writing_s_on: Callable[[Job, str], float] | None = None,
 ) -> dict[str, float]:
     """Wall seconds from now until each queued job should start writing (list scheduling).
 
@@ -161,6 +162,8 @@ def queue_etas(
     can start it first: when it is free and its board is too (one job per board at a time).
     Empty when no vehicle is usable. ``may_take(job, vehicle_id)`` (default: always) leaves out
     the vehicles whose kind cannot write a job; a job no usable vehicle may take has no ETA.
+    ``writing_s_on(job, vehicle_id)`` (default: the job's own estimate) is how long the job writes
+    on that vehicle (kinds differ).
     """
     scale = model.time_scale
     vehicle_free = dict.fromkeys(usable_boards, now_s)
@@ -186,7 +189,7 @@ def queue_etas(
             continue
         assigned, vid = min(map(can_start, takers))
         start = assigned + model.before_write_s / scale
-        done = start + writing_s(job) / scale
+        done = start + (writing_s_on(job, vid) if writing_s_on else writing_s(job)) / scale
         etas[job.job_id] = start - now_s
         board_free[usable_boards[vid]] = done
         vehicle_free[vid] = done + model.after_write_s / scale

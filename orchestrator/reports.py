@@ -96,7 +96,11 @@ def _done(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) ->
 def _failed(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
     if rep.retry_after_s is not None:
         return _handed_back(book, job, rep, eff, now_s, rep.retry_after_s)
-    if rep.error is not None and rep.error.code == PLAN_FAILED and _another_kind(book, job, rep):
+    if (
+        rep.error is not None
+        and rep.error.code == PLAN_FAILED
+        and book.kinds.refuse(job.job_id, rep.vehicle_id, book.config.vehicles)
+    ):
         return _handed_back(book, job, rep, eff, now_s, 0.0)
     book.put(eff, transition(job, "failed", now_s, error=rep.error))
     reason = rep.error.message if rep.error else "no reason given"
@@ -112,16 +116,6 @@ def _failed(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) 
     eff.fleet_changed = True
     book.assign(eff, now_s)
     return CommandReply(ok=True, message="failure recorded")
-
-
-def _another_kind(book: Book, job: Job, rep: AgentReport) -> bool:
-    """Record that the reporting vehicle's kind cannot plan ``job``; True when a vehicle of
-    another kind that has not refused it may still write it (the job then waits for it)."""
-    refused = book.refused_kinds.setdefault(job.job_id, set())
-    refused.add(book.vehicles[rep.vehicle_id].info.kind)
-    return any(
-        v.info.kind not in refused and v.info.cannot_write is None for v in book.vehicles.values()
-    )
 
 
 def _handed_back(

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from bus.messages import AgentReport, ErrorInfo, SubmitRequest, VehicleStatus
 from orchestrator.core import Book, CoreConfig, Effects
-from orchestrator.fleet import VehicleInfo
+from orchestrator.fleet import EtaModel, VehicleInfo, queue_etas
 from orchestrator.service import core_config
 from showfile import parse_show
 
@@ -68,7 +68,7 @@ def test_a_job_every_kind_refused_fails_with_the_planner_reason() -> None:
     _refuse(book, "uav1", "j1", 3.0)
     job = book.jobs["j1"]
     assert job.state == "failed" and job.error == WIDTH_ERROR
-    assert "j1" not in book.refused_kinds
+    assert "j1" not in book.kinds.refused
 
 
 GROUND = """\
@@ -97,3 +97,24 @@ def test_a_vehicle_that_cannot_reach_its_floor_area_is_never_given_a_job() -> No
     _online(book, info, 0.0)
     assert _assigned(_submit(book, "j1", 0.0)) + _assigned(book.tick(1.0)) == []
     assert book.jobs["j1"].state == "queued"
+
+
+def test_etas_take_the_duration_of_the_kind_that_would_write_each_job() -> None:
+    ground = VehicleInfo("ground1", "omni-wheel", "plaza")
+    book = Book(CoreConfig(show_id="t", vehicles=(QUAD, ground)), now_s=0.0)
+    for job_id in ("j1", "j2", "j3"):
+        _submit(book, job_id, 0.0)  # rough estimate 20 s each
+        book.set_estimate(job_id, {"quadrotor-brush": 10.0, "omni-wheel": 60.0}, 0.0)
+    assert book.jobs["j1"].estimate_s == 10.0  # the first vehicle's kind
+    model = EtaModel(before_write_s=11.0, after_write_s=9.0)
+    usable = {"uav1": "b1", "ground1": "plaza"}
+    kinds = book.kinds
+    etas = queue_etas(book.queue(), [], usable, 0.0, model, may_take=kinds.may_take,
+                      writing_s_on=kinds.writing_s_on)  # fmt: skip
+    # j1 on ground1 (60 s, free at 80), j2 on uav1 (10 s, free at 30): j3 next on uav1
+    assert etas == {"j1": 11.0, "j2": 11.0, "j3": 41.0}
+    kinds.refuse("j2", "uav1", book.config.vehicles)  # the brush cannot plan j2
+    etas = queue_etas(book.queue(), [], usable, 0.0, model, may_take=kinds.may_take,
+                      writing_s_on=kinds.writing_s_on)  # fmt: skip
+    # j1 on ground1, j2 must wait for ground1 (free at 80), j3 on uav1 at once
+    assert etas == {"j1": 11.0, "j2": 91.0, "j3": 11.0}
