@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 
+from showfile.kind_hexarotor import HexarotorKindSettings
 from showfile.models import KIND_ORIENTATION, Board, Show, Vehicle
 from vehicles import ROOMS
 from vehicles.omni_wheel.check_route import FloorArea, RouteError, check_route, terrain_of
@@ -158,8 +159,11 @@ def _mavlink_problems(show: Show) -> list[Problem]:
 def reach_problem(show: Show, vehicle: Vehicle) -> str | None:
     """Why ``vehicle`` cannot reach its board from its home (a floor area behind a step higher
     than a ground writer climbs, off the terrain, straddling a step, at the wrong height, too
-    far), in one line naming the area; None when it can."""
+    far; a wall whose writing area reaches beyond the hexarotor's ``reach_m``), in one line
+    naming the area; None when it can."""
     board = show.board(vehicle.board)
+    if board.orientation == "vertical":
+        return _wall_reach_problem(show, vehicle, board)
     if board.orientation != "floor":
         return None
     section = show.omni_wheel
@@ -187,3 +191,17 @@ def cannot_write(show: Show, vehicle: Vehicle) -> str | None:
             f"a {vehicle.kind} writes on a {surface} board, not on {board.orientation} {board.id!r}"
         )
     return reach_problem(show, vehicle)
+
+
+def _wall_reach_problem(show: Show, vehicle: Vehicle, board: Board) -> str | None:
+    """A wall whose writing area (less the margin) has corners beyond the writer's reach."""
+    reach_m = (show.hexarotor or HexarotorKindSettings()).reach_m
+    margin_m = show.planning.margin_m
+    half = [max(0.0, size / 2 - margin_m) for size in board.writing_area_m]
+    corner_m = math.hypot(*half)
+    if corner_m <= reach_m:
+        return None
+    return (
+        f"{vehicle.id} cannot write there: the corners of wall {board.id!r}'s writing area are "
+        f"{corner_m:.2f} m from its centre, beyond the reach {reach_m} m (hexarotor.reach_m)"
+    )

@@ -1,7 +1,9 @@
 """The live agent's path for the wall hexarotor and the ground writer (job runner + sim backend,
 one process, no bus): phases from the kind, the planned force reaching the wall, the step climbed
 on the way to a floor area, each kind's figures in the done report and the show's writing bounds
-deciding ``done``; bad input refused with one clear line and the vehicle left on the ground."""
+deciding ``done``; bad input refused with one clear line and the vehicle left on the ground (a
+wall whose writing area lies beyond the reach is refused by the show file already:
+tests/test_showfile_load.py)."""
 
 from __future__ import annotations
 
@@ -84,25 +86,14 @@ def test_a_ground_writer_climbs_to_its_terrace_writes_and_drives_home() -> None:
 
 
 @pytest.mark.parametrize(
-    ("text", "strokes", "words"),
-    [
-        (WALL_SHOW, _strokes(0.03), "width 30.00 mm is outside the pen's range"),
-        (WALL_SHOW, _strokes(0.0), "w must be in (0, 1] m"),
-        (
-            WALL_SHOW.replace(
-                "size_m: [2.0, 1.5], writing_area_m: [0.5, 0.5]",
-                "size_m: [4.0, 1.5], writing_area_m: [3.9, 1.4]",
-            ),
-            None,
-            "beyond the reach 1.5 m",
-        ),
-    ],
+    ("width_m", "words"),
+    [(0.03, "width 30.00 mm is outside the pen's range"), (0.0, "w must be in (0, 1] m")],
 )
 def test_a_wall_job_it_cannot_write_is_reported_in_one_line_and_it_stays_down(
-    text: str, strokes: dict[str, Any] | None, words: str
+    width_m: float, words: str
 ) -> None:
-    job = JobAssignment(job_id="j1", text=None if strokes else "一", strokes=strokes, attempt=1)
-    run = LiveRun(parse_show(text), "calligrapher")
+    job = JobAssignment(job_id="j1", strokes=_strokes(width_m), attempt=1)
+    run = LiveRun(parse_show(WALL_SHOW), "calligrapher")
     assert run.assign(job)
     for _ in range(5):
         run.tick()

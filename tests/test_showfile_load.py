@@ -256,3 +256,17 @@ def test_rotated_rectangles_overlap_by_separating_axes() -> None:
     turned = moved.model_copy(update={"yaw_deg": 45.0})
     assert polygons_overlap(footprint(board), footprint(turned))
     assert math.isclose(max(x for x, _ in footprint(board)), 0.7)
+
+
+def test_a_wall_whose_writing_area_reaches_beyond_the_hexarotor_is_refused_in_one_line() -> None:
+    text = (SHOWS / "flying-calligrapher.yaml").read_text(encoding="utf-8")
+    wide = text.replace(
+        "size_m: [2.0, 1.5], writing_area_m: [0.5, 0.5]",
+        "size_m: [4.0, 1.5], writing_area_m: [3.9, 1.4]",
+    )
+    err = _problem(wide)
+    problem = {p.field: p for p in err.problems}["vehicles[0].board"]
+    assert "'wall'" in problem.message and "beyond the reach 1.5 m" in problem.message
+    longer = wide.replace("force_rate_max_nps: 2.0", "force_rate_max_nps: 2.0\n  reach_m: 2.5")
+    hexarotor = parse_show(longer).hexarotor
+    assert hexarotor is not None and hexarotor.reach_m == 2.5

@@ -63,6 +63,7 @@ def settings_from(model: HexarotorKindSettings, surface: Surface | None = None) 
             limits=limits,
             default_width_m=pen.default_width_m,
             clamp_widths=pen.clamp_widths,
+            reach_m=model.reach_m,
         ),
         fly=FlySettings(params=params),
         surface=surface,
