@@ -10,7 +10,7 @@ import math
 from collections.abc import Iterator
 
 from showfile.kind_hexarotor import HexarotorKindSettings
-from showfile.models import KIND_ORIENTATION, Board, Show, Vehicle
+from showfile.models import AUTOPILOT_KINDS, KIND_ORIENTATION, Board, Show, Vehicle
 from vehicles import ROOMS
 from vehicles.omni_wheel.check_route import FloorArea, RouteError, check_route, terrain_of
 
@@ -143,6 +143,15 @@ def _mavlink_problems(show: Show) -> list[Problem]:
     problems: list[Problem] = []
     mavlink = [i for i, v in enumerate(show.vehicles) if v.backend == "mavlink"]
     for i in mavlink:
+        kind = show.vehicles[i].kind
+        if kind not in AUTOPILOT_KINDS:
+            problems.append(
+                (
+                    ("vehicles", i, "backend"),
+                    f"a {kind} cannot fly behind an autopilot yet: use backend: sim "
+                    f"(autopilot kinds: {', '.join(sorted(AUTOPILOT_KINDS))})",
+                )
+            )
         rate_hz = show.vehicles[i].mavlink_setpoint_rate_hz
         if rate_hz > show.controller.rate_hz:
             problems.append(

@@ -197,6 +197,10 @@ KIND_ORIENTATION: dict[str, str] = {
 }
 """The board orientation each vehicle kind writes on."""
 
+AUTOPILOT_KINDS: frozenset[str] = frozenset({"quadrotor-brush"})
+"""Kinds a MAVLink autopilot can fly (``backend: mavlink``); the others fly in the sim backend
+only (held equal to ``VehicleKind.autopilot_world`` by tests/test_showfile_load.py)."""
+
 
 class Limits(_Model):
     """Dynamic limits used by the planner (planner.pipeline.VehicleLimits). The defaults are the

@@ -11,7 +11,9 @@ import pytest
 
 from showfile import ShowFileError, dump_show, load_show, parse_show
 from showfile.checks import footprint, polygons_overlap
+from showfile.models import AUTOPILOT_KINDS
 from vehicles import ROOMS
+from vehicles.registry import vehicle_kind
 
 SHOWS = Path(__file__).resolve().parents[1] / "shows"
 
@@ -270,3 +272,15 @@ def test_a_wall_whose_writing_area_reaches_beyond_the_hexarotor_is_refused_in_on
     longer = wide.replace("force_rate_max_nps: 2.0", "force_rate_max_nps: 2.0\n  reach_m: 2.5")
     hexarotor = parse_show(longer).hexarotor
     assert hexarotor is not None and hexarotor.reach_m == 2.5
+
+
+def test_only_kinds_with_an_autopilot_world_may_fly_behind_mavlink() -> None:
+    for name in ROOMS:
+        kind = vehicle_kind(name)
+        has_world = kind.autopilot_world(kind.settings(None, None)) is not None
+        assert has_world == (name in AUTOPILOT_KINDS), name
+    text = (SHOWS / "flying-calligrapher.yaml").read_text(encoding="utf-8")
+    mavlink = "backend: mavlink, mavlink_url: 'udp:127.0.0.1:14561'"
+    err = _problem(text.replace("backend: sim", mavlink))
+    message = {p.field: p for p in err.problems}["vehicles[0].backend"].message
+    assert message.startswith("a hexarotor-sponge cannot fly behind an autopilot yet")
