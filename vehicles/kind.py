@@ -13,6 +13,10 @@ A job flows through a kind the same way for every kind (``vehicles.jobs`` does t
         -> VehicleKind.score(...)           -> WritingScore  (RMSE, IoU, kind-specific figures)
         -> VehicleKind.report(...)          -> report.png
 
+The live agent also asks ``VehicleKind.phases`` how the kind moves between its home and its
+writing (take off and land, or drive on the floor; cruise height; pen-up speed and route) and
+``VehicleKind.autopilot_world`` what an autopilot-flown vehicle of the kind needs (MAVLink).
+
 Pure: no transport, no asyncio; a room reads a parsed show only in ``settings``.
 """
 
