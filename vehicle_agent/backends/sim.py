@@ -100,9 +100,10 @@ class SimVehicle:
         self._begin_move(here, (here[0], here[1], self.home_m_enu[2]), "landing")
 
     def estop(self) -> None:
-        """Motors off: the vehicle drops to the ground where it is and stays there."""
-        x, y, _ = self._position()
-        self._rest_m_enu = (x, y, self.home_m_enu[2])
+        """Motors off: the vehicle drops to the ground where it is and stays there (a ground
+        vehicle stops on the floor it stands on)."""
+        x, y, z = self._position()
+        self._rest_m_enu = (x, y, z if not self.airborne else self.home_m_enu[2])
         self._vehicle = None
         self.mode = "estop"
 
