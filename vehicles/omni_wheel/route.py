@@ -2,9 +2,9 @@
 
 A route goes sideways on the level it starts on until it is in line with the goal, then straight
 along x (steps lie across x), climbing or descending the steps on the way with the proposed wheel
-control, then settles on the goal. :func:`check_route` refuses, with one line naming the area and
-the step, a route with a step higher than the vehicle climbs, a floor area off the terrain or
-straddling a step edge, a floor area whose height is not the floor's, or one too far away.
+control, then settles on the goal (the live agent's pen-up moves take the same shape:
+``JobPhases.route``). :func:`check_route` (light, in ``check_route.py`` so the show file can
+read it) refuses, in one line naming the area and the step, a floor area the vehicle cannot reach.
 """
 
 from __future__ import annotations
