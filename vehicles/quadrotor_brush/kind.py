@@ -20,9 +20,10 @@ import numpy as np
 
 from planner.board import BoardFrame
 from planner.samples import TrajectorySamples
-from vehicles.kind import FlownWriting, StrokeInput, WritingPlan, WritingScore
+from vehicles.kind import FlownWriting, JobPhases, StrokeInput, WritingPlan, WritingScore
 from vehicles.quadrotor_brush.control.controller import body_reference
 from vehicles.quadrotor_brush.loop import SimulatedQuadrotor
+from vehicles.quadrotor_brush.params import WorldParams
 from vehicles.quadrotor_brush.settings import QuadrotorSettings, quadrotor_settings
 from vehicles.surface import Orientation, Surface, Vec3
 
@@ -43,6 +44,14 @@ class QuadrotorBrush:
 
     name = "quadrotor-brush"
     orientation: Orientation = "horizontal"
+
+    def phases(self, settings: QuadrotorSettings) -> JobPhases:
+        """Takes off, flies above its board at the show's write height plus clearance, lands."""
+        return JobPhases(airborne=True, cruise="above_surface")
+
+    def autopilot_world(self, settings: QuadrotorSettings) -> WorldParams:
+        """The brush, board height and mocap of its simulated world (for the MAVLink backend)."""
+        return settings.flight.world
 
     def settings(self, show: Show | None, vehicle_id: str | None) -> QuadrotorSettings:
         """Settings of ``vehicle_id`` in ``show``, or a default show's with ``show`` None."""
