@@ -142,7 +142,7 @@ def measure_idle(tree: Path, count: int, idle_s: float, start_timeout_s: float) 
             keys = ShowKeys(show.show_id)
             heard = {"status": 0, "telemetry": 0}
 
-            def count(kind: str) -> Callable[[str, object], None]:
+            def counter(kind: str) -> Callable[[str, object], None]:
                 def on_message(_key: str, _message: object) -> None:
                     heard[kind] += 1
 
@@ -150,8 +150,8 @@ def measure_idle(tree: Path, count: int, idle_s: float, start_timeout_s: float) 
 
             with open_session(session_settings(show, "operator"), role="client") as session:
                 subs = [
-                    subscribe(session, keys.vehicle_status_all, VehicleStatus, count("status")),
-                    subscribe(session, keys.telemetry_all, Telemetry, count("telemetry")),
+                    subscribe(session, keys.vehicle_status_all, VehicleStatus, counter("status")),
+                    subscribe(session, keys.telemetry_all, Telemetry, counter("telemetry")),
                 ]
                 ticks0 = {pid: cpu_ticks(pid) for pid in pids}
                 started = time.monotonic()
@@ -322,6 +322,8 @@ def print_loop(label: str, figures: LoopFigures) -> None:
         print(
             f"    planning wall/CPU: median {statistics.median(ratios):.2f}, max {max(ratios):.2f}"
         )
+    if figures.worker_rss_mib is not None:
+        print(f"    planning worker RSS after the plans: {figures.worker_rss_mib:.0f} MiB")
 
 
 def export_commit(rev: str, into: Path) -> Path:
