@@ -25,6 +25,7 @@ FULL: dict[str, list[str]] = {
     "bench_cli.py": [],
     "bench_stop.py": [],
     "bench_ground.py": [],
+    "bench_agent.py": ["--vehicles", "50"],
 }
 QUICK: dict[str, list[str]] = {
     "bench_planner.py": ["--quick"],
@@ -37,6 +38,7 @@ QUICK: dict[str, list[str]] = {
     "bench_cli.py": ["--runs", "2"],
     "bench_stop.py": ["--vehicles", "4"],
     "bench_ground.py": ["--quick"],
+    "bench_agent.py": ["--vehicles", "2", "--idle-s", "3"],
 }
 
 

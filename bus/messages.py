@@ -178,6 +178,9 @@ class JobMetrics(State, frozen=True):
     written: WrittenInk | None = None
     """The ink left on the board, when the vehicle knows its brush (sent with the ``done``
     report and on ``jobs/<id>``; the orchestrator keeps it out of ``fleet``)."""
+    extra: dict[str, float] = {}
+    """The kind's own figures, names with units: the wall hexarotor's ``rmse_ee_m``,
+    ``rmse_base_m``, ``force_rmse_n``, ``width_rmse_m``; empty for kinds without any."""
 
 
 class JobState(State, frozen=True):
@@ -236,6 +239,8 @@ class Telemetry(State, frozen=True):
     """0..1 when the backend knows it."""
     job_id: str | None = None
     progress: float = 0.0
+    force_n: float | None = None
+    """Measured normal contact force in [N] of a kind that senses it (the wall hexarotor)."""
 
 
 class VehicleStatus(State, frozen=True):
@@ -335,10 +340,10 @@ class ShowSnapshot(State, frozen=True):
     jobs: list[JobState]
     vehicles: list[VehicleSummary]
     events: list[Event] = []
+    """The latest lines of the event log, oldest first (``snapshot`` replies only; v1 addition)."""
     dirty_boards: list[str] = []
     """Boards left half-written (a job requeued after writing started): no job is assigned there
     until the operator confirms a fresh sheet (``fresh_sheet``; v1 addition)."""
-    """The latest lines of the event log, oldest first (``snapshot`` replies only; v1 addition)."""
     job_counts: dict[str, int] = {}
     """How many jobs of the show are in each state, all of them: ``jobs`` may leave out older
     finished ones (states with no job are absent; v1 addition)."""

@@ -141,7 +141,6 @@ def _host_arg(host: str | None) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from cli.runstate import RunFileError
-    from cli.supervisor import child_env, show_children, skyquill_argv
     from showfile import ShowError, load_show
     from trust.hosts import HostError
 
@@ -161,6 +160,22 @@ def run(args: argparse.Namespace) -> int:
     tui, kiosk = _viewers(args, show, plan)
     if made:
         print(f"skyquill up: issued keys in {show.keys_dir}: {', '.join(made)}", file=sys.stderr)
+    _supervise(args, show, plan, previous, tui=tui, kiosk=kiosk)
+    return 0
+
+
+def _supervise(
+    args: argparse.Namespace,
+    show: Show,
+    plan: HostPlan,
+    previous: RunFile | None,
+    *,
+    tui: bool,
+    kiosk: bool,
+) -> None:
+    """Start (or adopt) the host's children and keep them up until asked to stop."""
+    from cli.supervisor import child_env, show_children, skyquill_argv
+
     specs = show_children(
         args.show,
         plan.vehicle_ids,
@@ -187,12 +202,8 @@ def run(args: argparse.Namespace) -> int:
         _adopt_survivors(supervisor, specs, previous, runfile, output.say)
         supervisor.start()
         runfile.save()
-        names = ", ".join(spec.name for spec in specs)
-        where = "" if plan.host is None else f" (host {plan.host})"
-        output.say(f"show {show.show_id}{where}: {names}")
-        output.say(
-            f"logs in {plan.log_dir}/; stop with Ctrl-C or `skyquill down {args.show}"
-            f"{_host_arg(plan.host)}`"
+        _announce(
+            output, show.show_id, plan.host, [spec.name for spec in specs], plan.log_dir, args.show
         )
         if tui:
             viewer = ConsoleViewer(
@@ -210,7 +221,15 @@ def run(args: argparse.Namespace) -> int:
         output.say(supervisor.stop().summary())
         runfile.remove()
         output.close()
-    return 0
+
+
+def _announce(
+    output: UpOutput, show_id: str, host: str | None, names: list[str], log_dir: Path, show: Path
+) -> None:
+    """Say what runs, where its logs are and how to stop it."""
+    where = "" if host is None else f" (host {host})"
+    output.say(f"show {show_id}{where}: {', '.join(names)}")
+    output.say(f"logs in {log_dir}/; stop with Ctrl-C or `skyquill down {show}{_host_arg(host)}`")
 
 
 def _record(runfile: RunFile, name: str, pid: int) -> None:

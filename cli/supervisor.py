@@ -6,9 +6,7 @@ then stops them group by group (``ChildSpec.stop_group``: agents and kiosk, then
 orchestrator, then simulated autopilots, then the router): each child of a group gets SIGTERM and
 its own grace period, and only a child that outlives its own grace gets SIGKILL. The grace is
 measured against the child's progress: past it, a child still using CPU or waiting for one
-(stopping, only slowed by the others stopping beside it on a busy machine) is given up to
-``stop_limit_s``; one that sits idle (stuck) is killed. Fifty agents stopping at once on two
-cores each need many seconds of wall time for about one of CPU.
+is given up to ``stop_limit_s``; one that sits idle (stuck) is killed (``cli/stopping.py``).
 
 Whether children outlive the supervisor is a choice (``die_with_supervisor``): ``ShowRun`` (the
 demo, tests) has them get SIGTERM when it dies (``PR_SET_PDEATHSIG``), so nothing is left behind;
@@ -27,9 +25,9 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, ClassVar, Protocol
+from typing import IO
 
-from cli.runstate import AdoptedProcess, cpu_ticks, runnable
+from cli.stopping import ProcessHandle, Stopping, StopReport, describe_end, stop_group
 
 PR_SET_PDEATHSIG = 1
 
@@ -58,21 +56,6 @@ ROUTER_RESTART = RestartPolicy(
     initial_delay_s=0.1, factor=2.0, max_delay_s=1.0, stable_after_s=10.0
 )
 """The router comes back fast: every client is waiting to reconnect to it."""
-
-
-class ProcessHandle(Protocol):
-    """What the supervisor needs of a process: ``subprocess.Popen`` or an adopted one."""
-
-    pid: int
-    returncode: int | None
-
-    def poll(self) -> int | None: ...
-
-    def send_signal(self, sig: int) -> None: ...
-
-    def wait(self, timeout: float | None = None) -> int: ...
-
-    def kill(self) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -105,67 +88,6 @@ class _Child:
     restart_at_s: float | None = None
     restarts: int = 0
     log: IO[bytes] | None = field(default=None, repr=False)
-
-
-@dataclass
-class StopReport:
-    """How a :meth:`Supervisor.stop` went."""
-
-    stop_s: dict[str, float] = field(default_factory=dict)
-    """Per child: [s] from its SIGTERM until it was gone."""
-    killed: list[str] = field(default_factory=list)
-    """Children that outlived their grace and got SIGKILL."""
-    slow: list[str] = field(default_factory=list)
-    """Children that took longer than their grace but were busy stopping, so were let finish."""
-    total_s: float = 0.0
-    """Wall time of the whole stop, every group, in [s]."""
-
-    def summary(self) -> str:
-        """One line: how many stopped, how long, the slowest, how many were killed."""
-        if not self.stop_s:
-            return "nothing was running"
-        slowest = max(self.stop_s, key=lambda name: self.stop_s[name])
-        killed = ", ".join(self.killed) if self.killed else "none"
-        return (
-            f"stopped {len(self.stop_s)} processes in {self.total_s:.1f} s (slowest: {slowest}, "
-            f"{self.stop_s[slowest]:.1f} s; {len(self.slow)} busy past their grace); "
-            f"SIGKILLed: {killed}"
-        )
-
-
-@dataclass
-class _Stopping:
-    """A child between its SIGTERM and its end."""
-
-    child: _Child
-    grace_s: float
-    limit_s: float
-    cpu_ticks: int | None
-    """Its CPU time at the last look (None: unknown)."""
-    looked_s: float = field(default_factory=time.monotonic)
-
-    PROGRESS_WINDOW_S: ClassVar[float] = 0.5
-    """How often in [s] its CPU time is looked at."""
-
-    def overdue(self, elapsed_s: float, now_s: float) -> bool:
-        """Whether to kill it now: past its limit, or past its grace, idle since the last look and
-        not waiting for a CPU either (a stuck process, not a busy or a starved one)."""
-        if elapsed_s >= self.limit_s:
-            return True
-        if elapsed_s < self.grace_s or now_s - self.looked_s < self.PROGRESS_WINDOW_S:
-            return False
-        assert self.child.process is not None
-        pid = self.child.process.pid
-        before, self.cpu_ticks = self.cpu_ticks, cpu_ticks(pid)
-        self.looked_s = now_s
-        worked = before is not None and self.cpu_ticks is not None and self.cpu_ticks > before
-        return not worked and not runnable(pid)
-
-    def why_killed(self, elapsed_s: float) -> str:
-        name = self.child.spec.name
-        if self.limit_s > self.grace_s and elapsed_s >= self.limit_s:
-            return f"{name} was still stopping after {self.limit_s:.0f} s; killing it"
-        return f"{name} did not stop in {self.grace_s:.0f} s; killing it"
 
 
 def _die_with_parent() -> None:  # pragma: no cover - runs in the child before exec
@@ -268,7 +190,7 @@ class Supervisor:
                 child.delay_s = policy.delay_s(child.delay_s, ran_for)
                 child.restart_at_s = now + child.delay_s
                 self._say(
-                    f"{name} exited ({_describe(process)}) after "
+                    f"{name} exited ({describe_end(process)}) after "
                     f"{ran_for:.1f} s; restarting in {child.delay_s:.1f} s"
                 )
             due = child.restart_at_s is not None and now >= child.restart_at_s
@@ -286,7 +208,14 @@ class Supervisor:
         report = StopReport()
         for group in sorted({c.spec.stop_group for c in self._children.values()}):
             members = [c for c in self._children.values() if c.spec.stop_group == group]
-            self._stop_group([c for c in members if c.process is not None], grace_s, report)
+            stopping = [
+                Stopping.of(
+                    c.spec.name, c.process, c.spec.stop_grace_s, c.spec.stop_limit_s, grace_s
+                )
+                for c in members
+                if c.process is not None
+            ]
+            stop_group(stopping, report, self._say)
         for child in self._children.values():
             if child.log is not None:
                 child.log.close()
@@ -294,55 +223,11 @@ class Supervisor:
         report.total_s = time.monotonic() - started
         return report
 
-    def _stop_group(
-        self, members: Sequence[_Child], grace_s: float | None, report: StopReport
-    ) -> None:
-        signalled_s = time.monotonic()
-        waiting: dict[str, _Stopping] = {}
-        for child in members:
-            assert child.process is not None
-            if child.process.poll() is None:
-                child.process.send_signal(signal.SIGTERM)
-            grace = child.spec.stop_grace_s if grace_s is None else grace_s
-            limit = max(grace, child.spec.stop_limit_s) if grace_s is None else grace_s
-            waiting[child.spec.name] = _Stopping(child, grace, limit, cpu_ticks(child.process.pid))
-        while waiting:
-            now = time.monotonic()
-            for name, stopping in list(waiting.items()):
-                process = stopping.child.process
-                assert process is not None
-                if process.poll() is None and not stopping.overdue(now - signalled_s, now):
-                    continue
-                if process.poll() is None:
-                    self._say(stopping.why_killed(now - signalled_s))
-                    process.kill()
-                    process.wait()
-                    report.killed.append(name)
-                report.stop_s[name] = time.monotonic() - signalled_s
-                if name not in report.killed and report.stop_s[name] > stopping.grace_s:
-                    report.slow.append(name)
-                del waiting[name]
-            if waiting:
-                time.sleep(0.02)
-
     def run_until(self, done: Callable[[], bool], period_s: float = 0.1) -> None:
         """Poll until ``done()`` is true."""
         while not done():
             self.poll()
             time.sleep(period_s)
-
-
-def _describe(process: ProcessHandle) -> str:
-    if isinstance(process, AdoptedProcess):
-        return "status unknown: started by an earlier skyquill up"
-    returncode = process.returncode
-    assert returncode is not None
-    if returncode < 0:
-        try:
-            return f"killed by {signal.Signals(-returncode).name}"
-        except ValueError:
-            return f"killed by signal {-returncode}"
-    return f"exit status {returncode}"
 
 
 def install_stop_signals(stop: Callable[[], None]) -> None:

@@ -13,7 +13,7 @@ duplicated; at most one active job per vehicle and per board; jobs are assigned 
 from __future__ import annotations
 
 from collections import Counter, deque
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 import msgspec
 
@@ -33,6 +33,7 @@ from orchestrator import positions, presence, reports
 from orchestrator.core_types import CoreConfig, Effects, Level
 from orchestrator.fleet import VehicleView, queue_etas, ready_for_job
 from orchestrator.jobs import WAITING_STATES, Job, to_state, transition, update
+from orchestrator.kinds import KindMatch
 from orchestrator.operator import apply_operator
 
 __all__ = ["Book", "CoreConfig", "Effects", "Level"]
@@ -52,6 +53,8 @@ class Book:
         now_s: float,
         queue_paused: bool = False,
         paused_vehicles: Iterable[str] = (),
+        held_vehicles: Iterable[str] = (),
+        dirty_boards: Iterable[str] = (),
     ) -> None:
         self.config = config
         self.queue_paused = queue_paused
@@ -59,6 +62,9 @@ class Book:
         for vid in paused_vehicles:
             if vid in self.vehicles:
                 self.vehicles[vid].paused = True
+        for vid in held_vehicles:
+            if vid in self.vehicles:
+                self.vehicles[vid].paused = self.vehicles[vid].held = True
         self.jobs: dict[str, Job] = {}
         for job in jobs:  # restart: active jobs must be confirmed by their vehicle again
             self.jobs[job.job_id] = update(job, now_s, assigned_at_s=now_s) if job.active else job
@@ -73,9 +79,12 @@ class Book:
         """(client_id, idempotency_key) -> job id of every keyed submission."""
         self._announced: positions.Announced = {}
         self.recent_events: deque[Event] = deque(maxlen=RECENT_EVENTS)
-        self.dirty_boards: set[str] = set()
-        """Boards left half-written: no job there until the operator's ``fresh_sheet``."""
         """The latest events, for the ``snapshot`` reply (a late console shows recent history)."""
+        self.kinds = KindMatch({v.vehicle_id: v.kind for v in config.vehicles})
+        """Which kind may take a job and how long it would write it (``orchestrator/kinds.py``)."""
+        boards = {v.board_id for v in config.vehicles}
+        self.dirty_boards: set[str] = {b for b in dirty_boards if b in boards}
+        """Boards left half-written: no job there until the operator's ``fresh_sheet``."""
 
     # --- views ------------------------------------------------------------------------------
     def queue(self) -> list[Job]:
@@ -114,7 +123,16 @@ class Book:
         etas = (
             {}
             if self.queue_paused
-            else queue_etas(queue, active, usable, now_s, self.config.eta, landing=landing)
+            else queue_etas(
+                queue,
+                active,
+                usable,
+                now_s,
+                self.config.eta,
+                landing=landing,
+                may_take=self.kinds.may_take,
+                writing_s_on=self.kinds.writing_s_on,
+            )
         )
         return {j.job_id: (i + 1, etas.get(j.job_id)) for i, j in enumerate(queue)}
 
@@ -199,6 +217,7 @@ class Book:
         self.job_counts[job.state] += 1
         self.jobs[job.job_id] = job
         eff.jobs[job.job_id] = job
+        self.kinds.forget(job)
         return job
 
     def requeue(self, eff: Effects, job: Job, now_s: float, reason: str, *, lost: bool) -> None:
@@ -298,12 +317,16 @@ class Book:
             ok=True, job_id=job_id, state=job.state, queue_position=position, eta_s=eta
         )
 
-    def set_estimate(self, job_id: str, estimate_s: float, now_s: float) -> Effects:
-        """A better duration estimate (from the planner) for a job."""
+    def set_estimate(self, job_id: str, by_kind: Mapping[str, float], now_s: float) -> Effects:
+        """Better duration estimates in [s] of a job from each kind's planner, by vehicle kind:
+        the job's own is the first vehicle's kind's (the shortest if that kind cannot plan it),
+        and the ETAs use the kind of the vehicle that would take it."""
         eff = Effects()
         job = self.jobs.get(job_id)
-        if job is not None and not job.final:
-            self.put(eff, update(job, now_s, estimate_s=estimate_s))
+        if job is not None and not job.final and by_kind:
+            first = by_kind.get(self.config.vehicles[0].kind, min(by_kind.values()))
+            self.kinds.estimates[job_id] = dict(by_kind)
+            self.put(eff, update(job, now_s, estimate_s=first))
         return self.settle(eff, now_s)
 
     # --- assignment ---------------------------------------------------------------------------
@@ -326,7 +349,10 @@ class Book:
                 continue
             if not ready_for_job(view, now_s):
                 continue
-            job = queue.pop(0)
+            job = next((j for j in queue if self.kinds.may_take(j, vid)), None)
+            if job is None:
+                continue
+            queue.remove(job)
             job = self.put(
                 eff,
                 transition(

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from bus.messages import VehicleStateName, VehicleSummary
@@ -22,6 +22,9 @@ class VehicleInfo:
     """Vehicle kind, e.g. ``quadrotor-brush``."""
     board_id: str
     """The board it writes on."""
+    cannot_write: str | None = None
+    """Why it can write no job (its kind does not write on its board's surface, or it cannot
+    reach it), in one line; None: it can. Such a vehicle is never given a job."""
 
 
 @dataclass
@@ -99,6 +102,7 @@ def ready_for_job(view: VehicleView, now_s: float) -> bool:
         and view.state in READY_STATES
         and view.reported_job_id is None
         and view.refused_until_s <= now_s
+        and view.info.cannot_write is None
     )
 
 
@@ -146,6 +150,8 @@ def queue_etas(
     model: EtaModel,
     *,
     landing: Iterable[str] = (),
+    may_take: Callable[[Job, str], bool] | None = None,
+    writing_s_on: Callable[[Job, str], float] | None = None,
 ) -> dict[str, float]:
     """Wall seconds from now until each queued job should start writing (list scheduling).
 
@@ -154,7 +160,10 @@ def queue_etas(
     vehicle lands); ``landing`` are usable vehicles without a job still on their way down
     (half of ``after_write_s`` left, on average). The head of the queue goes to the vehicle that
     can start it first: when it is free and its board is too (one job per board at a time).
-    Empty when no vehicle is usable.
+    Empty when no vehicle is usable. ``may_take(job, vehicle_id)`` (default: always) leaves out
+    the vehicles whose kind cannot write a job; a job no usable vehicle may take has no ETA.
+    ``writing_s_on(job, vehicle_id)`` (default: the job's own estimate) is how long the job writes
+    on that vehicle (kinds differ).
     """
     scale = model.time_scale
     vehicle_free = dict.fromkeys(usable_boards, now_s)
@@ -175,9 +184,12 @@ def queue_etas(
         return max(vehicle_free[vid], board_free[usable_boards[vid]]), vid
 
     for job in queue:
-        assigned, vid = min(map(can_start, vehicle_free))
+        takers = [v for v in vehicle_free if may_take is None or may_take(job, v)]
+        if not takers:
+            continue
+        assigned, vid = min(map(can_start, takers))
         start = assigned + model.before_write_s / scale
-        done = start + writing_s(job) / scale
+        done = start + (writing_s_on(job, vid) if writing_s_on else writing_s(job)) / scale
         etas[job.job_id] = start - now_s
         board_free[usable_boards[vid]] = done
         vehicle_free[vid] = done + model.after_write_s / scale

@@ -91,8 +91,8 @@ def _reclaim(book: Book, eff: Effects, view: VehicleView, job_id: str | None, no
     job = book.jobs.get(job_id) if job_id is not None else None
     if job is None or job.state != "queued" or job.vehicle_id != vid:
         return  # only the last holder, only while nobody else has it
-    if view.lost or not view.alive or book.active_job_of(vid) is not None:
-        return
+    if view.lost or not view.alive or view.held or book.active_job_of(vid) is not None:
+        return  # held: the operator took the job away (a status sent before the agent knew)
     if view.info.board_id in book.busy_boards():
         return
     board = view.info.board_id

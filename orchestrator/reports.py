@@ -7,7 +7,9 @@ even after a requeue (the character is written) and whoever took the job over is
 ``started``/``progress`` from the last holder reclaim a job that is back in the queue and not yet
 given to another vehicle (a liveliness flap), otherwise the vehicle is told to stop
 (``not_assigned``); ``failed`` is acknowledged and ignored. A ``failed``
-report with ``retry_after_s`` hands the job back to the queue instead of failing it.
+report with ``retry_after_s`` hands the job back to the queue instead of failing it, and so does a
+``plan_failed`` one while a vehicle of another kind may still write the job (the vehicle's kind
+cannot write it: a width outside the sponge's range...); it then waits for such a vehicle.
 """
 
 from __future__ import annotations
@@ -18,6 +20,12 @@ from bus.messages import AgentReport, CommandReply, ErrorInfo, VehicleCommand
 from orchestrator.core_types import Effects
 from orchestrator.jobs import Job, transition, update
 from orchestrator.written import split_written
+
+PLAN_FAILED = "plan_failed"
+"""Error code of a job the vehicle's planner refused (``planner.errors.PlannerError.code``)."""
+UNCOUNTED = frozenset({"takeoff_refused", PLAN_FAILED})
+"""Handed back without counting an attempt: the vehicle could not start (pre-arm checks), or its
+kind cannot write the job and another kind may."""
 
 if TYPE_CHECKING:
     from orchestrator.core import Book
@@ -91,34 +99,51 @@ def _done(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) ->
 def _failed(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
     if rep.retry_after_s is not None:
         return _handed_back(book, job, rep, eff, now_s, rep.retry_after_s)
-    book.put(eff, transition(job, "failed", now_s, error=rep.error))
+    if (
+        rep.error is not None
+        and rep.error.code == PLAN_FAILED
+        and book.kinds.refuse(job.job_id, rep.vehicle_id, book.config.vehicles)
+    ):
+        return _handed_back(book, job, rep, eff, now_s, 0.0)
     reason = rep.error.message if rep.error else "no reason given"
-    book.event(
-        eff,
-        now_s,
-        "alert",
-        "job_failed",
-        f"{job.label} failed on {rep.vehicle_id}: {reason}",
-        vehicle_id=rep.vehicle_id,
-        job_id=job.job_id,
-    )
-    eff.fleet_changed = True
-    book.assign(eff, now_s)
-    return CommandReply(ok=True, message="failure recorded")
+    return _fail(book, job, rep, eff, now_s, f"{job.label} failed on {rep.vehicle_id}: {reason}")
 
 
 def _handed_back(
     book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float, retry_after_s: float
 ) -> CommandReply:
-    """The vehicle could not start the job (take-off refused) but is healthy: the job goes back
-    to the queue without counting the attempt; the vehicle gets no job for ``retry_after_s``."""
+    """The vehicle gave the job back before its brush touched, and is healthy: the job goes back
+    to the queue and the vehicle gets no job for ``retry_after_s``. A take-off refusal or a plan
+    its kind cannot write (``UNCOUNTED``) does not count as an attempt; a safety abort
+    (``not_settled``, ``deviation`` in transit) does, so a job that no vehicle can fly fails
+    after ``max_attempts`` instead of going round for ever."""
     view = book.vehicles[rep.vehicle_id]
     view.refused_until_s = max(view.refused_until_s, now_s + max(0.0, retry_after_s))
     reason = rep.error.message if rep.error else "no reason given"
-    requeued = update(job, now_s, attempts=max(0, job.attempts - 1))
+    if rep.error is None or rep.error.code not in UNCOUNTED:
+        if job.attempts >= book.config.max_attempts:
+            message = f"{job.label} failed on {rep.vehicle_id}: {reason}"
+            return _fail(
+                book, job, rep, eff, now_s, f"{message}; gave up after {job.attempts} tries"
+            )
+        requeued = job
+    else:
+        requeued = update(job, now_s, attempts=max(0, job.attempts - 1))
     book.requeue(eff, requeued, now_s, f"{rep.vehicle_id} could not start it: {reason}", lost=False)
     book.assign(eff, now_s)
     return CommandReply(ok=True, message="job back in the queue")
+
+
+def _fail(
+    book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float, message: str
+) -> CommandReply:
+    book.put(eff, transition(job, "failed", now_s, error=rep.error))
+    book.event(
+        eff, now_s, "alert", "job_failed", message, vehicle_id=rep.vehicle_id, job_id=job.job_id
+    )
+    eff.fleet_changed = True
+    book.assign(eff, now_s)
+    return CommandReply(ok=True, message="failure recorded")
 
 
 def _writing(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
@@ -148,8 +173,8 @@ def _writing(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float)
 def _reclaim(book: Book, eff: Effects, job: Job, rep: AgentReport, now_s: float) -> bool:
     """A vehicle still writing a job that was requeued (e.g. after a liveliness flap)."""
     view = book.vehicles.get(rep.vehicle_id)
-    if job.state != "queued" or view is None or not view.alive:
-        return False
+    if job.state != "queued" or view is None or not view.alive or view.held:
+        return False  # held: the operator took the job away
     if book.active_job_of(rep.vehicle_id) is not None or view.info.board_id in book.busy_boards():
         return False
     book.put(

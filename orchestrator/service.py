@@ -45,9 +45,10 @@ from orchestrator.core import Book, CoreConfig, Effects
 from orchestrator.fleet import EtaModel, VehicleInfo
 from orchestrator.jobs import to_state
 from orchestrator.store import JobStore
-from orchestrator.submissions import SubmissionError, planned_duration_s, validate_submission
+from orchestrator.submissions import SubmissionError, planned_durations_s, validate_submission
 from orchestrator.written import attach_written, with_written
 from showfile import Show
+from showfile.checks import cannot_write
 
 log = logging.getLogger(__name__)
 
@@ -72,7 +73,10 @@ def core_config(show: Show) -> CoreConfig:
     """The Book's policy from a show file."""
     return CoreConfig(
         show_id=show.show_id,
-        vehicles=tuple(VehicleInfo(v.id, v.kind, v.board) for v in show.vehicles),
+        vehicles=tuple(
+            VehicleInfo(v.id, v.kind, v.board, cannot_write=cannot_write(show, v))
+            for v in show.vehicles
+        ),
         moderation=show.policy.moderation,
         lost_after_s=show.policy.lost_after_s,
         max_queue=show.policy.max_queue,
@@ -124,6 +128,8 @@ class OrchestratorService:
             now_s=clock(),
             queue_paused=stored.queue_paused,
             paused_vehicles=stored.paused_vehicles,
+            held_vehicles=stored.held_vehicles,
+            dirty_boards=stored.dirty_boards,
         )
         self._planner = ThreadPoolExecutor(max_workers=1, thread_name_prefix="eta-planner")
         self._tasks: set[asyncio.Task[Any]] = set()
@@ -131,7 +137,7 @@ class OrchestratorService:
         self._stop: asyncio.Event | None = None
         self.fatal: BaseException | None = None
         """Set when the database failed; :meth:`run` raises it after stopping."""
-        self._durations: dict[str, float] = {}
+        self._durations: dict[str, dict[str, float]] = {}
         log.info("show %s: %d jobs restored", show.show_id, len(stored.jobs))
 
     # --- effects ------------------------------------------------------------------------------
@@ -142,6 +148,8 @@ class OrchestratorService:
             settings = {
                 "queue_paused": self.book.queue_paused,
                 "paused_vehicles": [v for v, view in self.book.vehicles.items() if view.paused],
+                "held_vehicles": [v for v, view in self.book.vehicles.items() if view.held],
+                "dirty_boards": self.book.dirty_boards,
             }
         try:
             self.store.save(eff.jobs.values(), eff.events, written=eff.written, **settings)
@@ -233,26 +241,26 @@ class OrchestratorService:
 
     async def _refine_estimate(self, job_id: str, glyph: Any, cache_key: str | None) -> None:
         """Replace the rough estimate by the planner's duration (best effort, bounded work)."""
-        duration = self._durations.get(cache_key) if cache_key else None
-        if duration is None:
+        durations = self._durations.get(cache_key) if cache_key else None
+        if durations is None:
             if self._plans_pending >= MAX_PENDING_PLANS:
                 return  # a burst of submissions: keep the rough estimates
             self._plans_pending += 1
             loop = asyncio.get_running_loop()
             try:
-                duration = await loop.run_in_executor(
-                    self._planner, planned_duration_s, glyph, self.show
+                durations = await loop.run_in_executor(
+                    self._planner, planned_durations_s, glyph, self.show
                 )
             except Exception:
                 log.exception("planning %s for its ETA failed", job_id)
                 return
             finally:
                 self._plans_pending -= 1
-            if duration is None:
+            if not durations:
                 return
             if cache_key:
-                self._durations[cache_key] = duration
-        self.apply(self.book.set_estimate(job_id, duration, self.clock()))
+                self._durations[cache_key] = durations
+        self.apply(self.book.set_estimate(job_id, durations, self.clock()))
 
     async def on_command(self, command: OperatorCommand) -> CommandReply:
         self._record(self.keys.command + "#request", command)

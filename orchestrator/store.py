@@ -73,6 +73,10 @@ class StoredState:
     """The queue was paused."""
     paused_vehicles: list[str]
     """Vehicles the operator had paused, landed or stopped."""
+    held_vehicles: list[str]
+    """Vehicles held by the operator's land or estop (no job until ``release``)."""
+    dirty_boards: list[str]
+    """Boards left half-written (no job until ``fresh_sheet``)."""
 
 
 class JobStore:
@@ -128,6 +132,8 @@ class JobStore:
         *,
         queue_paused: bool | None = None,
         paused_vehicles: Iterable[str] | None = None,
+        held_vehicles: Iterable[str] | None = None,
+        dirty_boards: Iterable[str] | None = None,
         written: Mapping[str, WrittenInk] | None = None,
     ) -> None:
         """Write changed jobs, new events, settings and ink pictures (job id -> picture of a job
@@ -140,8 +146,13 @@ class JobStore:
         settings: list[tuple[str, str]] = []
         if queue_paused is not None:
             settings.append(("queue_paused", json.dumps(queue_paused)))
-        if paused_vehicles is not None:
-            settings.append(("paused_vehicles", json.dumps(sorted(paused_vehicles))))
+        for key, names in (
+            ("paused_vehicles", paused_vehicles),
+            ("held_vehicles", held_vehicles),
+            ("dirty_boards", dirty_boards),
+        ):
+            if names is not None:
+                settings.append((key, json.dumps(sorted(names))))
         if not (job_rows or event_rows or settings or ink_rows):
             return
         try:
@@ -182,6 +193,8 @@ class JobStore:
             jobs=jobs,
             queue_paused=bool(json.loads(settings.get("queue_paused", "false"))),
             paused_vehicles=list(json.loads(settings.get("paused_vehicles", "[]"))),
+            held_vehicles=list(json.loads(settings.get("held_vehicles", "[]"))),
+            dirty_boards=list(json.loads(settings.get("dirty_boards", "[]"))),
         )
 
     def job(self, job_id: str) -> Job | None:

@@ -2,7 +2,7 @@
 
 :func:`validate_submission` turns a :class:`SubmitRequest` into an :class:`Accepted` (label, glyph,
 rough duration) or raises :class:`SubmissionError` whose ``info`` names the field, stroke and point
-at fault. :func:`planned_duration_s` runs the vehicle's own planning (``vehicles.jobs.plan_job``)
+at fault. :func:`planned_durations_s` runs each kind's own planning (``vehicles.jobs.plan_job``)
 (slow: run it in a worker thread, after the acknowledgement).
 """
 
@@ -136,10 +136,17 @@ def rough_duration_s(glyph: Glyph, show: Show) -> float:
     return length_m / speed + PEN_UP_OVERHEAD_S * len(fitted.strokes)
 
 
-def planned_duration_s(glyph: Glyph, show: Show) -> float | None:
-    """Duration of the real plan of the first vehicle, or None if planning fails."""
-    try:
-        duration = plan_job(show, show.vehicles[0].id, glyph).plan.duration_s
-    except PlannerError:
-        return None
-    return float(duration) if math.isfinite(duration) else None
+def planned_durations_s(glyph: Glyph, show: Show) -> dict[str, float]:
+    """Duration in [s] of the real plan of the first vehicle of each kind of the show, by kind
+    (a job takes as long as the kind that writes it); kinds that cannot plan it are left out."""
+    durations: dict[str, float] = {}
+    for vehicle in show.vehicles:
+        if vehicle.kind in durations:
+            continue
+        try:
+            duration = float(plan_job(show, vehicle.id, glyph).plan.duration_s)
+        except PlannerError:
+            continue
+        if math.isfinite(duration):
+            durations[vehicle.kind] = duration
+    return durations

@@ -15,3 +15,6 @@ SPLIT_THRESHOLD_M = 0.01
 """Split-and-merge threshold of the turning points, [m]."""
 SAMPLE_RATE_HZ = 100.0
 """Rate at which the trajectory is sampled for the control loop, [Hz]."""
+
+SOLVERS = ("piqp", "clarabel", "osqp")
+"""QP solvers the planner can use (``planner.qp_solvers``), the default first."""

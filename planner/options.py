@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from planner import defaults
 from planner.board import BoardFrame
 from planner.errors import PlannerError
-from planner.fit_qp import QpLimits
 from planner.limits import VehicleLimits
-from planner.qp_solvers import SOLVERS
 from planner.waypoints import PathSettings
+
+if TYPE_CHECKING:  # the QP (scipy.sparse) is imported only where a job is planned
+    from planner.fit_qp import QpLimits
 
 PACES = ("limits", "nominal")
 """How fast a free total time flies (see ``PlanOptions.pace``)."""
@@ -72,8 +74,9 @@ class PlanOptions:
     would be met silently by writing a different shape. ``None`` disables the check."""
 
     def __post_init__(self) -> None:
-        if self.solver not in SOLVERS:
-            raise PlannerError(f"unknown solver {self.solver!r}; one of {SOLVERS}", field="solver")
+        if self.solver not in defaults.SOLVERS:
+            known = defaults.SOLVERS
+            raise PlannerError(f"unknown solver {self.solver!r}; one of {known}", field="solver")
         if self.method not in ("qp", "closed-form"):
             raise PlannerError(f"unknown method {self.method!r}", field="method")
         if self.pace not in PACES:
@@ -103,5 +106,7 @@ class PlanOptions:
 
     def qp_limits(self, write_z_m: float) -> QpLimits:
         """Linear QP limits: acceleration bounds (eq. 13), speed, z never below writing height."""
+        from planner.fit_qp import QpLimits
+
         lower, upper = self.limits.accel_bounds_mps2()
         return QpLimits(lower, upper, self.limits.v_max_mps, z_floor_m=write_z_m)

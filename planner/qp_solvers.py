@@ -21,9 +21,8 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from planner.bspline import FloatArray
+from planner.defaults import SOLVERS
 from planner.errors import PlannerError
-
-SOLVERS = ("piqp", "clarabel", "osqp")
 
 
 class QpSolverError(PlannerError):

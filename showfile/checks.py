@@ -9,8 +9,10 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 
-from showfile.models import KIND_ORIENTATION, Board, Show
-from vehicles import LIVE_KINDS, ROOMS
+from showfile.kind_hexarotor import HexarotorKindSettings
+from showfile.models import AUTOPILOT_KINDS, KIND_ORIENTATION, Board, Show, Vehicle
+from vehicles import ROOMS
+from vehicles.omni_wheel.check_route import FloorArea, RouteError, check_route, terrain_of
 
 Loc = tuple[str | int, ...]
 Problem = tuple[Loc, str]
@@ -101,15 +103,6 @@ def cross_check(show: Show) -> list[Problem]:
                     + ", ".join(sorted(ROOMS)),
                 )
             )
-        elif vehicle.kind not in LIVE_KINDS:
-            problems.append(
-                (
-                    ("vehicles", i, "kind"),
-                    f"vehicle kind {vehicle.kind!r} writes only in `skyquill fly --kind "
-                    f"{vehicle.kind}` so far: a show's agent cannot fly it yet; show kinds: "
-                    + ", ".join(sorted(LIVE_KINDS)),
-                )
-            )
         target = board_ids.get(vehicle.board)
         if target is None:
             problems.append(
@@ -126,6 +119,10 @@ def cross_check(show: Show) -> list[Problem]:
                     f"but board {target.id!r} is {target.orientation}",
                 )
             )
+        else:
+            why = reach_problem(show, vehicle)
+            if why is not None:
+                problems.append((("vehicles", i, "board"), why))
         for j in range(i):
             neighbour = show.vehicles[j]
             if math.dist(vehicle.home_m_enu, neighbour.home_m_enu) < _MIN_HOME_SEPARATION_M:
@@ -146,6 +143,15 @@ def _mavlink_problems(show: Show) -> list[Problem]:
     problems: list[Problem] = []
     mavlink = [i for i, v in enumerate(show.vehicles) if v.backend == "mavlink"]
     for i in mavlink:
+        kind = show.vehicles[i].kind
+        if kind not in AUTOPILOT_KINDS:
+            problems.append(
+                (
+                    ("vehicles", i, "backend"),
+                    f"a {kind} cannot fly behind an autopilot yet: use backend: sim "
+                    f"(autopilot kinds: {', '.join(sorted(AUTOPILOT_KINDS))})",
+                )
+            )
         rate_hz = show.vehicles[i].mavlink_setpoint_rate_hz
         if rate_hz > show.controller.rate_hz:
             problems.append(
@@ -157,3 +163,54 @@ def _mavlink_problems(show: Show) -> list[Problem]:
     if show.mavlink_sim.enabled and not mavlink:
         problems.append((("mavlink_sim", "enabled"), "no vehicle has backend: mavlink"))
     return problems
+
+
+def reach_problem(show: Show, vehicle: Vehicle) -> str | None:
+    """Why ``vehicle`` cannot reach its board from its home (a floor area behind a step higher
+    than a ground writer climbs, off the terrain, straddling a step, at the wrong height, too
+    far; a wall whose writing area reaches beyond the hexarotor's ``reach_m``), in one line
+    naming the area; None when it can."""
+    board = show.board(vehicle.board)
+    if board.orientation == "vertical":
+        return _wall_reach_problem(show, vehicle, board)
+    if board.orientation != "floor":
+        return None
+    section = show.omni_wheel
+    if section is None:
+        terrain = terrain_of((), 20.0)
+    else:
+        terrain = terrain_of(
+            ((s.x_m, s.height_m) for s in section.steps), section.terrain_half_width_m
+        )
+    area = FloorArea(board.id, board.center_m_enu, 0.5 * max(board.size_m))
+    try:
+        check_route(vehicle.home_m_enu, area, terrain)
+    except RouteError as exc:
+        return f"{vehicle.id} cannot write there: {exc}"
+    return None
+
+
+def cannot_write(show: Show, vehicle: Vehicle) -> str | None:
+    """Why ``vehicle`` can write no job of ``show``, in one line (its kind does not write on its
+    board's surface, or it cannot reach the board: :func:`reach_problem`); None when it can."""
+    board = show.board(vehicle.board)
+    surface = KIND_ORIENTATION[vehicle.kind]
+    if surface != board.orientation:
+        return (
+            f"a {vehicle.kind} writes on a {surface} board, not on {board.orientation} {board.id!r}"
+        )
+    return reach_problem(show, vehicle)
+
+
+def _wall_reach_problem(show: Show, vehicle: Vehicle, board: Board) -> str | None:
+    """A wall whose writing area (less the margin) has corners beyond the writer's reach."""
+    reach_m = (show.hexarotor or HexarotorKindSettings()).reach_m
+    margin_m = show.planning.margin_m
+    half = [max(0.0, size / 2 - margin_m) for size in board.writing_area_m]
+    corner_m = math.hypot(*half)
+    if corner_m <= reach_m:
+        return None
+    return (
+        f"{vehicle.id} cannot write there: the corners of wall {board.id!r}'s writing area are "
+        f"{corner_m:.2f} m from its centre, beyond the reach {reach_m} m (hexarotor.reach_m)"
+    )

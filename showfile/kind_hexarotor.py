@@ -1,6 +1,6 @@
 """Settings of a ``hexarotor-sponge`` vehicle (the Flying Calligrapher) as a show file states them.
 
-Not wired into :class:`showfile.models.Show` yet: ``vehicles.hexarotor_sponge.kind.settings_from``
+The show's ``hexarotor`` section; ``vehicles.hexarotor_sponge.kind.settings_from``
 turns one into the kind's typed settings. SI units; widths and lengths in metres.
 """
 
@@ -56,5 +56,8 @@ class HexarotorKindSettings(_Model):
     """Largest acceleration in [m/s^2] (paper: 20 cm/s^2)."""
     force_rate_max_nps: float = Field(default=2.0, gt=0.0)
     """Largest change of the normal force in [N/s] (paper: 2 N/s)."""
+    reach_m: float = Field(default=1.5, gt=0.0)
+    """Farthest a stroke point may lie from the centre of the wall's writing area, in [m] (a
+    writing area whose corners lie farther is refused by the show file)."""
     pen: PenSettings = PenSettings()
     """The sponge pen."""

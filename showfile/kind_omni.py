@@ -1,7 +1,7 @@
-"""Show-file settings of the ``omni-wheel`` ground writers (not wired into ``Show`` yet).
+"""Show-file settings of the ``omni-wheel`` ground writers (the show's ``omni_wheel`` section).
 
-Meant as the show's ``omni_wheel:`` section: the vehicle, its writing limits and the terrain of
-the floor areas (steps across world x between them). ``vehicles.omni_wheel.settings`` turns it
+The vehicle, its writing limits and the terrain of the floor areas (steps across world x
+between them). ``vehicles.omni_wheel.settings`` turns it
 into the room's typed settings; ``vehicles.omni_wheel.route.check_route`` refuses a floor area
 the vehicle cannot reach. SI units, world ENU.
 """

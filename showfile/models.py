@@ -14,6 +14,8 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 from pydantic.networks import IPvAnyNetwork
 
+from showfile.kind_hexarotor import HexarotorKindSettings
+from showfile.kind_omni import OmniWheelSettings
 from showfile.safety import SafetySettings
 from showfile.security import RESERVED_IDS, SecuritySettings
 
@@ -195,6 +197,10 @@ KIND_ORIENTATION: dict[str, str] = {
 }
 """The board orientation each vehicle kind writes on."""
 
+AUTOPILOT_KINDS: frozenset[str] = frozenset({"quadrotor-brush"})
+"""Kinds a MAVLink autopilot can fly (``backend: mavlink``); the others fly in the sim backend
+only (held equal to ``VehicleKind.autopilot_world`` by tests/test_showfile_load.py)."""
+
 
 class Limits(_Model):
     """Dynamic limits used by the planner (planner.pipeline.VehicleLimits). The defaults are the
@@ -354,6 +360,11 @@ class Show(_Model):
     """Tracking, geofence and writing bounds, and the abort policy (``showfile/safety.py``)."""
     mavlink_sim: MavlinkSimSettings = Field(default_factory=MavlinkSimSettings)
     """Rehearsal: simulate the MAVLink vehicles alongside the show."""
+    hexarotor: HexarotorKindSettings | None = None
+    """The ``hexarotor-sponge`` wall writers (vehicle, pen, writing limits); None: defaults."""
+    omni_wheel: OmniWheelSettings | None = None
+    """The ``omni-wheel`` ground writers (vehicle, writing limits, the steps between the floor
+    areas); None: defaults, a flat floor."""
 
     source_path: Path | None = Field(default=None, exclude=True)
     """The file the show was loaded from (set by load_show, not written in the file)."""

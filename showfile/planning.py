@@ -10,7 +10,7 @@ from __future__ import annotations
 from planner.board import BoardFrame
 from planner.glyphs import Glyph, fit_to_area
 from planner.limits import VehicleLimits
-from planner.pipeline import PlanOptions
+from planner.options import PlanOptions
 from showfile.models import Board, Limits, PlanningSettings, Show
 
 

@@ -13,6 +13,7 @@ from vehicle_agent.backends.kinematic import KinematicBackend
 from vehicle_agent.backends.sim import SimBackend, SimVehicle
 from vehicle_agent.clock import TickClock
 from vehicle_agent.motion import plan_move
+from vehicles.registry import vehicle_kind
 
 HOME = (0.0, -1.2, 0.0)
 
@@ -115,3 +116,21 @@ def test_tick_clock_paces_lock_step_and_skips_only_when_asked() -> None:
     real.advance()
     assert real.tick == pytest.approx(50, abs=1) and real.delay_s() <= 0.01
     assert np.isclose(real.now_s, real.tick * 0.01)
+
+
+def test_a_ground_kind_starts_and_stops_where_it_stands_and_drives_on_the_floor() -> None:
+    kind = vehicle_kind("omni-wheel")
+    home = (0.5, -1.0, 0.0)
+    vehicle = SimVehicle(home, kind=kind, settings=kind.settings(None, None))
+    assert not vehicle.airborne
+    vehicle.takeoff((0.5, -1.0, 1.0))  # the hover height means nothing on the floor
+    first = vehicle.tick(None)
+    assert first.mode == "hold" and not first.on_ground and first.armed
+    for _ in range(100):  # 1 s towards a point 5 cm ahead, the marker up
+        snap = vehicle.tick(Setpoint(position_m_enu=(0.55, -1.0, 0.0)))
+    assert abs(snap.position_m_enu[2]) < 1e-3 and snap.position_m_enu[0] > 0.52
+    assert snap.pen_contact is False and snap.force_n is None
+    vehicle.land()
+    landed = vehicle.tick(None)
+    assert landed.mode == "idle" and landed.on_ground
+    assert math.dist(landed.position_m_enu, snap.position_m_enu) < 0.01  # rests where it stopped

@@ -43,6 +43,16 @@ def test_writing_needs_acknowledgements_and_asks_for_one_after_a_third_of_the_le
     assert lease.job_id is None and lease.breach(0.0, 99.0) is None
 
 
+def test_unconfirmed_writing_asks_for_a_confirmation_at_most_once_a_third_of_the_lease() -> None:
+    lease = JobLease(LOST_AFTER_S)  # probes every 0.5 s
+    lease.hold("j1", writing=True, now_s=0.0)
+    assert not lease.probe_due(0.4)
+    asked = [t for t in (0.5, 0.6, 0.9, 1.0, 1.2) if lease.probe_due(t)]
+    assert asked == [0.5, 1.0]
+    lease.acknowledged("j1", sent_at_s=1.2)
+    assert not lease.probe_due(1.6)  # confirmed at 1.2: nothing to ask before 1.7
+
+
 def test_a_later_job_starts_with_a_fresh_lease() -> None:
     lease = JobLease(LOST_AFTER_S)
     lease.hold("j1", writing=True, now_s=0.0)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import threading
+import time
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 
@@ -28,6 +29,7 @@ from vehicle_agent.backends.kinematic import KinematicBackend
 from vehicle_agent.job_runner import JobRunner, PreparedJob
 from vehicle_agent.service import AgentService, EventOutbox, ServiceSettings
 from vehicle_agent.trace import FlownTrace
+from vehicle_agent.work import ThreadJobWork
 
 SHOW = "agenttest"
 KEYS = ShowKeys(SHOW)
@@ -110,14 +112,22 @@ class RefusingBackend(KinematicBackend):
 async def show(
     free_tcp_port: Callable[[], int],
     backend: KinematicBackend | None = None,
+    rest_period_s: float | None = None,
 ) -> AsyncIterator[tuple[AgentService, FakeOrchestrator]]:
     endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
     bus = BusSettings(router_listen=[endpoint], connect=[endpoint])
     with open_session(bus, role="router"), open_session(bus, role="client") as orch_session:
         orchestrator = FakeOrchestrator(orch_session)
-        settings = ServiceSettings(show_id=SHOW, zenoh=bus, time_scale=5.0, report_retry_s=0.1)
+        settings = ServiceSettings(
+            show_id=SHOW,
+            zenoh=bus,
+            time_scale=5.0,
+            report_retry_s=0.1,
+            rest_period_s=rest_period_s,
+        )
+        work = ThreadJobWork(prepare, measure)
         service = AgentService(
-            settings, JobRunner(config()), backend or KinematicBackend(HOME), prepare, measure
+            settings, JobRunner(config()), backend or KinematicBackend(HOME), work
         )
         stop = asyncio.Event()
         task = asyncio.create_task(service.run(stop))
@@ -152,6 +162,34 @@ def test_a_job_is_flown_and_reported_with_telemetry_and_status(
             writing = [t for t in orch.telemetry if t.state == "writing"]
             assert writing and all(t.job_id == "j1" for t in writing)
             assert 0.0 < max(t.progress for t in writing) <= 1.0
+
+    asyncio.run(scenario())
+
+
+def ticks_within(service: AgentService, since_s: float) -> int:
+    return sum(1 for t in service.tick_starts_s if t >= since_s)
+
+
+def test_a_landed_idle_vehicle_rests_and_wakes_at_once_on_an_assignment(
+    free_tcp_port: Callable[[], int],
+) -> None:
+    async def scenario() -> None:
+        async with show(free_tcp_port, rest_period_s=0.5) as (service, orch):
+            await wait_for(lambda: service.resting)
+            since_s = time.monotonic()
+            await asyncio.sleep(1.6)
+            assert ticks_within(service, since_s) <= 5  # 100 Hz at time scale 5 would be 800
+            telemetry_before = len(orch.telemetry)
+            sent_s = time.monotonic()
+            assert (await orch.command(assign("j1"))).ok
+            await asyncio.sleep(0.1)
+            assert not service.resting and ticks_within(service, sent_s) >= 10
+            await wait_for(lambda: "done" in orch.events() and service.runner.state == "idle")
+            assert orch.events() == ["started", "done"]
+            await wait_for(lambda: service.resting)
+            assert len(orch.telemetry) > telemetry_before
+            # agent time went on while resting: it is close to 5x the wall time since the start
+            assert service.clock.now_s > 5.0 * (time.monotonic() - since_s)
 
     asyncio.run(scenario())
 

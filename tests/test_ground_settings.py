@@ -12,7 +12,7 @@ from showfile.kind_omni import OmniWheelSettings, StepSettings
 from vehicles.omni_wheel.route import FloorArea, RouteError, check_route
 from vehicles.omni_wheel.settings import omni_settings
 
-SHOW = Path(__file__).parent / "data" / "ground-writers-draft.yaml"
+SHOW = Path(__file__).resolve().parents[1] / "shows" / "ground-writers.yaml"
 
 
 def test_draft_show_section_gives_a_terrain_the_writers_can_cross() -> None:

@@ -204,6 +204,26 @@ def test_refused_takeoff_requeues_the_job_and_backs_the_vehicle_off() -> None:
     assert book.report(plain, 7.0)[1].jobs["j1"].state == "failed"  # no retry: the job failed
 
 
+def test_a_job_aborted_before_writing_counts_its_attempts_and_fails_at_the_limit() -> None:
+    book = Book(_config(max_attempts=3), now_s=0.0)
+    _online(book, "uav1", 0.0)
+    _submit(book, "j1", 0.0)
+    error = ErrorInfo(code="not_settled", message="not settled within 1 cm after 3 approaches")
+    now, states = 0.0, []
+    for _ in range(3):
+        assert book.jobs["j1"].state == "assigned"
+        aborted = AgentReport(
+            vehicle_id="uav1", job_id="j1", event="failed", error=error, retry_after_s=1.0
+        )
+        reply, eff = book.report(aborted, now + 0.5)
+        assert reply.ok
+        states.append((eff.jobs["j1"].state, eff.jobs["j1"].attempts))
+        now += 2.0
+        book.tick(now)
+    assert states == [("queued", 1), ("queued", 2), ("failed", 3)]  # not round for ever
+    assert eff.events[-1].kind == "job_failed" and "gave up after 3 tries" in eff.events[-1].message
+
+
 def test_vehicle_events_are_relayed_with_the_orchestrators_time_and_rate_limited() -> None:
     book = Book(_config(), now_s=0.0)
     said = Event(time_s=123.0, level="alert", kind="autopilot", message="PreArm: Need GPS")
@@ -507,9 +527,9 @@ class FleetMachine(RuleBasedStateMachine):
     def no_ready_vehicle_left_idle_with_work_waiting(self) -> None:
         if not hasattr(self, "book") or self.book.queue_paused or not self.book.queue():
             return
-        busy_boards = self.book.busy_boards()
+        closed_boards = self.book.busy_boards() | self.book.dirty_boards  # dirty: fresh sheet first
         for vid, view in self.book.vehicles.items():
-            if self.book.active_job_of(vid) is None and view.info.board_id not in busy_boards:
+            if self.book.active_job_of(vid) is None and view.info.board_id not in closed_boards:
                 assert not ready_for_job(view, self.now)
 
 

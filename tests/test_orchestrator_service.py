@@ -290,6 +290,38 @@ def test_operator_commands_and_moderation(tmp_path: Path, endpoint: str, client:
         eventually(lambda: any(c.command == "estop" for c in uav3.commands), "estop forwarded")
 
 
+def test_holds_and_a_half_written_board_survive_an_orchestrator_restart(
+    tmp_path: Path, endpoint: str, client: Session
+) -> None:
+    _, show = make_show(tmp_path, "restarted", endpoint)
+    keys = ShowKeys(show.show_id)
+    settings = BusSettings(router_listen=[], connect=[endpoint])
+    with open_session(settings, role="client") as agents:
+        uav1 = FakeAgent(agents, keys, "uav1")
+        with RunningOrchestrator(show):
+            eventually(lambda: query(client, keys.snapshot, None, ShowSnapshot, timeout_s=0.5))
+            _submit(client, keys, SubmitRequest(text="L"))
+            eventually(lambda: uav1.job_id)
+            assert uav1.report("started", planned_duration_s=12.0).ok  # the brush has touched
+            land = OperatorCommand(command="land", vehicle_id="uav1")
+            assert query_one(client, keys.command, land, CommandReply).ok
+            uav1.status()
+            before = eventually(
+                lambda: _snapshot(client, keys).dirty_boards and _snapshot(client, keys)
+            )
+        with RunningOrchestrator(show):
+            after = eventually(
+                lambda: query(client, keys.snapshot, None, ShowSnapshot, timeout_s=0.5)
+            )
+            snap = after[0].value
+            assert snap is not None
+            assert snap.dirty_boards == before.dirty_boards == ["b1"]
+            (held,) = [v for v in snap.vehicles if v.vehicle_id == "uav1"]
+            assert held.held
+            time.sleep(1.0)  # the queued job stays off the dirty board and the held vehicle
+            assert uav1.job_id is None and _snapshot(client, keys).jobs[0].state == "queued"
+
+
 def test_drawings_carry_strokes_for_previews_and_vehicle_events_reach_the_log(
     tmp_path: Path, endpoint: str, client: Session
 ) -> None:

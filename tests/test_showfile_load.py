@@ -11,7 +11,9 @@ import pytest
 
 from showfile import ShowFileError, dump_show, load_show, parse_show
 from showfile.checks import footprint, polygons_overlap
+from showfile.models import AUTOPILOT_KINDS
 from vehicles import ROOMS
+from vehicles.registry import vehicle_kind
 
 SHOWS = Path(__file__).resolve().parents[1] / "shows"
 
@@ -134,15 +136,48 @@ def test_a_kind_without_a_room_is_refused_naming_the_kinds(monkeypatch: Any) -> 
     assert "'quadrotor-brush'" in message and message.endswith("the kinds are: omni-wheel")
 
 
-def test_a_kind_the_live_agent_cannot_fly_is_refused_in_a_show() -> None:
-    show = SOLO.replace("    board: b1\n", "    board: b1\n    kind: omni-wheel\n").replace(
-        "    size_m:", "    orientation: floor\n    size_m:"
-    )
-    err = _problem(show)
-    message = {p.field: p for p in err.problems}["vehicles[0].kind"].message
-    assert "skyquill fly --kind omni-wheel" in message and message.endswith(
-        "show kinds: quadrotor-brush"
-    )
+GROUND = """\
+show_id: t
+omni_wheel:
+  steps: [{x_m: 1.5, height_m: 0.1}]
+boards:
+  - id: plaza
+    orientation: floor
+    center_m_enu: [3.5, 0, 0.1]
+    size_m: [2.0, 2.0]
+    writing_area_m: [1.8, 1.8]
+vehicles:
+  - id: ground1
+    kind: omni-wheel
+    board: plaza
+    home_m_enu: [0, 0, 0]
+"""
+
+
+def test_a_ground_writer_reaches_its_floor_area_over_a_low_step() -> None:
+    show = parse_show(GROUND)
+    assert show.omni_wheel is not None and show.omni_wheel.steps[0].height_m == 0.1
+
+
+@pytest.mark.parametrize(
+    ("change", "words"),
+    [
+        (("0.1}]\nboards", "0.3}]\nboards"), "the step at x=1.50 m is 0.300 m high"),
+        (("[3.5, 0, 0.1]", "[3.5, 0, 0.0]"), "the floor there is 0.100 m high"),
+        (("[3.5, 0, 0.1]", "[1.5, 0, 0.1]"), "straddles the step edge at x=1.50 m"),
+        (("[3.5, 0, 0.1]", "[70, 0, 0.1]"), "out of reach: 70.0 m of route"),
+    ],
+)
+def test_a_floor_area_the_ground_writer_cannot_reach_is_refused_in_one_line(
+    change: tuple[str, str], words: str
+) -> None:
+    text = GROUND.replace(*change)
+    if "0.3}" in text:
+        text = text.replace("[3.5, 0, 0.1]", "[3.5, 0, 0.3]")
+    err = _problem(text)
+    problem = {p.field: p for p in err.problems}["vehicles[0].board"]
+    assert words in problem.message and "'plaza'" in problem.message
+    assert "\n" not in str(problem) and "bad.yaml" in str(problem)
 
 
 MAVLINK_SOLO = SOLO.replace(
@@ -223,3 +258,29 @@ def test_rotated_rectangles_overlap_by_separating_axes() -> None:
     turned = moved.model_copy(update={"yaw_deg": 45.0})
     assert polygons_overlap(footprint(board), footprint(turned))
     assert math.isclose(max(x for x, _ in footprint(board)), 0.7)
+
+
+def test_a_wall_whose_writing_area_reaches_beyond_the_hexarotor_is_refused_in_one_line() -> None:
+    text = (SHOWS / "flying-calligrapher.yaml").read_text(encoding="utf-8")
+    wide = text.replace(
+        "size_m: [2.0, 1.5], writing_area_m: [0.5, 0.5]",
+        "size_m: [4.0, 1.5], writing_area_m: [3.9, 1.4]",
+    )
+    err = _problem(wide)
+    problem = {p.field: p for p in err.problems}["vehicles[0].board"]
+    assert "'wall'" in problem.message and "beyond the reach 1.5 m" in problem.message
+    longer = wide.replace("force_rate_max_nps: 2.0", "force_rate_max_nps: 2.0\n  reach_m: 2.5")
+    hexarotor = parse_show(longer).hexarotor
+    assert hexarotor is not None and hexarotor.reach_m == 2.5
+
+
+def test_only_kinds_with_an_autopilot_world_may_fly_behind_mavlink() -> None:
+    for name in ROOMS:
+        kind = vehicle_kind(name)
+        has_world = kind.autopilot_world(kind.settings(None, None)) is not None
+        assert has_world == (name in AUTOPILOT_KINDS), name
+    text = (SHOWS / "flying-calligrapher.yaml").read_text(encoding="utf-8")
+    mavlink = "backend: mavlink, mavlink_url: 'udp:127.0.0.1:14561'"
+    err = _problem(text.replace("backend: sim", mavlink))
+    message = {p.field: p for p in err.problems}["vehicles[0].backend"].message
+    assert message.startswith("a hexarotor-sponge cannot fly behind an autopilot yet")

@@ -16,7 +16,6 @@ import datetime
 import ipaddress
 import os
 from collections.abc import Iterable
-from dataclasses import dataclass
 from pathlib import Path
 
 from cryptography import x509
@@ -25,37 +24,21 @@ from cryptography.hazmat.primitives import hashes, serialization
 from cryptography.hazmat.primitives.asymmetric import ec
 from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 
-from bus.session import SessionOpenError
+from trust.files import IdentityFiles, KeysError, identity_files
+
+__all__ = [
+    "IdentityFiles",
+    "KeysError",
+    "client_files",
+    "ensure_ca",
+    "identity_files",
+    "is_valid",
+    "issue",
+]
 
 CA_LIFETIME = datetime.timedelta(days=5 * 365)
 CERT_LIFETIME = datetime.timedelta(days=365)
 CLOCK_SKEW = datetime.timedelta(minutes=10)
-
-
-class KeysError(SessionOpenError):
-    """The show's keys are missing, unreadable or not the show's (no session can be opened)."""
-
-
-@dataclass(frozen=True)
-class IdentityFiles:
-    """Where one identity's certificate and key are."""
-
-    common_name: str
-    """The identity, as the router's access control sees it."""
-    cert: Path
-    """PEM certificate signed by the show CA."""
-    key: Path
-    """PEM private key (mode 0600)."""
-    ca: Path
-    """The show CA's certificate, to verify the other side."""
-
-
-def identity_files(keys_dir: Path, identity: str) -> IdentityFiles:
-    """Paths of a service's or vehicle's identity (they may not exist yet)."""
-    folder = Path(keys_dir) / identity
-    return IdentityFiles(
-        identity, folder / "cert.pem", folder / "key.pem", Path(keys_dir) / "ca.pem"
-    )
 
 
 def client_files(keys_dir: Path, name: str, role: str) -> IdentityFiles:

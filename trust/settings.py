@@ -16,8 +16,8 @@ from bus.session import BusSettings
 from showfile import Show
 from showfile.security import SERVICE_ROLES
 from trust.acl import access_control
+from trust.files import IdentityFiles, KeysError, identity_files
 from trust.hosts import GROUND_ROUTER, all_endpoints, companion_routers, endpoints
-from trust.pki import IdentityFiles, KeysError, identity_files, is_valid, issue
 
 log = logging.getLogger(__name__)
 
@@ -52,6 +52,8 @@ def ensure_show_keys(show: Show) -> list[str]:
     """Create the show CA and any missing or stale identity; returns the identities (re)issued."""
     if show.security.mode == "none":
         return []
+    from trust.pki import is_valid, issue  # cryptography: only where keys are made or checked
+
     issued = []
     hosts = show_hosts(show)
     for identity in identities(show):
@@ -67,6 +69,8 @@ def check_keys(show: Show, wanted: Sequence[str]) -> None:
     host never makes keys (it has no CA key); they are copied from the ground station."""
     if show.security.mode == "none":
         return
+    from trust.pki import is_valid
+
     hosts = show_hosts(show)
     bad = [i for i in wanted if not is_valid(identity_files(show.keys_dir, i), hosts)]
     if bad:

@@ -3,29 +3,23 @@
 Pure apart from :func:`run_agent` (the process entry point used by ``skyquill agent``):
 :func:`vehicle_setup` (:mod:`vehicle_agent.setup`) reads the show once; :func:`prepare_job`
 (:mod:`vehicle_agent.jobs`) turns an assignment into a planned reference on this vehicle's board
-through its kind; :func:`job_metrics` measures a flown job.
+through its kind; :func:`job_metrics` measures a flown job. The agent process plans and measures
+in its planning worker (:mod:`vehicle_agent.plan_worker`), so this module imports neither the
+planner nor matplotlib: the job functions are loaded on first use of these names.
 """
 
 from __future__ import annotations
 
 import asyncio
 import importlib
-import logging
 from collections.abc import Callable
+from typing import Any
 
-from bus.messages import JobAssignment
 from trust.settings import session_settings
 from vehicle_agent.backends.base import VehicleBackend
 from vehicle_agent.backends.sim import SimBackend, SimVehicle
-from vehicle_agent.job_picture import PictureWorker
 from vehicle_agent.job_runner import JobRunner
-from vehicle_agent.jobs import (
-    archive_job,
-    job_metrics,
-    prepare_job,
-    write_job_picture,
-    write_job_report,
-)
+from vehicle_agent.rest import REST_PERIOD_S
 from vehicle_agent.service import (
     AgentService,
     EventOutbox,
@@ -33,19 +27,18 @@ from vehicle_agent.service import (
     run_until_signalled,
 )
 from vehicle_agent.setup import VehicleSetup, on_board, vehicle_setup
+from vehicle_agent.worker_client import ProcessJobWork
 
-__all__ = [
-    "job_metrics",
-    "make_backend",
-    "prepare_job",
-    "run_agent",
-    "vehicle_setup",
-    "write_job_picture",
-    "write_job_report",
-]
+__all__ = ["make_backend", "make_runner", "run_agent", "run_agent_blocking", "vehicle_setup"]
 
-PICTURE_WAIT_S = 3.0
-"""On shutdown, how long in [s] the agent waits for a job's report.png still being drawn."""
+JOB_FUNCTIONS = ("job_metrics", "prepare_job", "write_job_picture", "write_job_report")
+"""Names of :mod:`vehicle_agent.jobs` this module also hands out, importing it on first use."""
+
+
+def __getattr__(name: str) -> Any:
+    if name in JOB_FUNCTIONS:
+        return getattr(importlib.import_module("vehicle_agent.jobs"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def make_backend(
@@ -73,44 +66,30 @@ def make_runner(setup: VehicleSetup) -> JobRunner:
     return JobRunner(setup.runner_config)
 
 
-def warm_up(setup: VehicleSetup) -> None:
-    """Plan one character before joining the bus: the first plan imports and initialises the
-    solvers while holding the interpreter lock, which stalled the agent's loop (and its status
-    heartbeat, by which the orchestrator knows it is alive) for up to a second."""
-    try:
-        prepare_job(setup, JobAssignment(job_id="warm-up", text="一"))
-    except Exception as exc:  # the real jobs will say what is wrong
-        logging.getLogger(__name__).warning("%s: warm-up plan failed: %s", setup.vehicle_id, exc)
-
-
 async def run_agent(
     setup: VehicleSetup, backend: VehicleBackend, events: EventOutbox | None = None
 ) -> None:
-    """Run this vehicle's agent until SIGINT/SIGTERM (the ``skyquill agent`` process);
-    ``events``: the outbox the backend's ``on_text`` was given."""
+    """Run this vehicle's agent until SIGINT/SIGTERM (the ``skyquill agent`` process), its jobs
+    planned and measured in a planning worker process; ``events``: the outbox the backend's
+    ``on_text`` was given."""
     vehicle = setup.show.vehicle(setup.vehicle_id)
-    warm_up(setup)
-    pictures = PictureWorker(setup.vehicle_id)
+    simulated = vehicle.backend == "sim"
     settings = ServiceSettings(
         show_id=setup.show.show_id,
         zenoh=session_settings(setup.show, setup.vehicle_id),
         time_scale=setup.time_scale,
-        skip_when_late=vehicle.backend != "sim",
+        skip_when_late=not simulated,
         lost_after_s=setup.show.policy.lost_after_s,
+        rest_period_s=REST_PERIOD_S if simulated else None,
     )
     service = AgentService(
         settings,
         make_runner(setup),
         backend,
-        prepare=lambda assignment: prepare_job(setup, assignment),
-        measure=lambda prepared, trace: job_metrics(setup, prepared, trace),
-        archive=lambda prepared, trace, metrics: archive_job(
-            setup, pictures, prepared, trace, metrics
-        ),
+        ProcessJobWork(setup.show, setup.vehicle_id, setup.time_scale),
         events=events,
     )
     await run_until_signalled(service)
-    await asyncio.to_thread(pictures.wait, PICTURE_WAIT_S)
 
 
 def run_agent_blocking(

@@ -59,3 +59,9 @@ class TickClock:
             behind = (self.wall_s() - self._start_wall_s) / self.wall_period_s - self.tick
             if behind > 1.0:
                 self.tick += int(behind)
+
+    def catch_up(self) -> None:
+        """Bring the next tick up to the wall clock after a rest (agent time went on meanwhile:
+        the ticks not run are skipped, whatever ``skip_when_late`` says)."""
+        due = math.floor((self.wall_s() - self._start_wall_s) / self.wall_period_s)
+        self.tick = max(self.tick, due)

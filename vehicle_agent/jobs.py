@@ -38,7 +38,11 @@ def prepare_job(setup: VehicleSetup, assignment: JobAssignment) -> PreparedJob:
     job = plan_job(setup.show, setup.vehicle_id, job_glyph(assignment))
     commands = setup.kind.command_reference(job.plan, setup.settings)
     return PreparedJob(
-        assignment.job_id, job.plan.samples, command_samples=commands, context=job.plan
+        assignment.job_id,
+        job.plan.samples,
+        command_samples=commands,
+        context=job.plan,
+        force_n=job.plan.force_n,
     )
 
 
@@ -61,6 +65,7 @@ def flown_writing(trace: FlownTrace) -> FlownWriting | None:
         pen_down=trace.pen_down,
         ink_width_m=np.where(contact, width, 0.0),
         base_m_enu=trace.position_m_enu,
+        force_n=trace.force_n,
         extra={"velocity_mps_enu": trace.velocity_mps_enu, "tip_m_enu": tip},
     )
 
@@ -86,7 +91,8 @@ def job_metrics(setup: VehicleSetup, prepared: PreparedJob, trace: FlownTrace) -
         max_error_m=score.max_error_m,
         iou=score.iou,
         duration_s=trace.duration_s,
-        written=written_ink_of_trace(trace, setup.board_frame.to_board, setup.writing_area_m),
+        extra={name: float(value) for name, value in score.extra.items()},
+        written=written_ink_of_trace(trace, setup.surface.to_surface, setup.writing_area_m),
     )
 
 

@@ -38,6 +38,7 @@ class JobLease:
     writing_since_s: float | None = None
     """When this job's writing began (the brush may touch from then on), [s]."""
     _last_tick_s: float | None = field(default=None, repr=False)
+    _next_probe_s: float = field(default=-math.inf, repr=False)
 
     @property
     def stall_limit_s(self) -> float:
@@ -93,3 +94,11 @@ class JobLease:
             return False
         since = max(self.confirmed_at_s, self.writing_since_s)
         return now_s - since >= self.probe_after_s
+
+    def probe_due(self, now_s: float) -> bool:
+        """:meth:`wants_probe`, at most once every ``probe_after_s``: True when the service
+        should send a ``progress`` report now to get a confirmation."""
+        if not self.wants_probe(now_s) or now_s < self._next_probe_s:
+            return False
+        self._next_probe_s = now_s + self.probe_after_s
+        return True

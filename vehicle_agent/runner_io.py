@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
+from numpy.typing import NDArray
 
 from bus.messages import (
     AgentReport,
@@ -47,6 +48,14 @@ class RunnerConfig:
     """Speed limit in [m/s] for transit moves."""
     a_max_mps2: float
     """Acceleration limit in [m/s^2] for transit moves (the smallest per-axis limit)."""
+    airborne: bool = True
+    """It takes off and lands (``vehicles.kind.JobPhases.airborne``); False: a ground vehicle,
+    whose take-off and landing end at once and whose pen-up height is the floor's."""
+    route: Literal["straight", "sideways_first"] = "straight"
+    """Shape of the pen-up moves (``vehicles.kind.JobPhases.route``)."""
+    transit_wait_m: float | None = None
+    """The pen-up reference waits while the vehicle is this far behind in [m]
+    (``vehicles.kind.JobPhases.transit_wait_m``); None: it never waits."""
     loss_land_after_s: float = 10.0
     """How long in [s] (agent time) to hover after losing the orchestrator before landing."""
     telemetry_period_s: float = 0.05
@@ -63,8 +72,21 @@ class RunnerConfig:
 
     @property
     def hover_home_m_enu(self) -> Vec3:
-        """The hover point above home in [m], at cruise height."""
+        """The hover point above home in [m], at cruise height (a ground vehicle: home)."""
+        if not self.airborne:
+            return self.home_m_enu
         return (self.home_m_enu[0], self.home_m_enu[1], self.cruise_z_m)
+
+    def legs(self, start_m_enu: Vec3, end_m_enu: Vec3) -> tuple[Vec3, ...]:
+        """The ends of the straight legs of a pen-up move along ``route`` (the last is
+        ``end_m_enu``): ``sideways_first`` goes along world y on the starting level, then along
+        world x."""
+        if self.route == "straight":
+            return (end_m_enu,)
+        corner = (start_m_enu[0], end_m_enu[1], start_m_enu[2])
+        if math.dist(corner, start_m_enu) < 1e-6 or math.dist(corner, end_m_enu) < 1e-6:
+            return (end_m_enu,)
+        return (corner, end_m_enu)
 
 
 @dataclass(frozen=True)
@@ -80,6 +102,9 @@ class PreparedJob:
     ``samples``); None: ``samples`` itself."""
     context: object = None
     """Whatever the metrics of the flown job need later (the laid-out glyph, the board...)."""
+    force_n: NDArray[np.float64] | None = None
+    """(N,) wanted normal contact force in [N] at the times of ``samples`` (kinds that control
+    force), None otherwise."""
 
 
 @dataclass(frozen=True)
@@ -181,11 +206,15 @@ def telemetry_message(
         battery_fraction=snap.battery_fraction,
         job_id=job_id,
         progress=progress,
+        force_n=snap.force_n,
     )
 
 
-def sample_at(samples: TrajectorySamples, t_s: float) -> Setpoint:
-    """The reference at ``t_s`` in [s], linearly interpolated between samples (clamped)."""
+def sample_at(
+    samples: TrajectorySamples, t_s: float, force_n: NDArray[np.float64] | None = None
+) -> Setpoint:
+    """The reference at ``t_s`` in [s], linearly interpolated between samples (clamped), with
+    the wanted contact force of ``force_n`` (per sample, in [N]) when given."""
     i = samples.index_at(t_s)
     j = min(i + 1, samples.t_s.shape[0] - 1)
     span = float(samples.t_s[j] - samples.t_s[i])
@@ -199,6 +228,7 @@ def sample_at(samples: TrajectorySamples, t_s: float) -> Setpoint:
         velocity_mps_enu=lerp(samples.velocity_mps_enu),
         acceleration_mps2_enu=lerp(samples.acceleration_mps2_enu),
         pen_down=bool(samples.pen_down[i] if w < 0.5 else samples.pen_down[j]),
+        force_n=None if force_n is None else float((1.0 - w) * force_n[i] + w * force_n[j]),
     )
 
 

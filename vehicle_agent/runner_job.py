@@ -51,11 +51,12 @@ class RunningJob:
         assert self.prepared is not None and self.started_s is not None
         prepared = self.prepared
         t_rel_s = now_s - self.started_s
-        self.planned_now = sample_at(prepared.samples, t_rel_s)
+        self.planned_now = sample_at(prepared.samples, t_rel_s, prepared.force_n)
         if prepared.command_samples is None:
             return self.planned_now
         commanded = sample_at(prepared.command_samples, t_rel_s)
-        return replace(commanded, pen_down=self.planned_now.pen_down)
+        planned = self.planned_now
+        return replace(commanded, pen_down=planned.pen_down, force_n=planned.force_n)
 
     def record(self, snap: VehicleSnapshot, now_s: float) -> bool:
         """Record this tick; True once the plan is written to its end."""

@@ -7,6 +7,7 @@ runner (``vehicle_agent/job_runner.py``) adds the commands, the interruptions an
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Literal
 
 from bus.messages import AgentReport, Telemetry, VehicleStateName, VehicleStatus
@@ -47,6 +48,10 @@ class RunnerPhases:
         self._abort: str | None = None
         self._after_landing: VehicleStateName = "idle"
         self._move: Move | None = None
+        self._legs: list[Vec3] = []
+        self._last_move_s = 0.0
+        """Agent time in [s] of the last tick that followed a pen-up move."""
+        """Ends of the legs of the current pen-up move still to go after ``_move``."""
         self._hold_m_enu: Vec3 | None = None
         self._backend_command: BackendCommand | None = None
         self._reports: list[AgentReport] = []
@@ -87,6 +92,8 @@ class RunnerPhases:
         if fence is not None:
             top = min(top, max(self.config.cruise_z_m, fence.ceiling_z_m - ABORT_CEILING_GAP_M))
         lifted = (start[0], start[1], max(start[2], top))
+        if not self.config.airborne:
+            lifted = start  # a ground vehicle lifts its pen where it stands
         self._start_move(start, lifted, "lift", "returning")
 
     def _event(self, level: Level, kind: str, message: str) -> None:
@@ -108,12 +115,26 @@ class RunnerPhases:
             assert self._job is not None
             return self._job.setpoint(now_s)
         assert self._move is not None
+        self._wait_for_vehicle(snap, now_s)
         setpoint = self._move.setpoint(now_s)
-        if self._move.done(now_s):
+        if self._move.done(now_s) and self._legs:
+            self._next_leg()
+        elif self._move.done(now_s):
             self._move_finished(snap)
             if self.phase == "land":
                 return None  # the backend's landing mode flies from here
         return setpoint
+
+    def _wait_for_vehicle(self, snap: VehicleSnapshot, now_s: float) -> None:
+        """Hold a pen-up move's clock for this tick while the vehicle is too far behind it
+        (``transit_wait_m``)."""
+        wait_m, move = self.config.transit_wait_m, self._move
+        tick_s, self._last_move_s = now_s - self._last_move_s, now_s
+        if wait_m is None or move is None or move.done(now_s) or tick_s <= 0.0:
+            return
+        ahead = move.setpoint(now_s).position_m_enu
+        if math.dist(ahead[:2], snap.position_m_enu[:2]) > wait_m:
+            self._move = replace(move, t0_s=move.t0_s + tick_s)
 
     def _passive(self, snap: VehicleSnapshot) -> Setpoint | None:
         """Phases where the backend's own mode flies: on the ground, climbing, landing."""
@@ -195,12 +216,22 @@ class RunnerPhases:
         self._start_move(start_m_enu, self.config.hover_home_m_enu, "return", "returning")
 
     def _start_move(self, start: Vec3, end: Vec3, phase: str, state: VehicleStateName) -> None:
+        """A pen-up move from ``start`` to ``end`` in the legs of the kind's route."""
+        first, *rest = self.config.legs(start, end)
+        self._legs = rest
+        self._start_leg(start, first)
+        self.phase, self.state = phase, state
+
+    def _start_leg(self, start: Vec3, end: Vec3) -> None:
         cfg = self.config
         self._move = plan_move(
             start, end, self._now_s, v_max_mps=cfg.v_max_mps, a_max_mps2=cfg.a_max_mps2
         )
         self._hold_m_enu = end
-        self.phase, self.state = phase, state
+
+    def _next_leg(self) -> None:
+        assert self._move is not None
+        self._start_leg(self._move.end_m_enu, self._legs.pop(0))
 
     def _move_finished(self, snap: VehicleSnapshot) -> None:
         if self.phase == "transit":

@@ -3,10 +3,13 @@
 Tasks of a running agent (one process, one event loop):
 
 - control loop: at each tick ``runner.step`` -> backend mode command -> ``backend.tick``; telemetry
-  and status published from what the runner says;
-- planning and metrics: off the loop in worker threads (the loop keeps flying meanwhile);
-- reports: a FIFO sent to the orchestrator's ``report`` queryable, each retried until some reply
-  acknowledges it (``progress`` reports are best effort and superseded by newer ones);
+  and status published from what the runner says. A vehicle at rest (landed, no job, motors off)
+  ticks only every ``rest_period_s`` when the settings allow it (a simulated vehicle: nothing
+  moves; an autopilot keeps the full rate for its mocap and heartbeat streams); a command, an
+  assignment or the orchestrator's presence changing wakes it at once;
+- planning and metrics: the :class:`vehicle_agent.work.JobWork` (a planning worker process in
+  ``skyquill agent``), awaited off the loop;
+- reports: :class:`vehicle_agent.reports.ReportOutbox`;
 - presence: the agent's liveliness token; the orchestrator's token watched and fed to the runner;
   the status heartbeat, at least every ``lost_after_s / 4`` (the orchestrator takes a silent
   vehicle as lost, token or not);
@@ -26,9 +29,7 @@ import logging
 import signal
 import time
 from collections import deque
-from collections.abc import Callable
-from dataclasses import dataclass, replace
-from typing import Literal
+from dataclasses import replace
 
 import msgspec
 
@@ -38,15 +39,13 @@ from bus.messages import (
     AgentReport,
     CommandReply,
     ErrorInfo,
-    Event,
     JobAssignment,
-    JobMetrics,
     VehicleCommand,
     VehicleStatus,
 )
 from bus.pubsub import MessagePublisher, declare_token, publish, watch_liveliness
-from bus.rpc import NoReplyError, RemoteError, aquery_one, error_info_from_exception, serve_async
-from bus.session import ZenohSettings, open_session
+from bus.rpc import error_info_from_exception, serve_async
+from bus.session import open_session
 from vehicle_agent.backends.base import (
     BackendError,
     CommandRefusedError,
@@ -55,101 +54,23 @@ from vehicle_agent.backends.base import (
     VehicleSnapshot,
 )
 from vehicle_agent.clock import TickClock
+from vehicle_agent.events import EventOutbox
 from vehicle_agent.fault import clear_fault
 from vehicle_agent.job_runner import JobRunner, PreparedJob, TickActions
 from vehicle_agent.lease import JobLease
+from vehicle_agent.reports import ReportOutbox
+from vehicle_agent.rest import at_rest
 from vehicle_agent.runner_io import ACTIVE_PHASES, result_report
+from vehicle_agent.service_settings import ServiceSettings
 from vehicle_agent.trace import FlownTrace
+from vehicle_agent.work import JobWork
+
+__all__ = ["AgentService", "EventOutbox", "ServiceSettings", "run_until_signalled"]
 
 log = logging.getLogger(__name__)
 
-Prepare = Callable[[JobAssignment], PreparedJob]
-"""Lays a job out on the board and plans it (runs in a worker thread; may raise)."""
-RETRY_CODES = frozenset({"internal", "unavailable", "busy"})
-"""Error replies to a report after which it is sent again (the orchestrator could not take it)."""
-Measure = Callable[[PreparedJob, FlownTrace], JobMetrics]
-"""Metrics of a flown job (runs in a worker thread)."""
-Archive = Callable[[PreparedJob, FlownTrace, JobMetrics | None], object]
-"""Keeps a record of a flown job, e.g. files on disk (runs in a worker thread; may raise)."""
-Level = Literal["info", "warning", "alert"]
-MAV_SEVERITY_DEBUG = 7
-
-
-@dataclass(frozen=True)
-class ServiceSettings:
-    """How the agent joins the bus and paces its loop."""
-
-    show_id: str
-    """Show id: the Zenoh namespace."""
-    zenoh: ZenohSettings
-    """Endpoints from the show file."""
-    time_scale: float = 1.0
-    """Agent seconds per wall second."""
-    skip_when_late: bool = False
-    """Real vehicles: jump ahead after a stall (see ``TickClock``)."""
-    report_retry_s: float = 0.5
-    """Wall time in [s] between attempts to deliver a report."""
-    report_timeout_s: float = 2.0
-    """Wall time in [s] to wait for the orchestrator's acknowledgement of one attempt."""
-    status_period_s: float = 1.0
-    """Wall time in [s] between status heartbeats, at most ``lost_after_s / 4`` (status is also
-    sent on every change)."""
-    lost_after_s: float = 1.5
-    """The show's ``policy.lost_after_s`` in [s]: the orchestrator takes a vehicle silent this
-    long as lost; the heartbeat and the job lease follow from it."""
-
-
-class EventOutbox:
-    """Events about one vehicle waiting to be published; filled from the backend's callbacks
-    (on the event loop) and by the service. A text repeated within ``repeat_after_s`` is dropped
-    (autopilots repeat their pre-arm complaints)."""
-
-    def __init__(
-        self,
-        vehicle_id: str,
-        *,
-        clock: Callable[[], float] = time.time,
-        repeat_after_s: float = 10.0,
-        max_events: int = 100,
-    ) -> None:
-        self.vehicle_id = vehicle_id
-        self._clock = clock
-        self._repeat_after_s = repeat_after_s
-        self._events: deque[Event] = deque(maxlen=max_events)
-        self._last_said: dict[str, float] = {}
-        self._max_remembered = 4 * max_events
-
-    def push(self, level: Level, kind: str, message: str, *, job_id: str | None = None) -> None:
-        """Queue one event (Unix time now)."""
-        now = self._clock()
-        said_at = self._last_said.get(message)
-        if said_at is not None and now - said_at < self._repeat_after_s:
-            return
-        if len(self._last_said) > self._max_remembered:
-            self._last_said.clear()
-        self._last_said[message] = now
-        event = Event(
-            time_s=now,
-            level=level,
-            kind=kind,
-            message=message,
-            vehicle_id=self.vehicle_id,
-            job_id=job_id,
-        )
-        self._events.append(event)
-
-    def autopilot_text(self, severity: int, text: str) -> None:
-        """A STATUSTEXT of the vehicle's autopilot (MAV_SEVERITY 0..7; debug is dropped)."""
-        if severity >= MAV_SEVERITY_DEBUG:
-            return
-        level: Level = "alert" if severity <= 2 else "warning" if severity <= 4 else "info"
-        self.push(level, "autopilot", f"{self.vehicle_id} autopilot: {text.strip()}")
-
-    def drain(self) -> list[Event]:
-        """The queued events, oldest first; the outbox is then empty."""
-        events = list(self._events)
-        self._events.clear()
-        return events
+TICK_HISTORY = 4096
+"""How many tick start times the service keeps (``AgentService.tick_starts_s``)."""
 
 
 class AgentService:
@@ -160,17 +81,14 @@ class AgentService:
         settings: ServiceSettings,
         runner: JobRunner,
         backend: VehicleBackend,
-        prepare: Prepare,
-        measure: Measure,
-        archive: Archive | None = None,
+        work: JobWork,
         events: EventOutbox | None = None,
     ) -> None:
         self.settings = settings
         self.runner = runner
         self.backend = backend
-        self._prepare = prepare
-        self._measure = measure
-        self._archive = archive
+        self.work = work
+        """Plans, measures and records the jobs (closed when the service stops)."""
         self.keys = ShowKeys(settings.show_id)
         self.vehicle_id = runner.config.vehicle_id
         self.events = events if events is not None else EventOutbox(self.vehicle_id)
@@ -181,13 +99,25 @@ class AgentService:
             skip_when_late=settings.skip_when_late,
         )
         self._prepared: dict[str, PreparedJob] = {}
-        self._reports: deque[AgentReport] = deque()
-        self._report_ready = asyncio.Event()
         self._status_sent: VehicleStatus | None = None
         self._tasks: set[asyncio.Task[None]] = set()
         self._lease = JobLease(settings.lost_after_s)
+        self.reports = ReportOutbox(
+            self.keys,
+            self.vehicle_id,
+            self._lease,
+            retry_s=settings.report_retry_s,
+            timeout_s=settings.report_timeout_s,
+            running_job=lambda: self.runner.job_id,
+            refused=self._give_up,
+        )
+        self._wake = asyncio.Event()
+        self.resting = False
+        """Whether the control loop is resting (ticking every ``rest_period_s``)."""
+        self.tick_starts_s: deque[float] = deque(maxlen=TICK_HISTORY)
+        """Wall (monotonic) times in [s] at which the latest ticks began: the loop's pace and
+        period jitter, for measurements (``benchmarks/bench_agent.py``) and tests."""
         self._stalled_s = 0.0
-        self._next_probe_s = 0.0
         self._progress = 0.0
         self._snapshot: VehicleSnapshot | None = None
 
@@ -219,7 +149,7 @@ class AgentService:
             log.info("vehicle %s ready on show %s", self.vehicle_id, self.settings.show_id)
             workers = [
                 asyncio.create_task(self._control_loop(snapshot)),
-                asyncio.create_task(self._send_reports()),
+                asyncio.create_task(self.reports.send_forever(session)),
                 asyncio.create_task(self._follow_presence(presence)),
                 asyncio.create_task(self._status_heartbeat()),
             ]
@@ -229,6 +159,7 @@ class AgentService:
                 task.cancel()
             results = await asyncio.gather(*workers, *self._tasks, return_exceptions=True)
             await self.backend.close()
+            await self.work.close()
             for result in results:
                 if isinstance(result, Exception):
                     raise result
@@ -246,7 +177,7 @@ class AgentService:
         vehicle has just finished (its result not yet delivered: the orchestrator was away) is
         refused rather than written twice."""
         job = command.job
-        if job is not None and job.job_id == self._pending_result():
+        if job is not None and job.job_id == self.reports.pending_result():
             return _refusal("busy", f"{job.job_id} is written; its report is on its way")
         if command.command != "assign":
             where = self.keys.vehicle_assign(self.vehicle_id)
@@ -254,6 +185,7 @@ class AgentService:
         return await self._handle(command)
 
     async def _handle(self, command: VehicleCommand) -> CommandReply:
+        self._wake_up()
         if command.command == "clear_fault":
             return self._clear_fault()
         reply = self.runner.handle_command(command, self.clock.now_s)
@@ -264,6 +196,7 @@ class AgentService:
     async def _follow_presence(self, presence: FifoChannel[bool]) -> None:
         async for alive in presence:
             log.info("%s: orchestrator %s", self.vehicle_id, "present" if alive else "lost")
+            self._wake_up()
             self.runner.set_orchestrator_alive(alive, self.clock.now_s)
             self._publish_status()
 
@@ -283,8 +216,13 @@ class AgentService:
 
     # --- the control loop ----------------------------------------------------------------------
     async def _control_loop(self, snapshot: VehicleSnapshot) -> None:
+        rest_period_s = self.settings.rest_period_s
         while True:
-            await asyncio.sleep(self.clock.delay_s())
+            if rest_period_s is not None and at_rest(self.runner, snapshot):
+                await self._rest(rest_period_s)
+            else:
+                await asyncio.sleep(self.clock.delay_s())
+            self.tick_starts_s.append(time.monotonic())
             now_s = self.clock.now_s
             self._guard_job(time.monotonic())
             actions = self.runner.step(snapshot, now_s)
@@ -293,6 +231,24 @@ class AgentService:
             self.clock.advance()
             self._carry_out(actions)
             self._lease.tick_done(time.monotonic())
+
+    async def _rest(self, period_s: float) -> None:
+        """Wait for a wake-up or ``period_s``, whichever first; then the agent's clock is
+        brought up to the wall clock (agent time goes on while resting)."""
+        self.resting = True
+        self._wake.clear()
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(self._wake.wait(), period_s)
+        self._wake_up()
+        self._lease.tick_done(time.monotonic())  # resting is no stall
+
+    def _wake_up(self) -> None:
+        """Something needs the loop: end a rest now (agent time caught up first, so that a
+        command is handled at the right time)."""
+        if self.resting:
+            self.resting = False
+            self.clock.catch_up()
+            self._wake.set()
 
     def _guard_job(self, wall_s: float) -> None:
         """Before a tick: give the job up if it may be someone else's by now; ask the
@@ -303,17 +259,14 @@ class AgentService:
         why = lease.breach(gap_s, wall_s)
         if why is not None:
             self._give_up(why)
-        elif (
-            lease.job_id is not None and lease.wants_probe(wall_s) and wall_s >= self._next_probe_s
-        ):
-            self._next_probe_s = wall_s + lease.probe_after_s
+        elif lease.job_id is not None and lease.probe_due(wall_s):
             probe = AgentReport(
                 vehicle_id=self.vehicle_id,
                 job_id=lease.job_id,
                 event="progress",
                 progress=self._progress,
             )
-            self._queue_report(probe)
+            self.reports.queue(probe)
 
     def _give_up(self, why: str) -> None:
         """Stop the job at once (brush up, home): the orchestrator requeues it, or did already."""
@@ -358,7 +311,7 @@ class AgentService:
         if actions.plan_request is not None:
             self._spawn(self._plan(actions.plan_request))
         for report in actions.reports:
-            self._queue_report(report)
+            self.reports.queue(report)
         if actions.finished is not None:
             self._spawn(self._finish(actions.finished))
         if actions.telemetry is not None:
@@ -377,7 +330,7 @@ class AgentService:
 
     async def _plan(self, assignment: JobAssignment) -> None:
         try:
-            prepared = await asyncio.to_thread(self._prepare, assignment)
+            prepared = await self.work.prepare(assignment)
         except Exception as exc:
             log.warning("%s: cannot plan job %s: %s", self.vehicle_id, assignment.job_id, exc)
             self.runner.plan_failed(assignment.job_id, error_info_from_exception(exc))
@@ -386,32 +339,28 @@ class AgentService:
         self.runner.plan_ready(prepared)
 
     async def _finish(self, trace: FlownTrace) -> None:
+        """Measure the flown job, record it, then report it: a job reported done has its
+        record on disk (its picture may still be drawn)."""
         prepared = self._prepared[trace.job_id]
         metrics = None
         try:
-            metrics = await asyncio.to_thread(self._measure, prepared, trace)
+            metrics = await self.work.measure(prepared, trace)
         except Exception:  # reported as unmeasured: done means within the writing bounds
             log.exception("%s: metrics of %s failed", self.vehicle_id, trace.job_id)
-        bounds = self.runner.safety.writing
-        self._queue_report(result_report(self.vehicle_id, trace, metrics, bounds))
-        if self._archive is not None:
-            try:
-                where = await asyncio.to_thread(self._archive, prepared, trace, metrics)
+        try:
+            where = await self.work.archive(prepared, trace, metrics)
+        except Exception:
+            log.exception("%s: cannot record job %s", self.vehicle_id, trace.job_id)
+        else:
+            if where is not None:
                 log.info("%s: job %s recorded in %s", self.vehicle_id, trace.job_id, where)
-            except Exception:
-                log.exception("%s: cannot record job %s", self.vehicle_id, trace.job_id)
+        bounds = self.runner.safety.writing
+        self.reports.queue(result_report(self.vehicle_id, trace, metrics, bounds))
 
     # --- outputs -------------------------------------------------------------------------------
-    def _pending_result(self) -> str | None:
-        """The job whose result (``done``/``failed``) waits for the orchestrator's receipt."""
-        for report in self._reports:
-            if report.event in ("done", "failed"):
-                return report.job_id
-        return None
-
     def _publish_status(self, *, only_if_changed: bool = False) -> None:
         status = self.runner.status()
-        pending = self._pending_result() if status.job_id is None else None
+        pending = self.reports.pending_result() if status.job_id is None else None
         if pending is not None:  # not over until the orchestrator has its result
             status = msgspec.structs.replace(status, job_id=pending)
         if only_if_changed and status == self._status_sent:
@@ -430,57 +379,6 @@ class AgentService:
             now_s = time.monotonic()
             self._stalled_s = max(self._stalled_s, now_s - woke_s - period_s)
             woke_s = now_s
-
-    def _queue_report(self, report: AgentReport) -> None:
-        last = self._reports[-1] if self._reports else None
-        if last is not None and last.event == "progress" and last.job_id == report.job_id:
-            self._reports.pop()  # a newer report supersedes a progress not yet sent
-        self._reports.append(report)
-        self._report_ready.set()
-
-    async def _send_reports(self) -> None:
-        while True:
-            await self._report_ready.wait()
-            while self._reports:
-                report = self._reports[0]
-                delivered = await self._deliver(report)
-                if delivered or report.event == "progress":
-                    if self._reports and self._reports[0] is report:
-                        self._reports.popleft()
-                else:
-                    await asyncio.sleep(self.settings.report_retry_s)
-            self._report_ready.clear()
-
-    async def _deliver(self, report: AgentReport) -> bool:
-        sent_at_s = time.monotonic()
-        try:
-            reply = await aquery_one(
-                self._session,
-                self.keys.report(self.vehicle_id),
-                report,
-                CommandReply,
-                timeout_s=self.settings.report_timeout_s,
-            )
-        except NoReplyError:
-            return False
-        except RemoteError as exc:
-            if exc.info.code in RETRY_CODES:
-                return False
-            log.warning("%s: report %s refused: %s", self.vehicle_id, report.event, exc)
-            return True  # the orchestrator answered: it has seen the report
-        except Exception as exc:
-            log.warning("%s: report %s refused: %s", self.vehicle_id, report.event, exc)
-            return True  # the orchestrator answered: it has seen the report
-        if reply.ok:
-            self._lease.acknowledged(report.job_id, sent_at_s)
-        else:
-            log.warning(
-                "%s: report %s not accepted: %s", self.vehicle_id, report.event, reply.message
-            )
-            refused = reply.error is not None and reply.error.code == "not_assigned"
-            if refused and report.job_id == self.runner.job_id:
-                self._give_up("the orchestrator says it is not this vehicle's any more")
-        return True
 
 
 def _refusal(code: str, message: str, *, field: str | None = None) -> CommandReply:

@@ -10,16 +10,16 @@ from typing import Any
 import numpy as np
 
 from planner.board import BoardFrame
-from showfile import Show
+from showfile import Board, PlanningSettings, Show
 from showfile.checks import footprint
 from showfile.planning import board_frame
 from vehicle_agent.backends.base import Vec3
 from vehicle_agent.job_runner import RunnerConfig
 from vehicle_agent.safety import DeviationLimit, SafetyLimits, WritingBounds, vehicle_fence
-from vehicles.kind import VehicleKind
-from vehicles.quadrotor_brush.params import WorldParams
-from vehicles.quadrotor_brush.settings import QuadrotorSettings
+from vehicles.jobs import board_surface
+from vehicles.kind import JobPhases, VehicleKind
 from vehicles.registry import vehicle_kind
+from vehicles.surface import Surface
 
 LOSS_LAND_AFTER_S = 10.0
 """Agent time in [s] a vehicle hovers after losing the orchestrator before it lands."""
@@ -38,7 +38,9 @@ class VehicleSetup:
     vehicle_id: str
     """This vehicle."""
     board_frame: BoardFrame
-    """Its board's pose."""
+    """Its board's pose (plan view)."""
+    surface: Surface
+    """Its board, wall or floor area as a writing plane (``to_surface``: world -> board metres)."""
     writing_area_m: tuple[float, float]
     """Width and height in [m] of the area glyphs are fitted to."""
     margin_m: float
@@ -68,41 +70,66 @@ def vehicle_setup(show: Show, vehicle_id: str, *, time_scale: float | None = Non
         scale = 1.0  # an autopilot lives in real time
     frame = board_frame(board)
     kind = vehicle_kind(vehicle.kind)
-    cruise_z_m = frame.surface_z_m + planning.write_height_m + planning.clearance_m
+    settings = kind.settings(show, vehicle.id)
+    phases = kind.phases(settings)
+    cruise_z_m = cruise_height_m(phases, board, vehicle.home_m_enu, planning)
     runner = RunnerConfig(
         vehicle_id=vehicle.id,
         kind=vehicle.kind,
         board_id=board.id,
         home_m_enu=vehicle.home_m_enu,
         cruise_z_m=cruise_z_m,
-        v_max_mps=limits.v_max_mps,
-        a_max_mps2=min(limits.a_max_mps2),
+        v_max_mps=phases.transit_v_max_mps or limits.v_max_mps,
+        a_max_mps2=phases.transit_a_max_mps2 or min(limits.a_max_mps2),
+        airborne=phases.airborne,
+        route=phases.route,
+        transit_wait_m=phases.transit_wait_m,
         loss_land_after_s=LOSS_LAND_AFTER_S,
         telemetry_period_s=scale / TELEMETRY_RATE_HZ,
         progress_period_s=scale * PROGRESS_PERIOD_S,
-        safety=safety_limits(show, vehicle_id, cruise_z_m),
+        safety=safety_limits(show, vehicle_id, cruise_z_m, route=phases.route),
     )
     return VehicleSetup(
         show=show,
         vehicle_id=vehicle.id,
         board_frame=frame,
+        surface=board_surface(board),
         writing_area_m=board.writing_area_m,
         margin_m=planning.margin_m,
         kind=kind,
-        settings=kind.settings(show, vehicle.id),
+        settings=settings,
         runner_config=runner,
         time_scale=scale,
         control_rate_hz=show.controller.rate_hz,
     )
 
 
-def safety_limits(show: Show, vehicle_id: str, cruise_z_m: float) -> SafetyLimits:
+def cruise_height_m(
+    phases: JobPhases, board: Board, home_m_enu: Vec3, planning: PlanningSettings
+) -> float:
+    """World z in [m] of the vehicle's pen-up moves (see :class:`vehicles.kind.JobPhases`)."""
+    centre_z_m = board.center_m_enu[2]
+    if phases.cruise == "above_surface":
+        return centre_z_m + planning.write_height_m + planning.clearance_m
+    if phases.cruise == "above_area":
+        return centre_z_m + 0.5 * board.writing_area_m[1] + planning.clearance_m
+    return max(home_m_enu[2], centre_z_m)
+
+
+def safety_limits(
+    show: Show, vehicle_id: str, cruise_z_m: float, *, route: str = "straight"
+) -> SafetyLimits:
     """The show's ``safety`` section for one vehicle, with its geofence: its board, its home and
-    the transit between them, up to ``cruise_z_m`` plus the ceiling margin."""
+    the transit between them (with ``route`` ``sideways_first``, the corners of its legs too), up
+    to ``cruise_z_m`` plus the ceiling margin."""
     s = show.safety
     vehicle = show.vehicle(vehicle_id)
+    corners = footprint(show.board(vehicle.board))
+    if route == "sideways_first":
+        hx, hy = vehicle.home_m_enu[0], vehicle.home_m_enu[1]
+        corners += [(hx, y) for _, y in corners] + [(x, hy) for x, _ in corners]
     fence = vehicle_fence(
-        footprint(show.board(vehicle.board)),
+        corners,
         vehicle.home_m_enu,
         cruise_z_m,
         margin_m=s.fence_margin_m,
@@ -123,20 +150,25 @@ def safety_limits(show: Show, vehicle_id: str, cruise_z_m: float) -> SafetyLimit
 
 
 def on_board(setup: VehicleSetup) -> Callable[[Vec3], bool]:
-    """Whether a point's horizontal position lies over this vehicle's board."""
+    """Whether a point lies over (a wall: in front of) this vehicle's board, within its edges."""
     board = setup.show.board(setup.show.vehicle(setup.vehicle_id).board)
     half = np.asarray(board.size_m) / 2.0
 
     def inside(point_m_enu: Vec3) -> bool:
-        local = setup.board_frame.to_board(np.asarray([point_m_enu]))[0]
+        local = setup.surface.to_surface(np.asarray([point_m_enu]))[0]
         return bool(np.all(np.abs(local) <= half))
 
     return inside
 
 
-def world_params(setup: VehicleSetup) -> WorldParams:
-    """The brush quadrotor's simulated world of this vehicle (its brush and board height), which
-    the MAVLink backend uses to follow a brush it cannot sense; ValueError for another kind."""
-    if not isinstance(setup.settings, QuadrotorSettings):
-        raise ValueError(f"vehicle {setup.vehicle_id}: a {setup.kind.name} has no brush model")
-    return setup.settings.flight.world
+def world_params(setup: VehicleSetup) -> Any:
+    """The simulated world an autopilot-flown vehicle of this kind follows its pen in (the brush
+    quadrotor's brush, board height and mocap, for the MAVLink backend); ValueError for a kind
+    that flies in the sim only."""
+    world = setup.kind.autopilot_world(setup.settings)
+    if world is None:
+        raise ValueError(
+            f"vehicle {setup.vehicle_id}: a {setup.kind.name} cannot fly behind an autopilot "
+            "(backend: mavlink) yet; use backend: sim"
+        )
+    return world

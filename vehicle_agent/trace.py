@@ -37,6 +37,8 @@ class FlownTrace:
     """(N, 3) brush tip in [m], ENU, when the backend knows."""
     pen_width_m: FloatArray | None = None
     """(N,) painted stroke width in [m] (0 without contact), when the backend knows."""
+    force_n: FloatArray | None = None
+    """(N,) measured normal contact force in [N], for kinds that sense it."""
 
     @property
     def duration_s(self) -> float:
@@ -56,6 +58,7 @@ class TraceRecorder:
         self._contact: list[bool | None] = []
         self._tip: list[tuple[float, float, float] | None] = []
         self._width: list[float | None] = []
+        self._force: list[float | None] = []
 
     def __len__(self) -> int:
         return len(self._t)
@@ -70,12 +73,14 @@ class TraceRecorder:
         self._contact.append(snapshot.pen_contact)
         self._tip.append(snapshot.pen_tip_m_enu)
         self._width.append(snapshot.pen_width_m)
+        self._force.append(snapshot.force_n)
 
     def finish(self, job_id: str, attempt: int) -> FlownTrace:
         """The recorded samples as arrays."""
         known = bool(self._contact) and all(c is not None for c in self._contact)
         tips_known = bool(self._tip) and all(p is not None for p in self._tip)
         widths_known = bool(self._width) and all(w is not None for w in self._width)
+        forces_known = bool(self._force) and all(f is not None for f in self._force)
         return FlownTrace(
             job_id=job_id,
             attempt=attempt,
@@ -89,4 +94,5 @@ class TraceRecorder:
                 np.asarray(self._tip, dtype=np.float64).reshape(-1, 3) if tips_known else None
             ),
             pen_width_m=np.asarray(self._width, dtype=np.float64) if widths_known else None,
+            force_n=np.asarray(self._force, dtype=np.float64) if forces_known else None,
         )

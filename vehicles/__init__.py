@@ -14,11 +14,6 @@ ROOMS: dict[str, str] = {
 }
 """Kind name (as in show files) -> the module whose ``KIND`` implements it."""
 
-LIVE_KINDS: frozenset[str] = frozenset({"quadrotor-brush"})
-"""Kinds a show's live agent flies. The other rooms plan, fly, score and report in a batch
-(``skyquill fly --kind``) but the agent's job runner still has a flying vehicle's phases (climb,
-cruise height, land), so a show refuses them until their phases come from the kind."""
-
 
 class UnknownKindError(LookupError):
     """A vehicle kind without a room; the message names the kinds that exist."""

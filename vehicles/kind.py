@@ -13,6 +13,10 @@ A job flows through a kind the same way for every kind (``vehicles.jobs`` does t
         -> VehicleKind.score(...)           -> WritingScore  (RMSE, IoU, kind-specific figures)
         -> VehicleKind.report(...)          -> report.png
 
+The live agent also asks ``VehicleKind.phases`` how the kind moves between its home and its
+writing (take off and land, or drive on the floor; cruise height; pen-up speed and route) and
+``VehicleKind.autopilot_world`` what an autopilot-flown vehicle of the kind needs (MAVLink).
+
 Pure: no transport, no asyncio; a room reads a parsed show only in ``settings``.
 """
 
@@ -20,7 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, Literal, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -113,6 +117,36 @@ class WritingScore:
     """Intersection over union of written and target ink rasters (None: not measurable)."""
     extra: Mapping[str, float] = field(default_factory=dict)
     """Kind-specific figures, names with units (``force_rmse_n``, ``rmse_base_m``, ...)."""
+
+
+@dataclass(frozen=True)
+class JobPhases:
+    """How the live agent brings a kind from its home to the start of a job and back.
+
+    An airborne kind takes off straight up at home to its cruise height, flies to the plan's
+    first point (the brush quadrotor above its board; the hexarotor in front of its wall, at
+    the standoff of its free-flight waypoints, from where the plan itself makes contact with the
+    planned force and leaves it), and comes back to land. A ground kind rests on the floor: its
+    take-off and landing end at once (motors on or off where it stands) and it drives to the
+    plan's first point with the pen up, along ``route``."""
+
+    airborne: bool
+    """Takes off and lands vertically at home; False: rests and drives on the floor."""
+    cruise: Literal["above_surface", "above_area", "floor"]
+    """Height of pen-up flight: ``above_surface``, the surface plus the show's write height and
+    clearance (a board seen from above); ``above_area``, the top of the writing area plus the
+    show's clearance (a wall); ``floor``, the higher of home and the floor area (driving)."""
+    transit_v_max_mps: float | None = None
+    """Speed limit in [m/s] of the pen-up moves; None: the show's limits for the vehicle."""
+    transit_a_max_mps2: float | None = None
+    """Acceleration limit in [m/s^2] of the pen-up moves; None: the show's limits."""
+    route: Literal["straight", "sideways_first"] = "straight"
+    """``straight`` lines; ``sideways_first``: along world y first, then along world x, so that
+    steps (edges across x) are met head on."""
+    transit_wait_m: float | None = None
+    """The pen-up reference waits while the vehicle is farther than this in [m] (horizontally)
+    behind it (a climb holds a ground vehicle against the step's face for seconds); None: the
+    reference runs on its clock."""
 
 
 @dataclass(frozen=True)
@@ -231,4 +265,14 @@ class VehicleKind(Protocol):
     ) -> SimulatedVehicle:
         """A live simulated vehicle at rest at ``start_m_enu`` for the agent's ``sim`` backend
         (which makes one per flight)."""
+        ...
+
+    def phases(self, settings: Any) -> JobPhases:
+        """How the live agent moves this kind between its home and its writing."""
+        ...
+
+    def autopilot_world(self, settings: Any) -> Any | None:
+        """What a vehicle of this kind flown behind an autopilot (the MAVLink backend) takes from
+        its simulated world to follow a pen it cannot sense (the brush quadrotor: its
+        ``WorldParams``, brush, board height and mocap); None: the kind flies in the sim only."""
         ...

@@ -64,6 +64,8 @@ class Setpoint:
     """Reference acceleration in [m/s^2] (feed-forward)."""
     pen_down: bool = False
     """True while the brush is meant to touch the board (for vehicles with an actuated pen)."""
+    force_n: float | None = None
+    """Wanted normal contact force in [N] (kinds that control force; None: the kind's own)."""
 
 
 @dataclass(frozen=True)
@@ -92,6 +94,8 @@ class VehicleSnapshot:
     """Where the brush tip is in [m], ENU, when the backend knows (for ink metrics)."""
     pen_width_m: float | None = None
     """Width in [m] of the stroke the brush paints now (0 without contact), when known."""
+    force_n: float | None = None
+    """Measured normal contact force in [N], for kinds that sense it."""
     autopilot_mode: str | None = None
     """The autopilot's own name of its flight mode (``GUIDED``, ``OFFBOARD``, ``AUTO.LAND``...),
     for the event log; None for a backend without an autopilot."""

@@ -5,7 +5,9 @@ logic.
 The backend plays the autopilot's part around the kind's vehicle: it rests on the ground until
 ``takeoff`` (the world is not stepped there: it has no ground), climbs and descends along its own
 min-jerk moves, holds the last point when no setpoint comes, and freezes where it touched down.
-Time is the world's tick count; nothing reads a clock.
+A kind that is not airborne (``VehicleKind.phases``: a ground writer) has no height to gain or
+lose: its take-off (motors on where it rests) and landing (motors off where it stands) end at
+once. Time is the world's tick count; nothing reads a clock.
 """
 
 from __future__ import annotations
@@ -57,6 +59,8 @@ class SimVehicle:
         self.seed = seed
         self.home_m_enu = home_m_enu
         self.dt_s = self.kind.simulated_vehicle(home_m_enu, self.settings, seed=seed).dt_s
+        self.airborne = self.kind.phases(self.settings).airborne
+        """It climbs and descends (False: take-off and landing end at once)."""
         self.vertical_speed_mps = vertical_speed_mps
         self.vertical_accel_mps2 = vertical_accel_mps2
         self.contact_region = contact_region
@@ -79,19 +83,27 @@ class SimVehicle:
             start, self.settings, seed=self.seed + self._flights
         )
         self._flights += 1
+        if not self.airborne:
+            self.mode, self._hold = "hold", Setpoint(position_m_enu=self._position())
+            return
         self._begin_move(start, (start[0], start[1], hover_m_enu[2]), "takeoff")
 
     def land(self) -> None:
         """Descend straight down to ground height (the home's z)."""
         if self.mode in ("idle", "estop"):
             return
+        if not self.airborne:
+            self._rest_m_enu = self._position()
+            self._vehicle, self._move, self.mode = None, None, "idle"
+            return
         here = self._hold.position_m_enu
         self._begin_move(here, (here[0], here[1], self.home_m_enu[2]), "landing")
 
     def estop(self) -> None:
-        """Motors off: the vehicle drops to the ground where it is and stays there."""
-        x, y, _ = self._position()
-        self._rest_m_enu = (x, y, self.home_m_enu[2])
+        """Motors off: the vehicle drops to the ground where it is and stays there (a ground
+        vehicle stops on the floor it stands on)."""
+        x, y, z = self._position()
+        self._rest_m_enu = (x, y, z if not self.airborne else self.home_m_enu[2])
         self._vehicle = None
         self.mode = "estop"
 
@@ -137,6 +149,7 @@ class SimVehicle:
                 velocity_mps_enu=reference.velocity_mps_enu,
                 acceleration_mps2_enu=reference.acceleration_mps2_enu,
                 pen_down=reference.pen_down,
+                force_n=reference.force_n,
             )
         )
 
@@ -193,6 +206,7 @@ class SimVehicle:
             pen_contact=contact,
             pen_tip_m_enu=tip,
             pen_width_m=state.pen_width_m if contact else 0.0,
+            force_n=state.force_n,
         )
 
 

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Protocol
 
 import numpy as np
+from numpy.typing import NDArray
 
 from planner.samples import TrajectorySamples
 from showfile.kind_hexarotor import HexarotorKindSettings
@@ -20,8 +21,10 @@ from vehicles.hexarotor_sponge.pen import PenCurve
 from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing
 from vehicles.hexarotor_sponge.report import report_figure
 from vehicles.hexarotor_sponge.widths import default_width_profile, with_profile_knots
-from vehicles.kind import FlownWriting, StrokeInput, WritingPlan, WritingScore
+from vehicles.kind import FlownWriting, JobPhases, StrokeInput, WritingPlan, WritingScore
 from vehicles.surface import Orientation, Surface, Vec3
+
+FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
@@ -60,6 +63,7 @@ def settings_from(model: HexarotorKindSettings, surface: Surface | None = None) 
             limits=limits,
             default_width_m=pen.default_width_m,
             clamp_widths=pen.clamp_widths,
+            reach_m=model.reach_m,
         ),
         fly=FlySettings(params=params),
         surface=surface,
@@ -67,7 +71,14 @@ def settings_from(model: HexarotorKindSettings, surface: Surface | None = None) 
 
 
 class _Show(Protocol):
-    """Whatever show model the agent passes (not read yet: every section at its default)."""
+    """The parts of a show file (``showfile.models.Show``) the kind reads."""
+
+    @property
+    def hexarotor(self) -> HexarotorKindSettings | None: ...
+
+    def vehicle(self, vehicle_id: str) -> Any: ...
+
+    def board(self, board_id: str) -> Any: ...
 
 
 def with_default_widths(
@@ -94,8 +105,31 @@ class HexarotorSpongeKind:
     """It writes on walls."""
 
     def settings(self, show: _Show | None, vehicle_id: str | None) -> WallSettings:
-        """Default settings (show sections for this kind are not wired yet)."""
-        return WallSettings()
+        """Settings of ``vehicle_id`` in ``show``: the show's ``hexarotor`` section (defaults
+        without one) and the vehicle's wall; the defaults and no wall without a show."""
+        if show is None:
+            return WallSettings()
+        surface = None
+        if vehicle_id is not None:
+            board = show.board(show.vehicle(vehicle_id).board)
+            surface = Surface.of(board.orientation, board.center_m_enu, board.yaw_rad)
+        return settings_from(show.hexarotor or HexarotorKindSettings(), surface)
+
+    def autopilot_world(self, settings: Any) -> None:
+        """No autopilot flies this kind yet: the sim backend only."""
+        return None
+
+    def phases(self, settings: Any) -> JobPhases:
+        """Takes off, flies level with the top of its writing area, then down to the first
+        free-flight waypoint in front of the wall at its writing limits; the plan makes and
+        leaves contact."""
+        limits = _settings(settings).plan.limits
+        return JobPhases(
+            airborne=True,
+            cruise="above_area",
+            transit_v_max_mps=limits.v_max_mps,
+            transit_a_max_mps2=limits.a_max_mps2,
+        )
 
     def plan(self, strokes: Sequence[StrokeInput], surface: Surface, settings: Any) -> WritingPlan:
         """Contact-aware motion-force plan (strokes without widths get the default profile)."""
@@ -111,8 +145,10 @@ class HexarotorSpongeKind:
         return fly_plan(plan, _settings(settings).fly, seed=seed)
 
     def score(self, plan: WritingPlan, flown: FlownWriting, settings: Any = None) -> WritingScore:
-        """Table I's metrics (``rmse_ee_m``, ``rmse_base_m``, ``force_rmse_n``, IoU)."""
+        """Table I's metrics (``rmse_ee_m``, ``rmse_base_m``, ``force_rmse_n``, IoU); a live
+        run, sampled at its own ticks, is compared with the plan at those ticks."""
         s = _settings(settings)
+        plan, flown = aligned(plan, flown)
         return score_writing(plan, flown, s.fly.params, s.plan.default_width_m)
 
     def report(self, plan: WritingPlan, flown: FlownWriting, settings: Any, title: str) -> Any:
@@ -127,6 +163,43 @@ class HexarotorSpongeKind:
         if s.surface is None:
             raise ValueError("hexarotor-sponge: a live vehicle needs settings.surface (its wall)")
         return WallVehicle(np.asarray(start_m_enu, dtype=np.float64), s.surface, s.fly, seed=seed)
+
+
+def aligned(plan: WritingPlan, flown: FlownWriting) -> tuple[WritingPlan, FlownWriting]:
+    """``plan`` at the ticks of ``flown`` (a live run's own clock), and ``flown`` without a base
+    when its base is its writing point (a live vehicle reports its tip only); unchanged when
+    they share their ticks (a batch flight)."""
+    t = flown.t_s
+    ref = plan.samples
+    if t.shape == ref.t_s.shape and np.allclose(t, ref.t_s):
+        return plan, flown
+    t = np.clip(t, 0.0, ref.duration_s)
+
+    def at(values: FloatArray) -> FloatArray:
+        if values.ndim == 1:
+            return np.interp(t, ref.t_s, values)
+        return np.column_stack(
+            [np.interp(t, ref.t_s, values[:, i]) for i in range(values.shape[1])]
+        )
+
+    index = np.clip(np.searchsorted(ref.t_s, t, side="right") - 1, 0, ref.t_s.size - 1)
+    samples = TrajectorySamples(
+        t_s=flown.t_s,
+        position_m_enu=at(ref.position_m_enu),
+        velocity_mps_enu=at(ref.velocity_mps_enu),
+        acceleration_mps2_enu=at(ref.acceleration_mps2_enu),
+        pen_down=ref.pen_down[index],
+    )
+    plan = replace(
+        plan,
+        samples=samples,
+        force_n=None if plan.force_n is None else at(plan.force_n),
+        width_m=None if plan.width_m is None else at(plan.width_m),
+    )
+    base = flown.base_m_enu
+    if base is not None and np.allclose(base, flown.writing_point_m_enu):
+        flown = replace(flown, base_m_enu=None)
+    return plan, flown
 
 
 def _settings(settings: Any) -> WallSettings:

@@ -12,8 +12,9 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from planner.samples import TrajectorySamples
-from vehicles.kind import FlownWriting, StrokeInput, WritingPlan, WritingScore
+from vehicles.kind import FlownWriting, JobPhases, StrokeInput, WritingPlan, WritingScore
 from vehicles.omni_wheel.live import OmniLiveVehicle
+from vehicles.omni_wheel.settings import omni_settings
 from vehicles.omni_wheel.writing import (
     DEFAULT_SETTINGS,
     OmniSettings,
@@ -26,6 +27,10 @@ from vehicles.surface import Orientation, Surface, Vec3
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
+TRANSIT_WAIT_M = 0.05
+"""The pen-up reference waits for the writer while it is this far behind in [m] (it stalls on a
+step's face while it climbs)."""
+
 
 class OmniWheel:
     """The ``omni-wheel`` kind (see :class:`vehicles.kind.VehicleKind`)."""
@@ -34,9 +39,26 @@ class OmniWheel:
     orientation: Orientation = "floor"
 
     def settings(self, show: Any, vehicle_id: str | None) -> OmniSettings:
-        """Settings of ``vehicle_id`` in ``show``; until the show file carries the kind's
-        section (``showfile/kind_omni.py``, not wired yet) every vehicle gets the defaults."""
-        return DEFAULT_SETTINGS
+        """Settings of the ground writers of ``show`` (its ``omni_wheel`` section: vehicle,
+        limits, terrain); the defaults without a show or a section."""
+        section = None if show is None else show.omni_wheel
+        return DEFAULT_SETTINGS if section is None else omni_settings(section)
+
+    def autopilot_world(self, settings: Any) -> None:
+        """No autopilot flies this kind yet: the sim backend only."""
+        return None
+
+    def phases(self, settings: OmniSettings) -> JobPhases:
+        """Rests on the floor; drives to its area with the marker up, sideways first, then
+        along x over the steps, within its planned speed and acceleration."""
+        return JobPhases(
+            airborne=False,
+            cruise="floor",
+            transit_v_max_mps=settings.speed_max_mps,
+            transit_a_max_mps2=min(settings.accel_max_mps2),
+            route="sideways_first",
+            transit_wait_m=TRANSIT_WAIT_M,
+        )
 
     def plan(
         self, strokes: Sequence[StrokeInput], surface: Surface, settings: OmniSettings

@@ -4,7 +4,9 @@ Plans with the Airshow planner (:func:`planner.pipeline.plan_strokes`), flies in
 (:mod:`vehicles.quadrotor_brush.world`) under its RPT controller
 (:mod:`vehicles.quadrotor_brush.control`), scores tracking at the writing point and the ink IoU
 (:mod:`vehicles.quadrotor_brush.metrics`) and draws ``report.png``
-(:mod:`vehicles.quadrotor_brush.report`, imported only when a report is drawn).
+(:mod:`vehicles.quadrotor_brush.report`, imported only when a report is drawn). The planner, the
+batch flight and the metrics are imported where they are used: a live agent that only flies
+loads none of them (nor scipy).
 """
 
 from __future__ import annotations
@@ -17,15 +19,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from planner.board import BoardFrame
-from planner.pipeline import plan_strokes
 from planner.samples import TrajectorySamples
-from vehicles.kind import FlownWriting, StrokeInput, WritingPlan, WritingScore
+from vehicles.kind import FlownWriting, JobPhases, StrokeInput, WritingPlan, WritingScore
 from vehicles.quadrotor_brush.control.controller import body_reference
-from vehicles.quadrotor_brush.flight import fly
 from vehicles.quadrotor_brush.loop import SimulatedQuadrotor
-from vehicles.quadrotor_brush.metrics import flight_metrics, ink_result
+from vehicles.quadrotor_brush.params import WorldParams
 from vehicles.quadrotor_brush.settings import QuadrotorSettings, quadrotor_settings
-from vehicles.quadrotor_brush.trace import flown_of, log_of
 from vehicles.surface import Orientation, Surface, Vec3
 
 if TYPE_CHECKING:
@@ -46,6 +45,14 @@ class QuadrotorBrush:
     name = "quadrotor-brush"
     orientation: Orientation = "horizontal"
 
+    def phases(self, settings: QuadrotorSettings) -> JobPhases:
+        """Takes off, flies above its board at the show's write height plus clearance, lands."""
+        return JobPhases(airborne=True, cruise="above_surface")
+
+    def autopilot_world(self, settings: QuadrotorSettings) -> WorldParams:
+        """The brush, board height and mocap of its simulated world (for the MAVLink backend)."""
+        return settings.flight.world
+
     def settings(self, show: Show | None, vehicle_id: str | None) -> QuadrotorSettings:
         """Settings of ``vehicle_id`` in ``show``, or a default show's with ``show`` None."""
         return quadrotor_settings(show, vehicle_id)
@@ -54,6 +61,8 @@ class QuadrotorBrush:
         self, strokes: Sequence[StrokeInput], surface: Surface, settings: QuadrotorSettings
     ) -> WritingPlan:
         """The Airshow planner's reference of the brush writing point (raises PlannerError)."""
+        from planner.pipeline import plan_strokes
+
         options = replace(settings.plan, board=board_of(surface))
         trajectory = plan_strokes([s.xy_m for s in strokes], options)
         return WritingPlan(
@@ -85,12 +94,18 @@ class QuadrotorBrush:
 
     def fly(self, plan: WritingPlan, settings: QuadrotorSettings, *, seed: int = 0) -> FlownWriting:
         """Fly ``plan`` in the simulated world to its end (one vehicle, batch)."""
+        from vehicles.quadrotor_brush.flight import fly
+        from vehicles.quadrotor_brush.trace import flown_of
+
         return flown_of(fly([plan.samples], settings.flight, seed=seed))
 
     def score(
         self, plan: WritingPlan, flown: FlownWriting, settings: QuadrotorSettings
     ) -> WritingScore:
         """Writing-point errors and ink IoU (Phang 2015 Fig. 12, Guo 2024 section VII)."""
+        from vehicles.quadrotor_brush.metrics import flight_metrics
+        from vehicles.quadrotor_brush.trace import log_of
+
         log = log_of(flown, plan.samples, settings.flight.world.brush, plan.surface.origin_m_enu[2])
         m = flight_metrics(log, pixel_m=settings.ink_pixel_m)
         return WritingScore(
@@ -109,7 +124,9 @@ class QuadrotorBrush:
         title: str,
     ) -> Figure:
         """The report figure: tracking against time, paths on the board, ink against target."""
+        from vehicles.quadrotor_brush.metrics import flight_metrics, ink_result
         from vehicles.quadrotor_brush.report import build_report
+        from vehicles.quadrotor_brush.trace import log_of
 
         log = log_of(flown, plan.samples, settings.flight.world.brush, plan.surface.origin_m_enu[2])
         ink = ink_result(log, pixel_m=settings.ink_pixel_m)

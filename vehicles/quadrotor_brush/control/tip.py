@@ -17,7 +17,6 @@ import math
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.signal import lfilter
 
 from vehicles.quadrotor_brush.control.errors import ControlError
 
@@ -40,6 +39,8 @@ def _two_sided_lowpass(
     signal: FloatArray, forward_alpha: float, backward_alpha: float
 ) -> FloatArray:
     """First-order low-pass forward, then another backward, along axis 0, at rest on the ends."""
+    from scipy.signal import lfilter  # only where a tip reference is planned (73 MiB)
+
     fwd = lfilter(
         [1.0 - forward_alpha], [1.0, -forward_alpha], signal, axis=0, zi=forward_alpha * signal[:1]
     )[0]

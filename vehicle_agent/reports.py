@@ -1,0 +1,103 @@
+"""The agent's reports to the orchestrator: a FIFO sent to its ``report`` queryable, each retried
+until some reply acknowledges it (``progress`` reports are best effort and superseded by newer
+ones). An acknowledgement renews the job lease; a ``not_assigned`` answer about the running job
+makes the agent give it up."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections import deque
+from collections.abc import Callable
+
+from bus.keys import ShowKeys
+from bus.messages import AgentReport, CommandReply
+from bus.rpc import NoReplyError, RemoteError, aquery_one
+from bus.session import Session
+from vehicle_agent.lease import JobLease
+
+log = logging.getLogger(__name__)
+
+RETRY_CODES = frozenset({"internal", "unavailable", "busy"})
+"""Error replies to a report after which it is sent again (the orchestrator could not take it)."""
+
+
+class ReportOutbox:
+    """Reports of one vehicle waiting for the orchestrator's receipt; ``await send_forever()``."""
+
+    def __init__(
+        self,
+        keys: ShowKeys,
+        vehicle_id: str,
+        lease: JobLease,
+        *,
+        retry_s: float,
+        timeout_s: float,
+        running_job: Callable[[], str | None],
+        refused: Callable[[str], None],
+    ) -> None:
+        self.keys = keys
+        self.vehicle_id = vehicle_id
+        self._lease = lease
+        self._retry_s = retry_s
+        self._timeout_s = timeout_s
+        self._running_job = running_job
+        self._refused = refused
+        self._reports: deque[AgentReport] = deque()
+        self._ready = asyncio.Event()
+
+    def queue(self, report: AgentReport) -> None:
+        """Send ``report`` after those queued before it."""
+        last = self._reports[-1] if self._reports else None
+        if last is not None and last.event == "progress" and last.job_id == report.job_id:
+            self._reports.pop()  # a newer report supersedes a progress not yet sent
+        self._reports.append(report)
+        self._ready.set()
+
+    def pending_result(self) -> str | None:
+        """The job whose result (``done``/``failed``) waits for the orchestrator's receipt."""
+        for report in self._reports:
+            if report.event in ("done", "failed"):
+                return report.job_id
+        return None
+
+    async def send_forever(self, session: Session) -> None:
+        """Deliver the queued reports in order, as they come."""
+        while True:
+            await self._ready.wait()
+            while self._reports:
+                report = self._reports[0]
+                delivered = await self._deliver(session, report)
+                if delivered or report.event == "progress":
+                    if self._reports and self._reports[0] is report:
+                        self._reports.popleft()
+                else:
+                    await asyncio.sleep(self._retry_s)
+            self._ready.clear()
+
+    async def _deliver(self, session: Session, report: AgentReport) -> bool:
+        sent_at_s = time.monotonic()
+        vid = self.vehicle_id
+        try:
+            reply = await aquery_one(
+                session, self.keys.report(vid), report, CommandReply, timeout_s=self._timeout_s
+            )
+        except NoReplyError:
+            return False
+        except RemoteError as exc:
+            if exc.info.code in RETRY_CODES:
+                return False
+            log.warning("%s: report %s refused: %s", vid, report.event, exc)
+            return True  # the orchestrator answered: it has seen the report
+        except Exception as exc:
+            log.warning("%s: report %s refused: %s", vid, report.event, exc)
+            return True  # the orchestrator answered: it has seen the report
+        if reply.ok:
+            self._lease.acknowledged(report.job_id, sent_at_s)
+        else:
+            log.warning("%s: report %s not accepted: %s", vid, report.event, reply.message)
+            refused = reply.error is not None and reply.error.code == "not_assigned"
+            if refused and report.job_id == self._running_job():
+                self._refused("the orchestrator says it is not this vehicle's any more")
+        return True

@@ -1,0 +1,161 @@
+"""The agent's end of its planning worker (:mod:`vehicle_agent.plan_worker`): a :class:`JobWork`
+whose plans, metrics and records are made in another process, outside the control loop's
+interpreter.
+
+The worker is started at the first request (an agent that never gets a job never starts one) and
+stopped after ``idle_exit_s`` without requests, so an idle agent holds no planner in memory; the
+next job starts it again (about a second of imports, in the worker). Requests go one at a time.
+A worker that dies or answers nonsense fails the request with a clear :class:`JobWorkError`
+(code ``worker_failed``) and is started afresh by the next one. ``close`` stops it: gently when it
+is idle (it finishes a picture first), at once when it is busy; no process is left behind.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import os
+import sys
+from typing import Any
+
+from bus.messages import ErrorInfo, JobAssignment, JobMetrics
+from showfile import Show
+from vehicle_agent.job_runner import PreparedJob
+from vehicle_agent.trace import FlownTrace
+from vehicle_agent.work import JobWorkError
+from vehicle_agent.worker_protocol import FrameError, body_length, frame, unframe
+
+log = logging.getLogger(__name__)
+
+IDLE_EXIT_S = 120.0
+"""Wall time in [s] without requests after which the worker is stopped (an agent between jobs
+of a running show keeps it; an idle one frees its memory)."""
+CLOSE_WAIT_S = 5.0
+"""How long in [s] ``close`` waits for an idle worker to exit (it may be drawing a picture)."""
+
+
+class ProcessJobWork:
+    """:class:`vehicle_agent.work.JobWork` in a worker process of this vehicle's own."""
+
+    def __init__(
+        self, show: Show, vehicle_id: str, time_scale: float, *, idle_exit_s: float = IDLE_EXIT_S
+    ) -> None:
+        self._init = ("init", show, vehicle_id, time_scale)
+        self.vehicle_id = vehicle_id
+        self.idle_exit_s = idle_exit_s
+        self._process: asyncio.subprocess.Process | None = None
+        self._lock = asyncio.Lock()
+        self._busy = False
+        self._idle_timer: asyncio.TimerHandle | None = None
+        self._closing: asyncio.Task[None] | None = None
+        self.last_cpu_s = 0.0
+        """The worker's CPU time in [s] of the last request answered."""
+        self.starts = 0
+        """How many worker processes were started."""
+
+    @property
+    def pid(self) -> int | None:
+        """The running worker's process id (None: none runs)."""
+        process = self._process
+        return None if process is None or process.returncode is not None else process.pid
+
+    async def prepare(self, assignment: JobAssignment) -> PreparedJob:
+        prepared = await self._call(("prepare", assignment))
+        if not isinstance(prepared, PreparedJob):
+            raise self._failed(f"answered prepare with a {type(prepared).__name__}")
+        return prepared
+
+    async def measure(self, prepared: PreparedJob, trace: FlownTrace) -> JobMetrics:
+        metrics = await self._call(("measure", prepared, trace))
+        if not isinstance(metrics, JobMetrics):
+            raise self._failed(f"answered measure with a {type(metrics).__name__}")
+        return metrics
+
+    async def archive(
+        self, prepared: PreparedJob, trace: FlownTrace, metrics: JobMetrics | None
+    ) -> object:
+        return await self._call(("archive", prepared, trace, metrics))
+
+    async def close(self) -> None:
+        """Stop the worker: let an idle one finish its picture, kill a busy one."""
+        if self._idle_timer is not None:
+            self._idle_timer.cancel()
+        process, self._process = self._process, None
+        if process is None or process.returncode is not None:
+            return
+        if not self._busy and process.stdin is not None:
+            with contextlib.suppress(OSError):
+                process.stdin.write(frame(("close",)))
+                process.stdin.close()
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(process.wait(), CLOSE_WAIT_S)
+        if process.returncode is None:
+            process.kill()
+            await process.wait()
+
+    # --- the pipe ------------------------------------------------------------------------------
+    async def _call(self, request: tuple[Any, ...]) -> Any:
+        async with self._lock:
+            if self._idle_timer is not None:
+                self._idle_timer.cancel()
+            self._busy = True
+            try:
+                process = await self._running()
+                reply = await self._exchange(process, request)
+            finally:
+                self._busy = False
+                self._idle_timer = asyncio.get_running_loop().call_later(
+                    self.idle_exit_s, self._idle_exit
+                )
+        return self._value(reply, request[0])
+
+    async def _running(self) -> asyncio.subprocess.Process:
+        process = self._process
+        if process is not None and process.returncode is None:
+            return process
+        process = await asyncio.create_subprocess_exec(
+            sys.executable,
+            "-m",
+            "vehicle_agent.plan_worker",
+            str(os.getpid()),
+            stdin=asyncio.subprocess.PIPE,
+            stdout=asyncio.subprocess.PIPE,
+        )
+        self._process = process
+        self.starts += 1
+        log.info("%s: planning worker %d started", self.vehicle_id, process.pid)
+        self._value(await self._exchange(process, self._init), "init")
+        return process
+
+    async def _exchange(self, process: asyncio.subprocess.Process, request: object) -> Any:
+        assert process.stdin is not None and process.stdout is not None
+        try:
+            process.stdin.write(frame(request))
+            await process.stdin.drain()
+            length = body_length(await process.stdout.readexactly(4))
+            return unframe(await process.stdout.readexactly(length))
+        except (OSError, FrameError, asyncio.IncompleteReadError) as exc:
+            if process.returncode is None:
+                process.kill()
+            code = await process.wait()
+            self._process = None
+            raise self._failed(f"exited (code {code}) while answering: {exc}") from exc
+
+    def _value(self, reply: Any, request_name: str) -> Any:
+        if isinstance(reply, tuple) and len(reply) == 3 and reply[0] == "ok":
+            self.last_cpu_s = float(reply[2])
+            return reply[1]
+        if isinstance(reply, tuple) and len(reply) == 2 and isinstance(reply[1], ErrorInfo):
+            raise JobWorkError(reply[1])
+        raise self._failed(f"answered {request_name} with {type(reply).__name__}")
+
+    def _failed(self, what: str) -> JobWorkError:
+        message = f"the planning worker of {self.vehicle_id} {what}"
+        return JobWorkError(ErrorInfo(code="worker_failed", message=message))
+
+    def _idle_exit(self) -> None:
+        self._idle_timer = None
+        if not self._busy and self._process is not None:
+            log.info("%s: planning worker idle; stopping it", self.vehicle_id)
+            self._closing = asyncio.get_running_loop().create_task(self.close())
