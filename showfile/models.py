@@ -294,9 +294,6 @@ class Vehicle(_Model):
     mavlink_origin_m_enu: Vec3 | None = None
     """Where the autopilot's LOCAL_NED origin (its estimator's home) is in the show frame, in
     [m], world ENU; None: ``home_m_enu`` (mavlink backend only)."""
-    mavlink_setpoints: Literal["position", "attitude"] = "position"
-    """``position``: the autopilot's position loop tracks our p, v, a setpoints; ``attitude``: the
-    show's controller runs in the agent and streams attitude and thrust (mavlink backend only)."""
     mavlink_setpoint_rate_hz: float = Field(default=50.0, gt=0.0)
     """Rate of the setpoint stream, in [Hz], at most ``controller.rate_hz`` (mavlink only)."""
     mavlink_mocap: Literal["none", "vision_position_estimate", "att_pos_mocap"] = "none"

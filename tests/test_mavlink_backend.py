@@ -343,16 +343,14 @@ def test_settings_come_from_the_show_files_typed_vehicle_fields() -> None:
     uav2 = show.vehicle("uav2")
     plain = settings_from_show(show, uav2)
     assert plain.origin_m_enu == uav2.home_m_enu and plain.system_id == 2
-    assert (plain.setpoints, plain.setpoint_rate_hz, plain.mocap) == ("position", 50.0, "none")
+    assert (plain.setpoint_rate_hz, plain.mocap) == (50.0, "none")
     tuned = uav2.model_copy(
         update={
             "mavlink_origin_m_enu": (0.5, 0.0, 0.0),
-            "mavlink_setpoints": "attitude",
             "mavlink_setpoint_rate_hz": 100.0,
             "mavlink_mocap": "att_pos_mocap",
         }
     )
     settings = settings_from_show(show, tuned)
-    assert settings.origin_m_enu == (0.5, 0.0, 0.0) and settings.setpoints == "attitude"
+    assert settings.origin_m_enu == (0.5, 0.0, 0.0)
     assert (settings.setpoint_rate_hz, settings.mocap) == (100.0, "att_pos_mocap")
-    assert settings.mass_kg == show.limits.mass_kg

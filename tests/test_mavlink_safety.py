@@ -1,5 +1,5 @@
 """The agent's MAVLink backend against mavsim: parameters set and verified at connect, the held
-heading, PX4 landings that are not takeovers, and attitude setpoints writing within the bounds.
+heading, PX4 landings that are not takeovers.
 
 Real MAVLink bytes over UDP loopback; vehicle and agent at ``SCALE`` times real time.
 """
@@ -20,8 +20,7 @@ from mavsim.server import MavsimServer
 from mavsim.show import vehicle_configs
 from showfile import parse_show
 from vehicle_agent.agent import job_metrics, make_backend, prepare_job, vehicle_setup
-from vehicle_agent.backends.mavlink import ATTITUDE_REFUSED, MavlinkBackend
-from vehicle_agent.backends.mavlink_errors import VehicleFaultError
+from vehicle_agent.backends.mavlink import MavlinkBackend
 from vehicle_agent.backends.mavlink_params import ARDUPILOT_TRACKING, FenceSpec
 from vehicle_agent.backends.mavlink_settings import MavlinkSettings
 from vehicle_agent.clock import TickClock
@@ -40,7 +39,7 @@ boards:
   - {{id: b1, center_m_enu: [0.0, 0.0, 0.75], size_m: [1.4, 1.4], writing_area_m: [0.6, 0.6]}}
 vehicles:
   - {{id: mav1, backend: mavlink, mavlink_url: "udp:127.0.0.1:{port}", mavlink_system_id: 3,
-     mavlink_setpoints: {setpoints}, board: b1, home_m_enu: [0.0, -1.0, 0.0]}}
+     board: b1, home_m_enu: [0.0, -1.0, 0.0]}}
 limits: {{v_max_mps: 0.4, a_max_mps2: [0.5, 0.5, 0.5]}}
 """
 
@@ -129,7 +128,7 @@ def test_a_vehicle_whose_parameters_cannot_be_set_is_refused_and_in_fault() -> N
 
 
 def _runner_config() -> Any:
-    show = parse_show(SHOW.format(port=free_udp_port(), setpoints="position"))
+    show = parse_show(SHOW.format(port=free_udp_port()))
     return vehicle_setup(show, "mav1").runner_config
 
 
@@ -208,33 +207,11 @@ async def write_jobs(
     return results, events
 
 
-@pytest.mark.parametrize("autopilot", ["ardupilot", "px4"])
-def test_attitude_setpoints_are_refused_at_connect(autopilot: str) -> None:
-    """Our outer loop over SET_ATTITUDE_TARGET diverged on ArduCopter SITL: a vehicle configured
-    for it is in fault from the start, with the reason, and never armed."""
-
-    async def scenario(server: MavsimServer) -> None:
-        backend = await connect(server, setpoints="attitude")
-        try:
-            assert backend.fault == ATTITUDE_REFUSED
-            with pytest.raises(VehicleFaultError, match="attitude is refused"):
-                await backend.takeoff((HOME[0], HOME[1], 0.6))
-            assert not server.endpoints[0].autopilot.armed
-        finally:
-            await backend.close()
-
-    server = one_vehicle(autopilot=autopilot)
-    try:
-        asyncio.run(scenario(server))
-    finally:
-        server.stop()
-
-
 @pytest.mark.slow
 def test_a_px4_landing_is_not_a_takeover_and_the_next_job_flies() -> None:
     """PX4 disarms after AUTO.LAND and reports OFFBOARD again in the same heartbeat: two jobs in
     a row without a fault, the mode changes in the events."""
-    show = parse_show(SHOW.format(port=free_udp_port(), setpoints="position"))
+    show = parse_show(SHOW.format(port=free_udp_port()))
     # landings and the next job, not PX4's tune: the paper's stiff loop (PX4's default MPC gains
     # leave 一 at IoU 0.08, below the show's writing bound)
     stiff = PositionGains.from_poles(STIFF_EPS)

@@ -74,12 +74,6 @@ EKF_ORIGIN_LLA = (-35.363261, 149.165230, 584.0)
 its local frame is the mocap's whichever origin it has, but EKF3 needs one, and the one its GPS
 would set later while it fuses ExternalNav crashes ArduCopter 4.7 SITL (floating point exception
 at "origin set", measured); set first, the GPS leaves it alone."""
-ATTITUDE_REFUSED = (
-    "mavlink_setpoints: attitude is refused: our outer loop over SET_ATTITUDE_TARGET diverged on "
-    "ArduCopter SITL (pitch swinging to 27 degrees, deviation abort at 0.69 m in the first "
-    "transit) and leaves mavsim's shaped autopilots beyond the 0.15 m bound; fly position setpoints"
-)
-"""Why a vehicle configured for attitude setpoints is not flown (measured 2026-11-23)."""
 GCS_HEARTBEAT_PERIOD_S = 0.5
 """Our heartbeat period in [s]: PX4 drops a ground station unheard for 2.5 s (and its texts with
 it), so a stall of the agent of up to 2 s keeps the texts coming."""
@@ -172,9 +166,7 @@ class MavlinkBackend:
                 "ArduPilot nor PX4"
             )
         self._request_telemetry()
-        if self.settings.setpoints == "attitude":
-            self.fault = ATTITUDE_REFUSED
-        elif self.state.armed:
+        if self.state.armed:
             self.fault = "vehicle already armed when the agent connected: the pilot has it"
         elif self.settings.set_params:
             await self._configure()
@@ -186,7 +178,7 @@ class MavlinkBackend:
         """Set and read back every parameter the show needs; a fault if one does not hold."""
         s = self.settings
         specs = show_params(self._flavor().name, setpoint_timeout_s=s.setpoint_timeout_s,
-                            attitude=s.setpoints == "attitude", fence=s.fence)  # fmt: skip
+                            fence=s.fence)  # fmt: skip
         if s.mocap != "none":
             specs += mocap_params(self._flavor().name)
         for spec in specs:
@@ -299,7 +291,7 @@ class MavlinkBackend:
 
     async def _prove_life(self, hold: Setpoint) -> None:
         """PX4: OFFBOARD and arming need a live setpoint stream; stream a second and a bit of
-        the current position (attitude setpoints: level, zero thrust) on a running clock."""
+        the current position on a running clock."""
         self._hold = hold
         rate = self.settings.setpoint_rate_hz
         for k in range(int(rate) + 5):
@@ -421,7 +413,7 @@ class MavlinkBackend:
             if self.mode != "offboard":
                 self._set_backend_mode("offboard")
             self._hold = Setpoint(position_m_enu=setpoint.position_m_enu)
-            target = setpoint if self.settings.setpoints == "attitude" else self.aid.lead(setpoint)
+            target = self.aid.lead(setpoint)
         elif self.mode in ("hold", "offboard") and self._hold is not None:
             if self.mode == "offboard":
                 self._set_backend_mode("hold")
@@ -431,7 +423,7 @@ class MavlinkBackend:
         else:
             return
         sent = self.stream.sent
-        self.stream.send(target, now_s, self._position_m_enu())
+        self.stream.send(target, now_s)
         if self.mode in ("hold", "offboard") and self.state.position_ned is not None:
             if self.stream.sent > sent:
                 self.aid.sent(now_s, target.position_m_enu)

@@ -27,8 +27,6 @@ from vehicle_agent.safety.geofence import Geofence, Vec3
 MAV_PARAM_TYPE_INT8, MAV_PARAM_TYPE_INT32, MAV_PARAM_TYPE_REAL32 = 2, 6, 9
 INTEGER_TYPES = frozenset(range(1, 9))
 """MAV_PARAM_TYPE_UINT8 .. INT64."""
-GUID_OPTIONS_THRUST_AS_THRUST = 8
-"""ArduCopter GUID_OPTIONS bit 3: SET_ATTITUDE_TARGET's thrust is thrust, not a climb rate."""
 ARDUPILOT_FENCE_CIRCLE_AND_ALT_MAX = 3
 """ArduCopter FENCE_TYPE: bit 0 maximum altitude, bit 1 circle around home."""
 ARDUPILOT_FENCE_ACTION_LAND = 2
@@ -56,11 +54,9 @@ class ParamSpec:
     name: str
     """Parameter id (at most 16 characters)."""
     value: float
-    """The value to set; for a bitmask, the bits to set (see ``bits``)."""
+    """The value to set."""
     param_type: int
     """MAV_PARAM_TYPE of the parameter on that autopilot."""
-    bits: bool = False
-    """``value`` is a bitmask OR-ed into the current value (other bits kept)."""
     why: str = ""
     """Why the show needs it (for the error message)."""
     needs_reboot: bool = False
@@ -98,10 +94,10 @@ de-quantized); three times the defaults (and ATC_INPUT_TC 0.1) gave no more (18 
 
 
 def show_params(
-    flavor: Flavor, *, setpoint_timeout_s: float, attitude: bool, fence: FenceSpec | None
+    flavor: Flavor, *, setpoint_timeout_s: float, fence: FenceSpec | None
 ) -> list[ParamSpec]:
-    """What a show needs of this autopilot: setpoint timeout, yaw left alone (ArduPilot), thrust
-    as thrust for attitude setpoints (ArduPilot), its own fence as a second line."""
+    """What a show needs of this autopilot: setpoint timeout, yaw left alone and writing-grade
+    tracking (ArduPilot), its own fence as a second line."""
     if flavor == "px4":
         specs = [ParamSpec("COM_OF_LOSS_T", setpoint_timeout_s, MAV_PARAM_TYPE_REAL32,
                            why="offboard loss timeout")]  # fmt: skip
@@ -119,9 +115,6 @@ def show_params(
     ]  # fmt: skip
     specs += [ParamSpec(name, value, MAV_PARAM_TYPE_REAL32, why="writing-grade tracking")
               for name, value in ARDUPILOT_TRACKING]  # fmt: skip
-    if attitude:
-        specs.append(ParamSpec("GUID_OPTIONS", GUID_OPTIONS_THRUST_AS_THRUST, MAV_PARAM_TYPE_INT32,
-                               bits=True, why="attitude setpoints: thrust as thrust"))  # fmt: skip
     if fence is not None:
         specs += [
             ParamSpec("FENCE_TYPE", ARDUPILOT_FENCE_CIRCLE_AND_ALT_MAX, MAV_PARAM_TYPE_INT8,
@@ -232,11 +225,9 @@ class ParamChannel:
     async def ensure(self, spec: ParamSpec) -> float:
         """Set ``spec`` and read it back; raises :class:`ParamError` unless it holds."""
         want = spec.value
-        if spec.bits or spec.needs_reboot:
+        if spec.needs_reboot:
             current = await self.read(spec.name)
-            if spec.bits:
-                want = float(int(current) | int(spec.value))
-            elif not same_value(current, want):
+            if not same_value(current, want):
                 await self.write(spec.name, want, spec.param_type)
                 raise ParamError(
                     f"parameter {spec.name} ({spec.why}) was {current:g}; set to {want:g}, it "

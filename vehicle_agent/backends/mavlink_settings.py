@@ -2,19 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Literal
 
 from showfile import Show, Vehicle
 from vehicle_agent.backends.base import BackendError, Vec3
 from vehicle_agent.backends.mavlink_params import FenceSpec
-from vehicles.quadrotor_brush.control.controller import (
-    DEFAULT_CONFIG,
-    PAPER_CONFIG,
-    ControllerConfig,
-)
 
-SetpointKind = Literal["position", "attitude"]
 MocapMessage = Literal["none", "vision_position_estimate", "att_pos_mocap"]
 TruthSource = Literal["none", "sitl"]
 
@@ -33,10 +27,6 @@ class MavlinkSettings:
     """Rate of ``tick`` (the agent's control loop) in [Hz]."""
     setpoint_rate_hz: float = 50.0
     """Rate of the setpoint stream in [Hz] (50-100; ArduPilot follows 50 Hz well)."""
-    setpoints: SetpointKind = "position"
-    """``position``: SET_POSITION_TARGET_LOCAL_NED with p, v, a (type_mask 0x0C00), the
-    autopilot's position loop flies; ``attitude``: our RPT outer loop runs here and streams
-    SET_ATTITUDE_TARGET (ArduPilot needs GUID_OPTIONS bit 3: thrust is thrust)."""
     telemetry_rate_hz: float = 50.0
     """Rate asked for LOCAL_POSITION_NED and ATTITUDE (MAV_CMD_SET_MESSAGE_INTERVAL)."""
     heartbeat_timeout_s: float = 3.0
@@ -78,17 +68,11 @@ class MavlinkSettings:
     lead_s: float | None = None
     """How far in [s] ahead on the plan position setpoints are sent, to cancel the autopilot's
     lag; None: identified in flight (:mod:`~vehicle_agent.backends.mavlink_lag`)."""
-    mass_kg: float = 1.0
-    """Vehicle mass (attitude setpoints: thrust normalisation)."""
-    thrust_max_n: float = 19.6
-    """Largest thrust (attitude setpoints: thrust 1.0)."""
-    controller: ControllerConfig = DEFAULT_CONFIG
-    """Our outer loop, used with ``setpoints = "attitude"``."""
 
     def __post_init__(self) -> None:
         for name in ("control_rate_hz", "setpoint_rate_hz", "telemetry_rate_hz",
                      "heartbeat_timeout_s", "connect_timeout_s", "command_timeout_s",
-                     "mocap_rate_hz", "mass_kg", "thrust_max_n", "climb_speed_mps"):  # fmt: skip
+                     "mocap_rate_hz", "climb_speed_mps"):  # fmt: skip
             if not getattr(self, name) > 0:
                 raise BackendError(f"mavlink setting {name} must be > 0")
         if self.setpoint_rate_hz > self.control_rate_hz:
@@ -111,11 +95,10 @@ def settings_from_show(
     show: Show, vehicle: Vehicle, fence: FenceSpec | None = None
 ) -> MavlinkSettings:
     """Settings of ``vehicle`` (a show-file vehicle with ``backend: mavlink``) in ``show``: its
-    ``mavlink_*`` fields (origin default: its home), limits and controller from the show;
+    ``mavlink_*`` fields (origin default: its home) and the show's control rate;
     ``fence``: the autopilot's own fence (see ``create_backend``)."""
     if not vehicle.mavlink_url:
         raise BackendError(f"vehicle {vehicle.id}: backend mavlink needs mavlink_url")
-    limits = show.vehicle_limits(vehicle.id)
     origin = vehicle.mavlink_origin_m_enu or vehicle.home_m_enu
     return MavlinkSettings(
         url=vehicle.mavlink_url,
@@ -124,19 +107,8 @@ def settings_from_show(
         control_rate_hz=float(show.controller.rate_hz),
         telemetry_rate_hz=float(show.controller.rate_hz),
         setpoint_rate_hz=float(vehicle.mavlink_setpoint_rate_hz),
-        setpoints=vehicle.mavlink_setpoints,
         mocap=vehicle.mavlink_mocap,
         truth=vehicle.mavlink_truth,
         lead_s=vehicle.mavlink_lead_s,
-        mass_kg=float(limits.mass_kg),
-        thrust_max_n=float(limits.thrust_max_n),
-        controller=_controller(show),
         fence=fence,
     )
-
-
-def _controller(show: Show) -> ControllerConfig:
-    """The show's outer loop (as the in-process simulator flies it), aiming the brush tip."""
-    if show.controller.preset == "paper":
-        return PAPER_CONFIG
-    return replace(DEFAULT_CONFIG, brush_lever_m=show.planning.write_height_m)

@@ -2,8 +2,7 @@
 
 Position setpoints are SET_POSITION_TARGET_LOCAL_NED with position, velocity, acceleration and
 the held heading (type_mask ``0x0800``: only the yaw rate ignored), so the autopilot never turns
-the vehicle on its own. Attitude setpoints come from our outer loop, run every control period and
-sent at the stream rate, with the held heading too.
+the vehicle on its own.
 """
 
 from __future__ import annotations
@@ -12,15 +11,12 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from vehicle_agent.backends.base import Setpoint, Vec3
-from vehicle_agent.backends.mavlink_frames import LocalFrame, euler_to_quaternion
+from vehicle_agent.backends.base import Setpoint
+from vehicle_agent.backends.mavlink_frames import LocalFrame
 from vehicle_agent.backends.mavlink_link import MavlinkLink
 from vehicle_agent.backends.mavlink_setpoints import (
     MAV_FRAME_LOCAL_NED,
-    TYPE_MASK_ATTITUDE_ONLY,
     TYPE_MASK_POSITION_VELOCITY_ACCEL_YAW,
-    AttitudeCommand,
-    AttitudeOuterLoop,
     ned_target,
 )
 from vehicle_agent.backends.mavlink_settings import MavlinkSettings
@@ -47,12 +43,10 @@ class SetpointStream:
         """Agent time in [s] of the last setpoint sent."""
         self.heading_ned_rad = 0.0
         """The heading held in every setpoint, in [rad] from north (the take-off heading)."""
-        self._outer: AttitudeOuterLoop | None = None
 
     def new_flight(self, heading_ned_rad: float) -> None:
-        """A take-off: hold this heading; the outer loop starts afresh."""
+        """A take-off: hold this heading."""
         self.heading_ned_rad = heading_ned_rad
-        self._outer = None
 
     @property
     def period_s(self) -> float:
@@ -62,16 +56,10 @@ class SetpointStream:
     def due(self, now_s: float) -> bool:
         return now_s - self.last_sent_s >= self.period_s
 
-    def send(self, setpoint: Setpoint, now_s: float, measured_m_enu: Vec3) -> None:
-        """One control period of the stream: position setpoints when due; attitude: the outer
-        loop on ``measured_m_enu`` every period, its command when due."""
-        if self.settings.setpoints != "attitude":
-            if self.due(now_s):
-                self.send_position(setpoint, now_s)
-            return
-        command = self._attitude_loop(measured_m_enu).update(measured_m_enu, setpoint)
+    def send(self, setpoint: Setpoint, now_s: float) -> None:
+        """One control period of the stream: the setpoint, when one is due."""
         if self.due(now_s):
-            self.send_attitude(command, now_s)
+            self.send_position(setpoint, now_s)
 
     def send_position(self, setpoint: Setpoint, now_s: float) -> None:
         """SET_POSITION_TARGET_LOCAL_NED: p, v, a and the held heading (yaw rate ignored)."""
@@ -84,37 +72,14 @@ class SetpointStream:
         )  # fmt: skip
         self._send(message, now_s)
 
-    def send_attitude(self, command: AttitudeCommand, now_s: float) -> None:
-        """SET_ATTITUDE_TARGET: attitude quaternion and thrust (body rates ignored)."""
-        st, mav = self.state, self._link().mav
-        message = mav.set_attitude_target_encode(
-            _stamp_ms(now_s), st.system_id or 0, st.component_id or 0,
-            TYPE_MASK_ATTITUDE_ONLY, command.q_ned, 0.0, 0.0, 0.0, command.thrust,
-        )  # fmt: skip
-        self._send(message, now_s)
-
     def send_proof_of_life(self, hold: Setpoint, now_s: float) -> None:
-        """What PX4 needs on the ground before OFFBOARD and arming: the hold point, or (attitude
-        setpoints) level at the held heading with zero thrust."""
-        if self.settings.setpoints == "attitude":
-            q = euler_to_quaternion(0.0, 0.0, self.heading_ned_rad)
-            self.send_attitude(AttitudeCommand(q, 0.0), now_s)
-        else:
-            self.send_position(hold, now_s)
+        """What PX4 needs on the ground before OFFBOARD and arming: the hold point."""
+        self.send_position(hold, now_s)
 
     def _send(self, message: Any, now_s: float) -> None:
         if self._link().send(message):
             self.last_sent_s = now_s
             self.sent += 1
-
-    def _attitude_loop(self, measured_m_enu: Vec3) -> AttitudeOuterLoop:
-        if self._outer is None:
-            s = self.settings
-            self._outer = AttitudeOuterLoop(
-                s.controller, s.control_period_s, measured_m_enu, s.thrust_max_n / s.mass_kg,
-                heading_ned_rad=self.heading_ned_rad,
-            )  # fmt: skip
-        return self._outer
 
 
 def _stamp_ms(now_s: float) -> int:
