@@ -6,10 +6,11 @@ whose token has been gone for ``lost_after_s``, or that has been silent for ``lo
 although its token remains (a frozen process, a token held by someone else), is lost and its job
 goes back to the queue; it is present again with its next status, and a job of its own that is
 still queued is its own again if that status names it (it finished writing it meanwhile, or is
-writing it still). A vehicle whose status has not
-mentioned the job it was given for
-``confirm_grace_s`` gives it back too (it restarted, or refused silently). After an orchestrator
-restart, jobs that were active wait for the same confirmation. Events the agents publish about
+writing it still). A vehicle whose status has not mentioned the job it was given for
+``confirm_grace_s`` gives it back too (it refused silently); at once if its token was declared
+anew since the job was given (its agent restarted, faster than it could be found lost, and its
+new self says it has no job). After an orchestrator restart, jobs that were active wait for the
+same confirmation. Events the agents publish about
 their vehicles (autopilot messages, refused take-offs) join the show's event log here.
 """
 
@@ -76,11 +77,23 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
     job = book.active_job_of(status.vehicle_id)
     if job is not None and status.job_id != job.job_id:
         view.mismatch_since_s = view.mismatch_since_s or now_s
+        if _restarted_since(view, job.assigned_at_s):
+            view.mismatch_since_s = None
+            book.requeue(eff, job, now_s, f"{view.info.vehicle_id} restarted without it", lost=True)
     else:
         view.mismatch_since_s = None
     eff.fleet_changed = changed
     tick_into(book, eff, now_s)
     return eff
+
+
+def _restarted_since(view: VehicleView, assigned_at_s: float | None) -> bool:
+    """Whether the vehicle's liveliness token was declared anew after the job was given to it."""
+    return (
+        view.token_at_s is not None
+        and assigned_at_s is not None
+        and view.token_at_s > assigned_at_s
+    )
 
 
 def _reclaim(book: Book, eff: Effects, view: VehicleView, job_id: str | None, now_s: float) -> None:

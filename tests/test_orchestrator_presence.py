@@ -132,3 +132,20 @@ def test_clear_fault_is_forwarded_to_the_vehicle_and_keeps_the_hold() -> None:
     reply, eff = book.operator(OperatorCommand(command="clear_fault", vehicle_id="uav1"), 2.0)
     assert reply.ok and [(v, c.command) for v, c in eff.commands] == [("uav1", "clear_fault")]
     assert book.vehicles["uav1"].held  # release is still the operator's decision
+
+
+def test_an_agent_restarted_without_its_job_gives_it_back_at_once_a_token_flap_does_not() -> None:
+    book = _book()
+    _writing_j1(book)
+    _run(book, 0.2, 1.0, {"uav1": "j1"})
+    book.liveliness("uav1", False, 1.05)  # a network flap: the same agent, still writing j1
+    book.liveliness("uav1", True, 1.1)
+    _run(book, 1.1, 5.0, {"uav1": "j1"})
+    assert book.jobs["j1"].state == "writing"
+    book.liveliness("uav1", False, 5.05)  # killed, and restarted by its supervisor at once
+    book.liveliness("uav1", True, 5.3)
+    eff = book.status(_status("uav1"), 5.35)  # its new self has no job
+    assert eff.jobs["j1"].state in ("queued", "assigned") and eff.jobs["j1"].vehicle_id == "uav1"
+    assert [e.message for e in eff.events if e.kind == "job_requeued"] == [
+        "L: uav1 restarted without it"
+    ]

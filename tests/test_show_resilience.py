@@ -231,9 +231,15 @@ def test_an_agent_killed_mid_character_is_lost_within_2_s_and_another_writes_it(
     os.kill(pid, signal.SIGKILL)
     (job,) = live.wait([job_id])
     assert job.vehicle_id != victim and job.attempts == 2
-    lost = live.events_of("vehicle_lost", victim)
-    assert lost and 0.0 <= lost[-1].time_s - killed_at <= 2.0, lost
-    print(f"\nkilled agent taken as lost after {lost[-1].time_s - killed_at:.2f} s")
+    # lost; or restarted by the supervisor so fast that its new self says it has no job first
+    taken_back = [
+        e.time_s - killed_at
+        for kind in ("vehicle_lost", "job_requeued")
+        for e in live.events_of(kind, victim)
+        if e.time_s >= killed_at
+    ]
+    assert taken_back and min(taken_back) <= 2.0, taken_back
+    print(f"\nkilled agent's job taken back after {min(taken_back):.2f} s")
     live.wait_ready(victim)  # restarted by the supervisor
     live.check_written_once()
 
