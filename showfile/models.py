@@ -109,6 +109,14 @@ class StorageSettings(_Model):
     """Directory of the MCAP recordings, one file per run; default ``out/<show_id>/recordings``."""
     record: bool = True
     """Record every message of the show to MCAP."""
+    job_files: Literal["compact", "full"] = "compact"
+    """Per-job files next to the database (``jobs/``): ``compact`` keeps a job under ~100 kB
+    (metrics, a small picture, the reference and the flight at 20 Hz in one compressed file);
+    ``full`` keeps every tick and a full-size picture."""
+    job_files_budget_mb: float = Field(default=1000.0, gt=0.0)
+    """Disk for job files, in [MB], shared evenly by the vehicles; the oldest go first."""
+    job_files_max_age_h: float | None = Field(default=None, gt=0.0)
+    """Job files older than this are removed, in [h]; None: only the budget limits them."""
 
 
 class PolicySettings(_Model):

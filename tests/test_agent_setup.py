@@ -113,9 +113,12 @@ def test_metrics_of_a_perfectly_flown_job(airshow_uav3) -> None:  # type: ignore
     assert worse.iou is not None and 0.2 < worse.iou < 0.7  # a 2 cm stroke moved by 1 cm
 
 
-def test_a_flown_job_is_recorded_next_to_the_database(tmp_path: Path) -> None:
+@pytest.mark.parametrize("detail", ["full", "compact"])
+def test_a_flown_job_is_recorded_next_to_the_database(tmp_path: Path, detail: str) -> None:
     show = load_show(SHOWS / "solo.yaml")
-    storage = show.storage.model_copy(update={"database": tmp_path / "show.sqlite3"})
+    storage = show.storage.model_copy(
+        update={"database": tmp_path / "show.sqlite3", "job_files": detail}
+    )
     setup = vehicle_setup(show.model_copy(update={"storage": storage}), "uav1")
     prepared = prepare_job(setup, JobAssignment(job_id="j1", text="一"))
     s = prepared.samples
@@ -128,10 +131,22 @@ def test_a_flown_job_is_recorded_next_to_the_database(tmp_path: Path) -> None:
     assert out == tmp_path / "jobs" / "j1-uav1-2"
     summary = json.loads((out / "metrics.json").read_text())
     assert summary["metrics"]["rmse_m"] == 0.0 and summary["attempt"] == 2
-    assert len(json.loads((out / "TRAJ.json").read_text())["samples"]["t"]) == s.t_s.shape[0]
     with np.load(out / "flight.npz") as flight:
-        np.testing.assert_array_equal(flight["position_m_enu"], s.position_m_enu)
+        if detail == "full":
+            traj = json.loads((out / "TRAJ.json").read_text())
+            assert len(traj["samples"]["t"]) == s.t_s.shape[0]
+        else:  # the reference rides with the flight, at the same rate
+            assert not (out / "TRAJ.json").exists()
+            np.testing.assert_array_equal(flight["reference_t_s"], flight["t_s"])
         assert "pen_contact" not in flight
+        if detail == "full":
+            np.testing.assert_array_equal(flight["position_m_enu"], s.position_m_enu)
+        else:  # 20 Hz in float32: a 100 Hz flight in a fifth of the ticks, within 0.1 mm
+            kept = flight["t_s"]
+            assert kept[0] == s.t_s[0] and kept[-1] == pytest.approx(s.t_s[-1])
+            assert np.all(np.diff(kept)[:-1] >= 0.05 - 1e-9) and len(kept) <= len(s.t_s) // 5 + 2
+            where = np.searchsorted(s.t_s, kept - 1e-9)
+            np.testing.assert_allclose(flight["position_m_enu"], s.position_m_enu[where], atol=1e-4)
 
 
 def test_a_flown_job_gets_a_report_picture_and_none_without_brush_data(tmp_path: Path) -> None:

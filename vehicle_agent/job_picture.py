@@ -27,12 +27,13 @@ CJK_FONTS = ("Noto Sans CJK SC", "Noto Serif CJK SC")
 """Fonts that draw Chinese labels (Debian's fonts-noto-cjk), tried after each text's own font."""
 
 
-def save_png(figure: Figure, path: Path) -> None:
-    """Write the figure as PNG atomically (a reader never sees half a file); Chinese characters
-    in its texts (a job's label) are drawn with a CJK font where one is installed."""
+def save_png(figure: Figure, path: Path, *, dpi: float | None = None) -> None:
+    """Write the figure as PNG atomically (a reader never sees half a file), at ``dpi`` (None:
+    the figure's own); Chinese characters in its texts (a job's label) are drawn with a CJK font
+    where one is installed."""
     _fall_back_to_cjk(figure)
     partial = path.with_name(f".{path.name}.partial")
-    figure.savefig(str(partial), format="png")
+    figure.savefig(str(partial), format="png", dpi="figure" if dpi is None else dpi)
     os.replace(partial, path)
 
 

@@ -13,6 +13,7 @@ import numpy as np
 from bus.messages import JobAssignment, JobMetrics
 from planner.errors import PlannerError
 from planner.glyphs import Glyph, parse_strokes_json, text_glyph
+from vehicle_agent.job_files import COMPACT_PICTURE_DPI, JobFilesPolicy, compact_arrays, prune
 from vehicle_agent.job_picture import PICTURE_NAME, PictureWorker, save_png
 from vehicle_agent.job_runner import PreparedJob
 from vehicle_agent.setup import VehicleSetup
@@ -105,8 +106,11 @@ def job_report_dir(setup: VehicleSetup, trace: FlownTrace) -> Path:
 def write_job_report(
     setup: VehicleSetup, prepared: PreparedJob, trace: FlownTrace, metrics: JobMetrics | None
 ) -> Path:
-    """Write ``metrics.json``, ``TRAJ.json`` (the planned reference) and ``flight.npz`` (what was
-    flown, tick by tick) of a job; returns the directory."""
+    """Write ``metrics.json``, the planned reference (``TRAJ.json``) and ``flight.npz`` (what
+    was flown, every tick) of a job; compact (the show's ``storage.job_files``): ``flight.npz``
+    alone holds both at 20 Hz in float32, the reference as ``reference_*``; returns the
+    directory."""
+    compact = JobFilesPolicy.of(setup.show).compact
     out = job_report_dir(setup, trace)
     out.mkdir(parents=True, exist_ok=True)
     summary = {
@@ -117,11 +121,22 @@ def write_job_report(
         "metrics": None if metrics is None else msgspec.to_builtins(metrics),
     }
     (out / "metrics.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
-    traj = {"samples": prepared.samples.to_json_dict()}
-    (out / "TRAJ.json").write_text(json.dumps(traj), encoding="utf-8")
     arrays: dict[str, Any] = {
         name: value for name, value in vars(trace).items() if isinstance(value, np.ndarray)
     }
+    if compact:
+        plan = prepared.samples  # its velocity and acceleration: in full detail only
+        reference = {
+            "t_s": plan.t_s,
+            "position_m_enu": plan.position_m_enu,
+            "pen_down": plan.pen_down,
+        }
+        arrays = compact_arrays(arrays, trace.t_s) | compact_arrays(
+            reference, prepared.samples.t_s, prefix="reference_"
+        )
+    else:
+        traj = {"samples": prepared.samples.to_json_dict()}
+        (out / "TRAJ.json").write_text(json.dumps(traj), encoding="utf-8")
     np.savez_compressed(out / "flight.npz", allow_pickle=False, **arrays)
     return out
 
@@ -137,7 +152,8 @@ def write_job_picture(
     title = f"job {trace.job_id} on {setup.vehicle_id}, attempt {trace.attempt}"
     figure = setup.kind.report(writing_plan(prepared), flown, setup.settings, title)
     path = out / PICTURE_NAME
-    save_png(figure, path)
+    compact = JobFilesPolicy.of(setup.show).compact
+    save_png(figure, path, dpi=COMPACT_PICTURE_DPI if compact else None)
     return path
 
 
@@ -148,7 +164,9 @@ def archive_job(
     trace: FlownTrace,
     metrics: JobMetrics | None,
 ) -> Path:
-    """:func:`write_job_report`, then ``report.png`` drawn by ``pictures`` in the background."""
+    """:func:`write_job_report`, then ``report.png`` drawn by ``pictures`` in the background;
+    the vehicle's older job directories beyond its budget or age are removed."""
     out = write_job_report(setup, prepared, trace, metrics)
+    prune(out.parent, setup.vehicle_id, JobFilesPolicy.of(setup.show))
     pictures.submit(lambda: write_job_picture(setup, prepared, trace, out))
     return out

@@ -1,0 +1,101 @@
+"""A vehicle's job directories on disk: how detailed they are, and keeping them within budget.
+
+Each flown job leaves ``<database dir>/jobs/<job>-<vehicle>-<attempt>/``: ``metrics.json``, the
+planned reference, what was flown and ``report.png``. ``compact`` (the default) keeps a job
+under about 100 kB: the reference and the flight at ``COMPACT_RATE_HZ`` in float32 in one
+compressed ``flight.npz``, a small picture; ``full`` keeps every tick (``TRAJ.json`` beside) and a
+full-size picture, for engineers tuning a vehicle.
+
+Every agent prunes only its own vehicle's directories (agents of one show may share the folder,
+and on several hosts each has its own), oldest first, down to its share of the show's budget and
+its age limit. Job records in the orchestrator's database are never touched: only files.
+"""
+
+from __future__ import annotations
+
+import shutil
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+from showfile import Show
+
+COMPACT_RATE_HZ = 20.0
+"""Rate in [Hz] of the flight kept in a compact job directory."""
+COMPACT_PICTURE_DPI = 36
+"""Resolution of a compact ``report.png`` (the kinds draw at 100 dpi)."""
+
+
+@dataclass(frozen=True)
+class JobFilesPolicy:
+    """How a vehicle keeps its job directories."""
+
+    detail: Literal["compact", "full"] = "compact"
+    """How much of a job is kept."""
+    budget_bytes: int = 100_000_000
+    """This vehicle's share of the show's budget, in bytes."""
+    max_age_s: float | None = None
+    """Directories older than this are removed, in [s]; None: no age limit."""
+
+    @property
+    def compact(self) -> bool:
+        return self.detail == "compact"
+
+    @classmethod
+    def of(cls, show: Show) -> JobFilesPolicy:
+        """The show's ``storage`` settings, the budget shared evenly by its vehicles."""
+        storage = show.storage
+        share = storage.job_files_budget_mb * 1e6 / max(1, len(show.vehicles))
+        age_h = storage.job_files_max_age_h
+        return cls(storage.job_files, int(share), None if age_h is None else age_h * 3600.0)
+
+
+def decimated(t_s: np.ndarray, rate_hz: float) -> np.ndarray:
+    """Indices of samples at most ``rate_hz`` apart in time, the first and last kept."""
+    if t_s.size == 0:
+        return np.arange(0)
+    slots = np.floor((t_s - t_s[0]) * rate_hz + 1e-9).astype(np.int64)
+    first = np.flatnonzero(np.diff(slots, prepend=-1) > 0)
+    return np.unique(np.append(first, t_s.size - 1))
+
+
+def compact_arrays(
+    arrays: dict[str, np.ndarray], t_s: np.ndarray, prefix: str = ""
+) -> dict[str, np.ndarray]:
+    """Per-tick arrays at ``COMPACT_RATE_HZ``, named ``prefix + name``, floats as float32
+    (0.1 mm at 1 km) but time (``t_s``: float32 steps reach milliseconds in hours of show)."""
+    keep = decimated(t_s, COMPACT_RATE_HZ)
+    out: dict[str, np.ndarray] = {}
+    for name, value in arrays.items():
+        part = value[keep] if value.shape[:1] == t_s.shape else value
+        narrow = part.dtype == np.float64 and name != "t_s"
+        out[prefix + name] = part.astype(np.float32) if narrow else part
+    return out
+
+
+def directory_bytes(path: Path) -> int:
+    return sum(f.stat().st_size for f in path.iterdir() if f.is_file())
+
+
+def prune(
+    jobs_dir: Path, vehicle_id: str, policy: JobFilesPolicy, now_s: float | None = None
+) -> list[Path]:
+    """Remove this vehicle's oldest job directories beyond its budget or age; returns them."""
+    now = time.time() if now_s is None else now_s
+    mine = [d for d in jobs_dir.glob(f"*-{vehicle_id}-*") if d.is_dir()]
+    aged = sorted(mine, key=lambda d: d.stat().st_mtime, reverse=True)  # newest first
+    removed, total = [], 0
+    for i, path in enumerate(aged):
+        try:
+            size, age_s = directory_bytes(path), now - path.stat().st_mtime
+        except FileNotFoundError:
+            continue
+        total += size
+        too_old = policy.max_age_s is not None and age_s > policy.max_age_s
+        if i > 0 and (total > policy.budget_bytes or too_old):  # never the job just written
+            shutil.rmtree(path, ignore_errors=True)
+            removed.append(path)
+    return removed
