@@ -5,9 +5,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+import numpy as np
+
 from kiosk.limits import SubmissionLimits
 from kiosk.wording import board_numbers
 from planner.pipeline import BoardFrame, PlanOptions
+from showfile.kind_hexarotor import PenSettings
 from showfile.planning import plan_options
 
 
@@ -51,13 +54,31 @@ class KioskSettings:
     """The page goes back to the start after this long without a touch, [s] (0: never)."""
     stale_after_s: float = 2.0
     """The status is stale when the orchestrator's 1 Hz fleet snapshot is older than this, [s]."""
+    preview_kind: str = "quadrotor-brush"
+    """The vehicle kind the preview plans for: the kind writing on the first board."""
+    width_range_m: tuple[float, float] | None = None
+    """Narrowest and widest line in [m] of the preview kind's pen, for kinds that write with a
+    width (the drawing pad then sends a width per point); None for a brush of fixed width."""
+
+
+def pen_width_range_m(kind: str) -> tuple[float, float] | None:
+    """The line widths in [m] a kind's pen can draw, or None if it draws one width: the
+    hexarotor's sponge from the show file's pen calibration (width at its lowest and highest
+    calibrated force, as ``vehicles.hexarotor_sponge.pen.PenCurve`` reads it)."""
+    if kind != "hexarotor-sponge":
+        return None
+    pen = PenSettings()
+    coefficients = np.asarray(pen.width_coefficients_m)
+    low, high = np.polynomial.polynomial.polyval([pen.force_min_n, pen.force_max_n], coefficients)
+    return float(low), float(high)
 
 
 def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
     """Kiosk settings from a loaded show (``showfile.Show``); ``port`` overrides the file's.
 
-    The preview is planned on the first board's writing area with the show's limits and planning
-    settings (every vehicle re-plans its job on its own board).
+    The preview is planned on the first board's writing area for the kind of the vehicles on it,
+    with the show's limits and planning settings (every vehicle re-plans its job on its own
+    board).
     """
     kiosk, board, planning = show.kiosk, show.boards[0], show.planning
     limits = SubmissionLimits(
@@ -71,6 +92,7 @@ def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
     plan = plan_options(planning, show.limits, frame)
     plan = replace(plan, clearance_m=max(planning.clearance_m, 1e-3))
     width_m, height_m = board.writing_area_m
+    kind = next((v.kind for v in show.vehicles if v.board == board.id), "quadrotor-brush")
     return KioskSettings(
         show_id=show.show_id,
         host=kiosk.host,
@@ -87,4 +109,6 @@ def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
             {vehicle.id: vehicle.board for vehicle in show.vehicles},
             [b.id for b in show.boards],
         ),
+        preview_kind=kind,
+        width_range_m=pen_width_range_m(kind),
     )
