@@ -3,9 +3,10 @@ vehicle writes on (the Textual and Zenoh path is in test_tui_console.py)."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
-from hypothesis import given
+from hypothesis import example, given
 from hypothesis import strategies as st
 
 from bus.messages import Telemetry
@@ -57,12 +58,16 @@ def test_samples_without_force_leave_gaps() -> None:
     ]
 
 
-@given(st.lists(st.one_of(st.none(), st.floats(-5.0, 50.0)), min_size=1, max_size=60))
-def test_every_force_lands_on_the_plot(values: list[float | None]) -> None:
+@given(st.lists(st.one_of(st.none(), st.floats(allow_nan=True)), min_size=1, max_size=60))
+@example([1.7e308, -math.inf, math.nan, None, 3.0])
+def test_every_finite_force_lands_on_the_plot(values: list[float | None]) -> None:
+    """Whatever a vehicle sends (negative, huge, NaN, infinite): no crash, and every finite
+    value gets a dot."""
     canvas, top_n = plot_force(values, values, cols=30, rows=3)
-    assert top_n >= 1.0
+    assert math.isfinite(top_n) and top_n >= 1.0
     for x, value in enumerate(values[: canvas.width_dots]):
-        assert (_highest_dot(canvas, x, MEASURED) is not None) == (value is not None)
+        shown = value is not None and math.isfinite(value)
+        assert (_highest_dot(canvas, x, MEASURED) is not None) == shown
 
 
 def test_the_show_file_says_what_each_vehicle_writes_on() -> None:

@@ -6,6 +6,7 @@ so in one line. Redrawn only when the track grew or restarted.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 from rich.text import Text
@@ -20,6 +21,8 @@ PLOT_STYLES = ("#0087ff", "bold #ffffff")
 """Style per layer: the target force, the measured force (drawn over it)."""
 LEGEND = "[bold #ffffff]━measured[/] [#0087ff]━target[/]"
 """The plot's subtitle: the console's own markup (no bus data)."""
+TOP_MAX_N = 1000.0
+"""Highest force the plot's scale reaches in [N]; larger values (bus data) are drawn at the top."""
 NO_FORCE = "no contact force in this job's telemetry"
 
 
@@ -44,10 +47,12 @@ def plot_force(
     measured: Sequence[float | None], target: Sequence[float | None], cols: int, rows: int
 ) -> tuple[BrailleCanvas, float]:
     """A canvas of both series (one value per dot column, 0 N at the bottom) and the force in
-    [N] at its top (the largest value plus a tenth, at least 1 N)."""
+    [N] at its top (the largest value plus a tenth, at least 1 N). A value that is not a finite
+    number (bus data) is left out like a missing one."""
     canvas = BrailleCanvas(cols, rows, layers=len(PLOT_STYLES))
+    measured, target = _finite(measured), _finite(target)
     values = [v for v in (*measured, *target) if v is not None]
-    top_n = max(1.0, 1.1 * max(values, default=0.0))
+    top_n = min(TOP_MAX_N, max(1.0, 1.1 * max(values, default=0.0)))
     bottom = canvas.height_dots - 1
     for layer, series in ((TARGET, target), (MEASURED, measured)):
         previous: tuple[float, float] | None = None
@@ -59,6 +64,10 @@ def plot_force(
             canvas.line(*(previous or dot), *dot, layer=layer)
             previous = dot
     return canvas, top_n
+
+
+def _finite(series: Sequence[float | None]) -> list[float | None]:
+    return [v if v is not None and math.isfinite(v) else None for v in series]
 
 
 class ForcePlot(Static):
