@@ -122,3 +122,28 @@ def test_pressing_harder_draws_wider_in_the_preview(browser: Any, wall_kiosk: st
     page.screenshot(path=str(SHOTS_DIR / "phone-wall-widths.png"))
     assert errors == []
     context.close()
+
+
+def test_without_pressure_a_faster_line_is_thinner(browser: Any, wall_kiosk: str) -> None:
+    """The page's own rule (kiosk/static/widths.js) on a mouse's points: pressure 0.5 all along,
+    10 px apart, first every 0.1 s (100 px/s) then every 0.01 s (1000 px/s)."""
+    page = browser.new_page()
+    page.goto(wall_kiosk)
+    page.wait_for_selector("body[data-ready='1']", timeout=UI_WAIT_MS)
+    times = [0.1 * i for i in range(10)] + [0.9 + 0.01 * i for i in range(1, 11)]
+    stroke = [[10.0 * i, 50.0, t, 0.5] for i, t in enumerate(times)]
+    widths, pressed = page.evaluate(
+        """([stroke, range]) => [
+            window.SkyquillWidths.strokeWidths(stroke, range),
+            window.SkyquillWidths.hasPressure(stroke),
+        ]""",
+        [stroke, [0.005, 0.014]],
+    )
+    assert pressed is False
+    slow, fast = widths[3], widths[-4]
+    assert slow == pytest.approx(0.014 - 0.009 * 100 / 1200, abs=1e-4)
+    assert fast == pytest.approx(0.014 - 0.009 * 1000 / 1200, abs=1e-4)
+    # a pen's pressure wins over the speed
+    stroke[5][3] = 0.9
+    assert page.evaluate("s => window.SkyquillWidths.hasPressure(s)", stroke) is True
+    page.close()
