@@ -18,16 +18,13 @@ import numpy as np
 from kiosk import wording
 from kiosk.errors import RejectedError
 from kiosk.limits import Submission
-from kiosk.settings import KioskSettings
+from kiosk.settings import BRUSH_KIND, KioskSettings
 from planner.errors import PlannerError
 from planner.glyphs import Glyph, parse_strokes_json, text_glyph
 from planner.glyphs.layout import MIN_INK_FRACTION, ink_fraction
 from vehicles.jobs import JobPlan, plan_glyph
 from vehicles.registry import vehicle_kind
 from vehicles.surface import Surface
-
-BRUSH_KIND = "quadrotor-brush"
-"""The kind whose planner options the kiosk's settings carry (``KioskSettings.plan``)."""
 
 PATH_POINTS_MAX = 800
 """Most points of the path sent to the page (decimated from the planner's samples)."""
@@ -114,7 +111,7 @@ def _plan(glyph: Glyph, settings: KioskSettings) -> JobPlan:
     """The job as a vehicle of the preview's kind would plan it, on the writing area's own
     frame."""
     kind = vehicle_kind(settings.preview_kind)
-    kind_settings = kind.settings(None, None)
+    kind_settings = settings.preview_kind_settings or kind.settings(None, None)
     if kind.name == BRUSH_KIND:
         kind_settings = replace(
             kind_settings, plan=replace(settings.plan, sample_rate_hz=PATH_RATE_HZ)

@@ -88,6 +88,8 @@ def test_a_show_previews_for_the_kind_on_its_first_board() -> None:
     wall = settings_from_show(show.model_copy(update={"vehicles": vehicles}))
     assert wall.preview_kind == WALL
     assert wall.width_range_m == pen_width_range_m(WALL)
+    assert type(wall.preview_kind_settings).__name__ == "WallSettings"  # the vehicle's own
+    assert settings_from_show(show).preview_kind_settings is None  # the brush: ``plan``
 
 
 def test_config_gives_the_pen_range(wall_kiosk: str) -> None:
