@@ -55,14 +55,17 @@ def plot_force(
     top_n = min(TOP_MAX_N, max(1.0, 1.1 * max(values, default=0.0)))
     bottom = canvas.height_dots - 1
     for layer, series in ((TARGET, target), (MEASURED, measured)):
-        previous: tuple[float, float] | None = None
+        previous: int | None = None
         for x, value in enumerate(series[: canvas.width_dots]):
             if value is None:
                 previous = None
                 continue
-            dot = (float(x), bottom - bottom * min(max(value, 0.0), top_n) / top_n)
-            canvas.line(*(previous or dot), *dot, layer=layer)
-            previous = dot
+            y = round(bottom - bottom * min(max(value, 0.0), top_n) / top_n)
+            # a step from the previous column is a run of dots in this one (a line, cheaply)
+            low, high = (y, y) if previous is None else (min(previous, y), max(previous, y))
+            for dot_y in range(low, high + 1):
+                canvas.set(x, dot_y, layer)
+            previous = y
     return canvas, top_n
 
 
