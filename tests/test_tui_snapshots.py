@@ -105,5 +105,7 @@ def test_wall_writer_detail_with_its_force(snap_compare: SnapCompare) -> None:
         await pilot.press("down", "d")
         await settle(pilot)
         await settle(pilot)  # the force plot appears with the first force, then is drawn
+        await pilot.wait_for_scheduled_animations()
+        await pilot.pause(0.2)  # the footer lists the screen's keys a moment after it opens
 
     assert snap_compare(mixed_app(), terminal_size=(100, 30), run_before=open_detail)
