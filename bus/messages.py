@@ -240,7 +240,11 @@ class Telemetry(State, frozen=True):
     job_id: str | None = None
     progress: float = 0.0
     force_n: float | None = None
-    """Measured normal contact force in [N] of a kind that senses it (the wall hexarotor)."""
+    """Measured normal contact force of the pen on its surface in [N], for kinds that sense it
+    (``hexarotor-sponge``); None otherwise (v1 addition)."""
+    force_reference_n: float | None = None
+    """Wanted normal contact force in [N] now (the plan's, 0 in free flight), for kinds that
+    control force; None otherwise (v1 addition)."""
 
 
 class VehicleStatus(State, frozen=True):

@@ -169,6 +169,7 @@ async def config(request: Request) -> Response:
         "writing_area_m": list(s.settings.writing_area_m),
         "max_flight_s": s.settings.max_flight_s,
         "idle_reset_s": s.settings.idle_reset_s,
+        "width_range_m": s.settings.width_range_m and list(s.settings.width_range_m),
     }})  # fmt: skip
 
 

@@ -1,9 +1,10 @@
 """What the vehicle will write: the glyph laid out on the writing area and planned.
 
-Plans through the one job-planning function (:func:`vehicles.jobs.plan_glyph`) with the brush
-quadrotor's settings of the show (the kiosk's planner options); returns plain JSON for the page:
-turning points and the planned path in the writing area's own frame (metres, origin at the
-centre, y up).
+Plans through the one job-planning function (:func:`vehicles.jobs.plan_glyph`) for the kind
+writing on the show's first board (the brush quadrotor with the kiosk's planner options, or the
+hexarotor with its pen); returns plain JSON for the page: turning points and the planned path in
+the writing area's own frame (metres, origin at the centre, y up), with the planned line width at
+each point where the kind writes with a width.
 """
 
 from __future__ import annotations
@@ -17,16 +18,13 @@ import numpy as np
 from kiosk import wording
 from kiosk.errors import RejectedError
 from kiosk.limits import Submission
-from kiosk.settings import KioskSettings
+from kiosk.settings import BRUSH_KIND, KioskSettings
 from planner.errors import PlannerError
 from planner.glyphs import Glyph, parse_strokes_json, text_glyph
 from planner.glyphs.layout import MIN_INK_FRACTION, ink_fraction
 from vehicles.jobs import JobPlan, plan_glyph
 from vehicles.registry import vehicle_kind
 from vehicles.surface import Surface
-
-PREVIEW_KIND = "quadrotor-brush"
-"""The kind the preview plans for (the kiosk's planner options are that kind's)."""
 
 PATH_POINTS_MAX = 800
 """Most points of the path sent to the page (decimated from the planner's samples)."""
@@ -62,7 +60,15 @@ def plan_preview(submission: Submission, settings: KioskSettings) -> dict[str, A
         raise RejectedError("too_small", wording.TOO_SMALL, status=422)
     try:
         job = _plan(glyph, settings)
-    except PlannerError:
+    except PlannerError as exc:
+        if exc.field == "w":
+            raise RejectedError(
+                "bad_width",
+                wording.BAD_WIDTH,
+                status=422,
+                stroke_index=exc.stroke_index,
+                point_index=exc.point_index,
+            ) from None
         raise RejectedError("unplannable", wording.UNPLANNABLE, status=422) from None
     planned, fitted = job.plan, job.glyph
     if planned.duration_s > settings.max_flight_s:
@@ -78,10 +84,13 @@ def plan_preview(submission: Submission, settings: KioskSettings) -> dict[str, A
     pen = samples.pen_down
     changes = np.flatnonzero(np.diff(pen.astype(np.int8)))
     keep = np.union1d(keep, np.r_[changes, changes + 1])
-    path = [
+    path: list[list[Any]] = [
         [round(float(x), 4), round(float(y), 4), bool(p)]
         for (x, y), p in zip(board_xy[keep], pen[keep], strict=True)
     ]
+    if planned.width_m is not None:
+        for point, w in zip(path, planned.width_m[keep], strict=True):
+            point.append(round(float(w), 5))
     turning = [np.round(tp, 4).tolist() for tp in planned.turning_points_m]
     return {
         "label": submission.label,
@@ -91,18 +100,26 @@ def plan_preview(submission: Submission, settings: KioskSettings) -> dict[str, A
         "turning_point_count": sum(len(tp) for tp in turning),
         "path": path,
         "duration_s": round(planned.duration_s, 2),
+        "kind": settings.preview_kind,
+        "widths": planned.width_m is not None,
+        "width_range_m": settings.width_range_m and list(settings.width_range_m),
+        "widths_clamped": int(planned.feasibility.get("widths_clamped", 0)),
     }
 
 
 def _plan(glyph: Glyph, settings: KioskSettings) -> JobPlan:
-    """The job as a vehicle would plan it, on the writing area's own frame."""
-    kind = vehicle_kind(PREVIEW_KIND)
-    base = kind.settings(None, None)
-    plan = replace(settings.plan, sample_rate_hz=PATH_RATE_HZ)
+    """The job as a vehicle of the preview's kind would plan it, on the writing area's own
+    frame."""
+    kind = vehicle_kind(settings.preview_kind)
+    kind_settings = settings.preview_kind_settings or kind.settings(None, None)
+    if kind.name == BRUSH_KIND:
+        kind_settings = replace(
+            kind_settings, plan=replace(settings.plan, sample_rate_hz=PATH_RATE_HZ)
+        )
     board = settings.plan.board
-    surface = Surface.of("horizontal", board.center_m_enu, board.yaw_rad)
+    surface = Surface.of(kind.orientation, board.center_m_enu, board.yaw_rad)
     return plan_glyph(
-        kind, replace(base, plan=plan), surface, glyph, settings.writing_area_m, settings.margin_m
+        kind, kind_settings, surface, glyph, settings.writing_area_m, settings.margin_m
     )
 
 

@@ -5,10 +5,17 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+import numpy as np
+
 from kiosk.limits import SubmissionLimits
 from kiosk.wording import board_numbers
 from planner.pipeline import BoardFrame, PlanOptions
+from showfile.kind_hexarotor import PenSettings
 from showfile.planning import plan_options
+from vehicles.registry import vehicle_kind
+
+BRUSH_KIND = "quadrotor-brush"
+"""The kind whose planner options the kiosk's settings carry (:attr:`KioskSettings.plan`)."""
 
 
 @dataclass(frozen=True)
@@ -51,13 +58,35 @@ class KioskSettings:
     """The page goes back to the start after this long without a touch, [s] (0: never)."""
     stale_after_s: float = 2.0
     """The status is stale when the orchestrator's 1 Hz fleet snapshot is older than this, [s]."""
+    preview_kind: str = "quadrotor-brush"
+    """The vehicle kind the preview plans for: the kind writing on the first board."""
+    width_range_m: tuple[float, float] | None = None
+    """Narrowest and widest line in [m] of the preview kind's pen, for kinds that write with a
+    width (the drawing pad then sends a width per point); None for a brush of fixed width."""
+    preview_kind_settings: Any = None
+    """The preview kind's settings (``VehicleKind.settings``) for the first board's vehicle, for
+    kinds other than the brush (whose planner options are :attr:`plan`); None: the kind's
+    defaults."""
+
+
+def pen_width_range_m(kind: str, pen: PenSettings | None = None) -> tuple[float, float] | None:
+    """The line widths in [m] a kind's pen can draw, or None if it draws one width: the
+    hexarotor's sponge from its pen calibration (``pen``, the show file's defaults when None:
+    width at the lowest and highest calibrated force, as the kind's ``PenCurve`` reads it)."""
+    if kind != "hexarotor-sponge":
+        return None
+    pen = pen or PenSettings()
+    coefficients = np.asarray(pen.width_coefficients_m)
+    low, high = np.polynomial.polynomial.polyval([pen.force_min_n, pen.force_max_n], coefficients)
+    return float(low), float(high)
 
 
 def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
     """Kiosk settings from a loaded show (``showfile.Show``); ``port`` overrides the file's.
 
-    The preview is planned on the first board's writing area with the show's limits and planning
-    settings (every vehicle re-plans its job on its own board).
+    The preview is planned on the first board's writing area for the kind of the vehicles on it,
+    with the show's limits and planning settings (every vehicle re-plans its job on its own
+    board).
     """
     kiosk, board, planning = show.kiosk, show.boards[0], show.planning
     limits = SubmissionLimits(
@@ -71,6 +100,9 @@ def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
     plan = plan_options(planning, show.limits, frame)
     plan = replace(plan, clearance_m=max(planning.clearance_m, 1e-3))
     width_m, height_m = board.writing_area_m
+    writer = next((v for v in show.vehicles if v.board == board.id), None)
+    kind = "quadrotor-brush" if writer is None else writer.kind
+    hexarotor = getattr(show, "hexarotor", None)  # the show file's wall-writer section, if any
     return KioskSettings(
         show_id=show.show_id,
         host=kiosk.host,
@@ -87,4 +119,14 @@ def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
             {vehicle.id: vehicle.board for vehicle in show.vehicles},
             [b.id for b in show.boards],
         ),
+        preview_kind=kind,
+        width_range_m=pen_width_range_m(kind, None if hexarotor is None else hexarotor.pen),
+        preview_kind_settings=(
+            None if writer is None or kind == BRUSH_KIND else kind_settings(show, writer.id, kind)
+        ),
     )
+
+
+def kind_settings(show: Any, vehicle_id: str, kind: str) -> Any:
+    """The settings ``kind`` gives ``vehicle_id`` of ``show`` (its pen, its limits)."""
+    return vehicle_kind(kind).settings(show, vehicle_id)

@@ -14,6 +14,10 @@ BAD_REQUEST = "Please either draw a character or type one, not both."
 NOTHING = "Please draw a character or type one first."
 SHORT_STROKE = "One of the strokes is just a dot. Please undo it and draw a line instead."
 BAD_DRAWING = "We could not read this drawing. Please clear it and draw it again."
+BAD_WIDTH = (
+    "Some lines of this drawing are thinner or wider than the pen can write. Please clear it "
+    "and draw it again."
+)
 TEXT_TOO_LONG = "Please type at most {limit} characters."
 TEXT_ONE_CHAR = "Please type just one character."
 TEXT_EMPTY = "Please type a character first."

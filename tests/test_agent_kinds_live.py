@@ -55,6 +55,8 @@ def test_the_wall_hexarotor_writes_with_its_planned_force_and_reports_its_figure
     forces = [t.force_n for t in run.telemetry if t.state == "writing"]
     assert max(f or 0.0 for f in forces) > 1.0
     assert all(t.force_n in (None, 0.0) for t in run.telemetry if t.state == "taking_off")
+    wanted = [t.force_reference_n for t in run.telemetry if t.state == "writing"]
+    assert None not in wanted and max(wanted) == pytest.approx(planned.max(), rel=0.05)  # type: ignore[type-var]
 
 
 @pytest.mark.slow

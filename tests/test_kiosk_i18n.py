@@ -16,7 +16,7 @@ import pytest
 
 STATIC = Path(__file__).resolve().parents[1] / "kiosk" / "static"
 LANGS = ("en", "zh-Hans")
-SCRIPTS = ("i18n.js", "pictures.js", "status.js", "kiosk.js")
+SCRIPTS = ("i18n.js", "pictures.js", "widths.js", "status.js", "kiosk.js")
 WORDED_ATTRS = ("aria-label", "placeholder", "alt", "title")
 CJK = re.compile(r"[\u3400-\u9fff]")
 WORDS = re.compile(r"[A-Za-z]{2,}[,.!?:;'’]? [A-Za-z]{2,}")

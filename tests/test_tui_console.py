@@ -8,6 +8,7 @@ console's whole path is real: Zenoh threads -> inbox -> model -> widgets, keys -
 from __future__ import annotations
 
 import asyncio
+import io
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -15,6 +16,8 @@ from typing import Any
 
 import msgspec
 import pytest
+from rich.console import Console
+from textual.widgets import Static
 
 from bus.keys import ShowKeys
 from bus.messages import (
@@ -35,6 +38,7 @@ from tui.link import ConsoleLink
 from tui.settings import BoardGeometry, ConsoleSettings, VehicleSpec
 from tui.widgets.board_view import INK, BoardView
 from tui.widgets.confirm_screen import ConfirmScreen
+from tui.widgets.force_plot import MEASURED, TARGET, ForcePlot
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -145,10 +149,14 @@ async def until(pilot: Any, condition: Callable[[], object], what: str) -> None:
         await pilot.pause(0.05)
 
 
-def run_console(settings: BusSettings, scenario: Callable[[ConsoleApp, Any], Any]) -> None:
+def run_console(
+    settings: BusSettings,
+    scenario: Callable[[ConsoleApp, Any], Any],
+    console: ConsoleSettings = SETTINGS,
+) -> None:
     """Open a console session (client of the router), run the app headless, play ``scenario``."""
     with open_session(settings, role="client") as session:
-        app = ConsoleApp(SETTINGS, link=ConsoleLink(session, KEYS))
+        app = ConsoleApp(console, link=ConsoleLink(session, KEYS))
 
         async def main() -> None:
             async with app.run_test(size=(100, 30)) as pilot:
@@ -211,7 +219,7 @@ def test_lands_the_selected_vehicle_and_draws_its_path(router: Any) -> None:
         for i in range(30):
             publish(session, KEYS.telemetry("uav1"), telemetry(i, pen_down=i >= 5))
         await until(pilot, lambda: app.model.track("uav1").count == 30, "30 telemetry samples")
-        await until(pilot, lambda: app._fleet.cell_texts("uav1")[1:2] == ("writing",), "writing")
+        await until(pilot, lambda: app._fleet.cell_text("uav1", "state") == "writing", "writing")
         board = app.query_one(BoardView)
         await until(
             pilot,
@@ -232,7 +240,7 @@ def test_lands_the_selected_vehicle_and_draws_its_path(router: Any) -> None:
         await pilot.press("y")
         await until(pilot, lambda: fake.sent("land"), "a land command")
         assert fake.sent("land")[0].vehicle_id == "uav1"
-        await until(pilot, lambda: app._fleet.cell_texts("uav1")[1:2] == ("landing",), "landing")
+        await until(pilot, lambda: app._fleet.cell_text("uav1", "state") == "landing", "landing")
         assert app._header.last_reply == "land: landing uav1"
 
     run_console(settings, scenario)
@@ -279,7 +287,7 @@ def test_a_lost_vehicle_and_a_vanished_orchestrator_stand_out(router: Any) -> No
             "a tracking-error alert",
         )
         token.undeclare()
-        await until(pilot, lambda: app._fleet.cell_texts("uav1")[1:2] == ("lost",), "uav1 lost")
+        await until(pilot, lambda: app._fleet.cell_text("uav1", "state") == "lost", "uav1 lost")
         await until(pilot, lambda: "uav1 lost" in app._alerts.alerts, "a lost alert")
         assert app._alerts.has_class("-active")
         fake.token.undeclare()
@@ -290,6 +298,113 @@ def test_a_lost_vehicle_and_a_vanished_orchestrator_stand_out(router: Any) -> No
         fake.token = declare_token(session, KEYS.orchestrator_alive)  # back (e.g. restarted)
         await until(pilot, lambda: app._header.orchestrator == "online", "orchestrator back")
         await until(pilot, lambda: fake.snapshots > asked, "the show asked for again")
+
+    run_console(settings, scenario)
+    fake.close()
+
+
+WALL_SETTINGS = ConsoleSettings(
+    show_id=SHOW,
+    boards=(
+        BoardGeometry("b1"),
+        BoardGeometry("wall1", center_m_enu=(3.0, 0.0, 1.5), orientation="vertical"),
+    ),
+    vehicles=(
+        VehicleSpec("uav1", "quadrotor-brush", "b1", "board"),
+        VehicleSpec("hexa1", "hexarotor-sponge", "wall1", "wall"),
+    ),
+    force_error_alert_n=1.0,
+)
+
+
+def wall_telemetry(i: int, force_n: float, target_n: float) -> Telemetry:
+    """The hexarotor pressing its sponge on wall1 (x along the wall, z up)."""
+    x = 2.8 + 0.01 * i
+    return Telemetry(
+        vehicle_id="hexa1",
+        t_s=0.05 * i,
+        state="writing",
+        position_m_enu=(x, 0.0, 1.5),
+        velocity_mps_enu=(0.2, 0.0, 0.0),
+        reference_m_enu=(x, 0.0, 1.5),
+        pen_down=True,
+        tracking_error_m=0.002,
+        job_id="j-3",
+        progress=i / 60,
+        force_n=force_n,
+        force_reference_n=target_n,
+    )
+
+
+def test_the_wall_writers_force_shows_against_its_target_in_its_row_and_detail(
+    router: Any,
+) -> None:
+    settings, session = router
+    fake = FakeOrchestrator(session, [_job("j-3", "writing", "工", vehicle_id="hexa1")], [])
+    token = declare_token(session, KEYS.vehicle_alive("hexa1"))
+
+    async def scenario(app: ConsoleApp, pilot: Any) -> None:
+        await until(pilot, lambda: app.model.orchestrator == "online", "the orchestrator")
+        # the target ramps 1 -> 5 N; the measurement lags it, too far only in the last samples
+        for i in range(40):
+            target = 1.0 + 0.1 * i
+            publish(session, KEYS.telemetry("hexa1"), wall_telemetry(i, target - 0.3, target))
+        await until(pilot, lambda: app.model.track("hexa1").count == 40, "40 samples")
+        await until(pilot, lambda: app._fleet.cell_text("hexa1", "force") == "4.6/4.9N", "force")
+        assert app._fleet.cell_text("hexa1", "surface") == "wall"
+        assert app._fleet.cell_text("hexa1", "kind") == "hexarotor-sponge"
+        assert app._fleet.cell_text("uav1", "surface") == "board"
+        assert app._fleet.cell_text("uav1", "force") == "-"  # a brush senses no force
+        assert not app.model.vehicle_row("hexa1", time.time()).force_off
+        publish(session, KEYS.telemetry("hexa1"), wall_telemetry(40, 2.0, 5.0))
+        await until(pilot, lambda: app._fleet.cell_text("hexa1", "force") == "2.0/5.0N", "3 N off")
+        assert app.model.vehicle_row("hexa1", time.time()).force_off
+        assert "hexa1 force 2.0 N, target 5.0 N" in [a.message for a in app.model.alerts()]
+
+        app._fleet.cursor_row = 1
+        await pilot.press("d")
+        plot = await _shown_force_plot(app, pilot)
+        console = Console(width=60, record=True, file=io.StringIO())
+        console.print(app.screen.query_one("#detail-info", Static).content)
+        info = console.export_text()
+        assert "force        2.00 N, target 5.00 N" in info
+        assert "writes on    wall" in info
+        canvas = plot.canvas
+        assert canvas is not None
+        assert "5.5 N" in str(plot.border_title)  # 1.1 x the largest force
+        # the last column: the target (5 N) drawn above the measurement (2 N), both on the plot
+        x = canvas.width_dots - 1
+        heights = {
+            layer: [y for y in range(canvas.height_dots) if canvas.get(x, y, layer)]
+            for layer in (TARGET, MEASURED)
+        }
+        assert heights[TARGET] and heights[MEASURED]
+        assert min(heights[TARGET]) < min(heights[MEASURED])
+
+    run_console(settings, scenario, WALL_SETTINGS)
+    token.undeclare()
+    fake.close()
+
+
+async def _shown_force_plot(app: ConsoleApp, pilot: Any) -> ForcePlot:
+    await until(pilot, lambda: app.screen.query(ForcePlot), "the vehicle's detail")
+    plot = app.screen.query_one(ForcePlot)
+    await until(pilot, lambda: plot.display and plot.canvas is not None, "the force plot")
+    return plot
+
+
+def test_a_brush_quadrotors_detail_has_no_force_plot(router: Any) -> None:
+    settings, session = router
+    fake = FakeOrchestrator(session, [_job("j-2", "writing", "一", vehicle_id="uav1")], ["uav1"])
+
+    async def scenario(app: ConsoleApp, pilot: Any) -> None:
+        for i in range(10):
+            publish(session, KEYS.telemetry("uav1"), telemetry(i))
+        await until(pilot, lambda: app.model.track("uav1").count == 10, "10 samples")
+        await pilot.press("d")
+        await until(pilot, lambda: app.screen.query(ForcePlot), "the vehicle's detail")
+        await pilot.pause(0.3)
+        assert not app.screen.query_one(ForcePlot).display
 
     run_console(settings, scenario)
     fake.close()

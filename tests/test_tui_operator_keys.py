@@ -112,7 +112,7 @@ def test_land_is_confirmed_and_the_held_vehicle_shows_in_the_fleet() -> None:
         )  # a ``fleet`` publication, after the vehicle's own telemetry went quiet
         app.model.apply(fleet, DEMO_TIME_S + 100)
         await pilot.pause(0.3)
-        assert app._fleet.cell_texts("uav1")[1] == "landed held"
+        assert app._fleet.cell_text("uav1", "state") == "landed held"
         await pilot.press("u")
         await settle(pilot)
         assert isinstance(app.screen, ConfirmScreen)

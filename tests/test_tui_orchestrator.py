@@ -165,7 +165,7 @@ def test_console_holds_releases_rejects_with_reason_and_reprioritises(tmp_path: 
         app = ConsoleApp(settings_from_show(show), link=ConsoleLink(session, keys))
 
         def held() -> bool:
-            return app._fleet.cell_texts(vid)[1:2] in (("lost held",), ("idle held",))
+            return app._fleet.cell_text(vid, "state") in ("lost held", "idle held")
 
         async def scenario(pilot: Any) -> None:
             await until(pilot, lambda: app._queue.selected_job == job_ids[0], "the submissions")

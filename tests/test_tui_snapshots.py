@@ -13,7 +13,7 @@ from typing import Any
 import pytest
 
 from tui.app import ConsoleApp
-from tui.demo import DEMO_TIME_S, demo_model, demo_settings
+from tui.demo import DEMO_TIME_S, demo_mixed_model, demo_mixed_settings, demo_model, demo_settings
 
 pytestmark = pytest.mark.timeout(120)
 
@@ -87,3 +87,25 @@ def test_reject_asks_with_a_reason_80x24(snap_compare: SnapCompare) -> None:
         await pilot.pause()
 
     assert snap_compare(demo_app(), terminal_size=(80, 24), run_before=ask)
+
+
+def mixed_app() -> ConsoleApp:
+    """A brush quadrotor on a table, the hexarotor on a wall (with its force), a ground writer."""
+    settings = demo_mixed_settings()
+    return ConsoleApp(settings, model=demo_mixed_model(), clock=lambda: DEMO_TIME_S)
+
+
+def test_mixed_fleet_130x40(snap_compare: SnapCompare) -> None:
+    assert snap_compare(mixed_app(), terminal_size=(130, 40), run_before=settle)
+
+
+def test_wall_writer_detail_with_its_force(snap_compare: SnapCompare) -> None:
+    async def open_detail(pilot: Any) -> None:
+        await settle(pilot)
+        await pilot.press("down", "d")
+        await settle(pilot)
+        await settle(pilot)  # the force plot appears with the first force, then is drawn
+        await pilot.wait_for_scheduled_animations()
+        await pilot.pause(0.2)  # the footer lists the screen's keys a moment after it opens
+
+    assert snap_compare(mixed_app(), terminal_size=(100, 30), run_before=open_detail)

@@ -41,9 +41,80 @@ def demo_settings(vehicles: int = 3) -> ConsoleSettings:
         BoardGeometry(f"b{i + 1}", center_m_enu=(3.0 * i, 0.0, 0.0)) for i in range(vehicles)
     )
     specs = tuple(
-        VehicleSpec(f"uav{i + 1}", "quadrotor-brush", f"b{i + 1}") for i in range(vehicles)
+        VehicleSpec(f"uav{i + 1}", "quadrotor-brush", f"b{i + 1}", "board") for i in range(vehicles)
     )
     return ConsoleSettings(show_id="demo-show", boards=boards, vehicles=specs)
+
+
+def demo_mixed_settings() -> ConsoleSettings:
+    """One of each kind: a brush quadrotor over a table, the hexarotor on a wall, the ground
+    writer on the floor."""
+    boards = (
+        BoardGeometry("b1"),
+        BoardGeometry("wall1", center_m_enu=(3.0, 0.0, 1.5), orientation="vertical"),
+        BoardGeometry("floor1", center_m_enu=(6.0, 0.0, 0.0)),
+    )
+    specs = (
+        VehicleSpec("uav1", "quadrotor-brush", "b1", "board"),
+        VehicleSpec("hexa1", "hexarotor-sponge", "wall1", "wall"),
+        VehicleSpec("rover1", "omni-wheel", "floor1", "floor"),
+    )
+    return ConsoleSettings(show_id="demo-mixed", boards=boards, vehicles=specs)
+
+
+def demo_wall_telemetry(
+    vehicle_id: str, board: BoardGeometry, job_id: str, fraction: float
+) -> list[Telemetry]:
+    """Telemetry of the hexarotor having written ``fraction`` of 工 on a wall ``board``: the
+    sponge pressed with a force that swells mid-stroke, measured a little off its target."""
+    path = glyph_path(GONG_STROKES_M)
+    count = max(1, round(fraction * len(path)))
+    cx, cy, cz = board.center_m_enu
+    out = []
+    for i, ((u, v, lift), pen_down) in enumerate(path[:count]):
+        wobble = 0.004 * math.sin(0.5 * i)
+        target = 3.0 + 1.5 * math.sin(0.08 * i) ** 2 if pen_down else 0.0
+        measured = target + 0.25 * math.sin(0.6 * i) if pen_down else 0.0
+        reference = (cx + u, cy - lift, cz + v)
+        out.append(
+            Telemetry(
+                vehicle_id=vehicle_id,
+                t_s=0.05 * i,
+                state="writing",
+                position_m_enu=(cx + u + wobble, cy - lift, cz + v - wobble),
+                velocity_mps_enu=(0.0, 0.0, 0.0),
+                reference_m_enu=reference,
+                pen_down=pen_down,
+                tracking_error_m=abs(wobble) * math.sqrt(2.0),
+                battery_fraction=0.64,
+                job_id=job_id,
+                progress=(i + 1) / len(path),
+                force_n=measured,
+                force_reference_n=target,
+            )
+        )
+    return out
+
+
+def demo_mixed_model() -> ConsoleModel:
+    """:func:`demo_model` on :func:`demo_mixed_settings`: the quadrotor and the hexarotor
+    writing (the hexarotor with its force), the ground writer waiting."""
+    settings = demo_mixed_settings()
+    model = demo_model(settings)
+    wall = settings.board("wall1")
+    assert wall is not None
+    now = DEMO_TIME_S
+    model.apply(
+        _job("j-0008", "writing", "工", 2, vehicle_id="hexa1", progress=0.4, attempts=1), now
+    )
+    for item in demo_wall_telemetry("hexa1", wall, "j-0008", 0.4):
+        model.apply(item, now - 0.1)
+    model.apply(
+        VehicleStatus(vehicle_id="rover1", kind="omni-wheel", state="idle", board_id="floor1"),
+        now - 0.2,
+    )
+    model.apply(VehiclePresence("rover1", alive=True), now - 0.2)
+    return model
 
 
 def glyph_path(

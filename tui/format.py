@@ -73,6 +73,27 @@ def tracking_error(row: VehicleRow) -> Text:
     )
 
 
+def force(row: VehicleRow) -> Text:
+    """Contact force against its target, ``4.8/5.0N``; reversed red when off by more than the
+    console's margin while writing; ``-`` for a kind that senses no force."""
+    if row.force_n is None:
+        return Text("-", style="dim")
+    shown = f"{row.force_n:.1f}"
+    if row.force_reference_n is not None:
+        shown += f"/{row.force_reference_n:.1f}"
+    return Text(shown + "N", style="bold white on red" if row.force_off else "")
+
+
+def force_detail(row: VehicleRow) -> Text:
+    """``4.82 N, target 5.00 N`` for the detail view; ``-`` without force."""
+    if row.force_n is None:
+        return Text("-", style="dim")
+    text = f"{row.force_n:.2f} N"
+    if row.force_reference_n is not None:
+        text += f", target {row.force_reference_n:.2f} N"
+    return Text(text, style="bold white on red" if row.force_off else "")
+
+
 def battery(fraction: float | None) -> Text:
     """Battery in percent; yellow under 30 %, red under 15 %."""
     if fraction is None:

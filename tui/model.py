@@ -54,7 +54,7 @@ class ConsoleModel:
         self._order = {spec.vehicle_id: i for i, spec in enumerate(settings.vehicles)}
         for spec in settings.vehicles:
             self._vehicles[spec.vehicle_id] = VehicleRecord(
-                spec.vehicle_id, spec.kind, spec.board_id
+                spec.vehicle_id, spec.kind, spec.board_id, spec.surface
             )
         self._sorted_ids: list[str] | None = None
         self._jobs: dict[str, JobState] = {}
@@ -125,6 +125,10 @@ class ConsoleModel:
             message=v.message,
             position_m_enu=v.position_m_enu,
             held=v.held,
+            surface=v.surface,
+            force_n=v.force_n,
+            force_reference_n=v.force_reference_n,
+            force_off=self._force_off(v),
         )
 
     def vehicle_rows(self, now_s: float) -> list[VehicleRow]:
@@ -209,7 +213,9 @@ class ConsoleModel:
         limit_m = self.settings.tracking_error_alert_m
         for vid in self.vehicle_ids():
             v = self._vehicles[vid]
-            alert = vehicle_alert(v, limit_m, over_threshold=self._over_threshold(v))
+            alert = vehicle_alert(
+                v, limit_m, over_threshold=self._over_threshold(v), force_off=self._force_off(v)
+            )
             if alert is not None:
                 alerts.append(alert)
         alerts.extend(job_alerts(self._jobs.values(), self.dirty_boards))
@@ -221,6 +227,15 @@ class ConsoleModel:
             and v.state == "writing"
             and v.tracking_error_m is not None
             and v.tracking_error_m > self.settings.tracking_error_alert_m
+        )
+
+    def _force_off(self, v: VehicleRecord) -> bool:
+        return (
+            v.alive is not False
+            and v.state == "writing"
+            and v.force_n is not None
+            and v.force_reference_n is not None
+            and abs(v.force_n - v.force_reference_n) > self.settings.force_error_alert_n
         )
 
     # --- writing ---------------------------------------------------------------------------------
@@ -345,10 +360,17 @@ class ConsoleModel:
             v.battery_fraction = t.battery_fraction
         v.job_id = t.job_id
         v.progress = t.progress
+        v.force_n = t.force_n
+        v.force_reference_n = t.force_reference_n
         v.heard_s = now_s
         if v.alive is None:
             v.alive = True
-        v.track.add(t.job_id, TrackPoint(t.position_m_enu, t.reference_m_enu, t.pen_down))
+        v.track.add(
+            t.job_id,
+            TrackPoint(
+                t.position_m_enu, t.reference_m_enu, t.pen_down, t.force_n, t.force_reference_n
+            ),
+        )
         self.fleet_version += 1
         self.tracks_version += 1
 

@@ -26,10 +26,13 @@ def with_known_strokes(job: JobState, known: JobState | None) -> JobState:
 class VehicleRecord:
     """Mutable record behind a :class:`VehicleRow`."""
 
-    def __init__(self, vehicle_id: str, kind: str = "", board_id: str | None = None) -> None:
+    def __init__(
+        self, vehicle_id: str, kind: str = "", board_id: str | None = None, surface: str = ""
+    ) -> None:
         self.vehicle_id = vehicle_id
         self.kind = kind
         self.board_id = board_id
+        self.surface = surface
         self.state = "unknown"
         self.job_id: str | None = None
         self.progress = 0.0
@@ -40,11 +43,16 @@ class VehicleRecord:
         self.message = ""
         self.position_m_enu: tuple[float, float, float] | None = None
         self.held = False
+        self.force_n: float | None = None
+        self.force_reference_n: float | None = None
         self.track = Track()
 
 
-def vehicle_alert(v: VehicleRecord, limit_m: float, *, over_threshold: bool) -> Alert | None:
-    """The one alert a vehicle raises now (lost before fault before tracking error), if any."""
+def vehicle_alert(
+    v: VehicleRecord, limit_m: float, *, over_threshold: bool, force_off: bool = False
+) -> Alert | None:
+    """The one alert a vehicle raises now (lost before fault before tracking error before a
+    contact force off its target), if any."""
     vid = v.vehicle_id
     if v.alive is False or v.state == "lost":
         return Alert(f"lost:{vid}", "vehicle_lost", f"{vid} lost")
@@ -57,6 +65,12 @@ def vehicle_alert(v: VehicleRecord, limit_m: float, *, over_threshold: bool) -> 
             f"tracking:{vid}",
             "tracking_error",
             f"{vid} tracking error {error_cm:.1f} cm > {100 * limit_m:.1f} cm",
+        )
+    if force_off:
+        return Alert(
+            f"force:{vid}",
+            "force_error",
+            f"{vid} force {v.force_n or 0.0:.1f} N, target {v.force_reference_n or 0.0:.1f} N",
         )
     return None
 

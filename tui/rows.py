@@ -39,6 +39,14 @@ class VehicleRow:
     position_m_enu: tuple[float, float, float] | None
     held: bool = False
     """Landed or stopped by the operator: it takes no job until released (``u``)."""
+    surface: str = ""
+    """What it writes on (``board``, ``wall``, ``floor``), from the show file; empty if unknown."""
+    force_n: float | None = None
+    """Latest measured normal contact force in [N], for kinds that sense it."""
+    force_reference_n: float | None = None
+    """Latest wanted normal contact force in [N], for kinds that control it."""
+    force_off: bool = False
+    """Writing with a contact force further from its target than the console's alert margin."""
 
 
 @dataclass(frozen=True)
@@ -59,6 +67,7 @@ class Alert:
         "vehicle_lost",
         "vehicle_fault",
         "tracking_error",
+        "force_error",
         "job_failed",
         "awaiting_approval",
         "fresh_sheet",

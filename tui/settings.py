@@ -51,6 +51,8 @@ class VehicleSpec:
     """Vehicle kind, e.g. ``quadrotor-brush``."""
     board_id: str | None = None
     """Board it writes on."""
+    surface: str = ""
+    """What that board is: ``board`` (a table), ``wall`` or ``floor``; empty if unknown."""
 
 
 @dataclass(frozen=True)
@@ -67,6 +69,9 @@ class ConsoleSettings:
     """Tracking error above which a writing vehicle raises an alert, in [m]."""
     lost_after_s: float = 1.5
     """Telemetry older than this is shown as stale, in [s]."""
+    force_error_alert_n: float = 1.0
+    """A writing vehicle's contact force further than this from its target is shown reversed
+    red, in [N] (a sixth of the sponge pen's calibrated 1-6 N range)."""
     redraw_hz: float = 20.0
     """Highest redraw rate of the live views, in [Hz] (10-30 is sensible)."""
     command_timeout_s: float = 3.0
@@ -96,8 +101,21 @@ def settings_from_show(show: Show, *, redraw_hz: float = 20.0) -> ConsoleSetting
     return ConsoleSettings(
         show_id=show.show_id,
         boards=tuple(board_geometry(b) for b in show.boards),
-        vehicles=tuple(VehicleSpec(v.id, v.kind, v.board) for v in show.vehicles),
+        vehicles=tuple(
+            VehicleSpec(v.id, v.kind, v.board, _surface(show, v.board)) for v in show.vehicles
+        ),
         tracking_error_alert_m=show.policy.tracking_error_alert_m,
         lost_after_s=show.policy.lost_after_s,
         redraw_hz=redraw_hz,
     )
+
+
+SURFACE_NAMES = {"horizontal": "board", "vertical": "wall", "floor": "floor"}
+"""What the console calls each board orientation of the show file."""
+
+
+def _surface(show: Show, board_id: str | None) -> str:
+    for board in show.boards:
+        if board.id == board_id:
+            return SURFACE_NAMES.get(board.orientation, board.orientation)
+    return ""

@@ -23,6 +23,10 @@ class TrackPoint:
     """Where it should have been, world frame, in [m]; None when the agent did not say."""
     pen_down: bool
     """Whether the pen touched the board at that instant."""
+    force_n: float | None = None
+    """Measured normal contact force in [N], for kinds that sense it."""
+    force_reference_n: float | None = None
+    """Wanted normal contact force in [N], for kinds that control it."""
 
 
 class Track:

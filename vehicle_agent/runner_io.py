@@ -176,6 +176,14 @@ def result_report(
     )
 
 
+def _wanted_force_n(snap: VehicleSnapshot, setpoint: Setpoint | None) -> float | None:
+    """The contact force wanted now in [N] for a vehicle that senses force (0 off contact)."""
+    if snap.force_n is None:
+        return None
+    wanted = None if setpoint is None else setpoint.force_n
+    return 0.0 if wanted is None else wanted
+
+
 def telemetry_message(
     vehicle_id: str,
     state: VehicleStateName,
@@ -207,6 +215,7 @@ def telemetry_message(
         job_id=job_id,
         progress=progress,
         force_n=snap.force_n,
+        force_reference_n=_wanted_force_n(snap, setpoint),
     )
 
 

@@ -8,7 +8,7 @@
   const { fitCanvas, drawGuides, drawPath, animatePath, drawInk } = window.SkyquillPictures;
   const config = {
     max_strokes: 60, max_points: 5000, max_text_chars: 1, writing_area_m: [1.2, 1.2],
-    idle_reset_s: 60,
+    idle_reset_s: 60, width_range_m: null,
   };
   const state = {
     mode: "draw",
@@ -208,7 +208,7 @@
         y_axis: "down",
         device: navigator.maxTouchPoints > 0 ? "touch screen" : "mouse",
         canvas: { width: Math.round(rect.width), height: Math.round(rect.height) },
-        strokes: state.strokes,
+        strokes: window.SkyquillWidths.withWidths(state.strokes, config.width_range_m),
       },
     };
   }
@@ -278,10 +278,29 @@
       secs: Math.round(reply.preview.duration_s),
     };
     word($("preview-facts"), "preview_facts", facts);
+    showWidths(reply.preview);
     // the text alternative: what a sighted visitor reads off the picture
     word($("preview-canvas"), "describe_path", facts, "aria-label");
     $("confirm-title").focus();
   });
+
+  // Where the kind writes with a width: the planned range (leaving out the pen's touching on
+  // and lifting off, thinner than it writes), and how many were clamped.
+  function showWidths(preview) {
+    const box = $("preview-widths");
+    word($("legend-ink"), preview.widths ? "legend_ink_width" : "legend_ink");
+    const [low] = preview.width_range_m || [0];
+    const widths = preview.widths
+      ? preview.path.filter((p) => p[2] && p[3] >= low - 1e-6).map((p) => p[3]) : [];
+    box.hidden = !widths.length;
+    if (!widths.length) return;
+    const mm = (w) => (w * 1000).toFixed(1);
+    if (preview.widths_clamped > 0) {
+      word(box, "warn_widths_clamped", { n: preview.widths_clamped });
+    } else {
+      word(box, "preview_widths", { low: mm(Math.min(...widths)), high: mm(Math.max(...widths)) });
+    }
+  }
 
   $("back").addEventListener("click", () => { show("compose"); redrawPad(); });
 

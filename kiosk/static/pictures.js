@@ -53,30 +53,58 @@ window.SkyquillPictures = (() => {
     return runs;
   }
 
+  function polyline(ctx, path, map, start, end) {
+    ctx.beginPath();
+    const first = map(path[start]);
+    ctx.moveTo(first[0], first[1]);
+    for (let i = start + 1; i <= end; i += 1) {
+      const p = map(path[i]);
+      ctx.lineTo(p[0], p[1]);
+    }
+    ctx.stroke();
+  }
+
+  // Ink of one pen-down run: in one line of the brush's plain width, or, where the plan gives
+  // a width per point (path[i][3], metres), segment by segment at that width to scale.
+  function drawInkRun(ctx, path, map, scale, start, end) {
+    if (path[start].length < 4) {
+      ctx.lineWidth = 6;
+      polyline(ctx, path, map, start, end);
+      return;
+    }
+    for (let i = start + 1; i <= end; i += 1) {
+      const a = map(path[i - 1]);
+      const b = map(path[i]);
+      ctx.lineWidth = Math.max(1, ((path[i - 1][3] + path[i][3]) / 2) * scale);
+      ctx.beginPath();
+      ctx.moveTo(a[0], a[1]);
+      ctx.lineTo(b[0], b[1]);
+      ctx.stroke();
+    }
+  }
+
   // The path up to sample ``upto``: air moves first, ink over them (never air over ink).
   function drawPath(canvas, preview, upto = Infinity) {
     const { ctx, w, h } = fitCanvas(canvas);
     ctx.clearRect(0, 0, w, h);
     drawGuides(ctx, w, h);
-    const { map } = mapper(w, h, preview.writing_area_m);
+    const { scale, map } = mapper(w, h, preview.writing_area_m);
     ctx.lineCap = "round";
     ctx.lineJoin = "round";
-    const path = preview.path;   // [x, y, pen_down]
+    const path = preview.path;   // [x, y, pen_down] or [x, y, pen_down, width_m]
     const runs = penRuns(path);
     for (const layer of [false, true]) {
       for (const [start, end, down] of runs) {
         if (down !== layer || start >= upto) continue;
         ctx.strokeStyle = down ? "#14213d" : "#6f7a91";
-        ctx.lineWidth = down ? 6 : 1.5;
-        ctx.setLineDash(down ? [] : [5, 5]);
-        ctx.beginPath();
-        const first = map(path[start]);
-        ctx.moveTo(first[0], first[1]);
-        for (let i = start + 1; i <= Math.min(end, upto); i += 1) {
-          const p = map(path[i]);
-          ctx.lineTo(p[0], p[1]);
+        if (down) {
+          ctx.setLineDash([]);
+          drawInkRun(ctx, path, map, scale, start, Math.min(end, upto));
+          continue;
         }
-        ctx.stroke();
+        ctx.lineWidth = 1.5;
+        ctx.setLineDash([5, 5]);
+        polyline(ctx, path, map, start, Math.min(end, upto));
       }
     }
     ctx.setLineDash([]);

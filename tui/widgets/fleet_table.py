@@ -25,16 +25,21 @@ from tui.rows import VehicleRow
 
 COLUMNS = (
     ("vehicle", "Vehicle"),
+    ("surface", "On"),
     ("state", "State"),
     ("char", "Char"),
     ("progress", "Progress"),
     ("error", "Error"),
+    ("force", "Force"),
     ("battery", "Batt"),
     ("age", "Link"),
     ("job", "Job"),
     ("kind", "Kind"),
 )
-"""Column keys and headings; the most urgent first, so narrow terminals still show them."""
+"""Column keys and headings; the most urgent first, so narrow terminals still show them. ``On``
+says what the vehicle writes on (``board``, ``wall``, ``floor``), so a wall or ground writer reads
+as one at once; ``Force`` is the contact force against its target (kinds that control force)."""
+_COLUMN_INDEX = {key: i for i, (key, _) in enumerate(COLUMNS)}
 
 Cell = tuple[str, str]
 """Text and style of one cell."""
@@ -58,10 +63,12 @@ def row_cells(row: VehicleRow) -> Cells:
     """The cells of one vehicle, in column order; every bus string cleaned (see tui.safe_text)."""
     values: tuple[Text | str, ...] = (
         Text(fmt.short_id(row.vehicle_id, ID_CHARS), style="bold"),
+        row.surface or "-",
         fmt.vehicle_state_text(row.state, row.held),
         Text(fmt.short_id(row.job_label, 6) if row.job_label else "-", style="bold"),
         fmt.progress(row.progress, 5) if row.job_id else "",
         fmt.tracking_error(row),
+        fmt.force(row),
         fmt.battery(row.battery_fraction),
         fmt.link_age(row),
         fmt.short_id(row.job_id) if row.job_id else "-",
@@ -114,6 +121,12 @@ class FleetTable(ScrollView, can_focus=True):
     def cell_texts(self, vehicle_id: str) -> tuple[str, ...]:
         """What the row of ``vehicle_id`` shows, column by column (empty if not listed)."""
         return tuple(text for text, _ in self._cells.get(vehicle_id, ()))
+
+    def cell_text(self, vehicle_id: str, column: str) -> str | None:
+        """What the row of ``vehicle_id`` shows in the column keyed ``column`` (None if not
+        listed)."""
+        cells = self._cells.get(vehicle_id)
+        return None if cells is None else cells[_COLUMN_INDEX[column]][0]
 
     # --- updating --------------------------------------------------------------------------------
     def show_rows(self, rows: list[VehicleRow]) -> None:

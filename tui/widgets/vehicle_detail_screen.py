@@ -20,6 +20,7 @@ from tui.safe_text import clean, plain
 from tui.settings import BoardGeometry
 from tui.widgets.board_view import BoardView
 from tui.widgets.event_log import EventLog
+from tui.widgets.force_plot import ForcePlot
 
 
 def detail_table(row: VehicleRow) -> Table:
@@ -35,12 +36,14 @@ def detail_table(row: VehicleRow) -> Table:
     pairs: list[tuple[str, Text]] = [
         ("vehicle", plain(row.vehicle_id, "bold")),
         ("kind", plain(row.kind or "-")),
+        ("writes on", plain(row.surface or "-")),
         ("state", fmt.vehicle_state_text(row.state, row.held)),
         ("board", plain(row.board_id or "-")),
         ("job", plain(row.job_id or "-")),
         ("character", plain(row.job_label or "-", "bold")),
         ("progress", Text(fmt.progress(row.progress, 10))),
         ("tracking err", fmt.tracking_error(row)),
+        ("force", fmt.force_detail(row)),
         ("battery", fmt.battery(row.battery_fraction)),
         ("link age", fmt.link_age(row)),
         ("position", Text(position)),
@@ -81,7 +84,11 @@ class VehicleDetailScreen(Screen[None]):
     def compose(self) -> ComposeResult:
         with Horizontal(id="detail-top"):
             yield Static(id="detail-info")
-            yield BoardView(self.board, self.model, vehicle_id=self.vehicle_id, id="detail-board")
+            with Vertical(id="detail-pictures"):
+                yield BoardView(
+                    self.board, self.model, vehicle_id=self.vehicle_id, id="detail-board"
+                )
+                yield ForcePlot(self.model, self.vehicle_id, id="detail-force")
         with Vertical(id="detail-bottom"):
             yield EventLog(vehicle_id=self.vehicle_id, id="detail-log")
         yield Footer()
@@ -97,6 +104,7 @@ class VehicleDetailScreen(Screen[None]):
         info = self.query_one("#detail-info", Static)
         info.update(detail_table(row) if row else plain(f"{self.vehicle_id}: unknown"))
         self.query_one(BoardView).sync(now_s)
+        self.query_one(ForcePlot).sync()
         log = self.query_one(EventLog)
         log.add_events(self.model.events_after(log.last_seq))
 
