@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import socket
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import pytest
 
@@ -18,3 +18,21 @@ def _free_tcp_port() -> int:
 def free_tcp_port() -> Callable[[], int]:
     """Call it for a TCP port on 127.0.0.1 that was free a moment ago."""
     return _free_tcp_port
+
+
+@pytest.fixture(scope="module")
+def wall_kiosk() -> Iterator[str]:
+    """A kiosk (no show around it) whose previews are planned for the wall hexarotor: its URL."""
+    from bus.session import loopback_settings
+    from kiosk.service import serving
+    from kiosk.settings import KioskSettings, pen_width_range_m
+
+    settings = KioskSettings(
+        show_id="kiosk-widths",
+        port=0,
+        writing_area_m=(0.5, 0.5),
+        preview_kind="hexarotor-sponge",
+        width_range_m=pen_width_range_m("hexarotor-sponge"),
+    )
+    with serving(settings, loopback_settings(), role="peer") as server:
+        yield server.url

@@ -10,16 +10,13 @@ from __future__ import annotations
 
 import itertools
 import re
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 from test_kiosk_browser import CHROMIUM, SHOTS_DIR, UI_WAIT_MS, browser
 
-from bus.session import loopback_settings
-from kiosk.service import serving
-from kiosk.settings import KioskSettings, pen_width_range_m
+from kiosk.settings import pen_width_range_m
 
 pytestmark = [
     pytest.mark.browser,
@@ -49,19 +46,6 @@ INK_THICKNESS_JS = """(xs) => {
     return dark;
   });
 }"""
-
-
-@pytest.fixture(scope="module")
-def wall_kiosk() -> Iterator[str]:
-    settings = KioskSettings(
-        show_id="kiosk-widths-browser",
-        port=0,
-        writing_area_m=(0.5, 0.5),
-        preview_kind=WALL,
-        width_range_m=pen_width_range_m(WALL),
-    )
-    with serving(settings, loopback_settings(), role="peer") as server:
-        yield server.url
 
 
 def pressed_stroke(page: Any, points: list[tuple[float, float, float]]) -> None:

@@ -8,15 +8,12 @@ from __future__ import annotations
 import json
 import urllib.error
 import urllib.request
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
-from bus.session import loopback_settings
-from kiosk.service import serving
 from kiosk.settings import KioskSettings, pen_width_range_m, settings_from_show
 from showfile import load_show
 from vehicles.hexarotor_sponge.pen import PenCurve
@@ -26,19 +23,6 @@ pytestmark = [pytest.mark.slow, pytest.mark.timeout(240)]
 WALL = "hexarotor-sponge"
 PLAN_WAIT_S = 120.0
 """Upper bound for one IPOPT preview on a loaded machine; never a timing assertion."""
-
-
-@pytest.fixture(scope="module")
-def wall_kiosk() -> Iterator[str]:
-    settings = KioskSettings(
-        show_id="kiosk-widths",
-        port=0,
-        writing_area_m=(0.5, 0.5),
-        preview_kind=WALL,
-        width_range_m=pen_width_range_m(WALL),
-    )
-    with serving(settings, loopback_settings(), role="peer") as server:
-        yield server.url
 
 
 def call(base_url: str, path: str, body: dict[str, Any] | None = None) -> tuple[int, Any]:
