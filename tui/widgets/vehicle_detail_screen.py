@@ -99,7 +99,9 @@ class VehicleDetailScreen(Screen[None]):
         self.query_one(EventLog).border_title = Text(f"events of {shown}")
 
     def sync(self, now_s: float) -> None:
-        """Show the model's current state of the vehicle."""
+        """Show the model's current state of the vehicle (nothing yet while it is being composed)."""
+        if not self.is_mounted:
+            return
         row = self.model.vehicle_row(self.vehicle_id, now_s)
         info = self.query_one("#detail-info", Static)
         info.update(detail_table(row) if row else plain(f"{self.vehicle_id}: unknown"))
