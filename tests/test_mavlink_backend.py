@@ -321,18 +321,28 @@ def test_no_vehicle_at_the_url_is_an_error_at_start(free_tcp_port: Callable[[], 
     asyncio.run(scenario())
 
 
-def test_mocap_poses_are_forwarded_in_local_ned() -> None:
-    pose = MocapPose(position_m_enu=(1.0, -1.0, 0.0))
+def test_mocap_flows_at_its_rate_while_the_control_loop_awaits_the_autopilot() -> None:
+    # The loop awaits mode changes and arming for seconds; an estimator starved of its position
+    # source that long drops it (PX4 SIH: arming refused). Poses keep flowing without ticks.
+    asked: list[float] = []
+
+    def source(now_s: float) -> MocapPose:
+        asked.append(now_s)
+        return MocapPose(position_m_enu=(1.0, -1.0, 0.0))
 
     async def scenario(server: MavsimServer) -> None:
         # mavsim has no fusion parameters (VISO_TYPE, EK3_SRC1_*): forwarding alone here
         async with connected(server, mocap="vision_position_estimate", mocap_rate_hz=50.0,
                              set_params=False) as (backend, driver):  # fmt: skip
-            backend._mocap.source = lambda _t: pose
-            for _ in range(50):
+            backend._mocap.source = source
+            for _ in range(50):  # 0.5 s of agent time
                 await driver.tick()
-            assert backend._mocap.sent == 25
-        assert server.endpoints[0].autopilot.mocap_received >= 20
+            ticking = backend._mocap.sent
+            await asyncio.sleep(0.5 / SCALE)  # 0.5 s of agent time without a tick
+            stalled = backend._mocap.sent - ticking
+        assert 20 <= ticking <= 27 and 18 <= stalled <= 27, (ticking, stalled)
+        assert asked[-1] > driver.now + 0.3  # the agent's clock carried on through the stall
+        assert server.endpoints[0].autopilot.mocap_received >= 40
 
     with vehicle() as server:
         asyncio.run(scenario(server))

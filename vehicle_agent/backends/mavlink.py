@@ -23,6 +23,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import math
+import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import replace
@@ -39,7 +40,7 @@ from vehicle_agent.backends.mavlink_errors import (
 )
 from vehicle_agent.backends.mavlink_frames import LocalFrame, ned_to_enu
 from vehicle_agent.backends.mavlink_link import MavlinkLink
-from vehicle_agent.backends.mavlink_mocap import MocapForwarder, MocapSource
+from vehicle_agent.backends.mavlink_mocap import MocapForwarder, MocapSource, TickTime
 from vehicle_agent.backends.mavlink_params import (
     ParamChannel,
     ParamError,
@@ -104,6 +105,9 @@ class MavlinkBackend:
         """The vehicle's true state (SITL) and its identified lag."""
         source = mocap_source if mocap_source is not None else self.aid.mocap_source()
         self._mocap = MocapForwarder(settings, self.frame, source)
+        self._mocap_task: asyncio.Task[None] | None = None
+        self.tick_time = TickTime()
+        """The agent's clock between ticks (truth stamps, mocap)."""
         self._link: MavlinkLink | None = None
         self._heartbeat_seen = asyncio.Event()
         self.commands = CommandChannel(lambda: self.link, self.state,
@@ -166,6 +170,10 @@ class MavlinkBackend:
                 "ArduPilot nor PX4"
             )
         self._request_telemetry()
+        if self._mocap.kind != "none":
+            self._mocap_task = asyncio.create_task(
+                self._mocap.run(lambda: self._link if self.fault is None else None, self.tick_time)
+            )
         if self.state.armed:
             self.fault = "vehicle already armed when the agent connected: the pilot has it"
         elif self.settings.set_params:
@@ -208,7 +216,8 @@ class MavlinkBackend:
         elif kind == "PARAM_VALUE":
             self.params.on_param_value(message)
         elif kind in ("SIM_STATE", "HIL_STATE_QUATERNION"):
-            self.aid.on_message(message, self._now_s, resting_at_home=not self.state.armed)
+            now_s = self.tick_time.now_s(time.monotonic())
+            self.aid.on_message(message, now_s, resting_at_home=not self.state.armed)
         elif kind == "STATUSTEXT":
             severity, text = self.state.recent_texts[-1]
             self.commands.on_text(text)
@@ -329,6 +338,9 @@ class MavlinkBackend:
             log.error("estop of vehicle %s not confirmed: %s", self.state.system_id, exc)
 
     def close_link(self) -> None:
+        if self._mocap_task is not None:
+            self._mocap_task.cancel()
+            self._mocap_task = None
         self.commands.cancel_all()
         self.params.cancel_all()
         if self._link is not None:
@@ -343,11 +355,11 @@ class MavlinkBackend:
     async def tick(self, setpoint: Setpoint | None, now_s: float) -> VehicleSnapshot:
         """Supervise, advance our mode, stream one setpoint when due; the state read back."""
         self._now_s = now_s
+        self.tick_time.ticked(now_s, time.monotonic())
         self._supervise(now_s)
         if self.fault is None and self._link is not None:
             self._advance(now_s)
             self._stream(setpoint, now_s)
-            self._mocap.forward(self.link, self.state, now_s)
         elif self.state.heartbeats > self._commanded_at:
             self._observe_after_fault()
         if now_s - self._last_gcs_heartbeat_s >= GCS_HEARTBEAT_PERIOD_S:

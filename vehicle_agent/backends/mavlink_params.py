@@ -142,6 +142,8 @@ def mocap_params(flavor: Flavor) -> list[ParamSpec]:
             ParamSpec("EKF2_GPS_CTRL", 0, MAV_PARAM_TYPE_INT32, why="position from mocap only"),
             ParamSpec("EKF2_EVP_NOISE", 0.01, MAV_PARAM_TYPE_REAL32,
                       why="mocap is millimetre-grade (its smallest value)"),
+            ParamSpec("EKF2_RNG_CTRL", 0, MAV_PARAM_TYPE_INT32,
+                      why="no range-finder height: over the board it measures the table"),
         ]  # fmt: skip
     return [
         ParamSpec("VISO_TYPE", 1, MAV_PARAM_TYPE_INT8, why="mocap over MAVLink",
