@@ -11,6 +11,8 @@ algorithm 7.4 (two-loop recursion) and 3.1 (backtracking line search):
   through ``f(x)``, the slope and the rejected value, kept within [0.1, 0.5] of the rejected
   step (an objective that answers ``inf`` or a huge value for an infeasible point only shrinks
   the step);
+- no coordinate moves by more than ``max_step`` in one iteration (an objective that cannot be
+  evaluated far from the current point, as a spline fit at ``exp(420)`` s, is never asked);
 - a pair enters the memory only if it has positive curvature ``s.y > eps y.y`` (the Wolfe
   curvature condition that backtracking alone does not guarantee), which keeps ``H`` positive
   definite;
@@ -94,6 +96,7 @@ def minimize_lbfgs(
     grad_tol: float = 1e-10,
     memory: int = 20,
     max_backtracks: int = 30,
+    max_step: float = math.inf,
 ) -> LbfgsResult:
     """Minimise ``objective`` from ``x0`` (see the module docstring for the method)."""
     x = np.array(x0, dtype=np.float64)
@@ -110,6 +113,7 @@ def minimize_lbfgs(
             pairs.clear()
             direction, slope = -grad, -float(grad @ grad)
         step = 1.0 if pairs else min(1.0, 1.0 / math.sqrt(-slope))
+        step = min(step, max_step / float(np.max(np.abs(direction))))
         for _ in range(max_backtracks):
             trial = x + step * direction
             trial_value, trial_grad = objective(trial)

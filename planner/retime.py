@@ -42,6 +42,11 @@ from planner.fit_qp import QpFitter
 from planner.lbfgs import minimize_lbfgs
 from planner.minjerk import FitProblem, SplineFit, fit_closed_form
 
+MAX_LOG_STEP = 2.0
+"""Largest change of a log-duration (or softmax weight) per L-BFGS iteration: a duration
+changes at most e^2 ~ 7.4 times per step (an unbounded quasi-Newton step once asked for fits
+at exp(420) s, which have no spline)."""
+
 
 class SegmentCost:
     """``f(T) = min_tau J(tau; T) (+ rho sum T)`` and its analytic gradient."""
@@ -249,7 +254,9 @@ def descend_analytic(
         return value, np.asarray(x * g)
 
     theta0 = np.log(T0 - t_min)
-    res = minimize_lbfgs(objective, theta0, max_iter=max_iter, rel_tol=rel_tol, memory=20)
+    res = minimize_lbfgs(
+        objective, theta0, max_iter=max_iter, rel_tol=rel_tol, memory=20, max_step=MAX_LOG_STEP
+    )
     f_best, T_best, fit_best = best[0]
     evaluations = cost.evaluations - start_evals
     return DescentResult(T_best, fit_best, f0, f_best, res.iterations, evaluations)

@@ -71,6 +71,15 @@ def test_backtracks_out_of_an_infeasible_region() -> None:
     np.testing.assert_allclose(res.x, [0.4, 0.0], atol=1e-6)
 
 
+def test_no_coordinate_moves_more_than_max_step_per_iteration() -> None:
+    def downhill(x: FloatArray) -> tuple[float, FloatArray]:
+        return -float(np.sum(x)), -np.ones_like(x)
+
+    res = minimize_lbfgs(downhill, np.zeros(2), max_iter=3, max_step=0.5)
+    np.testing.assert_allclose(res.x, [1.5, 1.5])
+    assert res.reason == "max_iter"
+
+
 def _scipy_descent(cost: SegmentCost, durations_s: FloatArray) -> float:
     """Final cost of the former re-segmentation: SciPy's L-BFGS-B on the same objective."""
     from scipy.optimize import minimize
