@@ -6,7 +6,8 @@ time. Two ways to minimise it:
 - :func:`descend_numerical` -- the paper's method: forward-difference gradient (eq. 56, one extra
   solve per segment, ``h = 1e-6``) and steepest descent with backtracking line search;
 - :func:`descend_analytic` -- the gradient from the envelope theorem, one solve per step, and
-  L-BFGS on ``log T`` (free total time) or on softmax weights (fixed total time).
+  L-BFGS (planner.lbfgs) on ``log T`` (free total time) or on softmax weights (fixed
+  total time).
 
 Envelope theorem: at the optimum the derivative of ``f`` w.r.t. a data time needs only the
 partial derivative of the cost at fixed control points. With ``r_i = p(t_i) - d_i`` and
@@ -34,12 +35,17 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize
 
 from planner.bspline import FloatArray
 from planner.errors import InfeasibleTrajectoryError, PlannerError
 from planner.fit_qp import QpFitter
+from planner.lbfgs import minimize_lbfgs
 from planner.minjerk import FitProblem, SplineFit, fit_closed_form
+
+MAX_LOG_STEP = 2.0
+"""Largest change of a log-duration (or softmax weight) per L-BFGS iteration: a duration
+changes at most e^2 ~ 7.4 times per step (an unbounded quasi-Newton step once asked for fits
+at exp(420) s, which have no spline)."""
 
 
 class SegmentCost:
@@ -248,12 +254,9 @@ def descend_analytic(
         return value, np.asarray(x * g)
 
     theta0 = np.log(T0 - t_min)
-    res = minimize(
-        objective,
-        theta0,
-        jac=True,
-        method="L-BFGS-B",
-        options={"maxiter": max_iter, "ftol": rel_tol, "gtol": 1e-10, "maxcor": 20},
+    res = minimize_lbfgs(
+        objective, theta0, max_iter=max_iter, rel_tol=rel_tol, memory=20, max_step=MAX_LOG_STEP
     )
     f_best, T_best, fit_best = best[0]
-    return DescentResult(T_best, fit_best, f0, f_best, int(res.nit), cost.evaluations - start_evals)
+    evaluations = cost.evaluations - start_evals
+    return DescentResult(T_best, fit_best, f0, f_best, res.iterations, evaluations)

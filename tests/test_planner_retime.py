@@ -96,6 +96,17 @@ def test_resegmentation_never_increases_cost(seed: int, kind: str, method: str) 
         assert np.sum(result.durations_s) == pytest.approx(np.sum(T0), rel=1e-12)
 
 
+def test_free_time_descent_never_asks_for_a_fit_at_an_absurd_duration() -> None:
+    """Seed 9999: an unbounded quasi-Newton step once asked for durations of exp(420) s (no
+    spline: singular normal equations); the log-step cap keeps every trial reasonable."""
+    problem = _problem(9999, n_points=6, m=20)
+    cost = _costs(problem)["closed-free"]
+    T0 = problem.segment_durations()
+    result = descend_analytic(cost, T0, max_iter=15)
+    assert result.cost_final <= result.cost_initial
+    assert np.all(result.durations_s < 100.0 * np.max(T0))
+
+
 def test_free_time_needs_a_penalty() -> None:
     with pytest.raises(PlannerError):
         SegmentCost(_problem(0), fixed_total=False, time_penalty=0.0)

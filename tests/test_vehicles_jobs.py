@@ -18,12 +18,18 @@ from planner.glyphs import text_glyph
 from planner.limits import VehicleLimits
 from planner.options import PlanOptions
 from showfile import load_show
-from showfile.models import Limits, PlanningSettings
+from showfile.models import ControllerSettings, Limits, PlanningSettings
+from showfile.planning import plan_options
 from vehicles import UnknownKindError, kind_names
 from vehicles.jobs import board_surface, plan_glyph, plan_job
 from vehicles.kind import LiveReference
-from vehicles.quadrotor_brush.flight import Flight
-from vehicles.quadrotor_brush.settings import quadrotor_settings
+from vehicles.quadrotor_brush.flight import Flight, FlightConfig
+from vehicles.quadrotor_brush.settings import (
+    QuadrotorSettings,
+    controller_config,
+    quadrotor_settings,
+    world_params,
+)
 from vehicles.registry import vehicle_kind
 from vehicles.surface import Surface
 
@@ -72,6 +78,16 @@ def test_one_set_of_defaults_for_shows_plan_and_fly() -> None:
     brush = settings.flight.world.brush
     assert brush.write_height_m == pytest.approx(planning.write_height_m)
     assert settings.flight.controller.brush_lever_m == planning.write_height_m
+
+
+def test_settings_without_a_show_are_a_default_show_files_built_without_pydantic() -> None:
+    """``quadrotor_settings(None, None)`` skips the show file models (their import is a third
+    of a one-off plan): it must still equal the settings of a show left at its defaults."""
+    planning, limits, controller = PlanningSettings(), Limits(), ControllerSettings()
+    plan = plan_options(planning, limits)
+    world = world_params(plan.write_height_m, 0.0, controller.rate_hz)
+    flight = FlightConfig(world, controller_config(controller.preset, plan.write_height_m))
+    assert quadrotor_settings(None, None) == QuadrotorSettings(plan=plan, flight=flight)
 
 
 def test_plan_job_writes_on_the_vehicles_own_board_with_its_show_settings() -> None:
