@@ -185,6 +185,7 @@ def build_mjcf(
     )
     return (
         '<mujoco model="omni_wheel">'
+        '<compiler angle="radian"/>'
         f'<option timestep="{PHYSICS_TIMESTEP_S}" integrator="implicitfast" cone="elliptic"/>'
         "<worldbody>"
         f"{_terrain_xml(terrain, geometry.friction_static)}{bodies}"
