@@ -83,7 +83,7 @@ class ClimbResult:
     """(7,) mean |rotation error ratio| per wheel during the climb."""
     log: dict[str, FloatArray]
     """Time series: ``t_s`` (K,), ``slip`` and ``rotation_error`` (K, 7), ``base_m_enu`` (K, 3),
-    ``reference_radps`` (K, 7)."""
+    ``reference_radps`` (K, 7), ``joint_pitch_rad`` (K,) (true pitch of free joint 1)."""
 
     def by_group(self, values: FloatArray) -> dict[str, float]:
         """Front / middle / rear means of a per-wheel figure, and their average."""
@@ -131,9 +131,8 @@ def climb(
     control = controller(method, geometry)
     r = geometry.wheel_radius_m
     along_x = np.abs(geometry.drive_directions()[:, 0]) > 0.5
-    logs: dict[str, list[FloatArray]] = {
-        k: [] for k in ("t_s", "slip", "rotation_error", "base_m_enu", "reference_radps")
-    }
+    keys = ("t_s", "slip", "rotation_error", "base_m_enu", "reference_radps", "joint_pitch_rad")
+    logs: dict[str, list[FloatArray]] = {k: [] for k in keys}
     climbing = climbed = False
     while world.t_s < time_limit_s:
         refs = control(world.sense(0))
@@ -152,6 +151,7 @@ def climb(
                 ("rotation_error", error),
                 ("base_m_enu", truth.base_m_enu),
                 ("reference_radps", refs),
+                ("joint_pitch_rad", np.array(truth.joint_angles_rad[0])),
             ):
                 logs[key].append(value)
         if climbed:

@@ -96,6 +96,8 @@ class TrueState:
     """(7, 3) wheel axles in world ENU."""
     pen_m_enu: FloatArray
     """(3,) the marker's point (under the front linkage's middle) at floor level, [m]."""
+    joint_angles_rad: FloatArray
+    """(2,) free joint 1: pitch and roll of the front part relative to the rear part in [rad]."""
 
 
 class _Vehicle:
@@ -261,4 +263,5 @@ class OmniWorld:
             motor_rate_radps=d.qvel[v.wheel_dof].copy(),
             axle_enu=axle,
             pen_m_enu=pen,
+            joint_angles_rad=d.qpos[v.joint_qpos].copy(),
         )
