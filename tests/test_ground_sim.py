@@ -1,5 +1,7 @@
 """The ground writer in MuJoCo: rollers give omnidirectional motion on the flat with traction only
-along each wheel's drive direction; the proposed wheel control climbs the paper's 0.1 m step."""
+along each wheel's drive direction; free joint 1 swings and a sliding roller loses friction; the
+proposed wheel control climbs a step of about the wheel radius (the paper's 0.1 m is beyond the
+model: benchmarks/bench_ground.py)."""
 
 from __future__ import annotations
 
