@@ -9,7 +9,7 @@ metrics read :class:`TrueState`.
 Friction is static or dynamic per roller (Table 1 gives both; MuJoCo has one coefficient): a
 roller whose contact slides at the start of a control period grips with the dynamic coefficient
 through it, so a slipping wheel loses traction as in the paper's Working Model 2D. It is decided
-per control period, not per physics step, as numpy's overhead per call is that of a MuJoCo step.
+per control period (24 us a call, 3 % of a period's 0.8 ms), not per physics step (15 %).
 """
 
 from __future__ import annotations
@@ -197,31 +197,20 @@ class OmniWorld:
     def _slide_friction(self) -> None:
         """Each roller's friction for the next control period: dynamic where one of its contacts
         (of the last physics step) slides faster than :data:`SLIDING_SPEED_MPS` over the (fixed)
-        terrain, static elsewhere."""
+        terrain, static elsewhere. A contact's two friction rows of the constraint velocity
+        (rows 1 and 2 after its normal row, elliptic cones) are its sliding velocity."""
         m, d = self.model, self.data
         m.geom_friction[self._rollers, 0] = self._friction_static
         if d.ncon == 0 or self._friction_dynamic == self._friction_static:
             return
         contact = d.contact
-        pair = contact.geom
+        row = contact.efc_address
+        active = row >= 0
+        slide_1, slide_2 = d.efc_vel[row[active] + 1], d.efc_vel[row[active] + 2]
+        sliding = slide_1 * slide_1 + slide_2 * slide_2 > SLIDING_SPEED_MPS**2
+        pair = contact.geom[active][sliding]
         roller = np.where(self._is_roller[pair[:, 0]], pair[:, 0], pair[:, 1])
-        body = m.geom_bodyid[roller]
-        # cvel: (angular, linear) velocity of each body at its tree's centre of mass
-        velocity = d.cvel[body]
-        arm = contact.pos - d.subtree_com[m.body_rootid[body]]
-        w = velocity[:, :3]  # w x arm by hand: np.cross costs 50 us, ten times the rest
-        point = velocity[:, 3:] + np.stack(
-            (
-                w[:, 1] * arm[:, 2] - w[:, 2] * arm[:, 1],
-                w[:, 2] * arm[:, 0] - w[:, 0] * arm[:, 2],
-                w[:, 0] * arm[:, 1] - w[:, 1] * arm[:, 0],
-            ),
-            axis=1,
-        )
-        normal = contact.frame[:, :3]
-        tangential = point - np.sum(point * normal, axis=1)[:, None] * normal
-        sliding = np.einsum("ij,ij->i", tangential, tangential) > SLIDING_SPEED_MPS**2
-        m.geom_friction[roller[sliding], 0] = self._friction_dynamic
+        m.geom_friction[roller, 0] = self._friction_dynamic
 
     def sense(self, k: int) -> Sensed:
         """The sensors of vehicle ``k`` now."""
