@@ -18,8 +18,9 @@ SHOW = Path(__file__).resolve().parents[1] / "shows" / "ground-writers.yaml"
 def test_draft_show_section_gives_a_terrain_the_writers_can_cross() -> None:
     doc = yaml.safe_load(SHOW.read_text(encoding="utf-8"))
     settings = omni_settings(OmniWheelSettings.model_validate(doc["omni_wheel"]))
-    assert settings.terrain.height_at_m(4.0) == pytest.approx(0.1)
+    assert settings.terrain.height_at_m(4.0) == pytest.approx(0.05)
     assert settings.geometry.friction_static == 1.0
+    assert settings.geometry.friction_dynamic == pytest.approx(0.9)  # slides at 90 % of static
     boards = {b["id"]: b for b in doc["boards"]}
     for vehicle in doc["vehicles"]:
         board = boards[vehicle["board"]]

@@ -1,19 +1,21 @@
 """The ground writer in MuJoCo: rollers give omnidirectional motion on the flat with traction only
-along each wheel's drive direction; the proposed wheel control climbs the paper's 0.1 m step."""
+along each wheel's drive direction; free joint 1 swings and a sliding roller loses friction; the
+proposed wheel control climbs a step of about the wheel radius (the paper's 0.1 m is beyond the
+model: benchmarks/bench_ground.py)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from vehicles.omni_wheel.climb import climb
+from vehicles.omni_wheel.climb import STEP_EDGE_X_M, climb
 from vehicles.omni_wheel.geometry import OmniGeometry
 from vehicles.omni_wheel.model import Terrain
 from vehicles.omni_wheel.sim import OmniWorld
 from vehicles.omni_wheel.wheel_control import BodyConfiguration, proposed_references
 
 GEO = OmniGeometry()
-RUBBER = OmniGeometry(friction_static=1.0)
+RUBBER = OmniGeometry(friction_static=1.0, friction_dynamic=0.9)
 
 
 def _drive(refs: np.ndarray, seconds: float) -> np.ndarray:
@@ -41,22 +43,52 @@ def test_x_wheels_drive_straight_ahead() -> None:
     assert abs(moved[1]) < 0.02
 
 
+def test_joint_1_is_free_over_its_range() -> None:
+    # the MJCF's angles are radians: the range of +-0.9 rad once read as degrees locked the joint
+    world = OmniWorld(GEO, Terrain(), ((0.0, 0.0, 0.0, 0.0),))
+    pitch = world.model.joint("v0_joint1_pitch")
+    np.testing.assert_allclose(pitch.range, [-0.9, 0.9])
+
+
 @pytest.mark.slow
-def test_proposed_method_climbs_the_papers_step() -> None:
-    result = climb("proposed", 0.1, geometry=RUBBER)
+def test_proposed_method_climbs_a_step_of_the_wheel_radius() -> None:
+    # 60 mm: the highest the model climbs is about the wheel radius (66 mm) with either method
+    result = climb("proposed", 0.06, geometry=RUBBER)
     assert result.climbed
     assert result.duration_s < 8.0
+    # the front part swings on free joint 1 as the front wheels climb (nose up: negative pitch)
+    assert result.log["joint_pitch_rad"].min() < -0.25
     # the references follow the body configuration: while the front part swings up, eq. 15
     # slows the middle wheels well below V0 / r (the standard method never changes them)
     middle = result.log["reference_radps"][:, 3]
     assert middle.min() < 0.6 * GEO.running_speed_mps / GEO.wheel_radius_m
     assert np.all(np.isfinite(result.slip_per_wheel[[0, 2, 3, 4, 5, 6]]))
+    assert np.isnan(result.slip_per_wheel[1])  # the sideways wheel does not count
+
+
+def test_a_sliding_roller_grips_with_the_dynamic_friction() -> None:
+    # the front-left wheel spins while the others hold the body still: its rollers slide
+    world = OmniWorld(RUBBER, Terrain(), ((0.0, 0.0, 0.0, 0.0),), seed=1)
+    hubs = world.vehicles[0].hubs
+    carrier = world.model.body_parentid[world.model.geom_bodyid]  # rollers hang on their hub
+    refs = np.zeros(7)
+    refs[0] = 6.0
+    spinning_slid = held_slid = 0
+    for _ in range(50):
+        world.step(refs[None, :])
+        friction = world.model.geom_friction[:, 0]
+        dynamic = np.isclose(friction, RUBBER.friction_dynamic)
+        spinning_slid += np.any(dynamic[carrier == hubs[0]])
+        held_slid += np.any(dynamic[np.isin(carrier, hubs[1:])])
+    assert spinning_slid > 10  # it skips over its rollers: in contact a part of the time
+    assert held_slid < spinning_slid / 2  # the held wheels barely slide
 
 
 @pytest.mark.slow
-def test_table_1_friction_cannot_climb_half_a_wheel() -> None:
-    # with the rollers' 0.3 of Table 1 the traction of all seven wheels cannot lift a wheel onto
-    # a 50 mm step: the run ends stuck in front of it
+def test_table_1_friction_cannot_climb_a_50_mm_step() -> None:
+    # with the rollers' 0.3 of Table 1 the front wheels go up (the front part swings on joint 1)
+    # but the traction of the others cannot lift the middle wheels: the run ends with the middle
+    # axle stuck in front of the step edge
     result = climb("proposed", 0.05, time_limit_s=6.0)
     assert not result.climbed
-    assert result.log["base_m_enu"][-1, 0] < 0.35
+    assert result.log["base_m_enu"][-1, 0] < STEP_EDGE_X_M

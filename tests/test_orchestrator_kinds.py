@@ -74,9 +74,9 @@ def test_a_job_every_kind_refused_fails_with_the_planner_reason() -> None:
 GROUND = """\
 show_id: t
 omni_wheel:
-  steps: [{x_m: 1.5, height_m: 0.1}]
+  steps: [{x_m: 1.5, height_m: 0.05}]
 boards:
-  - {id: plaza, orientation: floor, center_m_enu: [3.5, 0, 0.1], size_m: [2, 2],
+  - {id: plaza, orientation: floor, center_m_enu: [3.5, 0, 0.05], size_m: [2, 2],
      writing_area_m: [1.8, 1.8]}
 vehicles:
   - {id: ground1, kind: omni-wheel, board: plaza, home_m_enu: [0, 0, 0]}

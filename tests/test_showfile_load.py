@@ -139,11 +139,11 @@ def test_a_kind_without_a_room_is_refused_naming_the_kinds(monkeypatch: Any) -> 
 GROUND = """\
 show_id: t
 omni_wheel:
-  steps: [{x_m: 1.5, height_m: 0.1}]
+  steps: [{x_m: 1.5, height_m: 0.05}]
 boards:
   - id: plaza
     orientation: floor
-    center_m_enu: [3.5, 0, 0.1]
+    center_m_enu: [3.5, 0, 0.05]
     size_m: [2.0, 2.0]
     writing_area_m: [1.8, 1.8]
 vehicles:
@@ -156,16 +156,16 @@ vehicles:
 
 def test_a_ground_writer_reaches_its_floor_area_over_a_low_step() -> None:
     show = parse_show(GROUND)
-    assert show.omni_wheel is not None and show.omni_wheel.steps[0].height_m == 0.1
+    assert show.omni_wheel is not None and show.omni_wheel.steps[0].height_m == 0.05
 
 
 @pytest.mark.parametrize(
     ("change", "words"),
     [
-        (("0.1}]\nboards", "0.3}]\nboards"), "the step at x=1.50 m is 0.300 m high"),
-        (("[3.5, 0, 0.1]", "[3.5, 0, 0.0]"), "the floor there is 0.100 m high"),
-        (("[3.5, 0, 0.1]", "[1.5, 0, 0.1]"), "straddles the step edge at x=1.50 m"),
-        (("[3.5, 0, 0.1]", "[70, 0, 0.1]"), "out of reach: 70.0 m of route"),
+        (("0.05}]\nboards", "0.3}]\nboards"), "the step at x=1.50 m is 0.300 m high"),
+        (("[3.5, 0, 0.05]", "[3.5, 0, 0.0]"), "the floor there is 0.050 m high"),
+        (("[3.5, 0, 0.05]", "[1.5, 0, 0.05]"), "straddles the step edge at x=1.50 m"),
+        (("[3.5, 0, 0.05]", "[70, 0, 0.05]"), "out of reach: 70.0 m of route"),
     ],
 )
 def test_a_floor_area_the_ground_writer_cannot_reach_is_refused_in_one_line(
@@ -173,7 +173,7 @@ def test_a_floor_area_the_ground_writer_cannot_reach_is_refused_in_one_line(
 ) -> None:
     text = GROUND.replace(*change)
     if "0.3}" in text:
-        text = text.replace("[3.5, 0, 0.1]", "[3.5, 0, 0.3]")
+        text = text.replace("[3.5, 0, 0.05]", "[3.5, 0, 0.3]")
     err = _problem(text)
     problem = {p.field: p for p in err.problems}["vehicles[0].board"]
     assert words in problem.message and "'plaza'" in problem.message

@@ -14,9 +14,10 @@ from dataclasses import dataclass
 
 from vehicles.omni_wheel.model import Step, Terrain
 
-MAX_STEP_HEIGHT_M = 0.15
+MAX_STEP_HEIGHT_M = 0.05
 """Highest step in [m] the writer is allowed to cross (climbed with margin in MuJoCo with rubber
-rollers and the proposed method: benchmarks/bench_ground.py)."""
+rollers and the proposed method: 66-70 mm in benchmarks/bench_ground.py, about the wheel radius;
+above it a wheel must be lifted by friction on the riser alone)."""
 MAX_ROUTE_M = 60.0
 """Longest route in [m] from the start to a floor area."""
 

@@ -4,6 +4,9 @@ The vehicle starts on the flat in front of a step across its path and drives for
 climbed when every wheel stands on the step. Slip (eq. 19) and rotation error (eq. 20) are logged
 per wheel while the climb lasts (from the front wheels' first touch of the step face until the
 rear wheels are up) and averaged per wheel group (front, middle, rear) as in the paper's Table 2.
+Only the six wheels driving along x count: the paper's model is planar, and the sideways wheel
+moves along its axle on its rollers in a forward climb (its eq. 19 would compare a spin held at
+zero with the front axle's rise).
 """
 
 from __future__ import annotations
@@ -74,12 +77,13 @@ class ClimbResult:
     duration_s: float
     """Simulated time in [s] of the run."""
     slip_per_wheel: FloatArray
-    """(7,) mean |slip ratio| per wheel during the climb (NaN where never measurable)."""
+    """(7,) mean |slip ratio| per wheel during the climb (NaN where never measurable, and for the
+    sideways wheel)."""
     rotation_error_per_wheel: FloatArray
     """(7,) mean |rotation error ratio| per wheel during the climb."""
     log: dict[str, FloatArray]
     """Time series: ``t_s`` (K,), ``slip`` and ``rotation_error`` (K, 7), ``base_m_enu`` (K, 3),
-    ``reference_radps`` (K, 7)."""
+    ``reference_radps`` (K, 7), ``joint_pitch_rad`` (K,) (true pitch of free joint 1)."""
 
     def by_group(self, values: FloatArray) -> dict[str, float]:
         """Front / middle / rear means of a per-wheel figure, and their average."""
@@ -126,9 +130,9 @@ def climb(
     world = OmniWorld(geometry, terrain, ((0.0, 0.0, 0.0, 0.0),), seed=seed)
     control = controller(method, geometry)
     r = geometry.wheel_radius_m
-    logs: dict[str, list[FloatArray]] = {
-        k: [] for k in ("t_s", "slip", "rotation_error", "base_m_enu", "reference_radps")
-    }
+    along_x = np.abs(geometry.drive_directions()[:, 0]) > 0.5
+    keys = ("t_s", "slip", "rotation_error", "base_m_enu", "reference_radps", "joint_pitch_rad")
+    logs: dict[str, list[FloatArray]] = {k: [] for k in keys}
     climbing = climbed = False
     while world.t_s < time_limit_s:
         refs = control(world.sense(0))
@@ -140,12 +144,14 @@ def climb(
         )
         if climbing:
             slip, error = wheel_ratios(truth, refs, geometry)
+            slip[~along_x], error[~along_x] = np.nan, np.nan
             for key, value in (
                 ("t_s", np.array(world.t_s)),
                 ("slip", slip),
                 ("rotation_error", error),
                 ("base_m_enu", truth.base_m_enu),
                 ("reference_radps", refs),
+                ("joint_pitch_rad", np.array(truth.joint_angles_rad[0])),
             ):
                 logs[key].append(value)
         if climbed:

@@ -4,7 +4,11 @@ Each wheel is a hub on an actuated hinge carrying twelve free rollers (capsules 
 hinges, axes tangent to the rim): the rim can only push along the wheel's drive direction, while
 the rollers let the wheel slide freely along its axle. Only the rollers touch the terrain; the
 frames are modelled as arched over the step edges (no collision geometry), as the paper's free
-joint 1 at axle height implies. Rollers do not collide with each other.
+joint 1 at axle height implies. Rollers do not collide with each other. A roller's friction rules
+its contacts (higher priority than the terrain's), so the simulation can lower it to the dynamic
+coefficient while the roller slides (``sim``).
+
+Angles are in radians (MJCF's default is degrees: joint ranges would be read as such).
 
 Terrain: a floor plane and, for each step, a box whose top is the height of the floor beyond the
 step edge (steps lie across x, the direction of travel).
@@ -103,7 +107,7 @@ def _wheel_xml(prefix: str, name: str, pos: np.ndarray, axle: np.ndarray, g: Omn
             ' damping="0.0005" armature="0.0001"/>'
             f'<geom type="capsule" size="{ROLLER_RADIUS_M}" fromto="{_f(-half_len * tangent)}'
             f' {_f(half_len * tangent)}" mass="{ROLLER_MASS_KG}" contype="1" conaffinity="0"'
-            f' {fr} condim="3" rgba=".15 .15 .15 1"/></body>'
+            f' priority="1" {fr} condim="3" rgba=".15 .15 .15 1"/></body>'
         )
     hub_to = 0.012 * axle
     return (
@@ -185,6 +189,7 @@ def build_mjcf(
     )
     return (
         '<mujoco model="omni_wheel">'
+        '<compiler angle="radian"/>'
         f'<option timestep="{PHYSICS_TIMESTEP_S}" integrator="implicitfast" cone="elliptic"/>'
         "<worldbody>"
         f"{_terrain_xml(terrain, geometry.friction_static)}{bodies}"

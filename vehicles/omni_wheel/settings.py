@@ -8,6 +8,11 @@ from showfile.kind_omni import OmniWheelSettings
 from vehicles.omni_wheel.model import Step, Terrain
 from vehicles.omni_wheel.writing import DEFAULT_SETTINGS, OmniSettings
 
+_DYNAMIC_OVER_STATIC = (
+    DEFAULT_SETTINGS.geometry.friction_dynamic / DEFAULT_SETTINGS.geometry.friction_static
+)
+"""The show file gives one roller friction: the dynamic one keeps the default rollers' ratio."""
+
 
 def omni_settings(section: OmniWheelSettings) -> OmniSettings:
     """:class:`OmniSettings` of a show's ``omni_wheel`` section (defaults where it says nothing)."""
@@ -16,6 +21,7 @@ def omni_settings(section: OmniWheelSettings) -> OmniSettings:
         wheel_radius_m=section.wheel_radius_m,
         running_speed_mps=section.running_speed_mps,
         friction_static=section.roller_friction,
+        friction_dynamic=section.roller_friction * _DYNAMIC_OVER_STATIC,
     )
     terrain = Terrain(
         steps=tuple(Step(s.x_m, s.height_m) for s in section.steps),

@@ -5,6 +5,11 @@ period a PID per wheel runs at the physics rate on the sensed wheel rate (noisy 
 torque is clipped to the motor's limit. The controller sees only :class:`Sensed` (wheel rates,
 free-joint angles from potentiometers and their filtered rates, tilt and gyro of the rear part);
 metrics read :class:`TrueState`.
+
+Friction is static or dynamic per roller (Table 1 gives both; MuJoCo has one coefficient): a
+roller whose contact slides at the start of a control period grips with the dynamic coefficient
+through it, so a slipping wheel loses traction as in the paper's Working Model 2D. It is decided
+per control period (24 us a call, 3 % of a period's 0.8 ms), not per physics step (15 %).
 """
 
 from __future__ import annotations
@@ -22,6 +27,9 @@ FloatArray = NDArray[np.float64]
 
 PHYSICS_DT_S = 0.002
 """Physics step in [s] used by the simulation (the MJCF default is overridden)."""
+SLIDING_SPEED_MPS = 0.02
+"""Speed in [m/s] of a roller's contact point over the ground above which it slides: its friction
+is then the dynamic coefficient (MuJoCo has one coefficient; soft contacts creep below this)."""
 
 
 @dataclass(frozen=True)
@@ -88,6 +96,8 @@ class TrueState:
     """(7, 3) wheel axles in world ENU."""
     pen_m_enu: FloatArray
     """(3,) the marker's point (under the front linkage's middle) at floor level, [m]."""
+    joint_angles_rad: FloatArray
+    """(2,) free joint 1: pitch and roll of the front part relative to the rear part in [rad]."""
 
 
 class _Vehicle:
@@ -139,6 +149,10 @@ class OmniWorld:
         self._joint_prev = np.zeros((n, 2))
         self._joint_rate = np.zeros((n, 2))
         self.enabled = np.ones(n, dtype=bool)
+        self._is_roller = self.model.geom_contype == 1  # the only vehicle geoms that collide
+        self._rollers = np.flatnonzero(self._is_roller)
+        self._friction_static = geometry.friction_static
+        self._friction_dynamic = min(geometry.friction_dynamic, geometry.friction_static)
         mujoco.mj_forward(self.model, self.data)
         for k in range(n):
             self._joint_prev[k] = self._pots(k)
@@ -157,6 +171,7 @@ class OmniWorld:
         """Advance one control period with (n_vehicles, 7) wheel rate references in [rad/s]."""
         refs = np.asarray(wheel_refs_radps, dtype=np.float64).reshape(len(self.vehicles), 7)
         dt = PHYSICS_DT_S
+        self._slide_friction()
         for _ in range(self.substeps):
             for k, v in enumerate(self.vehicles):
                 if not self.enabled[k]:
@@ -178,6 +193,24 @@ class OmniWorld:
             raw = (pots - self._joint_prev[k]) / self.control_dt_s
             self._joint_rate[k] += 0.25 * (raw - self._joint_rate[k])
             self._joint_prev[k] = pots
+
+    def _slide_friction(self) -> None:
+        """Each roller's friction for the next control period: dynamic where one of its contacts
+        (of the last physics step) slides faster than :data:`SLIDING_SPEED_MPS` over the (fixed)
+        terrain, static elsewhere. A contact's two friction rows of the constraint velocity
+        (rows 1 and 2 after its normal row, elliptic cones) are its sliding velocity."""
+        m, d = self.model, self.data
+        m.geom_friction[self._rollers, 0] = self._friction_static
+        if d.ncon == 0 or self._friction_dynamic == self._friction_static:
+            return
+        contact = d.contact
+        row = contact.efc_address
+        active = row >= 0
+        slide_1, slide_2 = d.efc_vel[row[active] + 1], d.efc_vel[row[active] + 2]
+        sliding = slide_1 * slide_1 + slide_2 * slide_2 > SLIDING_SPEED_MPS**2
+        pair = contact.geom[active][sliding]
+        roller = np.where(self._is_roller[pair[:, 0]], pair[:, 0], pair[:, 1])
+        m.geom_friction[roller, 0] = self._friction_dynamic
 
     def sense(self, k: int) -> Sensed:
         """The sensors of vehicle ``k`` now."""
@@ -219,4 +252,5 @@ class OmniWorld:
             motor_rate_radps=d.qvel[v.wheel_dof].copy(),
             axle_enu=axle,
             pen_m_enu=pen,
+            joint_angles_rad=d.qpos[v.joint_qpos].copy(),
         )
