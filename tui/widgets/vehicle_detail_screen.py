@@ -99,7 +99,7 @@ class VehicleDetailScreen(Screen[None]):
         self.query_one(EventLog).border_title = Text(f"events of {shown}")
 
     def sync(self, now_s: float) -> None:
-        """Show the model's current state of the vehicle (nothing yet while it is being composed)."""
+        """Show the model's state of the vehicle (nothing yet while it is being composed)."""
         if not self.is_mounted:
             return
         row = self.model.vehicle_row(self.vehicle_id, now_s)
