@@ -95,6 +95,13 @@ def alpha(v: Any, mu: float) -> Any:
     return ca.vertcat(-mu * v[0] / speed, -mu * v[1] / speed, 1.0)
 
 
+def contact_direction(v_mps: FloatArray, mu: float) -> FloatArray:
+    """:func:`alpha` in numpy for (N, 3) velocities: (N, 3) contact force per unit normal force."""
+    speed = np.sqrt(v_mps[:, 0] ** 2 + v_mps[:, 1] ** 2 + SLIDE_EPS_MPS**2)
+    friction = -mu * v_mps[:, 0:2] / speed[:, None]
+    return np.column_stack([friction, np.ones(len(speed))])
+
+
 def steps_per_segment(period: Period, limits: Limits) -> list[int]:
     """Steps between consecutive waypoints, in proportion to distance and force change."""
     d = np.linalg.norm(np.diff(period.points_m, axis=0), axis=1)
@@ -127,7 +134,7 @@ def solve_period(period: Period, params: HexarotorParams, limits: Limits) -> Per
     force_path = np.interp(np.arange(n), nodes, period.force_n)
     lbx, ubx = _variable_bounds(period, nodes, limits)
     lbg, ubg = _constraint_bounds(n, params, limits)
-    guess = _initial_guess(period, nodes, limits, params.mass_kg)
+    guess = _initial_guess(period, nodes, limits, params)
     started = time.perf_counter()
     solver, lock = _solver(n, params, _weights(limits))
     with lock:
@@ -289,18 +296,24 @@ def _variable_bounds(
 
 
 def _initial_guess(
-    period: Period, nodes: NDArray[np.int_], limits: Limits, mass_kg: float
+    period: Period, nodes: NDArray[np.int_], limits: Limits, params: HexarotorParams
 ) -> FloatArray:
-    """The paper's start: 0.1 s steps, states linear between waypoints, hover thrust."""
+    """The paper's start (0.1 s steps, states linear between waypoints) with the control force
+    that flies those states instead of hover thrust: the finite-difference acceleration less
+    gravity and the contact force. A start that nearly keeps the dynamics saves IPOPT about a
+    quarter of its iterations (letters A, I, R: 1454 -> 1082) for the same optimum."""
     n = int(nodes[-1])
     k = np.arange(n + 1)
     p0 = np.column_stack([np.interp(k, nodes, period.points_m[:, j]) for j in range(3)])
     f0 = np.interp(k, nodes, period.force_n)
     v0 = np.gradient(p0, axis=0) / limits.h_init_s
     v0[0] = v0[-1] = 0.0
+    a0 = np.diff(v0, axis=0) / limits.h_init_s
+    gravity = np.array([0.0, -GRAVITY_MPS2, 0.0])
+    contact = f0[:-1, None] * contact_direction(v0[:-1], params.wall_friction)
     guess = np.zeros((n + 1, NODE))
     guess[:, 0:3], guess[:, 3:6], guess[:, 6] = p0, v0, f0
-    guess[:n, STATE + 1] = mass_kg * GRAVITY_MPS2
+    guess[:n, STATE : STATE + 3] = params.mass_kg * (a0 - gravity) - contact
     guess[:n, STATE + 3] = np.diff(f0) / limits.h_init_s
     guess[:, NODE - 1] = limits.h_init_s
     return guess.ravel()[: NODE * n + STATE]
@@ -350,9 +363,7 @@ def _solution(
     t = np.concatenate([[0.0], np.cumsum(hs)])
     v = xs[3:6].T
     force = xs[6]
-    speed = np.sqrt(v[:-1, 0] ** 2 + v[:-1, 1] ** 2 + SLIDE_EPS_MPS**2)
-    mu = params.wall_friction
-    contact = np.column_stack([-mu * v[:-1, 0] / speed, -mu * v[:-1, 1] / speed, np.ones(len(hs))])
+    contact = contact_direction(v[:-1], params.wall_friction)
     gravity = np.array([0.0, -GRAVITY_MPS2, 0.0])
     acc = (us[0:3].T + force[:-1, None] * contact) / params.mass_kg + gravity
     acc = np.vstack([acc, np.zeros(3)])
