@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from planner.errors import InfeasibleTrajectoryError, PlannerError
+from vehicles.hexarotor_sponge import nlp
 from vehicles.hexarotor_sponge.nlp import Limits, solve_period
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
 from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing
@@ -120,3 +123,21 @@ def test_force_beyond_the_rotors_names_the_thrust_limit() -> None:
     with pytest.raises(InfeasibleTrajectoryError, match=r"stroke 0: pressing 6\.00 N") as info:
         plan_writing(strokes, SURFACE, weak)
     assert info.value.limit == "thrust"
+
+
+@pytest.mark.slow
+def test_cached_solver_takes_each_periods_own_waypoints() -> None:
+    """The solver of a step count is built once; a second period with the same count (its
+    waypoints shifted along the wall) gets its own bounds: the same trajectory, shifted."""
+    strokes = [StrokeInput(np.array([[0.0, 0.0], [0.08, 0.0], [0.08, 0.06]]))]
+    forces = [np.array([2.0, 3.0, 2.5])]
+    first = periods_of(strokes, forces, start_m=np.array([0.0, 0.0, 0.06]), standoff_m=0.03)[1]
+    shift = np.array([0.3, -0.2, 0.0])
+    moved = dataclasses.replace(first, points_m=first.points_m + shift)
+    builds = nlp._solver.cache_info().misses
+    a = solve_period(first, PARAMS, Limits())
+    b = solve_period(moved, PARAMS, Limits())
+    assert nlp._solver.cache_info().misses <= builds + 1
+    assert b.p_m == pytest.approx(a.p_m + shift, abs=1e-6)
+    assert b.force_n == pytest.approx(a.force_n, abs=1e-6)
+    assert b.t_s == pytest.approx(a.t_s, abs=1e-6)

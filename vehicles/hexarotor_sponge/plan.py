@@ -8,7 +8,7 @@ and forces only (no velocity, acceleration or contact-wrench feed-forward).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -115,14 +115,21 @@ def _periods(
     return checked, periods, clamped
 
 
+PeriodSolver = Callable[[Period, HexarotorParams, Limits], PeriodSolution]
+"""Eq. 7 for one period: :func:`solve_period`, or a peer a benchmark compares it with."""
+
+
 def plan_writing(
-    strokes: Sequence[StrokeInput], surface: Surface, settings: PlanSettings
+    strokes: Sequence[StrokeInput],
+    surface: Surface,
+    settings: PlanSettings,
+    solve: PeriodSolver = solve_period,
 ) -> WritingPlan:
     """The contact-aware motion-force plan of ``strokes`` on a vertical ``surface``."""
     checked, periods, clamped = _periods(strokes, settings)
     solutions = []
     for period in periods:
-        solutions.append(solve_period(period, settings.params, settings.limits))
+        solutions.append(solve(period, settings.params, settings.limits))
     t, p, v, a, f = _stitch(solutions)
     report = _report(periods, solutions, v, a, f, t, settings, clamped)
     return _as_plan(t, p, v, a, f, checked, surface, settings, report)

@@ -1,0 +1,157 @@
+"""The wall planner's eq. 7 as it was solved before the cached solvers: the peer of
+``vehicles.hexarotor_sponge.nlp.solve_period`` in ``bench_wall.py``.
+
+Same model, cost, constraints and IPOPT options; a new ``casadi.Opti`` with ``expand`` is built
+for every period, so every period pays for building the MX graph in Python, expanding it to SX
+and deriving it.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import casadi as ca
+import numpy as np
+from numpy.typing import NDArray
+
+from vehicles.hexarotor_sponge.allocation import wrench_matrix
+from vehicles.hexarotor_sponge.nlp import (
+    BODY_IN_WALL,
+    Limits,
+    PeriodSolution,
+    _raise_infeasible,
+    _solution,
+    alpha,
+    steps_per_segment,
+)
+from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
+from vehicles.hexarotor_sponge.waypoints import Period
+
+FloatArray = NDArray[np.float64]
+
+
+def solve_period_opti(period: Period, params: HexarotorParams, limits: Limits) -> PeriodSolution:
+    """The planner before the cached solvers: a fresh ``casadi.Opti`` (expanded) per period,
+    every bound as a constraint, the paper's hover-thrust start."""
+    steps = steps_per_segment(period, limits)
+    nodes = np.concatenate([[0], np.cumsum(steps)]).astype(int)
+    n = int(nodes[-1])
+    opti = ca.Opti()
+    x = opti.variable(7, n + 1)
+    u = opti.variable(4, n)
+    h = opti.variable(n)
+    m = params.mass_kg
+    g = ca.DM([0.0, -GRAVITY_MPS2, 0.0])
+    mu = params.wall_friction
+
+    def f(xs: Any, us: Any) -> Any:
+        acc = (us[0:3] + xs[6] * alpha(xs[3:6], mu)) / m + g
+        return ca.vertcat(xs[3:6], acc, us[3])
+
+    cost: Any = 0
+    force_path = np.interp(np.arange(n + 1), nodes, period.force_n)
+    hover = ca.DM([0.0, m * GRAVITY_MPS2, 0.0])
+    for k in range(n):
+        xk, uk, hk = x[:, k], u[:, k], h[k]
+        k1 = f(xk, uk)
+        k2 = f(xk + hk / 2 * k1, uk)
+        k3 = f(xk + hk / 2 * k2, uk)
+        k4 = f(xk + hk * k3, uk)
+        opti.subject_to(x[:, k + 1] == xk + hk / 6 * (k1 + 2 * k2 + 2 * k3 + k4))
+        du = uk[0:3] - (u[0:3, k - 1] if k > 0 else hover)
+        stage = (
+            limits.weight_v * ca.sumsqr(xk[3:6])
+            + limits.weight_u * ca.sumsqr(uk[0:3] - hover)
+            + limits.weight_du * ca.sumsqr(du)
+            + limits.weight_force * (xk[6] - force_path[k]) ** 2
+            + limits.time_weight
+        )
+        cost += stage * hk
+        opti.subject_to(ca.sumsqr(k1[3:6]) <= limits.a_max_mps2**2)
+        _thrust_limits(opti, xk, uk, params)
+    opti.minimize(cost)
+    opti.subject_to(opti.bounded(0.02, h, limits.h_max_s))
+    opti.subject_to(opti.bounded(-limits.force_rate_max_nps, u[3, :], limits.force_rate_max_nps))
+    for k in range(n + 1):
+        opti.subject_to(ca.sumsqr(x[3:6, k]) <= limits.v_max_mps**2)
+    opti.subject_to(x[3:6, 0] == 0)
+    opti.subject_to(x[3:6, n] == 0)
+    for i, node in enumerate(nodes):
+        opti.subject_to(x[0:3, int(node)] == period.points_m[i])
+        opti.subject_to(x[6, int(node)] == period.force_n[i])
+    if period.contact:
+        opti.subject_to(x[2, :] == 0)
+        opti.subject_to(x[6, :] >= 0)
+    else:
+        opti.subject_to(x[2, :] >= 0)
+        opti.subject_to(x[6, :] == 0)
+        opti.subject_to(u[3, :] == 0)
+    _initial_guess(opti, x, u, h, period, nodes, limits, m)
+    opti.solver(
+        "ipopt",
+        {"print_time": False, "expand": True, "record_time": True},
+        {
+            "print_level": 0,
+            "sb": "yes",
+            "max_iter": 600,
+            "tol": 1e-6,
+            "acceptable_tol": 1e-4,
+            "mu_strategy": "adaptive",
+        },
+    )
+    started = time.perf_counter()
+    try:
+        sol = opti.solve()
+        values = sol.value
+    except RuntimeError:
+        values = opti.debug.value
+    solve_s = time.perf_counter() - started
+    stats = opti.stats()
+    status = str(stats.get("return_status", "unknown"))
+    xs = np.asarray(values(x)).reshape(7, n + 1)
+    us = np.asarray(values(u)).reshape(4, n)
+    hs = np.asarray(values(h)).reshape(n)
+    if not bool(stats.get("success", False)):
+        _raise_infeasible(period, status, xs, hs, limits)
+    timing = (solve_s, float(stats.get("t_wall_total", solve_s)))
+    return _solution(xs, us, hs, status, int(stats.get("iter_count", -1)), timing, params)
+
+
+def _thrust_limits(opti: Any, xk: Any, uk: Any, params: HexarotorParams) -> None:
+    """0 <= thrusts <= max for the wrench that applies ``f_a`` and cancels the gravity moment of
+    the offset centre of mass and the contact force's moment (allocation about the body origin)."""
+    rot = ca.DM(BODY_IN_WALL)
+    inverse = ca.DM(np.linalg.inv(wrench_matrix(params)))
+    com = ca.DM(params.com_m_body)
+    tip = ca.DM(params.tip_m_body)
+    force_body = rot.T @ uk[0:3]
+    weight_body = rot.T @ ca.DM([0.0, -params.mass_kg * GRAVITY_MPS2, 0.0])
+    contact_body = rot.T @ (xk[6] * alpha(xk[3:6], params.wall_friction))
+    torque = -ca.cross(com, weight_body) - ca.cross(tip, contact_body)
+    thrust = inverse @ ca.vertcat(force_body, torque)
+    opti.subject_to(opti.bounded(0.0, thrust, params.thrust_max_n))
+
+
+def _initial_guess(
+    opti: Any,
+    x: Any,
+    u: Any,
+    h: Any,
+    period: Period,
+    nodes: FloatArray,
+    limits: Limits,
+    mass_kg: float,
+) -> None:
+    """The paper's start: 0.1 s steps, states linear between waypoints, hover thrust."""
+    n = int(nodes[-1])
+    k = np.arange(n + 1)
+    p0 = np.column_stack([np.interp(k, nodes, period.points_m[:, j]) for j in range(3)])
+    f0 = np.interp(k, nodes, period.force_n)
+    v0 = np.gradient(p0, axis=0) / limits.h_init_s
+    v0[0] = v0[-1] = 0.0
+    opti.set_initial(x, np.vstack([p0.T, v0.T, f0]))
+    rate = np.diff(f0) / limits.h_init_s
+    hover = np.tile([[0.0], [mass_kg * GRAVITY_MPS2], [0.0]], (1, n))
+    opti.set_initial(u, np.vstack([hover, rate]))
+    opti.set_initial(h, np.full(n, limits.h_init_s))
