@@ -87,6 +87,8 @@ class AutopilotCore:
         """``time_boot_ms`` of the setpoint being tracked, echoed in POSITION_TARGET_LOCAL_NED."""
         self.setpoints_received = 0
         self.mocap_received = 0
+        self.ekf_origin_lla: tuple[float, float, float] | None = None
+        """EKF origin (lat [deg], lon [deg], alt [m]) a companion set (SET_GPS_GLOBAL_ORIGIN)."""
         self.now_s = 0.0
         self.flight_time_s = 0.0
         self._armed_idle_since_s = 0.0

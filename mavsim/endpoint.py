@@ -155,6 +155,11 @@ class VehicleEndpoint:
             self._param(kind, message)
         elif kind in ("VISION_POSITION_ESTIMATE", "ATT_POS_MOCAP"):
             ap.mocap_received += 1
+        elif kind == "SET_GPS_GLOBAL_ORIGIN":  # both autopilots answer with the origin taken
+            ap.ekf_origin_lla = (message.latitude * 1e-7, message.longitude * 1e-7,
+                                 message.altitude * 1e-3)  # fmt: skip
+            self.send(self._mav.gps_global_origin_encode(
+                message.latitude, message.longitude, message.altitude))  # fmt: skip
 
     def _position_setpoint(self, message: mavlink.MAVLink_message) -> None:
         ap = self.autopilot

@@ -340,11 +340,30 @@ def test_mocap_flows_at_its_rate_while_the_control_loop_awaits_the_autopilot() -
             ticking = backend._mocap.sent
             await asyncio.sleep(0.5 / SCALE)  # 0.5 s of agent time without a tick
             stalled = backend._mocap.sent - ticking
+            backend._fail("a fault: the autopilot flies on, on the mocap")
+            await asyncio.sleep(0.25 / SCALE)
+            after_fault = backend._mocap.sent - ticking - stalled
         assert 20 <= ticking <= 27 and 18 <= stalled <= 27, (ticking, stalled)
+        assert after_fault >= 8
         assert asked[-1] > driver.now + 0.3  # the agent's clock carried on through the stall
         assert server.endpoints[0].autopilot.mocap_received >= 40
 
     with vehicle() as server:
+        asyncio.run(scenario(server))
+
+
+def test_px4_on_mocap_gets_its_ekf_origin_at_altitude_zero_at_connect() -> None:
+    # EKF2 (v1.16) takes vision z as down from altitude 0: with its origin anywhere else its
+    # local z is off by that altitude (SIH: +584 m on the ground). ArduPilot gets it later, when
+    # it says it uses external nav (its own GPS origin crashes 4.7 SITL meanwhile).
+    async def scenario(server: MavsimServer) -> None:
+        ap = server.endpoints[0].autopilot
+        settings = {"mocap": "vision_position_estimate", "set_params": False}
+        async with connected(server, **settings) as (_backend, driver):
+            await driver.until(lambda _s: ap.ekf_origin_lla is not None, 1.0)
+        assert ap.ekf_origin_lla is not None and ap.ekf_origin_lla[2] == 0.0
+
+    with vehicle(autopilot="px4") as server:
         asyncio.run(scenario(server))
 
 

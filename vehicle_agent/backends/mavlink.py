@@ -71,10 +71,11 @@ STREAMED = {32: "LOCAL_POSITION_NED", 30: "ATTITUDE", 85: "POSITION_TARGET_LOCAL
 SLOW = {1: "SYS_STATUS", 147: "BATTERY_STATUS", 245: "EXTENDED_SYS_STATE"}
 TextHandler = Callable[[int, str], None]
 EKF_ORIGIN_LLA = (-35.363261, 149.165230, 584.0)
-"""EKF origin (lat [deg], lon [deg], alt [m]) given to an ArduPilot flying on forwarded mocap:
-its local frame is the mocap's whichever origin it has, but EKF3 needs one, and the one its GPS
-would set later while it fuses ExternalNav crashes ArduCopter 4.7 SITL (floating point exception
-at "origin set", measured); set first, the GPS leaves it alone."""
+"""EKF origin (lat [deg], lon [deg], alt [m]) given to an autopilot flying on forwarded mocap:
+its local frame is the mocap's whichever origin it has, but its EKF needs one. ArduPilot: the one
+its GPS would set later while it fuses ExternalNav crashes ArduCopter 4.7 SITL (floating point
+exception at "origin set", measured); set first, the GPS leaves it alone. PX4 gets it at altitude
+0 (see ``mavlink_params.PX4_HGT_REF_VISION``)."""
 GCS_HEARTBEAT_PERIOD_S = 0.5
 """Our heartbeat period in [s]: PX4 drops a ground station unheard for 2.5 s (and its texts with
 it), so a stall of the agent of up to 2 s keeps the texts coming."""
@@ -171,13 +172,16 @@ class MavlinkBackend:
             )
         self._request_telemetry()
         if self._mocap.kind != "none":
-            self._mocap_task = asyncio.create_task(
-                self._mocap.run(lambda: self._link if self.fault is None else None, self.tick_time)
-            )
+            # also after a fault: the autopilot (or the pilot) still flies on the mocap
+            forwarding = self._mocap.run(lambda: self._link, self.tick_time)
+            self._mocap_task = asyncio.create_task(forwarding)
         if self.state.armed:
             self.fault = "vehicle already armed when the agent connected: the pilot has it"
-        elif self.settings.set_params:
-            await self._configure()
+        else:
+            if self.settings.set_params:
+                await self._configure()
+            if self._flavor().name == "px4":  # ArduPilot: once it says it uses external nav
+                self._set_ekf_origin()
         log.info("MAVLink vehicle %s (%s) on %s", self.state.system_id,
                  self.state.flavor.name, self.settings.url)  # fmt: skip
         return self._snapshot(0.0)
@@ -230,11 +234,13 @@ class MavlinkBackend:
                 self._on_text(severity, text)
 
     def _set_ekf_origin(self) -> None:
-        """ArduPilot fusing our mocap: give its EKF an origin (once), before its GPS does."""
+        """An autopilot fusing our mocap: give its EKF an origin (once), before its GPS does."""
         if self._origin_sent or self._link is None or self.settings.mocap == "none":
             return
         self._origin_sent = True
         lat, lon, alt = EKF_ORIGIN_LLA
+        if self._flavor().name == "px4":
+            alt = 0.0
         message = self._link.mav.set_gps_global_origin_encode(
             self.state.system_id or 0, round(lat * 1e7), round(lon * 1e7), round(alt * 1000)
         )

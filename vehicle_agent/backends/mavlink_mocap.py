@@ -15,6 +15,7 @@ failures first") in 2 of 3 tries. :class:`TickTime` carries the agent's clock on
 from __future__ import annotations
 
 import asyncio
+import logging
 import time
 from collections import deque
 from collections.abc import Callable
@@ -31,6 +32,8 @@ from vehicle_agent.backends.mavlink_frames import (
 if TYPE_CHECKING:
     from vehicle_agent.backends.mavlink_link import MavlinkLink
     from vehicle_agent.backends.mavlink_settings import MavlinkSettings
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -85,6 +88,7 @@ class MocapForwarder:
         self.frame = frame
         self.source = source
         self.sent = 0
+        self.failed = 0
 
     async def run(self, link: Callable[[], MavlinkLink | None], clock: TickTime) -> None:
         """Forward poses at the rate until cancelled, whatever the control loop awaits;
@@ -92,8 +96,13 @@ class MocapForwarder:
         due_s = time.monotonic()  # wall clock, paced on deadlines so that late wake-ups even out
         while True:
             current = link()
-            if current is not None:
-                self.forward(current, clock.now_s(time.monotonic()))
+            try:
+                if current is not None:
+                    self.forward(current, clock.now_s(time.monotonic()))
+            except Exception:  # a bad pose must not end the estimator's position source
+                self.failed += 1
+                if self.failed in (1, 10) or self.failed % 1000 == 0:
+                    log.exception("mocap pose not forwarded (%d so far)", self.failed)
             due_s = max(due_s + self.period_s / max(clock.rate, 1e-3), time.monotonic() - 0.1)
             await asyncio.sleep(max(0.0, due_s - time.monotonic()))
 
