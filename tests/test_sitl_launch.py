@@ -13,6 +13,8 @@ from types import ModuleType
 
 import pytest
 
+from vehicle_agent.backends.mavlink_params import PX4_DELAY_MAX_MS
+
 START_PY = Path(__file__).resolve().parents[1] / "scripts" / "sitl" / "start.py"
 
 
@@ -100,6 +102,10 @@ def test_px4_starts_sih_at_its_home(launch: ModuleType, tmp_path: Path) -> None:
     assert argv[1:4] == ["-i", "1", "-d"] and argv[4].endswith("px4_sitl_default/etc")
     assert env["PX4_SIMULATOR"] == "sihsim" and env["PX4_SIM_MODEL"] == "sihsim_quadx"
     assert (env["PX4_HOME_LAT"], env["PX4_HOME_ALT"]) == ("-35.5000000", "590.00")
+    assert "PX4_PARAM_EKF2_DELAY_MAX" not in env
+    _, with_mocap = launch.command(replace(inst, mocap=True))
+    # read at boot, checked by the agent at connect: both sides agree
+    assert float(with_mocap["PX4_PARAM_EKF2_DELAY_MAX"]) == PX4_DELAY_MAX_MS
 
 
 def test_a_missing_binary_variable_is_named(

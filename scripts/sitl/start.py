@@ -48,6 +48,9 @@ ARDUPILOT_BASE_PORT = 5760
 MOCAP_PARM = "mocap.parm"
 MOCAP_BOOT_PARAMS = "VISO_TYPE 1\n"
 """ArduCopter parameters read only at boot that fusing forwarded mocap needs."""
+PX4_MOCAP_BOOT_PARAMS = {"EKF2_ASP_DELAY": "0", "EKF2_DELAY_MAX": "20"}
+"""The same for PX4, given as PX4_PARAM_* variables (vehicle_agent/backends/mavlink_params.py
+sets and checks them at connect, and refuses a vehicle that would need a reboot)."""
 PX4_OFFBOARD_REMOTE_PORT = 14540
 MAV_SYS_STATUS_PREARM_CHECK = 0x10000000
 READY_TIMEOUT_S = 180.0
@@ -165,6 +168,8 @@ def command(inst: Instance) -> tuple[list[str], dict[str, str]]:
         PX4_HOME_LON=f"{lon:.7f}",
         PX4_HOME_ALT=f"{alt:.2f}",
     )
+    if inst.mocap:
+        env.update({f"PX4_PARAM_{name}": value for name, value in PX4_MOCAP_BOOT_PARAMS.items()})
     return [str(inst.binary), "-i", str(inst.index), "-d", str(etc)], env
 
 
