@@ -68,12 +68,18 @@ class Autopilot(AutopilotCore):
         self._check_fence()
 
     def _follow_gain_params(self) -> None:
-        """ArduCopter flies PSC_POSXY_P, PSC_VELXY_P and PSC_VELXY_I as they are set now
-        (unless the configuration fixes the gains)."""
-        if self.flavor != "ardupilot" or self.config.gains is not None:
+        """Each flies its position gains as they are set now (unless the configuration fixes
+        them): ArduCopter PSC_POSXY_P, PSC_VELXY_P, PSC_VELXY_I; PX4 MPC_XY_P, MPC_XY_VEL_P_ACC,
+        MPC_XY_VEL_I_ACC, MPC_Z_P."""
+        if self.config.gains is not None:
             return
         p = self.params
-        gains = PositionGains.ardupilot(p["PSC_POSXY_P"], p["PSC_VELXY_P"], p["PSC_VELXY_I"])
+        if self.flavor == "px4":
+            gains = PositionGains.px4(
+                p["MPC_XY_P"], p["MPC_XY_VEL_P_ACC"], p["MPC_XY_VEL_I_ACC"], p["MPC_Z_P"]
+            )
+        else:
+            gains = PositionGains.ardupilot(p["PSC_POSXY_P"], p["PSC_VELXY_P"], p["PSC_VELXY_I"])
         if gains != self.controller.gains:
             self.controller.gains = gains
 

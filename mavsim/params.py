@@ -16,7 +16,8 @@ horizontal P-PI cascade), FENCE_ENABLE, FENCE_TYPE (bit 0
 maximum altitude, bit 1 circle), FENCE_RADIUS [m], FENCE_ALT_MAX [m], FENCE_ACTION (0 report,
 2 land, others: RTL). PX4: COM_OF_LOSS_T [s], COM_OBL_RC_ACT (what flies when the
 offboard stream is lost, :mod:`mavsim.px4`), GF_MAX_HOR_DIST [m], GF_MAX_VER_DIST [m] (0: off),
-GF_ACTION (0 none, 1 warning, 2 hold, 3 return, 5 land).
+GF_ACTION (0 none, 1 warning, 2 hold, 3 return, 5 land), MPC_XY_P [1/s], MPC_XY_VEL_P_ACC [1/s]
+and MPC_XY_VEL_I_ACC [1/s^2] (the horizontal P-PI cascade), MPC_Z_P [1/s].
 """
 
 from __future__ import annotations
@@ -70,6 +71,10 @@ PX4_PARAMS = (
     ParamDef("GF_MAX_HOR_DIST", REAL32, 0.0),
     ParamDef("GF_MAX_VER_DIST", REAL32, 0.0),
     ParamDef("GF_ACTION", INT32, 2),
+    ParamDef("MPC_XY_P", REAL32, 0.95),
+    ParamDef("MPC_XY_VEL_P_ACC", REAL32, 1.8),
+    ParamDef("MPC_XY_VEL_I_ACC", REAL32, 0.4),
+    ParamDef("MPC_Z_P", REAL32, 1.0),
 )
 
 

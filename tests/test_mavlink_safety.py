@@ -21,7 +21,7 @@ from mavsim.show import vehicle_configs
 from showfile import parse_show
 from vehicle_agent.agent import job_metrics, make_backend, prepare_job, vehicle_setup
 from vehicle_agent.backends.mavlink import MavlinkBackend
-from vehicle_agent.backends.mavlink_params import ARDUPILOT_TRACKING, FenceSpec
+from vehicle_agent.backends.mavlink_params import ARDUPILOT_TRACKING, PX4_TRACKING, FenceSpec
 from vehicle_agent.backends.mavlink_settings import MavlinkSettings
 from vehicle_agent.clock import TickClock
 from vehicle_agent.job_runner import JobRunner
@@ -86,12 +86,15 @@ def test_parameters_are_set_and_read_back_at_connect(autopilot: str) -> None:
                 assert params["COM_OF_LOSS_T"] == pytest.approx(0.7)
                 assert params["GF_ACTION"] == 5  # an integer, carried bytewise both ways
                 assert params["GF_MAX_HOR_DIST"] == pytest.approx(3.5)
+                for name, value in PX4_TRACKING:
+                    assert params[name] == pytest.approx(value)
             expected = (
                 {"GUID_TIMEOUT", "WP_YAW_BEHAVIOR", "FENCE_TYPE", "FENCE_RADIUS",
                  "FENCE_ALT_MAX", "FENCE_ACTION", "FENCE_ENABLE"}
                 | {name for name, _ in ARDUPILOT_TRACKING}
                 if autopilot == "ardupilot"
                 else {"COM_OF_LOSS_T", "GF_MAX_HOR_DIST", "GF_MAX_VER_DIST", "GF_ACTION"}
+                | {name for name, _ in PX4_TRACKING}
             )  # fmt: skip
             assert set(backend.params_set) == expected
         finally:

@@ -282,3 +282,4 @@ def test_each_autopilot_flies_its_own_default_gains() -> None:
     assert ardupilot == PositionGains() != px4
     stiff = PositionGains.from_poles(0.3)
     assert VehicleConfig(vehicle_id="v", system_id=1, port=0, gains=stiff).position_gains == stiff
+    assert PositionGains.px4() == px4 != PositionGains.px4(1.8, 3.6, 1.6, 1.5)
