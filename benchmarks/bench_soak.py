@@ -33,6 +33,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench_show import SHOW, submit_char, wait_ready  # noqa: E402
+
 from bus.messages import JobState  # noqa: E402
 from bus.pubsub import subscribe  # noqa: E402
 from cli.showrun import FINAL_STATES, ShowRun, Stagehand, derived_show  # noqa: E402
@@ -118,7 +119,9 @@ class Samples:
                 continue
             label = name.removeprefix("agent ")
             for k, child in enumerate(children_of(pid)):
-                self._add(self.rss, f"{label} worker" + (f" {k}" if k else ""), t_s, rss_bytes(child))
+                self._add(
+                    self.rss, f"{label} worker" + (f" {k}" if k else ""), t_s, rss_bytes(child)
+                )
             self._add(self.rss, label, t_s, rss_bytes(pid))
         database = show.database_path
         self._add(self.disk, "job files", t_s, tree_bytes(database.parent / "jobs"))
@@ -208,7 +211,9 @@ def _progress(samples: Samples, jobs: Jobs) -> None:
     )
 
 
-def report(args: argparse.Namespace, samples: Samples, jobs: Jobs, restarts: dict[str, int]) -> None:
+def report(
+    args: argparse.Namespace, samples: Samples, jobs: Jobs, restarts: dict[str, int]
+) -> None:
     """Print the table of RSS and disk per process and storage, and the show's throughput."""
     warm_s = args.warmup_minutes * 60.0
     hours = samples.t_s[-1] / 3600.0
@@ -246,7 +251,9 @@ def report(args: argparse.Namespace, samples: Samples, jobs: Jobs, restarts: dic
             grown = points[-1][1] - at(points, warm_s)
             after = done - at(samples.done, warm_s)
             if after > 0:
-                print(f"  orchestrator growth after warm-up: {grown / after / 1024:+.1f} KiB per job")
+                print(
+                    f"  orchestrator growth after warm-up: {grown / after / 1024:+.1f} KiB per job"
+                )
 
 
 def plot(samples: Samples, path: Path, warm_s: float) -> None:

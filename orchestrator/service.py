@@ -41,7 +41,7 @@ from bus.pubsub import declare_token, publish, subscribe, subscribe_raw, watch_l
 from bus.recorder import McapRecorder
 from bus.rpc import NoReplyError, RemoteError, aquery_one, serve_async
 from bus.session import Session
-from orchestrator.core import Book, CoreConfig, Effects
+from orchestrator.core import MAX_FINAL_JOBS, Book, CoreConfig, Effects
 from orchestrator.fleet import EtaModel, VehicleInfo
 from orchestrator.jobs import to_state
 from orchestrator.store import JobStore
@@ -121,11 +121,12 @@ class OrchestratorService:
         self.show, self.session, self.store, self.recorder = show, session, store, recorder
         self.keys = ShowKeys(show.show_id)
         self.clock = clock
-        stored = store.load()
+        stored = store.load(max_final=MAX_FINAL_JOBS)
         self.book = Book(
             core_config(show),
             stored.jobs,
             now_s=clock(),
+            job_counts=stored.job_counts,
             queue_paused=stored.queue_paused,
             paused_vehicles=stored.paused_vehicles,
             held_vehicles=stored.held_vehicles,
@@ -224,6 +225,10 @@ class OrchestratorService:
         except SubmissionError as exc:
             reply = SubmitReply(ok=False, error=exc.info)
         else:
+            forgotten = self._forgotten_submission(request)
+            if forgotten is not None:
+                self._record(self.keys.submit + "#reply", forgotten)
+                return forgotten
             job_id = new_job_id()
             reply, eff = self.book.submit(
                 job_id,
@@ -238,6 +243,15 @@ class OrchestratorService:
                 self._spawn(self._refine_estimate(job_id, accepted.glyph, key))
         self._record(self.keys.submit + "#reply", reply)
         return reply
+
+    def _forgotten_submission(self, request: SubmitRequest) -> SubmitReply | None:
+        """The reply to a repeated idempotency key whose job finished long ago (the Book forgot
+        it; the database still has it), or None."""
+        key = request.idempotency_key
+        if key is None or (request.client_id, key) in self.book.by_key:
+            return None
+        job = self.store.job_by_key(request.client_id, key)
+        return None if job is None else SubmitReply(ok=True, job_id=job.job_id, state=job.state)
 
     async def _refine_estimate(self, job_id: str, glyph: Any, cache_key: str | None) -> None:
         """Replace the rough estimate by the planner's duration (best effort, bounded work)."""
