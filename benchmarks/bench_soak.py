@@ -13,7 +13,8 @@ Printed per process: RSS at start, after warm-up (``--warmup-minutes``, default 
 the run up to 10 min) and at the end, its peak, and the least-squares slope after warm-up in
 MiB/hour; per storage the same slope in MiB/hour; characters written per hour, failed jobs and
 restarts. A process whose memory levels off has a slope near zero however long the run; one
-that grows per job keeps a slope proportional to characters per hour.
+that grows per job keeps a slope proportional to characters per hour. ``--trace-memory DIR``
+says what grows, by allocation site (``memtrace.py``).
 """
 
 from __future__ import annotations
@@ -26,10 +27,12 @@ import tempfile
 import threading
 import time
 from collections import Counter
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
 sys.path.insert(0, str(ROOT))
 
 from bench_show import SHOW, submit_char, wait_ready  # noqa: E402
@@ -37,6 +40,7 @@ from bench_show import SHOW, submit_char, wait_ready  # noqa: E402
 from bus.messages import JobState  # noqa: E402
 from bus.pubsub import subscribe  # noqa: E402
 from cli.showrun import FINAL_STATES, ShowRun, Stagehand, derived_show  # noqa: E402
+from cli.supervisor import ChildSpec  # noqa: E402
 from showfile.models import Show  # noqa: E402
 
 CORPUS = "ABQRSgkw" + "永光马和我的是人大中国天"
@@ -169,12 +173,30 @@ def keep_waiting(
             jobs.submitted(str(reply.job_id), str(reply.state))
 
 
+def traced(trace_dir: Path | None, period_s: float) -> Callable[[ChildSpec], ChildSpec] | None:
+    """Run the orchestrator and the agents under ``memtrace.py``, reporting into ``trace_dir``."""
+    if trace_dir is None:
+        return None
+    trace_dir.mkdir(parents=True, exist_ok=True)
+
+    def adjust(spec: ChildSpec) -> ChildSpec:
+        if spec.name != "orchestrator" and not spec.name.startswith("agent "):
+            return spec
+        out = trace_dir / f"{spec.name.removeprefix('agent ')}.txt"
+        python, *rest = spec.argv
+        tracer = (python, str(HERE / "memtrace.py"), str(out), repr(period_s))
+        return replace(spec, argv=(*tracer, *rest))
+
+    return adjust
+
+
 def soak(args: argparse.Namespace, out_dir: Path) -> tuple[Samples, Jobs, dict[str, int]]:
     """Run the show for ``args.minutes``; the samples, the jobs and restarts per process."""
     path, show = derived_show(SHOW, out_dir, time_scale=args.time_scale)
     samples, jobs = Samples(), Jobs()
+    adjust = traced(args.trace_memory, args.warmup_minutes * 60.0)
     with (
-        ShowRun(path, show, log_dir=out_dir / "logs") as run,
+        ShowRun(path, show, log_dir=out_dir / "logs", adjust=adjust) as run,
         run.client() as session,
         Stagehand(session, run.keys, period_s=5.0),
     ):
@@ -285,6 +307,13 @@ def main() -> int:
     parser.add_argument("--sample-s", type=float, default=10.0, help="sampling period (10 s)")
     parser.add_argument("--png", type=Path, help="plot RSS over time per process here")
     parser.add_argument("--out-dir", type=Path, help="keep the show's files here (default: tmp)")
+    parser.add_argument(
+        "--trace-memory",
+        type=Path,
+        metavar="DIR",
+        help="run the orchestrator and agents under tracemalloc (slower): what grew after"
+        " warm-up, by allocation site, in DIR/<process>.txt",
+    )
     args = parser.parse_args()
     if args.warmup_minutes is None:
         args.warmup_minutes = min(10.0, args.minutes / 4.0)
