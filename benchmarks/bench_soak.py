@@ -14,7 +14,8 @@ the run up to 10 min) and at the end, its peak, and the least-squares slope afte
 MiB/hour; per storage the same slope in MiB/hour; characters written per hour, failed jobs and
 restarts. A process whose memory levels off has a slope near zero however long the run; one
 that grows per job keeps a slope proportional to characters per hour. ``--trace-memory DIR``
-says what grows, by allocation site (``memtrace.py``).
+says what grows in the orchestrator (or the ``--trace`` processes), by allocation site
+(``memtrace.py``).
 """
 
 from __future__ import annotations
@@ -173,14 +174,17 @@ def keep_waiting(
             jobs.submitted(str(reply.job_id), str(reply.state))
 
 
-def traced(trace_dir: Path | None, period_s: float) -> Callable[[ChildSpec], ChildSpec] | None:
-    """Run the orchestrator and the agents under ``memtrace.py``, reporting into ``trace_dir``."""
+def traced(
+    trace_dir: Path | None, names: list[str], period_s: float
+) -> Callable[[ChildSpec], ChildSpec] | None:
+    """Run the processes ``names`` (``orchestrator``, ``uav1``...) under ``memtrace.py``,
+    reporting into ``trace_dir``."""
     if trace_dir is None:
         return None
     trace_dir.mkdir(parents=True, exist_ok=True)
 
     def adjust(spec: ChildSpec) -> ChildSpec:
-        if spec.name != "orchestrator" and not spec.name.startswith("agent "):
+        if spec.name.removeprefix("agent ") not in names:
             return spec
         out = trace_dir / f"{spec.name.removeprefix('agent ')}.txt"
         python, *rest = spec.argv
@@ -194,7 +198,7 @@ def soak(args: argparse.Namespace, out_dir: Path) -> tuple[Samples, Jobs, dict[s
     """Run the show for ``args.minutes``; the samples, the jobs and restarts per process."""
     path, show = derived_show(SHOW, out_dir, time_scale=args.time_scale)
     samples, jobs = Samples(), Jobs()
-    adjust = traced(args.trace_memory, args.warmup_minutes * 60.0)
+    adjust = traced(args.trace_memory, args.trace.split(","), args.warmup_minutes * 60.0)
     with (
         ShowRun(path, show, log_dir=out_dir / "logs", adjust=adjust) as run,
         run.client() as session,
@@ -311,8 +315,13 @@ def main() -> int:
         "--trace-memory",
         type=Path,
         metavar="DIR",
-        help="run the orchestrator and agents under tracemalloc (slower): what grew after"
-        " warm-up, by allocation site, in DIR/<process>.txt",
+        help="run --trace processes under tracemalloc (slower): what grew after warm-up, by"
+        " allocation site, in DIR/<process>.txt",
+    )
+    parser.add_argument(
+        "--trace",
+        default="orchestrator",
+        help="processes to trace, comma-separated (orchestrator; agents slow the show: uav1...)",
     )
     args = parser.parse_args()
     if args.warmup_minutes is None:

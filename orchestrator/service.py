@@ -61,6 +61,9 @@ MAX_PENDING_PLANS = 4
 keep their rough estimate. 64 gave every submission of a burst its planned duration, but under
 the bus fuzz (thousands of submissions) the orchestrator's memory then grew 11 % after warm-up:
 bounded planning caches are needed first."""
+CACHED_DURATIONS = 256
+"""Texts whose planned durations are kept for their next submission (a show's corpus repeats;
+the kiosk's visitors do not)."""
 SNAPSHOT_STROKES_BYTES = 300_000
 """JSON bytes of waiting jobs' strokes a ``snapshot`` reply carries at most (replies stay well
 under ``bus.messages.MAX_PAYLOAD_BYTES``); ``jobs/<id>`` publications always carry them."""
@@ -244,6 +247,13 @@ class OrchestratorService:
         self._record(self.keys.submit + "#reply", reply)
         return reply
 
+    def remember_durations(self, cache_key: str, durations: dict[str, float]) -> None:
+        """Keep a text's planned durations for its next submission; the oldest text is
+        forgotten past ``CACHED_DURATIONS`` (visitors type without end)."""
+        self._durations[cache_key] = durations
+        if len(self._durations) > CACHED_DURATIONS:
+            del self._durations[next(iter(self._durations))]
+
     def _forgotten_submission(self, request: SubmitRequest) -> SubmitReply | None:
         """The reply to a repeated idempotency key whose job finished long ago (the Book forgot
         it; the database still has it), or None."""
@@ -273,7 +283,7 @@ class OrchestratorService:
             if not durations:
                 return
             if cache_key:
-                self._durations[cache_key] = durations
+                self.remember_durations(cache_key, durations)
         self.apply(self.book.set_estimate(job_id, durations, self.clock()))
 
     async def on_command(self, command: OperatorCommand) -> CommandReply:

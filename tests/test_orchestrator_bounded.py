@@ -15,7 +15,7 @@ import msgspec
 from bus.messages import OperatorCommand, SubmitRequest
 from orchestrator.core import MAX_FINAL_JOBS, Book
 from orchestrator.jobs import Job
-from orchestrator.service import OrchestratorService, core_config
+from orchestrator.service import CACHED_DURATIONS, OrchestratorService, core_config
 from orchestrator.store import JobStore
 from showfile import load_show
 
@@ -87,6 +87,15 @@ def test_a_forgotten_jobs_key_is_answered_from_the_database(tmp_path: Path) -> N
         assert service.fatal is None
         assert reply.ok and reply.job_id == "j0" and reply.state == "done"
         assert store.load().job_counts == {"done": MAX_FINAL_JOBS + 1, "queued": 1}
+
+
+def test_planned_durations_are_kept_for_the_latest_texts_only(tmp_path: Path) -> None:
+    with JobStore(tmp_path / "s.sqlite3") as store:
+        service = OrchestratorService(SHOW, session=_NoSession(), store=store)  # type: ignore[arg-type]
+        for k in range(CACHED_DURATIONS + 10):
+            service.remember_durations(f"text:{k}", {"quadrotor-brush": 10.0 + k})
+        assert len(service._durations) == CACHED_DURATIONS
+        assert "text:9" not in service._durations and "text:10" in service._durations
 
 
 class _NoSession:
