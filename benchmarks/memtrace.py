@@ -10,6 +10,7 @@ file's contents: what a process keeps per job shows up as a site that grows with
 
 from __future__ import annotations
 
+import linecache
 import runpy
 import sys
 import threading
@@ -23,13 +24,21 @@ FRAMES = 8
 """Frames kept per allocation (tracebacks of the top sites)."""
 
 
+def _snapshot() -> tracemalloc.Snapshot:
+    """The process's allocations, without the tracer's own (its reports and line cache)."""
+    mine = (__file__, tracemalloc.__file__, linecache.__file__)
+    return tracemalloc.take_snapshot().filter_traces(
+        [tracemalloc.Filter(False, path, all_frames=True) for path in mine]
+    )
+
+
 def _report(out: Path, period_s: float) -> None:
     time.sleep(period_s)
-    first = tracemalloc.take_snapshot()
+    first = _snapshot()
     started = time.monotonic()
     while True:
         time.sleep(period_s)
-        snapshot = tracemalloc.take_snapshot()
+        snapshot = _snapshot()
         grown = snapshot.compare_to(first, "traceback")[:TOP]
         lines = [
             f"{time.monotonic() - started:.0f} s after the first snapshot;"

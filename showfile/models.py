@@ -109,7 +109,7 @@ class StorageSettings(_Model):
     """Directory of the MCAP recordings, one file per run; default ``out/<show_id>/recordings``."""
     record: bool = True
     """Record every message of the show to MCAP."""
-    recording_part_mb: float = Field(default=100.0, gt=0.0)
+    recording_part_mb: float = Field(default=25.0, gt=0.0)
     """A recording is finished and the next part begun past this size, in [MB]: each part is a
     whole MCAP file, and the recorder's index (which grows with every job) starts afresh."""
     recordings_budget_mb: float = Field(default=2000.0, gt=0.0)
