@@ -11,11 +11,12 @@ the bytes on disk of job files, MCAP recordings and the SQLite database (with it
 
 Printed per process: RSS at start, after warm-up (``--warmup-minutes``, default a quarter of
 the run up to 10 min) and at the end, its peak, and the least-squares slope after warm-up in
-MiB/hour; per storage the same slope in MiB/hour; characters written per hour, failed jobs and
-restarts. A process whose memory levels off has a slope near zero however long the run; one
-that grows per job keeps a slope proportional to characters per hour. ``--trace-memory DIR``
-says what grows in the orchestrator (or the ``--trace`` processes), by allocation site
-(``memtrace.py``).
+MiB/hour; the same for its anonymous memory (its own heap: RSS also counts the pages it touched
+of the Zenoh shared-memory segments, 16 MiB each, that the show's processes map). Per storage
+the same slope; characters written per hour, failed jobs and restarts. A process whose memory
+levels off has a slope near zero however long the run; one that grows per job keeps a slope
+proportional to characters per hour. ``--trace-memory DIR`` says what grows in the
+orchestrator (or the ``--trace`` processes), by allocation site (``memtrace.py``).
 """
 
 from __future__ import annotations
@@ -49,15 +50,20 @@ MIB = 1024.0 * 1024.0
 WAITING_STATES = frozenset({"submitted", "awaiting_approval", "queued"})
 
 
-def rss_bytes(pid: int) -> int | None:
-    """Resident set of ``pid`` in bytes (None: it is gone)."""
+def memory_bytes(pid: int) -> tuple[int, int] | None:
+    """Resident set of ``pid`` and its anonymous part (its own heap, not files or the Zenoh
+    shared-memory segments every process of the show maps), in bytes; None: it is gone."""
+    fields: dict[str, int] = {}
     try:
         for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) * 1024
+            name, _, value = line.partition(":")
+            if name in ("VmRSS", "RssAnon"):
+                fields[name] = int(value.split()[0]) * 1024
     except (FileNotFoundError, ProcessLookupError):
         return None
-    return None
+    if len(fields) < 2:
+        return None
+    return fields["VmRSS"], fields["RssAnon"]
 
 
 def children_of(pid: int) -> list[int]:
@@ -113,6 +119,7 @@ class Samples:
 
     t_s: list[float] = field(default_factory=list)
     rss: dict[str, list[tuple[float, int]]] = field(default_factory=dict)
+    anon: dict[str, list[tuple[float, int]]] = field(default_factory=dict)
     disk: dict[str, list[tuple[float, int]]] = field(default_factory=dict)
     done: list[tuple[float, int]] = field(default_factory=list)
 
@@ -124,15 +131,19 @@ class Samples:
                 continue
             label = name.removeprefix("agent ")
             for k, child in enumerate(children_of(pid)):
-                self._add(
-                    self.rss, f"{label} worker" + (f" {k}" if k else ""), t_s, rss_bytes(child)
-                )
-            self._add(self.rss, label, t_s, rss_bytes(pid))
+                self._memory(f"{label} worker" + (f" {k}" if k else ""), t_s, child)
+            self._memory(label, t_s, pid)
         database = show.database_path
         self._add(self.disk, "job files", t_s, tree_bytes(database.parent / "jobs"))
         self._add(self.disk, "recordings", t_s, tree_bytes(show.recordings_dir))
         self._add(self.disk, "sqlite", t_s, tree_bytes(database.parent, database.name + "*"))
         self.done.append((t_s, jobs.counts()["done"]))
+
+    def _memory(self, name: str, t_s: float, pid: int) -> None:
+        sizes = memory_bytes(pid)
+        if sizes is not None:
+            self._add(self.rss, name, t_s, sizes[0])
+            self._add(self.anon, name, t_s, sizes[1])
 
     @staticmethod
     def _add(
@@ -247,13 +258,17 @@ def report(
         f"soak: {SHOW.name} at time_scale {args.time_scale:g}, {samples.t_s[-1] / 60:.1f} min,"
         f" warm-up {args.warmup_minutes:g} min, {len(samples.t_s)} samples"
     )
-    print("  process            start MiB  warm MiB  end MiB  peak MiB  slope after warm-up")
+    print(
+        "  process          RSS MiB: start  warm   end  peak  slope after warm-up"
+        "   anonymous MiB: end  slope after warm-up"
+    )
     for name, points in samples.rss.items():
-        slope = slope_per_h(points, warm_s)
-        shown = "-" if slope is None else f"{slope / MIB:+7.1f} MiB/h"
+        anon = samples.anon[name]
         print(
-            f"  {name:18} {points[0][1] / MIB:9.0f} {at(points, warm_s) / MIB:9.0f}"
-            f" {points[-1][1] / MIB:8.0f} {max(v for _, v in points) / MIB:9.0f}  {shown}"
+            f"  {name:18} {points[0][1] / MIB:12.0f} {at(points, warm_s) / MIB:5.0f}"
+            f" {points[-1][1] / MIB:5.0f} {max(v for _, v in points) / MIB:5.0f}"
+            f"  {_slope(points, warm_s):>15} {anon[-1][1] / MIB:22.0f}"
+            f"  {_slope(anon, warm_s):>15}"
         )
     print("  storage            start MiB  warm MiB  end MiB  growth after warm-up")
     for name, points in samples.disk.items():
@@ -271,15 +286,19 @@ def report(
         f" {counts['cancelled']} cancelled; restarts: "
         + (", ".join(f"{n} {k}" for n, k in restarts.items() if k) or "none")
     )
-    done = counts["done"]
-    for name, points in samples.rss.items():
-        if done and name == "orchestrator":
-            grown = points[-1][1] - at(points, warm_s)
-            after = done - at(samples.done, warm_s)
-            if after > 0:
-                print(
-                    f"  orchestrator growth after warm-up: {grown / after / 1024:+.1f} KiB per job"
-                )
+    after = counts["done"] - at(samples.done, warm_s)
+    if after > 0 and "orchestrator" in samples.rss:
+        rss, anon = samples.rss["orchestrator"], samples.anon["orchestrator"]
+        per_job = [(s[-1][1] - at(s, warm_s)) / after / 1024 for s in (rss, anon)]
+        print(
+            f"  orchestrator growth after warm-up per job: RSS {per_job[0]:+.1f} KiB,"
+            f" anonymous {per_job[1]:+.1f} KiB"
+        )
+
+
+def _slope(points: list[tuple[float, int]], after_s: float) -> str:
+    slope = slope_per_h(points, after_s)
+    return "-" if slope is None else f"{slope / MIB:+7.1f} MiB/h"
 
 
 def plot(samples: Samples, path: Path, warm_s: float) -> None:
