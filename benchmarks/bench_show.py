@@ -150,7 +150,8 @@ class JobTimeline:
             self.last[job.job_id] = job
 
 
-def _wait_ready(run: ShowRun, session: Session, vehicles: int, timeout_s: float) -> None:
+def wait_ready(run: ShowRun, session: Session, vehicles: int, timeout_s: float) -> None:
+    """Wait until ``vehicles`` vehicles are alive and idle or landed (raises TimeoutError)."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         try:
@@ -165,7 +166,7 @@ def _wait_ready(run: ShowRun, session: Session, vehicles: int, timeout_s: float)
     raise TimeoutError(f"vehicles not ready after {timeout_s:.0f} s")
 
 
-def _submit(session: Session, run: ShowRun, char: str, index: int) -> SubmitReply:
+def submit_char(session: Session, run: ShowRun, char: str, index: int) -> SubmitReply:
     """Submit with an idempotency key, retrying while the orchestrator is slow to answer."""
     request = SubmitRequest(text=char, client_id="bench", idempotency_key=f"eta-{index}")
     for _ in range(20):
@@ -202,8 +203,8 @@ def eta_run(chars: str, scale: float, settle_s: float) -> None:
             Stagehand(session, run.keys),  # a fresh sheet where a requeued job left ink
         ):
             _sub = subscribe(session, run.keys.jobs_all, JobState, timeline.on_job)
-            _wait_ready(run, session, len(show.vehicles), timeout_s=120.0)
-            replies = [_submit(session, run, char, k) for k, char in enumerate(chars)]
+            wait_ready(run, session, len(show.vehicles), timeout_s=120.0)
+            replies = [submit_char(session, run, char, k) for k, char in enumerate(chars)]
             time.sleep(settle_s)
             snap = snapshot(session, run.keys)
             ids = [str(r.job_id) for r in replies]

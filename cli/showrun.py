@@ -80,6 +80,8 @@ class ShowRun:
     """Where supervisor messages go (default: stderr)."""
     policy: RestartPolicy | None = None
     """Restart backoff."""
+    adjust: Callable[[ChildSpec], ChildSpec] | None = None
+    """Changes each child's spec before it starts (a benchmark runs some under a tracer)."""
 
     def __post_init__(self) -> None:
         self.specs: list[ChildSpec] = show_children(
@@ -88,6 +90,8 @@ class ShowRun:
             mavlink_sim=self.show.mavlink_sim.enabled,
             log_dir=self.log_dir,
         )
+        if self.adjust is not None:
+            self.specs = [self.adjust(spec) for spec in self.specs]
         self.supervisor = Supervisor(self.specs, env=child_env(), say=self.say, policy=self.policy)
         self._stop = threading.Event()
         self._watcher: threading.Thread | None = None

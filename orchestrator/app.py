@@ -4,13 +4,16 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import functools
 import logging
 import signal
 import time
+from pathlib import Path
 
 from bus.keys import ShowKeys
 from bus.recorder import McapRecorder
 from bus.session import Role, open_session
+from orchestrator.recordings import prune_recordings
 from orchestrator.service import OrchestratorService, recording_path
 from orchestrator.store import JobStore
 from showfile import Show
@@ -39,12 +42,26 @@ async def serve_show(
         recorder = None
         if show.storage.record:
             path = recording_path(show, time.time())
-            recorder = stack.enter_context(McapRecorder(path, ShowKeys(show.show_id)))
+            recorder = stack.enter_context(
+                McapRecorder(
+                    path,
+                    ShowKeys(show.show_id),
+                    max_file_bytes=int(show.storage.recording_part_mb * 1e6),
+                    on_part_done=functools.partial(_prune, show),
+                )
+            )
             log.info("recording the bus to %s", path)
         service = OrchestratorService(show, session, store, recorder=recorder)
         if ready is not None:
             ready.set()
         await service.run(stop)
+
+
+def _prune(show: Show, finished: Path, begun: Path) -> None:
+    """Keep the show's recordings within budget once a part is finished."""
+    budget = int(show.storage.recordings_budget_mb * 1e6)
+    for path in prune_recordings(show.recordings_dir, show.show_id, budget, (finished, begun)):
+        log.info("recording %s removed (recordings over %g MB)", path.name, budget / 1e6)
 
 
 def run_orchestrator(show: Show, *, role: Role = "client") -> int:

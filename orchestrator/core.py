@@ -40,6 +40,10 @@ __all__ = ["Book", "CoreConfig", "Effects", "Level"]
 
 RECENT_EVENTS = 50
 """Events kept in memory for the ``snapshot`` reply."""
+MAX_FINAL_JOBS = 500
+"""Finished jobs kept in memory, the latest to finish: as many as a ``snapshot`` reply lists.
+Older ones are only in the database, so that a show running for days holds (and scans on every
+decision) a bounded set of jobs: keeping them all grew the orchestrator by about 6 KiB per job."""
 
 
 class Book:
@@ -55,8 +59,13 @@ class Book:
         paused_vehicles: Iterable[str] = (),
         held_vehicles: Iterable[str] = (),
         dirty_boards: Iterable[str] = (),
+        job_counts: Mapping[str, int] | None = None,
+        max_final_jobs: int = MAX_FINAL_JOBS,
     ) -> None:
+        """``jobs``: the stored ones (every unfinished job and at least the latest finished);
+        ``job_counts``: jobs per state in the database (default: counted from ``jobs``)."""
         self.config = config
+        self.max_final_jobs = max_final_jobs
         self.queue_paused = queue_paused
         self.vehicles = {v.vehicle_id: VehicleView(v, gone_since_s=now_s) for v in config.vehicles}
         for vid in paused_vehicles:
@@ -68,7 +77,9 @@ class Book:
         self.jobs: dict[str, Job] = {}
         for job in jobs:  # restart: active jobs must be confirmed by their vehicle again
             self.jobs[job.job_id] = update(job, now_s, assigned_at_s=now_s) if job.active else job
-        self.job_counts: Counter[str] = Counter(j.state for j in self.jobs.values())
+        self.job_counts: Counter[str] = Counter(
+            job_counts if job_counts is not None else (j.state for j in self.jobs.values())
+        )
         """Jobs per state, every job counted (kept as jobs change, not from a list)."""
         self.next_seq = max((j.seq for j in self.jobs.values()), default=0) + 1
         self.by_key: dict[tuple[str, str], str] = {
@@ -76,7 +87,14 @@ class Book:
             for j in self.jobs.values()
             if j.idempotency_key is not None
         }
-        """(client_id, idempotency_key) -> job id of every keyed submission."""
+        """(client_id, idempotency_key) -> job id of every keyed submission in memory."""
+        self.finished: deque[str] = deque(
+            j.job_id
+            for j in sorted(self.jobs.values(), key=lambda j: (j.updated_at_s, j.seq))
+            if j.final
+        )
+        """Ids of the finished jobs in memory, in the order they finished (oldest first)."""
+        self._forget_oldest_finished()
         self._announced: positions.Announced = {}
         self.recent_events: deque[Event] = deque(maxlen=RECENT_EVENTS)
         """The latest events, for the ``snapshot`` reply (a late console shows recent history)."""
@@ -141,7 +159,7 @@ class Book:
         now_s: float,
         *,
         include_final: bool = True,
-        max_final: int = 500,
+        max_final: int = MAX_FINAL_JOBS,
         strokes_budget_bytes: int = 0,
     ) -> ShowSnapshot:
         """Everything a late joiner needs: jobs (in submission order) and vehicles.
@@ -218,7 +236,18 @@ class Book:
         self.jobs[job.job_id] = job
         eff.jobs[job.job_id] = job
         self.kinds.forget(job)
+        if job.final and (previous is None or not previous.final):
+            self.finished.append(job.job_id)
+            self._forget_oldest_finished()
         return job
+
+    def _forget_oldest_finished(self) -> None:
+        """Drop finished jobs beyond ``max_final_jobs`` from memory (the database keeps them;
+        the service answers a repeated idempotency key of a forgotten job from there)."""
+        while len(self.finished) > self.max_final_jobs:
+            job = self.jobs.pop(self.finished.popleft(), None)
+            if job is not None and job.idempotency_key is not None:
+                self.by_key.pop((job.client_id, job.idempotency_key), None)
 
     def requeue(self, eff: Effects, job: Job, now_s: float, reason: str, *, lost: bool) -> None:
         """Take an active job back: queued again, or failed after too many lost attempts."""

@@ -41,7 +41,7 @@ from bus.pubsub import declare_token, publish, subscribe, subscribe_raw, watch_l
 from bus.recorder import McapRecorder
 from bus.rpc import NoReplyError, RemoteError, aquery_one, serve_async
 from bus.session import Session
-from orchestrator.core import Book, CoreConfig, Effects
+from orchestrator.core import MAX_FINAL_JOBS, Book, CoreConfig, Effects
 from orchestrator.fleet import EtaModel, VehicleInfo
 from orchestrator.jobs import to_state
 from orchestrator.store import JobStore
@@ -61,6 +61,9 @@ MAX_PENDING_PLANS = 4
 keep their rough estimate. 64 gave every submission of a burst its planned duration, but under
 the bus fuzz (thousands of submissions) the orchestrator's memory then grew 11 % after warm-up:
 bounded planning caches are needed first."""
+CACHED_DURATIONS = 256
+"""Texts whose planned durations are kept for their next submission (a show's corpus repeats;
+the kiosk's visitors do not)."""
 SNAPSHOT_STROKES_BYTES = 300_000
 """JSON bytes of waiting jobs' strokes a ``snapshot`` reply carries at most (replies stay well
 under ``bus.messages.MAX_PAYLOAD_BYTES``); ``jobs/<id>`` publications always carry them."""
@@ -121,11 +124,12 @@ class OrchestratorService:
         self.show, self.session, self.store, self.recorder = show, session, store, recorder
         self.keys = ShowKeys(show.show_id)
         self.clock = clock
-        stored = store.load()
+        stored = store.load(max_final=MAX_FINAL_JOBS)
         self.book = Book(
             core_config(show),
             stored.jobs,
             now_s=clock(),
+            job_counts=stored.job_counts,
             queue_paused=stored.queue_paused,
             paused_vehicles=stored.paused_vehicles,
             held_vehicles=stored.held_vehicles,
@@ -224,6 +228,10 @@ class OrchestratorService:
         except SubmissionError as exc:
             reply = SubmitReply(ok=False, error=exc.info)
         else:
+            forgotten = self._forgotten_submission(request)
+            if forgotten is not None:
+                self._record(self.keys.submit + "#reply", forgotten)
+                return forgotten
             job_id = new_job_id()
             reply, eff = self.book.submit(
                 job_id,
@@ -238,6 +246,22 @@ class OrchestratorService:
                 self._spawn(self._refine_estimate(job_id, accepted.glyph, key))
         self._record(self.keys.submit + "#reply", reply)
         return reply
+
+    def remember_durations(self, cache_key: str, durations: dict[str, float]) -> None:
+        """Keep a text's planned durations for its next submission; the oldest text is
+        forgotten past ``CACHED_DURATIONS`` (visitors type without end)."""
+        self._durations[cache_key] = durations
+        if len(self._durations) > CACHED_DURATIONS:
+            del self._durations[next(iter(self._durations))]
+
+    def _forgotten_submission(self, request: SubmitRequest) -> SubmitReply | None:
+        """The reply to a repeated idempotency key whose job finished long ago (the Book forgot
+        it; the database still has it), or None."""
+        key = request.idempotency_key
+        if key is None or (request.client_id, key) in self.book.by_key:
+            return None
+        job = self.store.job_by_key(request.client_id, key)
+        return None if job is None else SubmitReply(ok=True, job_id=job.job_id, state=job.state)
 
     async def _refine_estimate(self, job_id: str, glyph: Any, cache_key: str | None) -> None:
         """Replace the rough estimate by the planner's duration (best effort, bounded work)."""
@@ -259,7 +283,7 @@ class OrchestratorService:
             if not durations:
                 return
             if cache_key:
-                self._durations[cache_key] = durations
+                self.remember_durations(cache_key, durations)
         self.apply(self.book.set_estimate(job_id, durations, self.clock()))
 
     async def on_command(self, command: OperatorCommand) -> CommandReply:

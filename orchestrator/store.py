@@ -23,7 +23,7 @@ from types import TracebackType
 import msgspec
 
 from bus.messages import Event, WrittenInk
-from orchestrator.jobs import Job
+from orchestrator.jobs import FINAL_STATES, Job
 
 SCHEMA_VERSION = 3
 """1: jobs, events, settings. 2: ``jobs.idempotency_key`` (client id and key of a submission,
@@ -68,7 +68,10 @@ class StoredState:
     """What a restarted orchestrator starts from."""
 
     jobs: list[Job]
-    """Every job, in submission order."""
+    """Every unfinished job and the latest finished ones (:meth:`JobStore.load`), in submission
+    order."""
+    job_counts: dict[str, int]
+    """Jobs per state, every stored job counted."""
     queue_paused: bool
     """The queue was paused."""
     paused_vehicles: list[str]
@@ -182,15 +185,22 @@ class JobStore:
             )
             self._db.executemany("UPDATE jobs SET written = ? WHERE job_id = ?", ink_rows)
 
-    def load(self) -> StoredState:
-        """Every job and the settings."""
-        jobs = [
-            _job_decoder.decode(row[0])
-            for row in self._db.execute("SELECT data FROM jobs ORDER BY seq")
-        ]
+    def load(self, max_final: int | None = None) -> StoredState:
+        """The jobs (every unfinished one, and the latest ``max_final`` finished by submission
+        order; None: all), jobs per state, and the settings."""
+        final = ",".join(f"'{state}'" for state in sorted(FINAL_STATES))
+        rows = self._db.execute(f"SELECT seq, data FROM jobs WHERE state NOT IN ({final})")
+        kept = rows.fetchall()
+        kept += self._db.execute(
+            f"SELECT seq, data FROM jobs WHERE state IN ({final}) ORDER BY seq DESC LIMIT ?",
+            (-1 if max_final is None else max_final,),
+        ).fetchall()
+        jobs = [_job_decoder.decode(data) for _, data in sorted(kept)]
+        counts = dict(self._db.execute("SELECT state, COUNT(*) FROM jobs GROUP BY state"))
         settings = dict(self._db.execute("SELECT key, value FROM settings").fetchall())
         return StoredState(
             jobs=jobs,
+            job_counts=counts,
             queue_paused=bool(json.loads(settings.get("queue_paused", "false"))),
             paused_vehicles=list(json.loads(settings.get("paused_vehicles", "[]"))),
             held_vehicles=list(json.loads(settings.get("held_vehicles", "[]"))),
@@ -200,6 +210,13 @@ class JobStore:
     def job(self, job_id: str) -> Job | None:
         """One job as stored."""
         row = self._db.execute("SELECT data FROM jobs WHERE job_id = ?", (job_id,)).fetchone()
+        return _job_decoder.decode(row[0]) if row else None
+
+    def job_by_key(self, client_id: str, idempotency_key: str) -> Job | None:
+        """The job submitted by ``client_id`` with ``idempotency_key``, as stored."""
+        row = self._db.execute(
+            "SELECT data FROM jobs WHERE idempotency_key = ?", (_scope(client_id, idempotency_key),)
+        ).fetchone()
         return _job_decoder.decode(row[0]) if row else None
 
     def written(self, job_ids: Iterable[str]) -> dict[str, WrittenInk]:
@@ -229,7 +246,11 @@ def _scoped_key(job: Job) -> str | None:
     """The unique column value: a key is unique per client (``client_id``, unit separator, key)."""
     if job.idempotency_key is None:
         return None
-    return f"{job.client_id}\x1f{job.idempotency_key}"
+    return _scope(job.client_id, job.idempotency_key)
+
+
+def _scope(client_id: str, idempotency_key: str) -> str:
+    return f"{client_id}\x1f{idempotency_key}"
 
 
 class _Transaction:

@@ -109,6 +109,11 @@ class StorageSettings(_Model):
     """Directory of the MCAP recordings, one file per run; default ``out/<show_id>/recordings``."""
     record: bool = True
     """Record every message of the show to MCAP."""
+    recording_part_mb: float = Field(default=25.0, gt=0.0)
+    """A recording is finished and the next part begun past this size, in [MB]: each part is a
+    whole MCAP file, and the recorder's index (which grows with every job) starts afresh."""
+    recordings_budget_mb: float = Field(default=2000.0, gt=0.0)
+    """Disk for the show's recordings, in [MB]; the oldest parts go first."""
     job_files: Literal["compact", "full"] = "compact"
     """Per-job files next to the database (``jobs/``): ``compact`` keeps a job under ~100 kB
     (metrics, a small picture, the reference and the flight at 20 Hz in one compressed file);
