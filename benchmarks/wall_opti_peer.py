@@ -1,13 +1,15 @@
 """The wall planner's eq. 7 as it was solved before the cached solvers: the peer of
 ``vehicles.hexarotor_sponge.nlp.solve_period`` in ``bench_wall.py``.
 
-Same model, cost, constraints and IPOPT options; a new ``casadi.Opti`` with ``expand`` is built
+Same model, cost and constraints, with the IPOPT options, steps and step counts of then (adaptive
+barrier, 0.1 s steps, no rounding of the count); a new ``casadi.Opti`` with ``expand`` is built
 for every period, so every period pays for building the MX graph in Python, expanding it to SX
 and deriving it.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from typing import Any
 
@@ -30,10 +32,14 @@ from vehicles.hexarotor_sponge.waypoints import Period
 
 FloatArray = NDArray[np.float64]
 
+PAPER_STEP_S = 0.1
+"""The paper's step in [s], which the planner allocated steps at before it took 0.15 s."""
+
 
 def solve_period_opti(period: Period, params: HexarotorParams, limits: Limits) -> PeriodSolution:
     """The planner before the cached solvers: a fresh ``casadi.Opti`` (expanded) per period,
-    every bound as a constraint, the paper's hover-thrust start."""
+    every bound as a constraint, the paper's hover-thrust start from its 0.1 s steps."""
+    limits = dataclasses.replace(limits, h_init_s=PAPER_STEP_S)
     steps = steps_per_segment(period, limits)
     nodes = np.concatenate([[0], np.cumsum(steps)]).astype(int)
     n = int(nodes[-1])
