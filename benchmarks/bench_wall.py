@@ -12,8 +12,9 @@ Targets for ours: EE RMSE <= 1.5 cm, force RMSE <= 0.3 N, IoU >= 0.75; the paper
 gave 2.93 cm, 0.72 N, 0.59. Speed sweep: peak speed limits 24, 33 and 40 cm/s on letter I
 (paper: IoU 0.562 at 40 cm/s). IPOPT time per letter: the sum over its periods.
 Planning time per letter against the peer measured in the same run: the planner as it was
-before its solvers were cached (a fresh casadi.Opti per period, ``wall_opti_peer.py``); the
-peer's plan is flown too, so the table shows whether the cached planner's force RMSE held.
+before its solvers were cached (a fresh casadi.Opti per period, 0.1 s steps, adaptive barrier,
+``wall_opti_peer.py``); the peer's plan is flown too, so the table shows whether the cached
+planner's force RMSE held. Wall seconds on a shared machine follow its load; CPU seconds less so.
 Also printed: simulated seconds per wall second of the closed loop (physics faster than real
 time), beside the same loop without the controller (physics alone).
 """
