@@ -9,14 +9,19 @@ workers, real Zenoh on loopback; a copy of the show on a free port, storing in a
 queue never empties. Every ``--sample-s`` it reads each process's resident set (``/proc``) and
 the bytes on disk of job files, MCAP recordings and the SQLite database (with its WAL).
 
-Printed per process: RSS at start, after warm-up (``--warmup-minutes``, default a quarter of
-the run up to 10 min) and at the end, its peak, and the least-squares slope after warm-up in
-MiB/hour; the same for its anonymous memory (its own heap: RSS also counts the pages it touched
-of the Zenoh shared-memory segments, 16 MiB each, that the show's processes map). Per storage
-the same slope; characters written per hour, failed jobs and restarts. A process whose memory
-levels off has a slope near zero however long the run; one that grows per job keeps a slope
-proportional to characters per hour. ``--trace-memory DIR`` says what grows in the
-orchestrator (or the ``--trace`` processes), by allocation site (``memtrace.py``).
+Printed per process: RSS at start, after warm-up and at the end, its peak, and the least-squares
+slope after warm-up in MiB/hour; the same for its anonymous memory (its own heap: RSS also counts
+the pages it touched of the Zenoh shared-memory segments, 16 MiB each, that the show's processes
+map). Per storage the same slope; characters written per hour, failed jobs and restarts. A
+process whose memory levels off has a slope near zero however long the run; one that grows per
+job keeps a slope proportional to characters per hour.
+
+The warm-up (``--warmup-minutes``) is by default half the run, up to 25 min: the orchestrator
+keeps the latest 500 finished jobs and snapshot replies list as many, so its memory rises until
+about 500 characters are written (25 min at time scale 4), then stays flat.
+
+``--trace-memory DIR`` says what grows in the orchestrator (or the ``--trace`` processes), by
+allocation site (``memtrace.py``).
 """
 
 from __future__ import annotations
@@ -325,7 +330,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--minutes", type=float, default=60.0, help="length of the soak (60)")
     parser.add_argument("--time-scale", type=float, default=4.0, help="show time_scale (4)")
-    parser.add_argument("--warmup-minutes", type=float, help="default: minutes/4, at most 10")
+    parser.add_argument("--warmup-minutes", type=float, help="default: minutes/2, at most 25")
     parser.add_argument("--waiting", type=int, default=8, help="characters kept waiting (8)")
     parser.add_argument("--sample-s", type=float, default=10.0, help="sampling period (10 s)")
     parser.add_argument("--png", type=Path, help="plot RSS over time per process here")
@@ -344,7 +349,7 @@ def main() -> int:
     )
     args = parser.parse_args()
     if args.warmup_minutes is None:
-        args.warmup_minutes = min(10.0, args.minutes / 4.0)
+        args.warmup_minutes = min(25.0, args.minutes / 2.0)
     if args.out_dir is not None:
         args.out_dir.mkdir(parents=True, exist_ok=True)
         samples, jobs, restarts = soak(args, args.out_dir)
