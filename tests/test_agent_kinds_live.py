@@ -74,6 +74,9 @@ def test_a_wall_job_outside_the_shows_bounds_is_failed_not_done() -> None:
 def test_a_ground_writer_climbs_to_its_terrace_writes_and_drives_home() -> None:
     text = GROUND_SHOW.replace("writing_area_m: [2.2, 2.2]", "writing_area_m: [0.6, 0.6]")
     text = text.replace("home_m_enu: [0.0, -2.0, 0.0]", "home_m_enu: [0.8, -0.8, 0.0]")  # nearer
+    east = "center_m_enu: [4.0, 0.0, 0.05], yaw_deg: 0, size_m: [2.6, 2.6]"
+    assert east in text  # a smaller terrace area just past the step (x = 1.5 m): a shorter drive
+    text = text.replace(east, "center_m_enu: [2.3, 0.0, 0.05], yaw_deg: 0, size_m: [1.2, 1.2]")
     run = _run(text, "ground2", JobAssignment(job_id="j1", text="一", attempt=1), 200.0)
     assert run.phases == FLIGHT
     (report,) = [r for r in run.reports if r.event in ("done", "failed")]
