@@ -17,14 +17,13 @@ import casadi as ca
 import numpy as np
 from numpy.typing import NDArray
 
-from vehicles.hexarotor_sponge.allocation import wrench_matrix
 from vehicles.hexarotor_sponge.nlp import (
-    BODY_IN_WALL,
     Limits,
     PeriodSolution,
     _raise_infeasible,
     _solution,
     alpha,
+    rotor_thrusts,
     steps_per_segment,
 )
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
@@ -125,18 +124,8 @@ def solve_period_opti(period: Period, params: HexarotorParams, limits: Limits) -
 
 
 def _thrust_limits(opti: Any, xk: Any, uk: Any, params: HexarotorParams) -> None:
-    """0 <= thrusts <= max for the wrench that applies ``f_a`` and cancels the gravity moment of
-    the offset centre of mass and the contact force's moment (allocation about the body origin)."""
-    rot = ca.DM(BODY_IN_WALL)
-    inverse = ca.DM(np.linalg.inv(wrench_matrix(params)))
-    com = ca.DM(params.com_m_body)
-    tip = ca.DM(params.tip_m_body)
-    force_body = rot.T @ uk[0:3]
-    weight_body = rot.T @ ca.DM([0.0, -params.mass_kg * GRAVITY_MPS2, 0.0])
-    contact_body = rot.T @ (xk[6] * alpha(xk[3:6], params.wall_friction))
-    torque = -ca.cross(com, weight_body) - ca.cross(tip, contact_body)
-    thrust = inverse @ ca.vertcat(force_body, torque)
-    opti.subject_to(opti.bounded(0.0, thrust, params.thrust_max_n))
+    """0 <= each rotor's thrust <= its maximum (the planner's own allocation)."""
+    opti.subject_to(opti.bounded(0.0, rotor_thrusts(xk, uk, params), params.thrust_max_n))
 
 
 def _initial_guess(

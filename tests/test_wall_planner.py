@@ -189,7 +189,7 @@ def test_rotor_thrust_limit_holds_when_the_plan_without_it_exceeds_it() -> None:
 
 
 def _max_thrust_n(sol: nlp.PeriodSolution, params: HexarotorParams) -> float:
-    """Largest rotor thrust in [N] of the planned steps (allocation of ``nlp._thrusts``)."""
+    """Largest rotor thrust in [N] of the planned steps (allocation of ``nlp.rotor_thrusts``)."""
     states = np.vstack([sol.p_m.T, sol.v_mps.T, sol.force_n])[:, :-1]
     actions = np.vstack([sol.control_n.T, np.zeros(sol.control_n.shape[0])])
     return float(np.asarray(nlp._thrust_function(params)(states, actions)).max())

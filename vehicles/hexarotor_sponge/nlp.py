@@ -218,10 +218,10 @@ def _thrust_margin_n(xs: FloatArray, us: FloatArray, params: HexarotorParams) ->
 
 @lru_cache(maxsize=4)
 def _thrust_function(params: HexarotorParams) -> ca.Function:
-    """:func:`_thrusts` as a function of a step's state and action."""
+    """:func:`rotor_thrusts` as a function of a step's state and action."""
     x = ca.SX.sym("x", STATE)
     u = ca.SX.sym("u", ACTION)
-    return ca.Function("thrusts", [x, u], [_thrusts(x, u, params)])
+    return ca.Function("thrusts", [x, u], [rotor_thrusts(x, u, params)])
 
 
 def _weights(limits: Limits) -> tuple[float, ...]:
@@ -325,12 +325,12 @@ def _stage_function(
         + weight_force * (x[6] - force_ref) ** 2
         + time_weight
     )
-    thrusts = _thrusts(x, u, params) if thrust_rows else ca.SX(0, 1)
+    thrusts = rotor_thrusts(x, u, params) if thrust_rows else ca.SX(0, 1)
     path = ca.vertcat(ca.sumsqr(k1[3:6]), thrusts, ca.sumsqr(x[3:6]))
     return ca.Function("stage", [x, u, h, u_prev, x_next, force_ref], [defect, stage * h, path])
 
 
-def _thrusts(x: Any, u: Any, params: HexarotorParams) -> Any:
+def rotor_thrusts(x: Any, u: Any, params: HexarotorParams) -> Any:
     """Rotor thrusts for the wrench that applies ``f_a`` and cancels the gravity moment of the
     offset centre of mass and the contact force's moment (allocation about the body origin)."""
     rot = ca.DM(BODY_IN_WALL)
