@@ -9,7 +9,7 @@ The poses flow from a task of their own, not from the control loop's tick: the l
 autopilot's answers to mode changes and arming (seconds, with retries), and an estimator left
 without its position source that long drops it. Measured on PX4 1.16 SIH: 4.8 s gaps while the
 agent armed, EKF2 fell back to a fake position and refused arming ("Resolve system health
-failures first") in 2 of 3 tries. :class:`TickTime` carries the agent's clock on between ticks.
+failures first") in 3 of 6 tries. :class:`TickTime` carries the agent's clock on between ticks.
 """
 
 from __future__ import annotations
