@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from playwright.sync_api import TimeoutError as PlaywrightTimeout
 from test_kiosk_support import done_metrics
 
 from bus.keys import ShowKeys
@@ -93,6 +94,21 @@ class Show:
         fields = {f: getattr(old, f) for f in old.__struct_fields__}
         fields.update(changes, state=state, updated_at_s=time.time())
         publish(self.bus, self.keys.job(job_id), JobState(**fields))
+
+
+def _relay_until_shown(
+    show: Show, status: Any, job_id: str, text: str, state: str, **changes: Any
+) -> None:
+    """Relay the job's state every second until ``status`` shows ``text`` (within UI_WAIT_MS)."""
+    deadline = time.monotonic() + UI_WAIT_MS / 1000
+    while True:
+        show.relay(job_id, state, **changes)
+        try:
+            status.filter(has_text=text).wait_for(timeout=1000)
+            return
+        except PlaywrightTimeout:
+            if time.monotonic() > deadline:
+                raise
 
 
 def _wait_for_orchestrator(bus: Session, keys: ShowKeys, proc: subprocess.Popen[bytes]) -> None:
@@ -226,8 +242,10 @@ def test_draw_preview_submit_and_follow_on_a_phone(browser: object, show: Show) 
     page.wait_for_selector("#status:not([hidden])", timeout=UI_WAIT_MS)
     assert page.inner_text("#job-id").strip() == job_id
     status.filter(has_text="next in line").wait_for(timeout=UI_WAIT_MS)
-    show.relay(job_id, "writing", vehicle_id="uav1", progress=0.3, queue_position=None)
-    status.filter(has_text="uav1").wait_for(timeout=UI_WAIT_MS)
+    # the orchestrator, which owns the job, may publish it queued again meanwhile (seen once in
+    # CI: "uav1" not shown within 15 s): relayed until the page shows it
+    _relay_until_shown(show, status, job_id, "uav1", "writing", vehicle_id="uav1", progress=0.3,
+                       queue_position=None)  # fmt: skip
     show.relay(job_id, "done", vehicle_id="uav1", progress=1.0, metrics=done_metrics())
     status.filter(has_text="Done!").wait_for(timeout=UI_WAIT_MS)
     page.wait_for_selector("#result:not([hidden])", timeout=UI_WAIT_MS)
