@@ -17,13 +17,12 @@ import casadi as ca
 import numpy as np
 from numpy.typing import NDArray
 
+from vehicles.hexarotor_sponge.contact_model import alpha, rotor_thrusts
 from vehicles.hexarotor_sponge.nlp import (
     Limits,
     PeriodSolution,
     _raise_infeasible,
     _solution,
-    alpha,
-    rotor_thrusts,
     steps_per_segment,
 )
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams

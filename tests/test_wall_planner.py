@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from planner.errors import InfeasibleTrajectoryError, PlannerError
-from vehicles.hexarotor_sponge import nlp
+from vehicles.hexarotor_sponge import nlp, solver_cache
 from vehicles.hexarotor_sponge.nlp import Limits, solve_period
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
 from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing
@@ -134,10 +134,10 @@ def test_cached_solver_takes_each_periods_own_waypoints() -> None:
     first = periods_of(strokes, forces, start_m=np.array([0.0, 0.0, 0.06]), standoff_m=0.03)[1]
     shift = np.array([0.3, -0.2, 0.0])
     moved = dataclasses.replace(first, points_m=first.points_m + shift)
-    builds = nlp._solver.cache_info().misses
+    builds = solver_cache.period_solver.cache_info().misses
     a = solve_period(first, PARAMS, Limits())
     b = solve_period(moved, PARAMS, Limits())
-    assert nlp._solver.cache_info().misses <= builds + 1
+    assert solver_cache.period_solver.cache_info().misses <= builds + 1
     assert b.p_m == pytest.approx(a.p_m + shift, abs=1e-6)
     assert b.force_n == pytest.approx(a.force_n, abs=1e-6)
     assert b.t_s == pytest.approx(a.t_s, abs=1e-6)
@@ -150,9 +150,17 @@ def _corner_stroke_periods() -> list[Period]:
 
 
 def test_step_counts_round_up_to_the_ladder_and_spread_over_segments() -> None:
-    assert [nlp.step_count(k) for k in (1, 8, 9, 10, 11, 40, 41)] == [8, 8, 10, 10, 13, 48, 48]
+    assert [solver_cache.step_count(k) for k in (1, 8, 9, 10, 11, 40, 41)] == [
+        8,
+        8,
+        10,
+        10,
+        13,
+        48,
+        48,
+    ]
     needed = [3, 10, 2, 7]
-    steps = nlp.spread_steps(needed, 25)
+    steps = solver_cache.spread_steps(needed, 25)
     assert sum(steps) == 25
     assert all(s >= k for s, k in zip(steps, needed, strict=True))
     assert steps == [4, 11, 2, 8]
@@ -165,11 +173,11 @@ def test_periods_of_nearby_step_counts_share_one_solver() -> None:
     longer = dataclasses.replace(first, points_m=first.points_m * [1.2, 1.2, 1.0])
     needs = [sum(nlp.steps_per_segment(p, Limits())) for p in (first, longer)]
     assert needs[0] != needs[1]
-    builds = nlp._solver.cache_info().misses
+    builds = solver_cache.period_solver.cache_info().misses
     a = solve_period(first, PARAMS, Limits())
     b = solve_period(longer, PARAMS, Limits())
-    assert nlp._solver.cache_info().misses <= builds + 1
-    assert a.t_s.size == b.t_s.size == nlp.step_count(max(needs)) + 1
+    assert solver_cache.period_solver.cache_info().misses <= builds + 1
+    assert a.t_s.size == b.t_s.size == solver_cache.step_count(max(needs)) + 1
     assert a.status == b.status == "Solve_Succeeded"
 
 
@@ -189,7 +197,8 @@ def test_rotor_thrust_limit_holds_when_the_plan_without_it_exceeds_it() -> None:
 
 
 def _max_thrust_n(sol: nlp.PeriodSolution, params: HexarotorParams) -> float:
-    """Largest rotor thrust in [N] of the planned steps (allocation of ``nlp.rotor_thrusts``)."""
+    """Largest rotor thrust in [N] of the planned steps (allocation of
+    ``contact_model.rotor_thrusts``)."""
     states = np.vstack([sol.p_m.T, sol.v_mps.T, sol.force_n])[:, :-1]
     actions = np.vstack([sol.control_n.T, np.zeros(sol.control_n.shape[0])])
-    return float(np.asarray(nlp._thrust_function(params)(states, actions)).max())
+    return float(np.asarray(solver_cache.thrust_function(params)(states, actions)).max())

@@ -2,7 +2,8 @@
 writes on a vertical wall with a sponge pen whose line width follows the contact force.
 
 ``pen`` force <-> width; ``allocation`` wrench -> six tilted rotor thrusts; ``world`` MuJoCo;
-``waypoints``/``nlp``/``plan`` contact-aware motion-force planning (eq. 7); ``controller`` hybrid
+``waypoints``/``nlp``/``plan`` contact-aware motion-force planning (eq. 7), ``contact_model`` its
+contact and rotor model, ``solver_cache`` its built IPOPT solvers; ``controller`` hybrid
 motion-force control (section V); ``flight`` the batch closed loop, ``live`` the agent's one;
 ``metrics``/``report`` Table I's figures; ``kind`` the interface, ``KIND`` its instance.
 """

@@ -9,32 +9,36 @@ against the sliding direction; the sign of each tangential axis is replaced by t
 the unit sliding direction, smoothed near 0 m/s, which is MuJoCo's isotropic cone and eq. 6 for
 axis-aligned motion). Rotor thrust limits are imposed through the allocation matrix, including
 the torque that cancels the friction force's moment about the centre of mass.
+
+This module fits one period to the NLP: its step counts, bounds, start, thrust screening and
+result; the model is in ``contact_model``, the built solvers and step-count ladder in
+``solver_cache``.
 """
 
 from __future__ import annotations
 
-import math
-import threading
 import time
 from dataclasses import dataclass
-from functools import lru_cache
 from typing import Any
 
-import casadi as ca
 import numpy as np
 from numpy.typing import NDArray
 
 from planner.errors import InfeasibleTrajectoryError
-from vehicles.hexarotor_sponge.allocation import wrench_matrix
+from vehicles.hexarotor_sponge.contact_model import contact_direction
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
+from vehicles.hexarotor_sponge.solver_cache import (
+    ACTION,
+    NODE,
+    STATE,
+    period_solver,
+    spread_steps,
+    step_count,
+    thrust_function,
+)
 from vehicles.hexarotor_sponge.waypoints import Period
 
 FloatArray = NDArray[np.float64]
-
-BODY_IN_WALL = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]])
-"""Columns: body x (into the wall), body y, body z (up) in wall coordinates (x, y, s)."""
-SLIDE_EPS_MPS = 0.03
-"""Speed in [m/s] below which the friction direction is smoothed to 0."""
 
 
 @dataclass(frozen=True)
@@ -93,19 +97,6 @@ class PeriodSolution:
     """IPOPT's own wall-clock time in [s] (CasADi's ``t_wall_total``)."""
 
 
-def alpha(v: Any, mu: float) -> Any:
-    """Contact wrench direction per unit normal force (force part), wall coordinates."""
-    speed = ca.sqrt(v[0] ** 2 + v[1] ** 2 + SLIDE_EPS_MPS**2)
-    return ca.vertcat(-mu * v[0] / speed, -mu * v[1] / speed, 1.0)
-
-
-def contact_direction(v_mps: FloatArray, mu: float) -> FloatArray:
-    """:func:`alpha` in numpy for (N, 3) velocities: (N, 3) contact force per unit normal force."""
-    speed = np.sqrt(v_mps[:, 0] ** 2 + v_mps[:, 1] ** 2 + SLIDE_EPS_MPS**2)
-    friction = -mu * v_mps[:, 0:2] / speed[:, None]
-    return np.column_stack([friction, np.ones(len(speed))])
-
-
 def steps_per_segment(period: Period, limits: Limits) -> list[int]:
     """Steps between consecutive waypoints, in proportion to distance and force change."""
     d = np.linalg.norm(np.diff(period.points_m, axis=0), axis=1)
@@ -117,48 +108,11 @@ def steps_per_segment(period: Period, limits: Limits) -> list[int]:
     return [int(max(2, a, b)) for a, b in zip(by_dist, by_force, strict=True)]
 
 
-STEP_COUNT_RATIO = 1.25
-"""Ratio of consecutive step counts a period is planned with: a period's steps are rounded up to
-the next count so periods of nearby lengths share one built solver (about 12 % more steps on
-average; building costs about 6 ms of CPU per step, solving 3 ms per iteration)."""
-SMALLEST_STEP_COUNT = 8
-"""Smallest count of the ladder (the shortest period, leaving the wall, needs 8 at 0.15 s)."""
-
-
-def step_count(needed: int) -> int:
-    """The smallest count of the ladder ``ceil(8 * 1.25^k)`` that is at least ``needed``."""
-    count = SMALLEST_STEP_COUNT
-    k = 0
-    while count < needed:
-        k += 1
-        count = math.ceil(SMALLEST_STEP_COUNT * STEP_COUNT_RATIO**k)
-    return count
-
-
-def spread_steps(needed: list[int], total: int) -> list[int]:
-    """``total`` steps over the segments, each at least its ``needed`` count, the extra steps
-    shared in proportion to the needed ones (largest remainders first)."""
-    extra = total - sum(needed)
-    share = np.asarray(needed, dtype=np.float64) * extra / sum(needed)
-    whole = np.floor(share).astype(int)
-    order = np.argsort(whole - share, kind="stable")
-    whole[order[: extra - int(whole.sum())]] += 1
-    return [a + int(b) for a, b in zip(needed, whole, strict=True)]
-
-
-STATE = 7
-"""State of a node: position (3), velocity (3), normal force."""
-ACTION = 4
-"""Action of a step: control force f_a (3), force rate dF/dt."""
-NODE = STATE + ACTION + 1
-"""Decision variables of one step in the NLP's vector: x_k, u_k, h_k (the last node only x_N)."""
-
-
 def solve_period(period: Period, params: HexarotorParams, limits: Limits) -> PeriodSolution:
     """Optimise one period from rest at its first waypoint to rest at its last.
 
     The NLP of ``n`` steps is built once per ``(n, params, cost weights)`` (see
-    :func:`_solver`); the period's waypoints, contact mode and limits enter as variable and
+    :func:`period_solver`); the period's waypoints, contact mode and limits enter as variable and
     constraint bounds, its force profile as a parameter. The rotor thrust limits are screened:
     the NLP without them is solved first (the thrust rows are three quarters of the inequality
     constraints and the nominal letters never reach them; without them an iteration costs about
@@ -201,7 +155,7 @@ def _solve(
     bounds): its variables, statistics, iterations and own wall-clock seconds."""
     guess, force_path, lbx, ubx = problem
     lbg, ubg = _constraint_bounds(n, thrust_rows, params, limits)
-    solver, lock = _solver(n, thrust_rows, params, _weights(limits))
+    solver, lock = period_solver(n, thrust_rows, params, _weights(limits))
     with lock:
         out = solver(x0=guess, p=force_path, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
         stats = solver.stats()
@@ -212,16 +166,8 @@ def _solve(
 def _thrust_margin_n(xs: FloatArray, us: FloatArray, params: HexarotorParams) -> float:
     """Smallest distance in [N] of a rotor's thrust inside ``[0, thrust_max]`` over the steps
     (negative: beyond)."""
-    thrusts = np.asarray(_thrust_function(params)(xs[:, :-1], us))
+    thrusts = np.asarray(thrust_function(params)(xs[:, :-1], us))
     return float(min(thrusts.min(), params.thrust_max_n - thrusts.max()))
-
-
-@lru_cache(maxsize=4)
-def _thrust_function(params: HexarotorParams) -> ca.Function:
-    """:func:`rotor_thrusts` as a function of a step's state and action."""
-    x = ca.SX.sym("x", STATE)
-    u = ca.SX.sym("u", ACTION)
-    return ca.Function("thrusts", [x, u], [rotor_thrusts(x, u, params)])
 
 
 def _weights(limits: Limits) -> tuple[float, ...]:
@@ -235,119 +181,10 @@ def _weights(limits: Limits) -> tuple[float, ...]:
     )
 
 
-@lru_cache(maxsize=64)
-def _solver(
-    n: int, thrust_rows: bool, params: HexarotorParams, weights: tuple[float, ...]
-) -> tuple[ca.Function, threading.Lock]:
-    """IPOPT on the NLP of ``n`` RK4 steps, and the lock that keeps one solve (and its stats)
-    at a time on it.
-
-    Variables: ``[x_0, u_0, h_0, ..., x_{n-1}, u_{n-1}, h_{n-1}, x_n]``; parameter: the wanted
-    force at nodes ``0..n-1``; constraints per step: the RK4 defect (7), ``|a|^2`` (1), rotor
-    thrusts (6, only with ``thrust_rows``) and ``|v|^2`` (1). Built in SX, so derivatives are
-    exact and evaluated without CasADi's MX overhead; cached because building takes longer than
-    solving.
-
-    IPOPT's options: from a start that nearly keeps the dynamics the default adaptive barrier
-    spends 20-30 iterations at mu 0.1; a monotone barrier from 1e-2 with a first Hessian
-    perturbation of 1e-2 (the friction direction's curvature at low speed makes the Hessian
-    indefinite early) and tol 1e-4 (dynamics and limits still to 1e-6) takes the six bench
-    glyphs from 2831 iterations to 1148, their durations within 0.1 %.
-    """
-    stage = _stage_function(thrust_rows, params, weights)
-    w = ca.SX.sym("w", NODE * n + STATE)
-    force_ref = ca.SX.sym("force_ref", n)
-    hover = ca.DM([0.0, params.mass_kg * GRAVITY_MPS2, 0.0])
-    cost: Any = 0
-    constraints = []
-    for k in range(n):
-        at = NODE * k
-        u_prev = w[at - NODE + STATE : at - NODE + STATE + 3] if k > 0 else hover
-        defect, stage_cost, path = stage(
-            w[at : at + STATE],
-            w[at + STATE : at + STATE + ACTION],
-            w[at + NODE - 1],
-            u_prev,
-            w[at + NODE : at + NODE + STATE],
-            force_ref[k],
-        )
-        cost += stage_cost
-        constraints += [defect, path]
-    nlp = {"x": w, "p": force_ref, "f": cost, "g": ca.vertcat(*constraints)}
-    options: dict[str, Any] = {
-        "print_time": False,
-        "record_time": True,
-        "ipopt": {
-            "print_level": 0,
-            "sb": "yes",
-            "max_iter": 600,
-            "tol": 1e-4,
-            "constr_viol_tol": 1e-6,
-            "acceptable_tol": 1e-4,
-            "mu_strategy": "monotone",
-            "mu_init": 1e-2,
-            "first_hessian_perturbation": 1e-2,
-            "perturb_inc_fact_first": 10.0,
-        },
-    }
-    return ca.nlpsol(f"period_{n}", "ipopt", nlp, options), threading.Lock()
-
-
-def _stage_function(
-    thrust_rows: bool, params: HexarotorParams, weights: tuple[float, ...]
-) -> ca.Function:
-    """One step ``k``: (x_k, u_k, h_k, f_a of step k-1, x_{k+1}, wanted force) -> (RK4 defect,
-    cost of the step, path constraints ``[|a_k|^2, thrusts (6), |v_k|^2]``)."""
-    weight_v, weight_u, weight_du, weight_force, time_weight = weights
-    x = ca.SX.sym("x", STATE)
-    u = ca.SX.sym("u", ACTION)
-    h = ca.SX.sym("h")
-    u_prev = ca.SX.sym("u_prev", 3)
-    x_next = ca.SX.sym("x_next", STATE)
-    force_ref = ca.SX.sym("force_ref")
-    m = params.mass_kg
-    g = ca.DM([0.0, -GRAVITY_MPS2, 0.0])
-    hover = ca.DM([0.0, m * GRAVITY_MPS2, 0.0])
-
-    def f(xs: Any) -> Any:
-        acc = (u[0:3] + xs[6] * alpha(xs[3:6], params.wall_friction)) / m + g
-        return ca.vertcat(xs[3:6], acc, u[3])
-
-    k1 = f(x)
-    k2 = f(x + h / 2 * k1)
-    k3 = f(x + h / 2 * k2)
-    k4 = f(x + h * k3)
-    defect = x_next - (x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4))
-    stage = (
-        weight_v * ca.sumsqr(x[3:6])
-        + weight_u * ca.sumsqr(u[0:3] - hover)
-        + weight_du * ca.sumsqr(u[0:3] - u_prev)
-        + weight_force * (x[6] - force_ref) ** 2
-        + time_weight
-    )
-    thrusts = rotor_thrusts(x, u, params) if thrust_rows else ca.SX(0, 1)
-    path = ca.vertcat(ca.sumsqr(k1[3:6]), thrusts, ca.sumsqr(x[3:6]))
-    return ca.Function("stage", [x, u, h, u_prev, x_next, force_ref], [defect, stage * h, path])
-
-
-def rotor_thrusts(x: Any, u: Any, params: HexarotorParams) -> Any:
-    """Rotor thrusts for the wrench that applies ``f_a`` and cancels the gravity moment of the
-    offset centre of mass and the contact force's moment (allocation about the body origin)."""
-    rot = ca.DM(BODY_IN_WALL)
-    inverse = ca.DM(np.linalg.inv(wrench_matrix(params)))
-    com = ca.DM(params.com_m_body)
-    tip = ca.DM(params.tip_m_body)
-    force_body = rot.T @ u[0:3]
-    weight_body = rot.T @ ca.DM([0.0, -params.mass_kg * GRAVITY_MPS2, 0.0])
-    contact_body = rot.T @ (x[6] * alpha(x[3:6], params.wall_friction))
-    torque = -ca.cross(com, weight_body) - ca.cross(tip, contact_body)
-    return inverse @ ca.vertcat(force_body, torque)
-
-
 def _constraint_bounds(
     n: int, thrust_rows: bool, params: HexarotorParams, limits: Limits
 ) -> tuple[FloatArray, FloatArray]:
-    """Bounds of the per-step constraints of :func:`_solver` (the limits of eq. 7g)."""
+    """Bounds of the per-step constraints of :func:`period_solver` (the limits of eq. 7g)."""
     rotors = 6 if thrust_rows else 0
     lower = np.concatenate([np.zeros(STATE), [-np.inf], np.zeros(rotors), [-np.inf]])
     upper = np.concatenate(
