@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
@@ -34,6 +35,29 @@ PAPER_STEP_S = 0.1
 """The paper's step in [s], which the planner allocated steps at before it took 0.15 s."""
 
 
+IPOPT_OPTIONS: dict[str, Any] = {
+    "print_level": 0,
+    "sb": "yes",
+    "max_iter": 600,
+    "tol": 1e-6,
+    "acceptable_tol": 1e-4,
+    "mu_strategy": "adaptive",
+}
+"""IPOPT's options of then: the adaptive barrier and tol 1e-6."""
+
+
+@dataclass(frozen=True)
+class _Variables:
+    """The decision variables of one period of ``n`` steps in a ``casadi.Opti``."""
+
+    x: Any
+    """(7, n+1) states: position (3), velocity (3), normal force."""
+    u: Any
+    """(4, n) actions: control force f_a (3), force rate dF/dt."""
+    h: Any
+    """(n,) time steps in [s]."""
+
+
 def solve_period_opti(period: Period, params: HexarotorParams, limits: Limits) -> PeriodSolution:
     """The planner before the cached solvers: a fresh ``casadi.Opti`` (expanded) per period,
     every bound as a constraint, the paper's hover-thrust start from its 0.1 s steps."""
@@ -42,9 +66,35 @@ def solve_period_opti(period: Period, params: HexarotorParams, limits: Limits) -
     nodes = np.concatenate([[0], np.cumsum(steps)]).astype(int)
     n = int(nodes[-1])
     opti = ca.Opti()
-    x = opti.variable(7, n + 1)
-    u = opti.variable(4, n)
-    h = opti.variable(n)
+    var = _Variables(opti.variable(7, n + 1), opti.variable(4, n), opti.variable(n))
+    force_path = np.interp(np.arange(n + 1), nodes, period.force_n)
+    opti.minimize(_dynamics_and_cost(opti, var, force_path, params, limits))
+    _bounds(opti, var, period, nodes, limits)
+    _initial_guess(opti, var, period, nodes, limits, params.mass_kg)
+    opti.solver("ipopt", {"print_time": False, "expand": True, "record_time": True}, IPOPT_OPTIONS)
+    started = time.perf_counter()
+    try:
+        values = opti.solve().value
+    except RuntimeError:
+        values = opti.debug.value
+    solve_s = time.perf_counter() - started
+    stats = opti.stats()
+    status = str(stats.get("return_status", "unknown"))
+    xs = np.asarray(values(var.x)).reshape(7, n + 1)
+    us = np.asarray(values(var.u)).reshape(4, n)
+    hs = np.asarray(values(var.h)).reshape(n)
+    if not bool(stats.get("success", False)):
+        _raise_infeasible(period, status, xs, hs, limits)
+    timing = (solve_s, float(stats.get("t_wall_total", solve_s)))
+    return _solution(xs, us, hs, status, int(stats.get("iter_count", -1)), timing, params)
+
+
+def _dynamics_and_cost(
+    opti: Any, var: _Variables, force_path: FloatArray, params: HexarotorParams, limits: Limits
+) -> Any:
+    """Per step: the RK4 defect, acceleration and rotor thrust constraints; returns the cost
+    (eq. 7a with the force and control terms of the planner)."""
+    x, u, h = var.x, var.u, var.h
     m = params.mass_kg
     g = ca.DM([0.0, -GRAVITY_MPS2, 0.0])
     mu = params.wall_friction
@@ -54,9 +104,8 @@ def solve_period_opti(period: Period, params: HexarotorParams, limits: Limits) -
         return ca.vertcat(xs[3:6], acc, us[3])
 
     cost: Any = 0
-    force_path = np.interp(np.arange(n + 1), nodes, period.force_n)
     hover = ca.DM([0.0, m * GRAVITY_MPS2, 0.0])
-    for k in range(n):
+    for k in range(h.shape[0]):  # n steps
         xk, uk, hk = x[:, k], u[:, k], h[k]
         k1 = f(xk, uk)
         k2 = f(xk + hk / 2 * k1, uk)
@@ -74,7 +123,16 @@ def solve_period_opti(period: Period, params: HexarotorParams, limits: Limits) -
         cost += stage * hk
         opti.subject_to(ca.sumsqr(k1[3:6]) <= limits.a_max_mps2**2)
         _thrust_limits(opti, xk, uk, params)
-    opti.minimize(cost)
+    return cost
+
+
+def _bounds(
+    opti: Any, var: _Variables, period: Period, nodes: NDArray[np.int_], limits: Limits
+) -> None:
+    """Time steps (7c), force rate and speed (7g), rest at both ends, the waypoints (7d) and the
+    contact mode (7e), each as a constraint."""
+    x, u, h = var.x, var.u, var.h
+    n = int(nodes[-1])
     opti.subject_to(opti.bounded(0.02, h, limits.h_max_s))
     opti.subject_to(opti.bounded(-limits.force_rate_max_nps, u[3, :], limits.force_rate_max_nps))
     for k in range(n + 1):
@@ -91,35 +149,6 @@ def solve_period_opti(period: Period, params: HexarotorParams, limits: Limits) -
         opti.subject_to(x[2, :] >= 0)
         opti.subject_to(x[6, :] == 0)
         opti.subject_to(u[3, :] == 0)
-    _initial_guess(opti, x, u, h, period, nodes, limits, m)
-    opti.solver(
-        "ipopt",
-        {"print_time": False, "expand": True, "record_time": True},
-        {
-            "print_level": 0,
-            "sb": "yes",
-            "max_iter": 600,
-            "tol": 1e-6,
-            "acceptable_tol": 1e-4,
-            "mu_strategy": "adaptive",
-        },
-    )
-    started = time.perf_counter()
-    try:
-        sol = opti.solve()
-        values = sol.value
-    except RuntimeError:
-        values = opti.debug.value
-    solve_s = time.perf_counter() - started
-    stats = opti.stats()
-    status = str(stats.get("return_status", "unknown"))
-    xs = np.asarray(values(x)).reshape(7, n + 1)
-    us = np.asarray(values(u)).reshape(4, n)
-    hs = np.asarray(values(h)).reshape(n)
-    if not bool(stats.get("success", False)):
-        _raise_infeasible(period, status, xs, hs, limits)
-    timing = (solve_s, float(stats.get("t_wall_total", solve_s)))
-    return _solution(xs, us, hs, status, int(stats.get("iter_count", -1)), timing, params)
 
 
 def _thrust_limits(opti: Any, xk: Any, uk: Any, params: HexarotorParams) -> None:
@@ -129,11 +158,9 @@ def _thrust_limits(opti: Any, xk: Any, uk: Any, params: HexarotorParams) -> None
 
 def _initial_guess(
     opti: Any,
-    x: Any,
-    u: Any,
-    h: Any,
+    var: _Variables,
     period: Period,
-    nodes: FloatArray,
+    nodes: NDArray[np.int_],
     limits: Limits,
     mass_kg: float,
 ) -> None:
@@ -144,8 +171,8 @@ def _initial_guess(
     f0 = np.interp(k, nodes, period.force_n)
     v0 = np.gradient(p0, axis=0) / limits.h_init_s
     v0[0] = v0[-1] = 0.0
-    opti.set_initial(x, np.vstack([p0.T, v0.T, f0]))
+    opti.set_initial(var.x, np.vstack([p0.T, v0.T, f0]))
     rate = np.diff(f0) / limits.h_init_s
     hover = np.tile([[0.0], [mass_kg * GRAVITY_MPS2], [0.0]], (1, n))
-    opti.set_initial(u, np.vstack([hover, rate]))
-    opti.set_initial(h, np.full(n, limits.h_init_s))
+    opti.set_initial(var.u, np.vstack([hover, rate]))
+    opti.set_initial(var.h, np.full(n, limits.h_init_s))
