@@ -32,6 +32,7 @@ import multiprocessing
 import statistics
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -94,31 +95,67 @@ def circle(i: int, t: float) -> Setpoint:
 
 
 async def _fly(urls: list[str], rate_hz: float, seconds: float, conn: Any) -> dict[str, Any]:
-    backends = []
+    """Fly one backend a vehicle along the circles for ``seconds`` (setpoints at ``rate_hz``)
+    after hovering at their start; ``conn`` tells the vehicles' process when the measured stream
+    starts and stops."""
+    backends = [await _started_backend(url, i, rate_hz) for i, url in enumerate(urls)]
     round_trips: list[float] = []
-    for i, url in enumerate(urls):
-        origin = (2.0 * i, 0.0, 0.0)
-        settings = MavlinkSettings(
-            url=url,
-            origin_m_enu=origin,
-            setpoint_rate_hz=rate_hz,
-            control_rate_hz=CONTROL_HZ,
-            telemetry_rate_hz=CONTROL_HZ,
-        )
-        backend = MavlinkBackend(settings)
-        await backend.start()
-        backends.append(backend)
     for backend in backends:
-        link = backend.link
-        handler = link.on_message
+        _record_round_trips(backend, round_trips)
+    await _hover_at_circle_start(backends)
+    conn.send("reset")
+    round_trips.clear()
+    sent0 = [b.setpoints_sent for b in backends]
+    stream = await _stream_circles(backends, seconds)
+    conn.send("stop")
+    faults = [b.fault for b in backends if b.fault]
+    for backend in backends:
+        await backend.close()
+    return {
+        "sent_hz": [
+            (b.setpoints_sent - s0) / stream.elapsed_s
+            for b, s0 in zip(backends, sent0, strict=True)
+        ],
+        "elapsed": stream.elapsed_s,
+        "round_trip_ms": round_trips,
+        "tracking_m": stream.tracking_m,
+        "lateness_ms": stream.lateness_ms,
+        "faults": faults,
+    }
 
-        def on_message(message: Any, handler: Any = handler) -> None:
-            handler(message)
-            if message.get_type() == "POSITION_TARGET_LOCAL_NED":
-                now_ms = int(time.monotonic() * 1000) & 0xFFFFFFFF
-                round_trips.append(float((now_ms - message.time_boot_ms) & 0xFFFFFFFF))
 
-        link.on_message = on_message
+async def _started_backend(url: str, i: int, rate_hz: float) -> MavlinkBackend:
+    """The started backend of vehicle ``i`` (origin 2 i m east) streaming at ``rate_hz``."""
+    settings = MavlinkSettings(
+        url=url,
+        origin_m_enu=(2.0 * i, 0.0, 0.0),
+        setpoint_rate_hz=rate_hz,
+        control_rate_hz=CONTROL_HZ,
+        telemetry_rate_hz=CONTROL_HZ,
+    )
+    backend = MavlinkBackend(settings)
+    await backend.start()
+    return backend
+
+
+def _record_round_trips(backend: MavlinkBackend, round_trips: list[float]) -> None:
+    """Append to ``round_trips`` the age in [ms] of each setpoint stamp the vehicle echoes in
+    POSITION_TARGET_LOCAL_NED, after the link's own handling of the message."""
+    link = backend.link
+    handler = link.on_message
+
+    def on_message(message: Any) -> None:
+        handler(message)
+        if message.get_type() == "POSITION_TARGET_LOCAL_NED":
+            now_ms = int(time.monotonic() * 1000) & 0xFFFFFFFF
+            round_trips.append(float((now_ms - message.time_boot_ms) & 0xFFFFFFFF))
+
+    link.on_message = on_message
+
+
+async def _hover_at_circle_start(backends: list[MavlinkBackend]) -> None:
+    """Take off, wait (at most 15 s) until every vehicle holds, then settle 2 s on the start
+    point of its circle."""
     dt = 1.0 / CONTROL_HZ
     for i, backend in enumerate(backends):
         await backend.takeoff(circle(i, 0.0).position_m_enu)
@@ -133,9 +170,23 @@ async def _fly(urls: list[str], rate_hz: float, seconds: float, conn: Any) -> di
         for i, backend in enumerate(backends):
             await backend.tick(circle(i, 0.0), time.monotonic())
         await asyncio.sleep(dt)
-    conn.send("reset")
-    round_trips.clear()
-    sent0 = [b.setpoints_sent for b in backends]
+
+
+@dataclass(frozen=True)
+class _Stream:
+    """What the agent side measured while streaming the circles."""
+
+    elapsed_s: float
+    """Wall-clock length of the stream in [s]."""
+    tracking_m: list[float]
+    """Distances in [m] of telemetry from the reference after the warm-up, all vehicles."""
+    lateness_ms: list[float]
+    """Lateness in [ms] of each control tick behind its schedule."""
+
+
+async def _stream_circles(backends: list[MavlinkBackend], seconds: float) -> _Stream:
+    """Tick every backend along its circle at the control rate for ``seconds``."""
+    dt = 1.0 / CONTROL_HZ
     errors: list[float] = []
     lateness: list[float] = []
     t0 = time.monotonic()
@@ -150,21 +201,7 @@ async def _fly(urls: list[str], rate_hz: float, seconds: float, conn: Any) -> di
                 errors.append(math.dist(snapshot.position_m_enu, reference))
         k += 1
         await asyncio.sleep(max(0.0, t0 + k * dt - time.monotonic()))
-    elapsed = time.monotonic() - t0
-    conn.send("stop")
-    faults = [b.fault for b in backends if b.fault]
-    for backend in backends:
-        await backend.close()
-    return {
-        "sent_hz": [
-            (b.setpoints_sent - s0) / elapsed for b, s0 in zip(backends, sent0, strict=True)
-        ],
-        "elapsed": elapsed,
-        "round_trip_ms": round_trips,
-        "tracking_m": errors,
-        "lateness_ms": lateness,
-        "faults": faults,
-    }
+    return _Stream(time.monotonic() - t0, errors, lateness)
 
 
 def _pct(values: list[float], q: int) -> float:
