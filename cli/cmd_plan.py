@@ -19,11 +19,20 @@ _PROG = "skyquill plan"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The input and output files, then the writing area, vehicle limits and planner groups
+    (in this order in ``--help``)."""
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--strokes", metavar="FILE", help="strokes JSON (docs/formats.md)")
     source.add_argument("--text", metavar="TEXT", help="Latin (Hershey) or Chinese text")
     parser.add_argument("--out", metavar="TRAJ.json", help="write the trajectory here")
     parser.add_argument("--plot", metavar="PLOT.png", help="write a figure of the plan here")
+    _add_board_arguments(parser)
+    _add_limit_arguments(parser)
+    _add_planner_arguments(parser)
+
+
+def _add_board_arguments(parser: argparse.ArgumentParser) -> None:
+    """Where on which board the text is laid out, and the heights the brush flies at."""
     board = parser.add_argument_group("writing area (board-local metres)")
     board.add_argument("--width", type=float, default=1.0, help="area width [m] (1.0)")
     board.add_argument("--height", type=float, default=1.0, help="area height [m] (1.0)")
@@ -54,6 +63,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=defaults.CLEARANCE_M,
         help=f"extra height with the pen up [m] ({defaults.CLEARANCE_M})",
     )
+
+
+def _add_limit_arguments(parser: argparse.ArgumentParser) -> None:
+    """The vehicle's limits, each defaulting to a show file's default (:class:`VehicleLimits`)."""
     d = VehicleLimits()
     lim = parser.add_argument_group("vehicle limits (a show file's defaults)")
     lim.add_argument(
@@ -77,6 +90,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=d.body_rate_max_radps,
         help=f"max body-rate bound of eq. 15 [rad/s] ({d.body_rate_max_radps})",
     )
+
+
+def _add_planner_arguments(parser: argparse.ArgumentParser) -> None:
+    """The trajectory planner's options: total time, QP solver, method, re-segmentation, split
+    threshold and the sample rate of the written trajectory."""
     opt = parser.add_argument_group("planner")
     opt.add_argument("--total-time", type=float, help="fixed total time [s] (default: free)")
     opt.add_argument("--solver", choices=("piqp", "clarabel", "osqp"), default="piqp")
