@@ -24,6 +24,7 @@ from vehicles.hexarotor_sponge.nlp import (
     PeriodSolution,
     _raise_infeasible,
     _solution,
+    linear_states,
     steps_per_segment,
 )
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
@@ -166,11 +167,7 @@ def _initial_guess(
 ) -> None:
     """The paper's start: 0.1 s steps, states linear between waypoints, hover thrust."""
     n = int(nodes[-1])
-    k = np.arange(n + 1)
-    p0 = np.column_stack([np.interp(k, nodes, period.points_m[:, j]) for j in range(3)])
-    f0 = np.interp(k, nodes, period.force_n)
-    v0 = np.gradient(p0, axis=0) / limits.h_init_s
-    v0[0] = v0[-1] = 0.0
+    p0, v0, f0 = linear_states(period, nodes, limits.h_init_s)
     opti.set_initial(var.x, np.vstack([p0.T, v0.T, f0]))
     rate = np.diff(f0) / limits.h_init_s
     hover = np.tile([[0.0], [mass_kg * GRAVITY_MPS2], [0.0]], (1, n))

@@ -222,6 +222,20 @@ def _variable_bounds(
     return lower.ravel()[:size], upper.ravel()[:size]
 
 
+def linear_states(
+    period: Period, nodes: NDArray[np.int_], h_s: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The paper's start of the states: positions (n+1, 3) and normal forces (n+1,) linear
+    between the waypoints at ``nodes``, velocities (n+1, 3) in [m/s] their central differences
+    over steps of ``h_s`` in [s], at rest at both ends."""
+    k = np.arange(int(nodes[-1]) + 1)
+    p0 = np.column_stack([np.interp(k, nodes, period.points_m[:, j]) for j in range(3)])
+    f0 = np.interp(k, nodes, period.force_n)
+    v0 = np.gradient(p0, axis=0) / h_s
+    v0[0] = v0[-1] = 0.0
+    return p0, v0, f0
+
+
 def _initial_guess(
     period: Period, nodes: NDArray[np.int_], h_s: float, params: HexarotorParams
 ) -> FloatArray:
@@ -231,11 +245,7 @@ def _initial_guess(
     saves IPOPT about a quarter of its iterations (letters A, I, R: 1454 -> 1082) for the same
     optimum."""
     n = int(nodes[-1])
-    k = np.arange(n + 1)
-    p0 = np.column_stack([np.interp(k, nodes, period.points_m[:, j]) for j in range(3)])
-    f0 = np.interp(k, nodes, period.force_n)
-    v0 = np.gradient(p0, axis=0) / h_s
-    v0[0] = v0[-1] = 0.0
+    p0, v0, f0 = linear_states(period, nodes, h_s)
     a0 = np.diff(v0, axis=0) / h_s
     gravity = np.array([0.0, -GRAVITY_MPS2, 0.0])
     contact = f0[:-1, None] * contact_direction(v0[:-1], params.wall_friction)
