@@ -1,10 +1,11 @@
 """The wall planner's eq. 7 as it was solved before the cached solvers: the peer of
 ``vehicles.hexarotor_sponge.nlp.solve_period`` in ``bench_wall.py``.
 
-Same model, cost and constraints, with the IPOPT options, steps and step counts of then (adaptive
-barrier, 0.1 s steps, no rounding of the count); a new ``casadi.Opti`` with ``expand`` is built
-for every period, so every period pays for building the MX graph in Python, expanding it to SX
-and deriving it.
+Same model, cost and constraints (the planner's own ``rk4_step``, ``stage_cost`` and
+``rotor_thrusts``, so the two cannot drift apart), with the IPOPT options, steps and step counts
+of then (adaptive barrier, 0.1 s steps, no rounding of the count); a new ``casadi.Opti`` with
+``expand`` is built for every period, so every period pays for building the MX graph in Python,
+expanding it to SX and deriving it.
 """
 
 from __future__ import annotations
@@ -18,16 +19,18 @@ import casadi as ca
 import numpy as np
 from numpy.typing import NDArray
 
-from vehicles.hexarotor_sponge.contact_model import alpha, rotor_thrusts
+from vehicles.hexarotor_sponge.contact_model import hover_control_n, rk4_step, rotor_thrusts
 from vehicles.hexarotor_sponge.nlp import (
     Limits,
     PeriodSolution,
     _raise_infeasible,
     _solution,
+    cost_weights,
     linear_states,
     steps_per_segment,
 )
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
+from vehicles.hexarotor_sponge.solver_cache import stage_cost
 from vehicles.hexarotor_sponge.waypoints import Period
 
 FloatArray = NDArray[np.float64]
@@ -94,35 +97,18 @@ def _dynamics_and_cost(
     opti: Any, var: _Variables, force_path: FloatArray, params: HexarotorParams, limits: Limits
 ) -> Any:
     """Per step: the RK4 defect, acceleration and rotor thrust constraints; returns the cost
-    (eq. 7a with the force and control terms of the planner)."""
+    (the planner's own dynamics and stage cost)."""
     x, u, h = var.x, var.u, var.h
-    m = params.mass_kg
-    g = ca.DM([0.0, -GRAVITY_MPS2, 0.0])
-    mu = params.wall_friction
-
-    def f(xs: Any, us: Any) -> Any:
-        acc = (us[0:3] + xs[6] * alpha(xs[3:6], mu)) / m + g
-        return ca.vertcat(xs[3:6], acc, us[3])
-
+    weights = cost_weights(limits)
+    hover = hover_control_n(params)
     cost: Any = 0
-    hover = ca.DM([0.0, m * GRAVITY_MPS2, 0.0])
     for k in range(h.shape[0]):  # n steps
         xk, uk, hk = x[:, k], u[:, k], h[k]
-        k1 = f(xk, uk)
-        k2 = f(xk + hk / 2 * k1, uk)
-        k3 = f(xk + hk / 2 * k2, uk)
-        k4 = f(xk + hk * k3, uk)
-        opti.subject_to(x[:, k + 1] == xk + hk / 6 * (k1 + 2 * k2 + 2 * k3 + k4))
-        du = uk[0:3] - (u[0:3, k - 1] if k > 0 else hover)
-        stage = (
-            limits.weight_v * ca.sumsqr(xk[3:6])
-            + limits.weight_u * ca.sumsqr(uk[0:3] - hover)
-            + limits.weight_du * ca.sumsqr(du)
-            + limits.weight_force * (xk[6] - force_path[k]) ** 2
-            + limits.time_weight
-        )
-        cost += stage * hk
-        opti.subject_to(ca.sumsqr(k1[3:6]) <= limits.a_max_mps2**2)
+        x_end, rate = rk4_step(xk, uk, hk, params)
+        opti.subject_to(x[:, k + 1] == x_end)
+        u_prev = u[0:3, k - 1] if k > 0 else hover
+        cost += stage_cost(xk, uk, u_prev, force_path[k], params, weights) * hk
+        opti.subject_to(ca.sumsqr(rate[3:6]) <= limits.a_max_mps2**2)
         _thrust_limits(opti, xk, uk, params)
     return cost
 

@@ -1,10 +1,12 @@
-"""The writing point's contact and rotor model on the wall, shared by the period NLP (``nlp``),
-its cached solvers (``solver_cache``) and the benchmark's fresh-Opti peer.
+"""The writing point's dynamics, contact and rotor model on the wall, shared by the period NLP
+(``nlp``), its cached solvers (``solver_cache``) and the benchmark's fresh-Opti peer.
 
 Wall coordinates ``(x, y, s)``: x along the wall, y up, s out of the wall. The contact wrench is
 ``F alpha(v)`` with ``alpha = n - mu v_t / |v_t|`` (paper eq. 4 and 6: Coulomb friction against
 the sliding direction, smoothed near 0 m/s). Rotor thrusts follow from the allocation matrix,
-including the torque that cancels the friction force's moment about the centre of mass.
+including the torque that cancels the friction force's moment about the centre of mass. A state
+``x`` is position (3), velocity (3) and normal force; an action ``u`` the control force ``f_a``
+(3, wall axes) and the force rate; the functions take CasADi SX or MX alike.
 """
 
 from __future__ import annotations
@@ -51,3 +53,26 @@ def rotor_thrusts(x: Any, u: Any, params: HexarotorParams) -> Any:
     contact_body = rot.T @ (x[6] * alpha(x[3:6], params.wall_friction))
     torque = -ca.cross(com, weight_body) - ca.cross(tip, contact_body)
     return inverse @ ca.vertcat(force_body, torque)
+
+
+def rk4_step(x: Any, u: Any, h: Any, params: HexarotorParams) -> tuple[Any, Any]:
+    """The state after a step of ``h`` in [s] from ``x`` under the action ``u`` (classic RK4 of
+    :func:`point_rate`), and the rate at its start (its acceleration is limited)."""
+    k1 = point_rate(x, u, params)
+    k2 = point_rate(x + h / 2 * k1, u, params)
+    k3 = point_rate(x + h / 2 * k2, u, params)
+    k4 = point_rate(x + h * k3, u, params)
+    return x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4), k1
+
+
+def point_rate(x: Any, u: Any, params: HexarotorParams) -> Any:
+    """d/dt of the writing point's state (eq. 7b): velocity, acceleration from the control
+    force, the contact force and gravity in [m/s^2], and the force rate."""
+    gravity = ca.DM([0.0, -GRAVITY_MPS2, 0.0])
+    acc = (u[0:3] + x[6] * alpha(x[3:6], params.wall_friction)) / params.mass_kg + gravity
+    return ca.vertcat(x[3:6], acc, u[3])
+
+
+def hover_control_n(params: HexarotorParams) -> ca.DM:
+    """The control force f_a in [N], wall coordinates, that holds the vehicle's weight."""
+    return ca.DM([0.0, params.mass_kg * GRAVITY_MPS2, 0.0])

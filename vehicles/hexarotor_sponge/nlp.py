@@ -155,7 +155,7 @@ def _solve(
     bounds): its variables, statistics, iterations and own wall-clock seconds."""
     guess, force_path, lbx, ubx = problem
     lbg, ubg = _constraint_bounds(n, thrust_rows, params, limits)
-    solver, lock = period_solver(n, thrust_rows, params, _weights(limits))
+    solver, lock = period_solver(n, thrust_rows, params, cost_weights(limits))
     with lock:
         out = solver(x0=guess, p=force_path, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
         stats = solver.stats()
@@ -170,7 +170,7 @@ def _thrust_margin_n(xs: FloatArray, us: FloatArray, params: HexarotorParams) ->
     return float(min(thrusts.min(), params.thrust_max_n - thrusts.max()))
 
 
-def _weights(limits: Limits) -> tuple[float, ...]:
+def cost_weights(limits: Limits) -> tuple[float, ...]:
     """The cost weights of ``limits``: the only limits that shape the NLP's expressions."""
     return (
         limits.weight_v,

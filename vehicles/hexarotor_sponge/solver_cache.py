@@ -17,8 +17,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from vehicles.hexarotor_sponge.contact_model import alpha, rotor_thrusts
-from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
+from vehicles.hexarotor_sponge.contact_model import hover_control_n, rk4_step, rotor_thrusts
+from vehicles.hexarotor_sponge.params import HexarotorParams
 
 STATE = 7
 """State of a node: position (3), velocity (3), normal force."""
@@ -102,7 +102,7 @@ def _period_nlp(
     stage = _stage_function(thrust_rows, params, weights)
     w = ca.SX.sym("w", NODE * n + STATE)
     force_ref = ca.SX.sym("force_ref", n)
-    hover = ca.DM([0.0, params.mass_kg * GRAVITY_MPS2, 0.0])
+    hover = hover_control_n(params)
     cost: Any = 0
     constraints = []
     for k in range(n):
@@ -126,36 +126,38 @@ def _stage_function(
 ) -> ca.Function:
     """One step ``k``: (x_k, u_k, h_k, f_a of step k-1, x_{k+1}, wanted force) -> (RK4 defect,
     cost of the step, path constraints ``[|a_k|^2, thrusts (6), |v_k|^2]``)."""
-    weight_v, weight_u, weight_du, weight_force, time_weight = weights
     x = ca.SX.sym("x", STATE)
     u = ca.SX.sym("u", ACTION)
     h = ca.SX.sym("h")
     u_prev = ca.SX.sym("u_prev", 3)
     x_next = ca.SX.sym("x_next", STATE)
     force_ref = ca.SX.sym("force_ref")
-    m = params.mass_kg
-    g = ca.DM([0.0, -GRAVITY_MPS2, 0.0])
-    hover = ca.DM([0.0, m * GRAVITY_MPS2, 0.0])
+    x_end, rate = rk4_step(x, u, h, params)
+    defect = x_next - x_end
+    stage = stage_cost(x, u, u_prev, force_ref, params, weights)
+    thrusts = rotor_thrusts(x, u, params) if thrust_rows else ca.SX(0, 1)
+    path = ca.vertcat(ca.sumsqr(rate[3:6]), thrusts, ca.sumsqr(x[3:6]))
+    return ca.Function("stage", [x, u, h, u_prev, x_next, force_ref], [defect, stage * h, path])
 
-    def f(xs: Any) -> Any:
-        acc = (u[0:3] + xs[6] * alpha(xs[3:6], params.wall_friction)) / m + g
-        return ca.vertcat(xs[3:6], acc, u[3])
 
-    k1 = f(x)
-    k2 = f(x + h / 2 * k1)
-    k3 = f(x + h / 2 * k2)
-    k4 = f(x + h * k3)
-    defect = x_next - (x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4))
-    stage = (
+def stage_cost(
+    x: Any,
+    u: Any,
+    u_prev: Any,
+    force_ref: Any,
+    params: HexarotorParams,
+    weights: tuple[float, ...],
+) -> Any:
+    """Cost per second of one step (eq. 7a with the force and control terms): speed, control
+    force from hover and from the step before, force from the wanted force, and time."""
+    weight_v, weight_u, weight_du, weight_force, time_weight = weights
+    return (
         weight_v * ca.sumsqr(x[3:6])
-        + weight_u * ca.sumsqr(u[0:3] - hover)
+        + weight_u * ca.sumsqr(u[0:3] - hover_control_n(params))
         + weight_du * ca.sumsqr(u[0:3] - u_prev)
         + weight_force * (x[6] - force_ref) ** 2
         + time_weight
     )
-    thrusts = rotor_thrusts(x, u, params) if thrust_rows else ca.SX(0, 1)
-    path = ca.vertcat(ca.sumsqr(k1[3:6]), thrusts, ca.sumsqr(x[3:6]))
-    return ca.Function("stage", [x, u, h, u_prev, x_next, force_ref], [defect, stage * h, path])
 
 
 @lru_cache(maxsize=4)
