@@ -23,10 +23,10 @@ from vehicles.hexarotor_sponge.contact_model import hover_control_n, rk4_step, r
 from vehicles.hexarotor_sponge.nlp import (
     Limits,
     PeriodSolution,
-    _raise_infeasible,
-    _solution,
     cost_weights,
     linear_states,
+    period_solution,
+    raise_infeasible,
     steps_per_segment,
 )
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
@@ -88,9 +88,9 @@ def solve_period_opti(period: Period, params: HexarotorParams, limits: Limits) -
     us = np.asarray(values(var.u)).reshape(4, n)
     hs = np.asarray(values(var.h)).reshape(n)
     if not bool(stats.get("success", False)):
-        _raise_infeasible(period, status, xs, hs, limits)
+        raise_infeasible(period, status, xs, hs, limits)
     timing = (solve_s, float(stats.get("t_wall_total", solve_s)))
-    return _solution(xs, us, hs, status, int(stats.get("iter_count", -1)), timing, params)
+    return period_solution(xs, us, hs, status, int(stats.get("iter_count", -1)), timing, params)
 
 
 def _dynamics_and_cost(

@@ -136,8 +136,8 @@ def solve_period(period: Period, params: HexarotorParams, limits: Limits) -> Per
     solve_s = time.perf_counter() - started
     status = str(stats.get("return_status", "unknown"))
     if not bool(stats.get("success", False)):
-        _raise_infeasible(period, status, xs, hs, limits)
-    return _solution(xs, us, hs, status, iterations, (solve_s, ipopt_s), params)
+        raise_infeasible(period, status, xs, hs, limits)
+    return period_solution(xs, us, hs, status, iterations, (solve_s, ipopt_s), params)
 
 
 THRUST_SLACK_N = 1e-6
@@ -263,7 +263,7 @@ def _unpack(w: FloatArray, n: int) -> tuple[FloatArray, FloatArray, FloatArray]:
     return full[:, :STATE].T.copy(), full[:n, STATE : STATE + ACTION].T.copy(), full[:n, -1].copy()
 
 
-def _raise_infeasible(
+def raise_infeasible(
     period: Period, status: str, xs: FloatArray, hs: FloatArray, limits: Limits
 ) -> None:
     """A :class:`InfeasibleTrajectoryError` naming the period and the limit most exceeded."""
@@ -289,7 +289,7 @@ def _raise_infeasible(
     )
 
 
-def _solution(
+def period_solution(
     xs: FloatArray,
     us: FloatArray,
     hs: FloatArray,
@@ -298,6 +298,9 @@ def _solution(
     timing: tuple[float, float],
     params: HexarotorParams,
 ) -> PeriodSolution:
+    """The :class:`PeriodSolution` of states (7, n+1), actions (4, n) and steps (n,) in [s]
+    however they were solved (cached NLP or the benchmark's peer), with the accelerations of
+    the model at the nodes (the last node's: 0); ``timing``: (build and solve, IPOPT's own) [s]."""
     t = np.concatenate([[0.0], np.cumsum(hs)])
     v = xs[3:6].T
     force = xs[6]
