@@ -185,49 +185,15 @@ def realtime_factor(plan) -> tuple[float, float]:  # type: ignore[no-untyped-def
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--out", type=Path, default=Path("benchmarks/out"))
-    parser.add_argument("--glyphs", default="".join(GLYPHS), help="characters to write")
-    parser.add_argument("--seeds", type=int, default=3)
-    args = parser.parse_args()
+    args = _parse_args()
     glyphs, seeds = (("I",), 1) if args.quick else (tuple(args.glyphs), args.seeds)
     started = time.perf_counter()
     rows, timing, first_plan = ablation(glyphs, seeds)
     sweep = [] if args.quick else speed_sweep(seeds)
     loop_rtf, physics_rtf = realtime_factor(first_plan)
-    table = {
-        name: {
-            m: (statistics.mean(r[m] for r in rs), statistics.pstdev(r[m] for r in rs))
-            for m in METRICS
-        }
-        for name, rs in rows.items()
-    }
-    print(
-        f"\nTable I (mean +- std over {len(glyphs)} glyphs x {seeds} seeds; paper's real vehicle "
-        "for ours: 2.93 cm, 2.48 cm, 0.72 N, 0.59)"
-    )
-    print(f"{'':18s}{'EE RMSE cm':>16s}{'base RMSE cm':>16s}{'force RMSE N':>16s}{'IoU':>14s}")
-    for name, t in table.items():
-        print(
-            f"{name:18s}"
-            + "".join(_cell(t[m], 100.0 if m.endswith("_m") else 1.0) for m in METRICS)
-        )
-    for name, ts in timing.items():
-        print(
-            f"{name} planner per letter: median {statistics.median(t.plan_s for t in ts):.2f} s "
-            f"(worst {max(t.plan_s for t in ts):.2f} s), CPU median "
-            f"{statistics.median(t.cpu_s for t in ts):.2f} s, IPOPT median "
-            f"{statistics.median(t.ipopt_s for t in ts):.2f} s, "
-            f"{sum(t.iterations for t in ts)} iterations in all"
-        )
-    pairs = list(zip(timing["peer"], timing["cached"], strict=True))
-    wall = statistics.median(p.plan_s / c.plan_s for p, c in pairs)
-    cpu = statistics.median(p.cpu_s / c.cpu_s for p, c in pairs)
-    print(
-        f"cached planner against the peer: median {wall:.1f}x faster per letter in wall s, "
-        f"{cpu:.1f}x in CPU s (target: 0.5 s per letter)"
-    )
+    table = _table(rows)
+    _print_table(table, len(glyphs), seeds)
+    _print_planning(timing)
     for v, peak, iou in sweep:
         print(f"speed sweep: limit {v * 100:.0f} cm/s, peak {peak * 100:.1f} cm/s, IoU {iou:.3f}")
     print(
@@ -249,10 +215,71 @@ def main() -> None:
         )
     )
     _figure(table, sweep, first_plan, args.out / "bench_wall.png")
-    flown = fly_plan(first_plan, FlySettings(), seed=0)
-    report = KIND.report(first_plan, flown, None, f"hexarotor-sponge: {glyphs[0]}, seed 0")
-    report.savefig(args.out / "bench_wall_report.png", dpi=100)
-    print(f"report: {args.out / 'bench_wall_report.png'}")
+    _report(first_plan, glyphs[0], args.out / "bench_wall_report.png")
+
+
+def _parse_args() -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--out", type=Path, default=Path("benchmarks/out"))
+    parser.add_argument("--glyphs", default="".join(GLYPHS), help="characters to write")
+    parser.add_argument("--seeds", type=int, default=3)
+    return parser.parse_args()
+
+
+Table = dict[str, dict[str, tuple[float, float]]]
+"""Per planner/controller row, per metric: (mean, population std) over glyphs and seeds."""
+
+
+def _table(rows: dict[str, list[dict[str, float]]]) -> Table:
+    return {
+        name: {
+            m: (statistics.mean(r[m] for r in rs), statistics.pstdev(r[m] for r in rs))
+            for m in METRICS
+        }
+        for name, rs in rows.items()
+    }
+
+
+def _print_table(table: Table, glyphs: int, seeds: int) -> None:
+    """Table I: EE and base RMSE in [cm], force RMSE in [N], IoU."""
+    print(
+        f"\nTable I (mean +- std over {glyphs} glyphs x {seeds} seeds; paper's real vehicle "
+        "for ours: 2.93 cm, 2.48 cm, 0.72 N, 0.59)"
+    )
+    print(f"{'':18s}{'EE RMSE cm':>16s}{'base RMSE cm':>16s}{'force RMSE N':>16s}{'IoU':>14s}")
+    for name, t in table.items():
+        print(
+            f"{name:18s}"
+            + "".join(_cell(t[m], 100.0 if m.endswith("_m") else 1.0) for m in METRICS)
+        )
+
+
+def _print_planning(timing: dict[str, list[Timing]]) -> None:
+    """Planning time per letter of each planner, and the cached one's speed-up on the peer."""
+    for name, ts in timing.items():
+        print(
+            f"{name} planner per letter: median {statistics.median(t.plan_s for t in ts):.2f} s "
+            f"(worst {max(t.plan_s for t in ts):.2f} s), CPU median "
+            f"{statistics.median(t.cpu_s for t in ts):.2f} s, IPOPT median "
+            f"{statistics.median(t.ipopt_s for t in ts):.2f} s, "
+            f"{sum(t.iterations for t in ts)} iterations in all"
+        )
+    pairs = list(zip(timing["peer"], timing["cached"], strict=True))
+    wall = statistics.median(p.plan_s / c.plan_s for p, c in pairs)
+    cpu = statistics.median(p.cpu_s / c.cpu_s for p, c in pairs)
+    print(
+        f"cached planner against the peer: median {wall:.1f}x faster per letter in wall s, "
+        f"{cpu:.1f}x in CPU s (target: 0.5 s per letter)"
+    )
+
+
+def _report(plan: WritingPlan, glyph: str, path: Path) -> None:
+    """The kind's report figure of ``plan`` flown with seed 0."""
+    flown = fly_plan(plan, FlySettings(), seed=0)
+    report = KIND.report(plan, flown, None, f"hexarotor-sponge: {glyph}, seed 0")
+    report.savefig(path, dpi=100)
+    print(f"report: {path}")
 
 
 def _cell(value: tuple[float, float], scale: float) -> str:
