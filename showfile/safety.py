@@ -13,9 +13,10 @@ Every field has a default, so a show file without a ``safety`` section gets thes
 - **writing bounds**: a job is ``done`` only when its pen-down RMSE is at most
   ``rmse_pen_down_max_m`` and its ink IoU (when the backend knows the brush) at least ``iou_min``;
   otherwise it is ``failed`` with code ``writing_bounds``;
-- **settling**: the brush goes down only once the vehicle holds the start within
-  ``settle_tolerance_m``; it has ``settle_timeout_s`` per approach and ``settle_attempts``
-  approaches, after which the job goes back to the queue (code ``not_settled``).
+- **settling**: the brush goes down only once the vehicle has held the start within
+  ``settle_tolerance_m`` for ``settle_hold_s`` without a break; it has ``settle_timeout_s`` per
+  approach and ``settle_attempts`` approaches, after which the job goes back to the queue (code
+  ``not_settled``).
 """
 
 from __future__ import annotations
@@ -61,7 +62,12 @@ class SafetySettings(BaseModel):
     iou_min: float = Field(default=0.3, ge=0.0, le=1.0)
     """Smallest ink IoU of a job reported ``done`` (checked when the backend knows the brush)."""
     settle_tolerance_m: float = Field(default=0.01, gt=0.0)
-    """Before writing the vehicle must hold the start of the plan this close, in [m]."""
+    """Before writing the vehicle must hold the start of the plan this close, in [m]..."""
+    settle_hold_s: float = Field(default=1.0, ge=0.0)
+    """...for this long in [s] without a break. A vehicle that swings about the start passes
+    through the tolerance without holding it: ArduCopter SITL after a transit swung +-1 cm at
+    about 0.5 Hz, and a one-sample check put the brush down as the swing crossed the start, 1.4
+    cm off a moment later. A swing of period T is inside for less than T/2."""
     settle_timeout_s: float = Field(default=3.0, gt=0.0)
     """Time in [s] one approach may take to settle."""
     settle_attempts: int = Field(default=2, ge=1)

@@ -106,6 +106,19 @@ def test_closed_loop_identifies_the_lag_and_leading_cancels_most_of_it() -> None
     assert led < 0.1 * late
 
 
+def test_a_climb_that_lags_unlike_a_delay_does_not_hide_the_horizontal_delay() -> None:
+    """ArduCopter's thrust loop trails a climb by a steady few centimetres (a ramp through a P
+    loop), not by a delay; the horizontal response is the delay to lead by."""
+    t = np.arange(0.0, 3.0, DT_S)
+    sent = path(t, 0.3, 2.0, 0.0)
+    sent[:, 2] = 1.0 + 0.3 * t  # climbing at 0.3 m/s
+    measured = path(t - 0.06, 0.3, 2.0, 0.0)
+    measured[:, 2] = sent[:, 2] - 0.03 * (1.0 - np.exp(-t / 0.2))  # 3 cm behind, settling
+    fit = fit_delay(t, sent, t, measured, LagSettings())
+    assert fit is not None and fit.delay_s == pytest.approx(0.06, abs=0.004)
+    assert ResponseDelayEstimator().plausible(fit)
+
+
 def test_a_response_that_is_no_delay_leaves_the_lead_alone() -> None:
     """A vehicle that does not follow (here: stuck) fits the longest delay; it is not taken."""
     estimator = ResponseDelayEstimator()

@@ -208,6 +208,25 @@ def test_an_unsettled_start_is_flown_again_then_handed_back_without_ink() -> Non
     assert [e.level for e in run.events if e.kind == "not_settled"] == ["warning"]
 
 
+def test_a_vehicle_swinging_through_the_start_does_not_write() -> None:
+    """2 cm swings of 2 s period cross the 1 cm tolerance for 0.33 s at a time: never held 1 s."""
+    run = Run(push=lambda t: (0.02 * float(np.sin(np.pi * t)), 0.0, 0.0))
+    run.assign()
+    run.until(lambda: run.runner.phase == "ground" and bool(run.reports))
+    report = run.failed()
+    assert report.error is not None and report.error.code == "not_settled"
+    assert "write" not in run.phases and "started" not in [r.event for r in run.reports]
+
+
+def test_the_brush_goes_down_only_after_the_start_is_held() -> None:
+    run = Run()
+    run.assign()
+    run.until(lambda: run.runner.phase == "settle")
+    settle_from_s = run.now_s
+    run.until(lambda: run.runner.phase == "write")
+    assert run.now_s - settle_from_s == pytest.approx(run.safety.settle_hold_s, abs=2 * DT)
+
+
 def test_a_second_approach_that_settles_writes() -> None:
     settled_after_s = writing_starts_at() + 3.5  # 2 cm off until the first settle timed out
     run = Run(push=lambda t: (0.02 if t < settled_after_s else 0.0, 0.0, 0.0))

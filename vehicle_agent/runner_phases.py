@@ -64,6 +64,8 @@ class RunnerPhases:
         self._tracked: Setpoint | None = None
         """The setpoint of the last tick (None: the backend's mode flew), for the guard."""
         self._settle_until_s = 0.0
+        self._settled_since_s: float | None = None
+        """Since when in [s] the vehicle has been inside the settle tolerance (None: outside)."""
         self._hover_until_s = math.inf
         self._retry_at_s = -math.inf
         self._retry_code = "takeoff_refused"
@@ -173,13 +175,18 @@ class RunnerPhases:
         return self._hold()
 
     def _settle(self, snap: VehicleSnapshot, now_s: float) -> Setpoint:
-        """Hold the start of the plan until the vehicle is there; fly the approach again if it
-        is not in time; hand the job back when no approach settles."""
+        """Hold the start of the plan until the vehicle has stayed there ``settle_hold_s``; fly
+        the approach again if it does not in time; hand the job back when no approach settles."""
         job = self._job
         assert job is not None and self._hold_m_enu is not None
         error = math.dist(snap.position_m_enu, self._hold_m_enu)
         safety = self.safety
-        if error <= safety.settle_tolerance_m:
+        if error > safety.settle_tolerance_m:
+            self._settled_since_s = None
+        elif self._settled_since_s is None:
+            self._settled_since_s = now_s
+        held_s = -math.inf if self._settled_since_s is None else now_s - self._settled_since_s
+        if held_s >= safety.settle_hold_s:
             self._begin_writing(job)
             return job.setpoint(now_s)
         if now_s < self._settle_until_s:
@@ -239,6 +246,7 @@ class RunnerPhases:
             self._job.approaches += 1
             self.phase = "settle"
             self._settle_until_s = self._now_s + self.safety.settle_timeout_s
+            self._settled_since_s = None
         elif self.phase == "lift":
             self._after_lift()
         elif self.phase == "return":

@@ -144,6 +144,7 @@ def safety_limits(
         abort_backoff_s=s.abort_backoff_s,
         fence_hold_s=s.fence_hold_s,
         settle_tolerance_m=s.settle_tolerance_m,
+        settle_hold_s=s.settle_hold_s,
         settle_timeout_s=s.settle_timeout_s,
         settle_attempts=s.settle_attempts,
     )

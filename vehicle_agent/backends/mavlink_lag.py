@@ -6,7 +6,10 @@ about one. :class:`ResponseDelayEstimator` measures that delay from the flight i
 where the setpoint moves: the transit to the first stroke comes before the brush goes down): it
 keeps the last seconds of setpoints sent and positions read back and finds the delay ``d`` that
 best explains ``measured(t) = sent(t - d)`` (no free offset: along a straight leg a delay and an
-offset would be the same thing). :func:`lead_setpoint` then streams the
+offset would be the same thing) in the horizontal plane, where the brush writes on a board: the
+vertical loop (thrust) answers a climb or a descent not as a delay (on ArduCopter SITL its climb
+errors of 2-3 cm left no 3-D fit of a take-off, transit and two characters plausible, 0 of 59,
+while the horizontal fits gave 0.055-0.07 s). :func:`lead_setpoint` then streams the
 setpoint that lies ``d`` ahead on the plan, extrapolated along its velocity and acceleration, so
 the vehicle is where the plan is when the plan is there.
 """
@@ -28,7 +31,8 @@ class LagSettings:
     window_s: float = 3.0
     """Length in [s] of the history a delay is fitted on."""
     min_path_m: float = 0.15
-    """Least setpoint travel in [m] inside the window for a fit (a hover says nothing)."""
+    """Least horizontal setpoint travel in [m] inside the window for a fit (a hover or a climb
+    says nothing)."""
     max_delay_s: float = 0.4
     """Largest delay in [s] considered (and so the largest lead ever applied)."""
     step_s: float = 0.005
@@ -60,10 +64,12 @@ def fit_delay(
     measured_m: np.ndarray,
     settings: LagSettings,
 ) -> DelayFit | None:
-    """The delay of ``measured`` (K, 3) behind ``sent`` (N, 3), both positions in [m] in one frame
-    at times in [s]; None when the setpoint did not move far enough to tell."""
+    """The delay of ``measured`` (K, 3) behind ``sent`` (N, 3), both positions in [m] ENU in one
+    frame at times in [s], fitted on east and north; None when the setpoint did not move far
+    enough horizontally to tell."""
     if t_sent_s.size < 3 or t_measured_s.size < 3:
         return None
+    sent_m, measured_m = sent_m[:, :2], measured_m[:, :2]
     travel = float(np.sum(np.linalg.norm(np.diff(sent_m, axis=0), axis=1)))
     if travel < settings.min_path_m:
         return None
@@ -86,7 +92,7 @@ def fit_delay(
 def _residual_rms(
     t_sent: np.ndarray, sent: np.ndarray, t: np.ndarray, measured: np.ndarray
 ) -> float:
-    shifted = np.column_stack([np.interp(t, t_sent, sent[:, k]) for k in range(3)])
+    shifted = np.column_stack([np.interp(t, t_sent, sent[:, k]) for k in range(sent.shape[1])])
     residual = measured - shifted
     return float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))
 

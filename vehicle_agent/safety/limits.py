@@ -42,6 +42,8 @@ class SafetyLimits:
     """Outside its fence the vehicle holds this long in [s], then lands where it is."""
     settle_tolerance_m: float = 0.01
     """Before writing, the vehicle must hold the start this close in [m]..."""
+    settle_hold_s: float = 1.0
+    """...for this long in [s] without a break..."""
     settle_timeout_s: float = 3.0
     """...within this long in [s] per approach..."""
     settle_attempts: int = 2
