@@ -83,6 +83,10 @@ async def fly_jobs(
     """The agent's control loop without the bus: start the backend, then for each text assign,
     fly, measure, back on the ground (the next job on the same vehicle, as a show runs).
     ``paced``: in real time (an autopilot); otherwise as fast as the simulator goes."""
+    assignments = [JobAssignment(job_id=f"j{k}", text=text) for k, text in enumerate(texts)]
+    # Planned before connecting: planning inside the loop stalled it, and the mocap stream, for
+    # 1.2 s before take-off (PX4 dropped external vision); the agent plans in a worker process.
+    plans = [prepare_job(setup, a) for a in assignments]
     snapshot = await backend.start()
     clock = TickClock(backend.control_period_s, time_scale=1.0, skip_when_late=True)
     while paced and not _warm(backend, clock.now_s):  # the EKF converges on the forwarded mocap
@@ -94,9 +98,7 @@ async def fly_jobs(
         clock.advance()
     done: list[JobMetrics] = []
     runner = JobRunner(setup.runner_config)  # one per vehicle, as the agent has
-    for k, text in enumerate(texts):
-        assignment = JobAssignment(job_id=f"j{k}", text=text)
-        prepared = prepare_job(setup, assignment)
+    for k, (assignment, prepared) in enumerate(zip(assignments, plans, strict=True)):
         if not runner.handle_command(VehicleCommand(command="assign", job=assignment),
                                      clock.now_s).ok:  # fmt: skip
             raise RuntimeError(f"the runner refused job {k}")
