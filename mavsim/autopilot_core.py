@@ -21,6 +21,7 @@ from mavsim.guided import (
     heading_of,
     merge,
 )
+from mavsim.mocap import MOCAP_TIMEOUT_S, STALE_REFUSAL, fuses_mocap
 from mavsim.modes import NEEDS_POSITION, NOT_ARMABLE, CopterMode
 from mavsim.params import Flavor, ParamTable
 from mavsim.shaping import TargetShaper
@@ -87,6 +88,9 @@ class AutopilotCore:
         """``time_boot_ms`` of the setpoint being tracked, echoed in POSITION_TARGET_LOCAL_NED."""
         self.setpoints_received = 0
         self.mocap_received = 0
+        self.mocap_at_s = -math.inf
+        """Vehicle time in [s] of the last mocap pose."""
+        self._viso_type_at_boot = self.params["VISO_TYPE"] if self.flavor == "ardupilot" else 0.0
         self.ekf_origin_lla: tuple[float, float, float] | None = None
         """EKF origin (lat [deg], lon [deg], alt [m]) a companion set (SET_GPS_GLOBAL_ORIGIN)."""
         self.now_s = 0.0
@@ -105,8 +109,24 @@ class AutopilotCore:
 
     @property
     def position_source_ready(self) -> bool:
-        """The estimator has a position source (arming and GUIDED allowed)."""
-        return self.now_s >= self.config.position_source_delay_s
+        """The estimator has a position source (arming and GUIDED allowed): after the start
+        delay, and, while mocap is the source, with a recent pose (:mod:`mavsim.mocap`)."""
+        return self.now_s >= self.config.position_source_delay_s and not self.mocap_stale
+
+    @property
+    def fuses_mocap(self) -> bool:
+        """Mocap is the estimator's position source (the parameters say so)."""
+        return fuses_mocap(self.flavor, self.params, self._viso_type_at_boot)
+
+    @property
+    def mocap_stale(self) -> bool:
+        """Mocap is the position source and no pose came recently."""
+        return self.fuses_mocap and self.now_s - self.mocap_at_s > MOCAP_TIMEOUT_S[self.flavor]
+
+    def mocap_pose(self) -> None:
+        """A VISION_POSITION_ESTIMATE or ATT_POS_MOCAP arrived."""
+        self.mocap_received += 1
+        self.mocap_at_s = self.now_s
 
     @property
     def on_ground(self) -> bool:
@@ -149,6 +169,8 @@ class AutopilotCore:
     def _arming_refusal(self) -> str | None:
         if self.config.arm_refusal is not None:
             return f"PreArm: {self.config.arm_refusal}"
+        if self.now_s >= self.config.position_source_delay_s and self.mocap_stale:
+            return STALE_REFUSAL[self.flavor]
         if not self.position_source_ready:
             return "PreArm: Need Position Estimate"
         if self.mode in NOT_ARMABLE:

@@ -154,7 +154,7 @@ class VehicleEndpoint:
         elif kind in ("PARAM_SET", "PARAM_REQUEST_READ", "PARAM_REQUEST_LIST"):
             self._param(kind, message)
         elif kind in ("VISION_POSITION_ESTIMATE", "ATT_POS_MOCAP"):
-            ap.mocap_received += 1
+            ap.mocap_pose()
         elif kind == "SET_GPS_GLOBAL_ORIGIN":  # both autopilots answer with the origin taken
             ap.ekf_origin_lla = (message.latitude * 1e-7, message.longitude * 1e-7,
                                  message.altitude * 1e-3)  # fmt: skip

@@ -18,6 +18,13 @@ maximum altitude, bit 1 circle), FENCE_RADIUS [m], FENCE_ALT_MAX [m], FENCE_ACTI
 offboard stream is lost, :mod:`mavsim.px4`), GF_MAX_HOR_DIST [m], GF_MAX_VER_DIST [m] (0: off),
 GF_ACTION (0 none, 1 warning, 2 hold, 3 return, 5 land), MPC_XY_P [1/s], MPC_XY_VEL_P_ACC [1/s]
 and MPC_XY_VEL_I_ACC [1/s^2] (the horizontal P-PI cascade), MPC_Z_P [1/s].
+
+Motion-capture fusion (:mod:`mavsim.mocap`): ArduCopter VISO_TYPE (read at boot) and
+EK3_SRC1_POSXY decide whether mocap is the position source; PX4 EKF2_EV_CTRL and EKF2_GPS_CTRL.
+The other estimator parameters a companion sets with them (EK3_SRC1_POSZ/VELXY/VELZ,
+VISO_POS_M_NSE, VISO_DELAY_MS, EK3_TAU_OUTPUT; EKF2_HGT_REF, EKF2_EVP_NOISE, EKF2_TAU_POS/VEL,
+EKF2_RNG_CTRL, EKF2_ASP_DELAY, EKF2_DELAY_MAX) are kept and read back with the real defaults; the
+simulated estimator is exact, so they change nothing else.
 """
 
 from __future__ import annotations
@@ -28,7 +35,7 @@ from typing import Literal
 
 from mavsim.errors import MavsimError
 
-INT8, INT32, REAL32 = 2, 6, 9
+INT8, INT16, INT32, REAL32 = 2, 4, 6, 9
 """MAV_PARAM_TYPE of the parameters below."""
 _INTEGER_TYPES = frozenset(range(1, 9))
 
@@ -64,6 +71,14 @@ ARDUPILOT_PARAMS = (
     ParamDef("FENCE_RADIUS", REAL32, 300.0),
     ParamDef("FENCE_ALT_MAX", REAL32, 100.0),
     ParamDef("FENCE_ACTION", INT8, 1),
+    ParamDef("VISO_TYPE", INT8, 0),
+    ParamDef("EK3_SRC1_POSXY", INT8, 3),
+    ParamDef("EK3_SRC1_POSZ", INT8, 1),
+    ParamDef("EK3_SRC1_VELXY", INT8, 3),
+    ParamDef("EK3_SRC1_VELZ", INT8, 3),
+    ParamDef("VISO_POS_M_NSE", REAL32, 0.2),
+    ParamDef("VISO_DELAY_MS", INT16, 10),
+    ParamDef("EK3_TAU_OUTPUT", INT8, 25),
 )
 PX4_PARAMS = (
     ParamDef("COM_OF_LOSS_T", REAL32, 1.0),
@@ -75,6 +90,15 @@ PX4_PARAMS = (
     ParamDef("MPC_XY_VEL_P_ACC", REAL32, 1.8),
     ParamDef("MPC_XY_VEL_I_ACC", REAL32, 0.4),
     ParamDef("MPC_Z_P", REAL32, 1.0),
+    ParamDef("EKF2_EV_CTRL", INT32, 0),
+    ParamDef("EKF2_HGT_REF", INT32, 1),
+    ParamDef("EKF2_GPS_CTRL", INT32, 7),
+    ParamDef("EKF2_EVP_NOISE", REAL32, 0.1),
+    ParamDef("EKF2_TAU_POS", REAL32, 0.25),
+    ParamDef("EKF2_TAU_VEL", REAL32, 0.25),
+    ParamDef("EKF2_RNG_CTRL", INT32, 1),
+    ParamDef("EKF2_ASP_DELAY", REAL32, 100.0),
+    ParamDef("EKF2_DELAY_MAX", REAL32, 200.0),
 )
 
 

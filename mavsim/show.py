@@ -3,7 +3,8 @@
 A vehicle with ``backend: mavlink`` and ``mavlink_url: udp:HOST:PORT`` (or ``udpout:``) becomes a
 simulated ArduCopter listening on HOST:PORT, system id ``mavlink_system_id`` (default: its index
 in the show + 1), starting at its ``home_m_enu`` (also its LOCAL_NED origin), with the show's mass
-and thrust limits.
+and thrust limits. A vehicle that forwards mocap (``mavlink_mocap``) boots with the parameters its
+autopilot reads only at boot to fuse it (:data:`mavsim.mocap.MOCAP_BOOT_PARAMS`).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from typing import Any
 
 from mavsim.config import PositionGains, VehicleConfig
 from mavsim.errors import MavsimError
+from mavsim.mocap import MOCAP_BOOT_PARAMS
 
 SERVED_SCHEMES = ("udp", "udpout")
 
@@ -61,6 +63,9 @@ def vehicle_configs(
             arm_refusal=refusals.pop(vehicle.id, None),
             **overrides,
         )
+        if vehicle.mavlink_mocap != "none":
+            boot = MOCAP_BOOT_PARAMS[config.autopilot]
+            config = replace(config, params=(*boot, *config.params))
         configs.append(config if gains is None else replace(config, gains=gains))
     if refusals:
         raise MavsimError(

@@ -331,7 +331,7 @@ def test_mocap_flows_at_its_rate_while_the_control_loop_awaits_the_autopilot() -
         return MocapPose(position_m_enu=(1.0, -1.0, 0.0))
 
     async def scenario(server: MavsimServer) -> None:
-        # mavsim has no fusion parameters (VISO_TYPE, EK3_SRC1_*): forwarding alone here
+        # forwarding alone here (the next test: fusion and arming)
         async with connected(server, mocap="vision_position_estimate", mocap_rate_hz=50.0,
                              set_params=False) as (backend, driver):  # fmt: skip
             backend._mocap.source = source
@@ -349,6 +349,45 @@ def test_mocap_flows_at_its_rate_while_the_control_loop_awaits_the_autopilot() -
         assert server.endpoints[0].autopilot.mocap_received >= 40
 
     with vehicle() as server:
+        asyncio.run(scenario(server))
+
+
+@pytest.mark.parametrize(
+    ("autopilot", "boot", "refusal"),
+    [
+        ("ardupilot", (("VISO_TYPE", 1),), "PreArm: VisOdom: not healthy"),
+        ("px4", (("EKF2_ASP_DELAY", 0.0), ("EKF2_DELAY_MAX", 20.0)), "Arming denied: Resolve"),
+    ],
+)
+def test_a_mocap_vehicle_is_set_up_at_connect_and_arms_only_while_poses_flow(
+    autopilot: str, boot: tuple[tuple[str, float], ...], refusal: str
+) -> None:
+    # The agent's fusion parameters are set and read back as on SITL; with mocap the estimator's
+    # only position source, arming waits for poses (a stalled mocap task was refused on PX4 SIH).
+    poses = {"on": False}
+
+    def source(_now_s: float) -> MocapPose | None:
+        return MocapPose(position_m_enu=HOME) if poses["on"] else None
+
+    async def scenario(server: MavsimServer) -> None:
+        ap = server.endpoints[0].autopilot
+        async with connected(server, mocap="vision_position_estimate", mocap_rate_hz=50.0) as (
+            backend,
+            driver,
+        ):
+            backend._mocap.source = source
+            assert ap.fuses_mocap  # the agent's parameters made mocap the position source
+            for _ in range(30):
+                await driver.tick()
+            with pytest.raises(ArmingRefusedError) as refused:
+                await backend.takeoff(HOVER)
+            assert refused.value.reason.startswith(refusal)
+            poses["on"] = True
+            await driver.until(lambda _s: ap.position_source_ready, 1.0)
+            await airborne(backend, driver)
+            assert ap.armed and ap.mocap_received > 20
+
+    with vehicle(autopilot=autopilot, params=boot) as server:
         asyncio.run(scenario(server))
 
 
