@@ -23,12 +23,15 @@ from types import TracebackType
 import msgspec
 
 from bus.messages import Event, WrittenInk
+from orchestrator.compaction import FULL_FINISHED_INDEX, Compaction, HistoryPolicy, compact
 from orchestrator.jobs import FINAL_STATES, Job
 
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 """1: jobs, events, settings. 2: ``jobs.idempotency_key`` (client id and key of a submission,
-unique). 3: ``jobs.written`` (the ink picture of a done job, WrittenInk JSON). Both added in place
-to an older database."""
+unique). 3: ``jobs.written`` (the ink picture of a done job, WrittenInk JSON). 4: ``jobs.compacted``
+(1: a finished job's bulky parts dropped, ``orchestrator/compaction.py``) and incremental
+auto-vacuum (freed pages go back to the file system). All added in place to an older database
+(version 4's auto-vacuum by one ``VACUUM``, which rewrites the file once)."""
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS jobs (
@@ -53,6 +56,9 @@ _KEY_INDEX = (
     "CREATE UNIQUE INDEX IF NOT EXISTS jobs_idempotency_key ON jobs (idempotency_key) "
     "WHERE idempotency_key IS NOT NULL"
 )
+
+_INCREMENTAL = 2
+"""``PRAGMA auto_vacuum`` value of incremental mode."""
 
 _job_decoder = msgspec.json.Decoder(Job)
 _event_decoder = msgspec.json.Decoder(Event)
@@ -94,12 +100,15 @@ class JobStore:
             self._db.execute("PRAGMA synchronous=FULL")
             self._db.execute("PRAGMA busy_timeout=5000")
             version = self._db.execute("PRAGMA user_version").fetchone()[0]
-            if version not in (0, 1, 2, SCHEMA_VERSION):  # 0: new file; 1, 2: migrated below
+            if version not in (0, 1, 2, 3, SCHEMA_VERSION):  # 0: new file; 1-3: migrated below
                 raise StoreError(
                     f"{self.path}: schema version {version}, expected {SCHEMA_VERSION}"
                 )
+            self._db.execute("PRAGMA auto_vacuum=INCREMENTAL")  # takes effect on a new file
             self._db.executescript(_SCHEMA)
             self._migrate()
+            if self._db.execute("PRAGMA auto_vacuum").fetchone()[0] != _INCREMENTAL:
+                self._db.execute("VACUUM")  # an older file: rewritten once with the new mode
             self._db.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
         except sqlite3.Error as exc:
             raise StoreError(f"{self.path}: {exc}") from exc
@@ -112,7 +121,10 @@ class JobStore:
                 self._db.execute("ALTER TABLE jobs ADD COLUMN idempotency_key TEXT")
             if "written" not in columns:
                 self._db.execute("ALTER TABLE jobs ADD COLUMN written BLOB")
+            if "compacted" not in columns:
+                self._db.execute("ALTER TABLE jobs ADD COLUMN compacted INTEGER NOT NULL DEFAULT 0")
             self._db.execute(_KEY_INDEX)
+            self._db.execute(FULL_FINISHED_INDEX)
 
     def __enter__(self) -> JobStore:
         return self
@@ -174,7 +186,8 @@ class JobStore:
             self._db.executemany(
                 "INSERT INTO jobs (job_id, seq, state, data, idempotency_key) "
                 "VALUES (?, ?, ?, ?, ?) "
-                "ON CONFLICT(job_id) DO UPDATE SET state=excluded.state, data=excluded.data",
+                "ON CONFLICT(job_id) DO UPDATE SET state=excluded.state, data=excluded.data, "
+                "compacted=0",
                 job_rows,
             )
             self._db.executemany("INSERT INTO events (time_s, data) VALUES (?, ?)", event_rows)
@@ -233,6 +246,13 @@ class JobStore:
             )
             found.update((job_id, _ink_decoder.decode(data)) for job_id, data in rows)
         return found
+
+    def compact(self, policy: HistoryPolicy, now_s: float, *, resume: bool = False) -> Compaction:
+        """Bound the history by ``policy`` (orchestrator/compaction.py); ``now_s``: Unix time."""
+        try:
+            return compact(self._db, policy, now_s, resume=resume)
+        except sqlite3.Error as exc:
+            raise StoreError(f"{self.path}: {exc}") from exc
 
     def events(self, limit: int = 200) -> list[Event]:
         """The latest events, oldest first."""
