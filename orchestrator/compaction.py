@@ -52,12 +52,12 @@ class HistoryPolicy:
     """Once over budget, compaction goes on down to this fraction of it."""
     keep_full_finished: int = 50
     """The newest finished jobs never compacted (at least 1)."""
-    batch_jobs: int = 100
-    """Jobs compacted per transaction."""
-    batch_events: int = 1000
+    batch_jobs: int = 50
+    """Jobs compacted per transaction (as many as finish between two scheduled calls)."""
+    batch_events: int = 500
     """Events deleted per transaction."""
-    max_batches: int = 5
-    """Transactions per call."""
+    max_batches: int = 1
+    """Transactions per call (see ``benchmarks/bench_store.py`` for their time)."""
 
     @property
     def low_water_bytes(self) -> int:
@@ -181,15 +181,16 @@ def _compactable(
 ) -> list[Job]:
     """The oldest finished jobs not compacted yet, outside the newest ``keep_full_finished``:
     any of them when ``pressed``, else those that finished before ``age_cutoff_s``."""
-    newest_kept = db.execute(
-        f"SELECT seq FROM jobs WHERE state IN ({_FINAL}) ORDER BY seq DESC LIMIT 1 OFFSET ?",
+    newest_kept = db.execute(  # +state: walk the seq index from the end, not the state index
+        f"SELECT seq FROM jobs WHERE +state IN ({_FINAL}) ORDER BY seq DESC LIMIT 1 OFFSET ?",
         (policy.keep_full_finished - 1,),
     ).fetchone()
     if newest_kept is None:
         return []
     age_term = "" if pressed else "AND json_extract(data, '$.updated_at_s') < :cutoff "
     rows = db.execute(
-        f"SELECT data FROM jobs WHERE compacted = 0 AND state IN ({_FINAL}) AND seq < :kept "
+        "SELECT data FROM jobs INDEXED BY jobs_full_finished "
+        f"WHERE compacted = 0 AND state IN ({_FINAL}) AND seq < :kept "
         f"{age_term}ORDER BY seq LIMIT :limit",
         {"kept": newest_kept[0], "cutoff": age_cutoff_s, "limit": policy.batch_jobs},
     )

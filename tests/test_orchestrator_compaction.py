@@ -283,11 +283,12 @@ def test_the_service_compacts_at_start_and_when_due(tmp_path: Path) -> None:
         _fill(store, jobs)
         service = OrchestratorService(SHOW, session=None, store=store)  # type: ignore[arg-type]
         assert service.history.budget_bytes == 100_000_000  # the show file's default
-        service.history = HistoryPolicy(600_000, keep_full_finished=10, batch_jobs=50)
-        service.compact_history(1e6)  # at start: 5 batches of 50, work left
-        assert store.job("j250") == compacted(jobs[249]) and store.job("j251") == jobs[250]
-        service.compact_history(1e6 + 0.1)  # the next tick resumes
-        assert store.job("j251") == compacted(jobs[250])
+        service.history = HistoryPolicy(600_000, keep_full_finished=10)
+        service.compact_history(1e6)  # at start: one batch, work left
+        assert store.job("j50") == compacted(jobs[49]) and store.job("j51") == jobs[50]
+        for tick in range(1, 7):  # the next ticks resume
+            service.compact_history(1e6 + 0.1 * tick)
+        assert store.job("j290") == compacted(jobs[289]) and store.job("j291") == jobs[290]
         assert used_bytes(store._db) <= 600_000
         store.save([jobs[0]])  # whole again, but too soon for another call
         service.compact_history(1e6 + 0.2)
