@@ -213,6 +213,9 @@ def traced(
 def soak(args: argparse.Namespace, out_dir: Path) -> tuple[Samples, Jobs, dict[str, int]]:
     """Run the show for ``args.minutes``; the samples, the jobs and restarts per process."""
     path, show = derived_show(SHOW, out_dir, time_scale=args.time_scale)
+    if args.database_budget_mb is not None:
+        storage = show.storage.model_copy(update={"database_budget_mb": args.database_budget_mb})
+        path, show = derived_show(path, out_dir, storage=storage)
     samples, jobs = Samples(), Jobs()
     adjust = traced(args.trace_memory, args.trace.split(","), args.warmup_minutes * 60.0)
     with (
@@ -334,6 +337,12 @@ def main() -> int:
     parser.add_argument("--waiting", type=int, default=8, help="characters kept waiting (8)")
     parser.add_argument("--sample-s", type=float, default=10.0, help="sampling period (10 s)")
     parser.add_argument("--png", type=Path, help="plot RSS over time per process here")
+    parser.add_argument(
+        "--database-budget-mb",
+        type=float,
+        help="the show's storage.database_budget_mb (default: the show's; small to see the"
+        " database compacted within a short run)",
+    )
     parser.add_argument("--out-dir", type=Path, help="keep the show's files here (default: tmp)")
     parser.add_argument(
         "--trace-memory",

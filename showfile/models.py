@@ -122,7 +122,7 @@ class StorageSettings(_Model):
     """Disk for job files, in [MB], shared evenly by the vehicles; the oldest go first."""
     job_files_max_age_h: float | None = Field(default=None, gt=0.0)
     """Job files older than this are removed, in [h]; None: only the budget limits them."""
-    database_budget_mb: float = Field(default=100.0, ge=10.0)
+    database_budget_mb: float = Field(default=100.0, gt=0.0)
     """Disk for the SQLite database, in [MB] (its WAL adds up to ~4 MB). Past it the oldest
     finished jobs are compacted (strokes and ink picture dropped; the record that keeps counts
     exact and idempotency keys answered stays, ~1 kB a job) and the oldest events deleted, down
