@@ -57,11 +57,12 @@ TICK_PERIOD_S = 0.1
 """Wall time between timer decisions (loss detection, confirmation, assignment), [s]."""
 VEHICLE_COMMAND_TIMEOUT_S = 2.0
 """How long an agent has to answer a command, [s]."""
-MAX_PENDING_PLANS = 4
+MAX_PENDING_PLANS = 64
 """Planner runs for ETAs waiting at most (one worker, about 25-100 ms each); beyond, submissions
-keep their rough estimate. 64 gave every submission of a burst its planned duration, but under
-the bus fuzz (thousands of submissions) the orchestrator's memory then grew 11 % after warm-up:
-bounded planning caches are needed first."""
+keep their rough estimate. 64 gives every submission of a burst its planned duration (the ETA
+figures of ``bench_show.py --eta`` need it; 4 left most of a 16-character burst on rough
+estimates); the planning caches it fills are bounded (``CACHED_DURATIONS``, the glyph and
+planner LRU caches), so the orchestrator's memory stays within the bus fuzz's bound."""
 CACHED_DURATIONS = 256
 """Texts whose planned durations are kept for their next submission (a show's corpus repeats;
 the kiosk's visitors do not)."""
