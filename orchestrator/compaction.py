@@ -5,13 +5,22 @@ What a finished job costs (Airshow soak, text jobs): its ink picture ``jobs.writ
 (about 5 kB of pages with its overflow chain), ``jobs.data`` ~0.9 kB, four events ~0.6 kB: about
 6 kB a job, 9 MB per hour of show. Drawn jobs also carry their strokes (up to the 1 MB payload).
 
-Kept forever: every job's row with its id, sequence, state, idempotency key, text, label,
-client, vehicle, board, times, attempts, durations, metrics and error (~1 kB), so that counts
-per state stay exact and a repeated idempotency key still answers with its job. Compacted: a
-finished job's strokes document and ink picture. Deleted: events (the log) older than the
-compaction reached. Never touched: an unfinished job, nor any event at or after the submission
-of the oldest unfinished job. The newest ``keep_full_finished`` finished jobs stay whole (a
-``snapshot`` reply shows the ink pictures of the newest).
+Three tiers, oldest first, while over budget (or past ``max_age_s``):
+
+- compacted: a finished job's strokes document and ink picture are dropped; its record stays
+  (id, sequence, state, idempotency key, text, label, client, vehicle, board, times, attempts,
+  durations, metrics, error: ~1.2 kB with its index entries);
+- folded (only over budget, once every older finished job is compacted): the record of the
+  oldest compacted jobs is deleted, their number added to ``job_totals`` (per state) and their
+  idempotency key kept in ``folded_keys`` with the job's id and state (~80 B);
+- deleted: events (the log) older than the jobs just compacted (every event, once no job is
+  left to compact).
+
+Kept forever, so that counts per state stay exact and a repeated idempotency key still answers
+with its job: the per-state totals and every key. Never touched: an unfinished job, any event
+at or after the submission of the oldest unfinished job, and the newest ``keep_full_finished``
+finished jobs (a ``snapshot`` reply shows the ink pictures of the newest); the newest
+``keep_records`` finished jobs keep their record.
 
 Work is done in small transactions (``batch_jobs`` jobs, ``batch_events`` events) and at most
 ``max_batches`` per call, so a call never holds the orchestrator's loop for long; the caller calls
@@ -22,14 +31,25 @@ from __future__ import annotations
 
 import math
 import sqlite3
+from collections import Counter
 from dataclasses import dataclass
 
 import msgspec
 
+from orchestrator.finished import MAX_FINAL_JOBS
 from orchestrator.jobs import FINAL_STATES, TRANSITIONS, Job
 
 _FINAL = ",".join(f"'{state}'" for state in sorted(FINAL_STATES))
 _UNFINISHED = ",".join(f"'{state}'" for state in sorted(set(TRANSITIONS) - FINAL_STATES))
+FOLD_TABLES = """
+CREATE TABLE IF NOT EXISTS job_totals (state TEXT PRIMARY KEY, count INTEGER NOT NULL);
+CREATE TABLE IF NOT EXISTS folded_keys (
+    idempotency_key TEXT PRIMARY KEY,
+    job_id TEXT NOT NULL,
+    state TEXT NOT NULL
+) WITHOUT ROWID;
+"""
+"""Jobs folded per state; (scoped) idempotency key -> job id and state of folded jobs."""
 FULL_FINISHED_INDEX = (
     "CREATE INDEX IF NOT EXISTS jobs_full_finished ON jobs (seq) "
     f"WHERE compacted = 0 AND state IN ({_FINAL})"
@@ -52,6 +72,9 @@ class HistoryPolicy:
     """Once over budget, compaction goes on down to this fraction of it."""
     keep_full_finished: int = 50
     """The newest finished jobs never compacted (at least 1)."""
+    keep_records: int = MAX_FINAL_JOBS
+    """The newest finished jobs never folded (at least 1): by default as many as the Book holds,
+    so that a job it may still save is never folded (it would be counted twice)."""
     batch_jobs: int = 50
     """Jobs compacted per transaction (as many as finish between two scheduled calls)."""
     batch_events: int = 500
@@ -70,6 +93,8 @@ class Compaction:
 
     jobs: int
     """Jobs compacted."""
+    folded: int
+    """Compacted jobs folded into the totals."""
     events: int
     """Events deleted."""
     before_bytes: int
@@ -126,27 +151,32 @@ def compact(
     ``db`` is in autocommit mode (``isolation_level=None``); each batch is one transaction."""
     before = used_bytes(db)
     pressed = before > (policy.low_water_bytes if resume else policy.budget_bytes)
-    jobs = events = 0
+    jobs = folded = events = 0
     more = False
     if pressed or policy.max_age_s is not None:
         for batch in range(policy.max_batches):
-            n_jobs, n_events = _batch(db, policy, now_s, pressed)
-            jobs, events = jobs + n_jobs, events + n_events
-            if not (n_jobs or n_events):
+            n_jobs, n_folded, n_events = _batch(db, policy, now_s, pressed)
+            jobs, folded, events = jobs + n_jobs, folded + n_folded, events + n_events
+            if not (n_jobs or n_folded or n_events):
                 break
             pressed = pressed and used_bytes(db) > policy.low_water_bytes
             more = batch == policy.max_batches - 1
-    return Compaction(jobs, events, before, used_bytes(db), more)
+    return Compaction(jobs, folded, events, before, used_bytes(db), more)
 
 
 def _batch(
     db: sqlite3.Connection, policy: HistoryPolicy, now_s: float, pressed: bool
-) -> tuple[int, int]:
-    """One transaction: the oldest compactable jobs, then the events before them; counts."""
+) -> tuple[int, int, int]:
+    """One transaction: the oldest compactable jobs (or, over budget with none left, the oldest
+    compacted ones folded), then the events before them; the counts of each."""
     age_cutoff_s = -math.inf if policy.max_age_s is None else now_s - policy.max_age_s
     db.execute("BEGIN IMMEDIATE")
     try:
-        rows = _compactable(db, policy, age_cutoff_s, pressed)
+        kept_seq = _newest_finished_seq(db, policy.keep_full_finished)
+        rows = _compactable(db, policy, kept_seq, age_cutoff_s, pressed)
+        folded = 0
+        if pressed and not rows:
+            folded = _fold(db, _newest_finished_seq(db, policy.keep_records), policy.batch_jobs)
         db.executemany(
             "UPDATE jobs SET data = ?, written = NULL, compacted = 1 WHERE job_id = ?",
             [(msgspec.json.encode(compacted(job)), job.job_id) for job in rows],
@@ -173,28 +203,57 @@ def _batch(
         db.execute("ROLLBACK")
         raise
     db.execute("COMMIT")
-    return len(rows), deleted
+    return len(rows), folded, deleted
+
+
+def _newest_finished_seq(db: sqlite3.Connection, count: int) -> int:
+    """The submission order of the oldest of the newest ``count`` finished jobs (0: fewer)."""
+    row = db.execute(  # +state: walk the seq index from the end, not the state index
+        f"SELECT seq FROM jobs WHERE +state IN ({_FINAL}) ORDER BY seq DESC LIMIT 1 OFFSET ?",
+        (count - 1,),
+    ).fetchone()
+    return 0 if row is None else int(row[0])
 
 
 def _compactable(
-    db: sqlite3.Connection, policy: HistoryPolicy, age_cutoff_s: float, pressed: bool
+    db: sqlite3.Connection,
+    policy: HistoryPolicy,
+    kept_seq: int,
+    age_cutoff_s: float,
+    pressed: bool,
 ) -> list[Job]:
-    """The oldest finished jobs not compacted yet, outside the newest ``keep_full_finished``:
-    any of them when ``pressed``, else those that finished before ``age_cutoff_s``."""
-    newest_kept = db.execute(  # +state: walk the seq index from the end, not the state index
-        f"SELECT seq FROM jobs WHERE +state IN ({_FINAL}) ORDER BY seq DESC LIMIT 1 OFFSET ?",
-        (policy.keep_full_finished - 1,),
-    ).fetchone()
-    if newest_kept is None:
-        return []
+    """The oldest finished jobs not compacted yet, submitted before ``kept_seq`` (the oldest of
+    the newest ``keep_full_finished``): any of them when ``pressed``, else those that finished
+    before ``age_cutoff_s``."""
     age_term = "" if pressed else "AND json_extract(data, '$.updated_at_s') < :cutoff "
     rows = db.execute(
         "SELECT data FROM jobs INDEXED BY jobs_full_finished "
         f"WHERE compacted = 0 AND state IN ({_FINAL}) AND seq < :kept "
         f"{age_term}ORDER BY seq LIMIT :limit",
-        {"kept": newest_kept[0], "cutoff": age_cutoff_s, "limit": policy.batch_jobs},
+        {"kept": kept_seq, "cutoff": age_cutoff_s, "limit": policy.batch_jobs},
     )
     return [_job_decoder.decode(data) for (data,) in rows]
+
+
+def _fold(db: sqlite3.Connection, kept_seq: int, limit: int) -> int:
+    """Fold the oldest ``limit`` compacted jobs (submitted before ``kept_seq``) into the totals
+    and the key table; their count."""
+    rows = db.execute(  # the seq index from the start: compacted jobs are the oldest
+        "SELECT job_id, state, idempotency_key FROM jobs WHERE +compacted = 1 AND seq < ? "
+        "ORDER BY seq LIMIT ?",
+        (kept_seq, limit),
+    ).fetchall()
+    db.executemany(
+        "INSERT INTO folded_keys (idempotency_key, job_id, state) VALUES (?, ?, ?)",
+        [(key, job_id, state) for job_id, state, key in rows if key is not None],
+    )
+    db.executemany(
+        "INSERT INTO job_totals (state, count) VALUES (?, ?) "
+        "ON CONFLICT(state) DO UPDATE SET count = count + excluded.count",
+        Counter(state for _, state, _ in rows).items(),
+    )
+    db.executemany("DELETE FROM jobs WHERE job_id = ?", [(job_id,) for job_id, _, _ in rows])
+    return len(rows)
 
 
 def _give_back_free_pages(db: sqlite3.Connection) -> None:

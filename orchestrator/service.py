@@ -246,18 +246,19 @@ class OrchestratorService:
             self._compaction.ran(now_s, more=False)
             return
         self._compaction.ran(now_s, more=result.more)
-        if result.jobs or result.events:
+        if result.jobs or result.folded or result.events:
             log.info(
-                "database compacted: %d jobs, %d events; %.1f -> %.1f MB",
+                "database compacted: %d jobs, %d folded, %d events; %.1f -> %.1f MB",
                 result.jobs,
+                result.folded,
                 result.events,
                 result.before_bytes / 1e6,
                 result.after_bytes / 1e6,
             )
         if not result.more and result.after_bytes > self.history.budget_bytes:
             log.warning(
-                "database %.1f MB over its %.1f MB budget: unfinished jobs and compacted records"
-                " are kept",
+                "database %.1f MB over its %.1f MB budget: unfinished jobs, the newest finished"
+                " and every idempotency key are kept",
                 result.after_bytes / 1e6,
                 self.history.budget_bytes / 1e6,
             )

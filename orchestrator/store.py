@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import sqlite3
+from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,14 +23,21 @@ from types import TracebackType
 
 import msgspec
 
-from bus.messages import Event, WrittenInk
-from orchestrator.compaction import FULL_FINISHED_INDEX, Compaction, HistoryPolicy, compact
+from bus.messages import Event, JobStateName, WrittenInk
+from orchestrator.compaction import (
+    FOLD_TABLES,
+    FULL_FINISHED_INDEX,
+    Compaction,
+    HistoryPolicy,
+    compact,
+)
 from orchestrator.jobs import FINAL_STATES, Job
 
 SCHEMA_VERSION = 4
 """1: jobs, events, settings. 2: ``jobs.idempotency_key`` (client id and key of a submission,
 unique). 3: ``jobs.written`` (the ink picture of a done job, WrittenInk JSON). 4: ``jobs.compacted``
-(1: a finished job's bulky parts dropped, ``orchestrator/compaction.py``) and incremental
+(1: a finished job's bulky parts dropped, ``orchestrator/compaction.py``), ``job_totals`` and
+``folded_keys`` (what is left of the oldest finished jobs past the budget), and incremental
 auto-vacuum (freed pages go back to the file system). All added in place to an older database
 (version 4's auto-vacuum by one ``VACUUM``, which rewrites the file once)."""
 
@@ -88,6 +96,14 @@ class StoredState:
     """Boards left half-written (no job until ``fresh_sheet``)."""
 
 
+@dataclass(frozen=True)
+class KeyedJob:
+    """What a repeated idempotency key is answered with (also of a folded job)."""
+
+    job_id: str
+    state: JobStateName
+
+
 class JobStore:
     """The orchestrator's SQLite database; use as a context manager."""
 
@@ -105,7 +121,7 @@ class JobStore:
                     f"{self.path}: schema version {version}, expected {SCHEMA_VERSION}"
                 )
             self._db.execute("PRAGMA auto_vacuum=INCREMENTAL")  # takes effect on a new file
-            self._db.executescript(_SCHEMA)
+            self._db.executescript(_SCHEMA + FOLD_TABLES)
             self._migrate()
             if self._db.execute("PRAGMA auto_vacuum").fetchone()[0] != _INCREMENTAL:
                 self._db.execute("VACUUM")  # an older file: rewritten once with the new mode
@@ -209,11 +225,14 @@ class JobStore:
             (-1 if max_final is None else max_final,),
         ).fetchall()
         jobs = [_job_decoder.decode(data) for _, data in sorted(kept)]
-        counts = dict(self._db.execute("SELECT state, COUNT(*) FROM jobs GROUP BY state"))
+        counts: Counter[str] = Counter(
+            dict(self._db.execute("SELECT state, COUNT(*) FROM jobs GROUP BY state"))
+        )
+        counts.update(dict(self._db.execute("SELECT state, count FROM job_totals")))
         settings = dict(self._db.execute("SELECT key, value FROM settings").fetchall())
         return StoredState(
             jobs=jobs,
-            job_counts=counts,
+            job_counts=dict(counts),
             queue_paused=bool(json.loads(settings.get("queue_paused", "false"))),
             paused_vehicles=list(json.loads(settings.get("paused_vehicles", "[]"))),
             held_vehicles=list(json.loads(settings.get("held_vehicles", "[]"))),
@@ -225,12 +244,15 @@ class JobStore:
         row = self._db.execute("SELECT data FROM jobs WHERE job_id = ?", (job_id,)).fetchone()
         return _job_decoder.decode(row[0]) if row else None
 
-    def job_by_key(self, client_id: str, idempotency_key: str) -> Job | None:
-        """The job submitted by ``client_id`` with ``idempotency_key``, as stored."""
+    def job_by_key(self, client_id: str, idempotency_key: str) -> KeyedJob | None:
+        """The job submitted by ``client_id`` with ``idempotency_key`` (folded ones too)."""
+        key = _scope(client_id, idempotency_key)
         row = self._db.execute(
-            "SELECT data FROM jobs WHERE idempotency_key = ?", (_scope(client_id, idempotency_key),)
+            "SELECT job_id, state FROM jobs WHERE idempotency_key = ? UNION ALL "
+            "SELECT job_id, state FROM folded_keys WHERE idempotency_key = ?",
+            (key, key),
         ).fetchone()
-        return _job_decoder.decode(row[0]) if row else None
+        return KeyedJob(job_id=row[0], state=row[1]) if row else None
 
     def written(self, job_ids: Iterable[str]) -> dict[str, WrittenInk]:
         """The stored ink pictures of ``job_ids`` (jobs without one are left out)."""

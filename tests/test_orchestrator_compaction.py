@@ -19,7 +19,7 @@ from bus.messages import Event, JobMetrics, SubmitRequest, WrittenInk
 from orchestrator.compaction import CompactionSchedule, HistoryPolicy, compacted, used_bytes
 from orchestrator.jobs import Job
 from orchestrator.service import OrchestratorService
-from orchestrator.store import JobStore
+from orchestrator.store import JobStore, KeyedJob
 from showfile import load_show
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -98,7 +98,7 @@ def _file_bytes(path: Path) -> int:
         max_size=400,
     ),
     drawn=st.sets(st.integers(1, 400), max_size=40),
-    budget_kb=st.integers(150, 1000),
+    budget_kb=st.integers(60, 1000),
 )
 def test_the_database_stays_under_budget_and_loses_nothing(
     states: list[str], drawn: set[int], budget_kb: int
@@ -107,7 +107,7 @@ def test_the_database_stays_under_budget_and_loses_nothing(
         _job(seq, state, 1000.0 + 60.0 * seq, drawn=seq in drawn)
         for seq, state in enumerate(states, 1)
     ]
-    policy = HistoryPolicy(budget_bytes=budget_kb * 1000, keep_full_finished=5, batch_jobs=20)
+    policy = HistoryPolicy(budget_kb * 1000, keep_full_finished=5, keep_records=20, batch_jobs=20)
     now_s = 1000.0 + 60.0 * len(jobs) + 100.0
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "s.sqlite3"
@@ -117,6 +117,11 @@ def test_the_database_stays_under_budget_and_loses_nothing(
             _compact_all(store, policy, now_s)
             under_budget = used_bytes(store._db) <= policy.budget_bytes
             event("under budget after" if under_budget else "only the kept-forever left")
+            event(
+                "some folded"
+                if store._db.execute("SELECT * FROM job_totals").fetchall()
+                else "none folded"
+            )
             if not under_budget:
                 _check_only_the_kept_forever_left(store, jobs, policy)
             _check_nothing_lost(store, jobs)
@@ -128,11 +133,12 @@ def test_the_database_stays_under_budget_and_loses_nothing(
 def _check_only_the_kept_forever_left(
     store: JobStore, jobs: list[Job], policy: HistoryPolicy
 ) -> None:
-    """Over budget: every finished job but the newest is compacted, and no event is left from
-    before the oldest unfinished job's submission."""
+    """Over budget: every finished job but the newest is folded (the newest records compacted),
+    and no event is left from before the oldest unfinished job's submission."""
     finished = [j for j in jobs if j.final][: -policy.keep_full_finished]
-    assert all(store.job(j.job_id) == compacted(j) for j in finished)
-    assert store.written([j.job_id for j in finished]) == {}
+    folded = finished[: -(policy.keep_records - policy.keep_full_finished)]
+    assert all(store.job(j.job_id) is None for j in folded)
+    assert all(store.job(j.job_id) == compacted(j) for j in finished[len(folded) :])
     oldest = min((j.created_at_s for j in jobs if not j.final), default=float("inf"))
     assert all(e.time_s >= oldest for e in store.events(limit=100_000))
 
@@ -145,10 +151,10 @@ def _check_nothing_lost(store: JobStore, jobs: list[Job]) -> None:
             assert stored_events[job.job_id] == len(_events(job))
     for job in jobs:
         stored = store.job(job.job_id)
-        assert stored in (job, compacted(job))
+        assert stored in (job, compacted(job), None)  # None: folded
         if not job.final:
             assert stored == job  # never touched
-        assert store.job_by_key("kiosk-1", f"k-{job.seq}") == stored
+        assert store.job_by_key("kiosk-1", f"k-{job.seq}") == KeyedJob(job.job_id, job.state)
     newest_done = [j.job_id for j in [j for j in jobs if j.final][-5:] if j.state == "done"]
     assert set(store.written(newest_done)) == set(newest_done)  # the newest stay whole
 
@@ -194,12 +200,12 @@ def test_the_age_limit_compacts_what_finished_before_it(tmp_path: Path) -> None:
         assert min(e.time_s for e in store.events(limit=1000)) >= 6.5 * 3600.0
 
 
-def test_a_compacted_jobs_idempotency_key_still_answers_it(tmp_path: Path) -> None:
+def test_a_folded_jobs_idempotency_key_still_answers_it(tmp_path: Path) -> None:
     jobs = [_job(seq, "done", 60.0 * seq, drawn=True) for seq in range(1, 601)]
     with JobStore(tmp_path / "s.sqlite3") as store:
         _fill(store, jobs)
         _compact_all(store, HistoryPolicy(budget_bytes=1, keep_full_finished=10), now_s=1e6)
-        assert store.job("j1") == compacted(jobs[0])
+        assert store.job("j100") is None and store.job("j101") == compacted(jobs[100])  # folded
         service = OrchestratorService(SHOW, session=None, store=store)  # type: ignore[arg-type]
         assert "j1" not in service.book.jobs  # past the finished jobs held in memory
         request = SubmitRequest(text="永", client_id="kiosk-1", idempotency_key="k-1")
