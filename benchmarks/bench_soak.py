@@ -7,7 +7,8 @@ Runs ``shows/airshow-2014.yaml`` (router, orchestrator, four simulated agents an
 workers, real Zenoh on loopback; a copy of the show on a free port, storing in a temporary or
 ``--out-dir`` directory) and keeps ``--waiting`` characters of a fixed corpus waiting, so the
 queue never empties. Every ``--sample-s`` it reads each process's resident set (``/proc``) and
-the bytes on disk of job files, MCAP recordings and the SQLite database (with its WAL).
+the bytes on disk of job files, MCAP recordings, the SQLite database and its WAL (apart: the
+WAL fills to about 4 MB in the first minutes, then is reused).
 
 Printed per process: RSS at start, after warm-up and at the end, its peak, and the least-squares
 slope after warm-up in MiB/hour; the same for its anonymous memory (its own heap: RSS also counts
@@ -141,7 +142,9 @@ class Samples:
         database = show.database_path
         self._add(self.disk, "job files", t_s, tree_bytes(database.parent / "jobs"))
         self._add(self.disk, "recordings", t_s, tree_bytes(show.recordings_dir))
-        self._add(self.disk, "sqlite", t_s, tree_bytes(database.parent, database.name + "*"))
+        self._add(self.disk, "sqlite", t_s, tree_bytes(database.parent, database.name))
+        wal = tree_bytes(database.parent, database.name + "-wal")  # fills to ~4 MB, then stays
+        self._add(self.disk, "sqlite wal", t_s, wal)
         self.done.append((t_s, jobs.counts()["done"]))
 
     def _memory(self, name: str, t_s: float, pid: int) -> None:
