@@ -131,7 +131,8 @@ class CompactionSchedule:
 
 
 def compacted(job: Job) -> Job:
-    """The record kept forever of a finished job: without its strokes document."""
+    """The record left of a compacted finished job: without its strokes document (its ink
+    picture, in its own column, is dropped too)."""
     return msgspec.structs.replace(job, strokes=None)
 
 
@@ -145,8 +146,9 @@ def used_bytes(db: sqlite3.Connection) -> int:
 def compact(
     db: sqlite3.Connection, policy: HistoryPolicy, now_s: float, *, resume: bool = False
 ) -> Compaction:
-    """Compact old finished jobs and delete old events while the database is over budget (from
-    ``resume``: over its low water) or they are older than ``max_age_s``; ``now_s``: Unix time.
+    """Compact old finished jobs, fold old records and delete old events while the database is
+    over budget (from ``resume``: over its low water), and compact and delete what is older than
+    ``max_age_s`` (records are folded only over budget); ``now_s``: Unix time.
 
     ``db`` is in autocommit mode (``isolation_level=None``); each batch is one transaction."""
     before = used_bytes(db)
