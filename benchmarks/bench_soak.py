@@ -7,7 +7,8 @@ Runs ``shows/airshow-2014.yaml`` (router, orchestrator, four simulated agents an
 workers, real Zenoh on loopback; a copy of the show on a free port, storing in a temporary or
 ``--out-dir`` directory) and keeps ``--waiting`` characters of a fixed corpus waiting, so the
 queue never empties. Every ``--sample-s`` it reads each process's resident set (``/proc``) and
-the bytes on disk of job files, MCAP recordings and the SQLite database (with its WAL).
+the bytes on disk of job files, MCAP recordings, the SQLite database and its WAL (apart: the
+WAL fills to about 4 MB in the first minutes, then is reused).
 
 Printed per process: RSS at start, after warm-up and at the end, its peak, and the least-squares
 slope after warm-up in MiB/hour; the same for its anonymous memory (its own heap: RSS also counts
@@ -141,7 +142,9 @@ class Samples:
         database = show.database_path
         self._add(self.disk, "job files", t_s, tree_bytes(database.parent / "jobs"))
         self._add(self.disk, "recordings", t_s, tree_bytes(show.recordings_dir))
-        self._add(self.disk, "sqlite", t_s, tree_bytes(database.parent, database.name + "*"))
+        self._add(self.disk, "sqlite", t_s, tree_bytes(database.parent, database.name))
+        wal = tree_bytes(database.parent, database.name + "-wal")  # fills to ~4 MB, then stays
+        self._add(self.disk, "sqlite wal", t_s, wal)
         self.done.append((t_s, jobs.counts()["done"]))
 
     def _memory(self, name: str, t_s: float, pid: int) -> None:
@@ -213,6 +216,9 @@ def traced(
 def soak(args: argparse.Namespace, out_dir: Path) -> tuple[Samples, Jobs, dict[str, int]]:
     """Run the show for ``args.minutes``; the samples, the jobs and restarts per process."""
     path, show = derived_show(SHOW, out_dir, time_scale=args.time_scale)
+    if args.database_budget_mb is not None:
+        storage = show.storage.model_copy(update={"database_budget_mb": args.database_budget_mb})
+        path, show = derived_show(path, out_dir, storage=storage)
     samples, jobs = Samples(), Jobs()
     adjust = traced(args.trace_memory, args.trace.split(","), args.warmup_minutes * 60.0)
     with (
@@ -334,6 +340,12 @@ def main() -> int:
     parser.add_argument("--waiting", type=int, default=8, help="characters kept waiting (8)")
     parser.add_argument("--sample-s", type=float, default=10.0, help="sampling period (10 s)")
     parser.add_argument("--png", type=Path, help="plot RSS over time per process here")
+    parser.add_argument(
+        "--database-budget-mb",
+        type=float,
+        help="the show's storage.database_budget_mb (default: the show's; small to see the"
+        " database compacted within a short run)",
+    )
     parser.add_argument("--out-dir", type=Path, help="keep the show's files here (default: tmp)")
     parser.add_argument(
         "--trace-memory",

@@ -31,19 +31,16 @@ from bus.messages import (
 )
 from orchestrator import positions, presence, reports
 from orchestrator.core_types import CoreConfig, Effects, Level
+from orchestrator.finished import MAX_FINAL_JOBS, FinishedJobs
 from orchestrator.fleet import VehicleView, queue_etas, ready_for_job
 from orchestrator.jobs import WAITING_STATES, Job, to_state, transition, update
 from orchestrator.kinds import KindMatch
 from orchestrator.operator import apply_operator
 
-__all__ = ["Book", "CoreConfig", "Effects", "Level"]
+__all__ = ["MAX_FINAL_JOBS", "Book", "CoreConfig", "Effects", "Level"]
 
 RECENT_EVENTS = 50
 """Events kept in memory for the ``snapshot`` reply."""
-MAX_FINAL_JOBS = 500
-"""Finished jobs kept in memory, the latest to finish: as many as a ``snapshot`` reply lists.
-Older ones are only in the database, so that a show running for days holds (and scans on every
-decision) a bounded set of jobs: keeping them all grew the orchestrator by about 6 KiB per job."""
 
 
 class Book:
@@ -65,7 +62,6 @@ class Book:
         """``jobs``: the stored ones (every unfinished job and at least the latest finished);
         ``job_counts``: jobs per state in the database (default: counted from ``jobs``)."""
         self.config = config
-        self.max_final_jobs = max_final_jobs
         self.queue_paused = queue_paused
         self.vehicles = {v.vehicle_id: VehicleView(v, gone_since_s=now_s) for v in config.vehicles}
         for vid in paused_vehicles:
@@ -77,10 +73,8 @@ class Book:
         self.jobs: dict[str, Job] = {}
         for job in jobs:  # restart: active jobs must be confirmed by their vehicle again
             self.jobs[job.job_id] = update(job, now_s, assigned_at_s=now_s) if job.active else job
-        self.job_counts: Counter[str] = Counter(
-            job_counts if job_counts is not None else (j.state for j in self.jobs.values())
-        )
-        """Jobs per state, every job counted (kept as jobs change, not from a list)."""
+        self.finished = FinishedJobs(self.jobs.values(), job_counts, max_final_jobs)
+        """Jobs per state and the held finished jobs (``orchestrator/finished.py``)."""
         self.next_seq = max((j.seq for j in self.jobs.values()), default=0) + 1
         self.by_key: dict[tuple[str, str], str] = {
             (j.client_id, j.idempotency_key): j.job_id
@@ -88,13 +82,7 @@ class Book:
             if j.idempotency_key is not None
         }
         """(client_id, idempotency_key) -> job id of every keyed submission in memory."""
-        self.finished: deque[str] = deque(
-            j.job_id
-            for j in sorted(self.jobs.values(), key=lambda j: (j.updated_at_s, j.seq))
-            if j.final
-        )
-        """Ids of the finished jobs in memory, in the order they finished (oldest first)."""
-        self._forget_oldest_finished()
+        self._forget(self.finished.overflow())
         self._announced: positions.Announced = {}
         self.recent_events: deque[Event] = deque(maxlen=RECENT_EVENTS)
         """The latest events, for the ``snapshot`` reply (a late console shows recent history)."""
@@ -105,6 +93,11 @@ class Book:
         """Boards left half-written: no job there until the operator's ``fresh_sheet``."""
 
     # --- views ------------------------------------------------------------------------------
+    @property
+    def job_counts(self) -> Counter[str]:
+        """Jobs per state, every stored job counted (not only those held)."""
+        return self.finished.counts
+
     def queue(self) -> list[Job]:
         """Queued jobs in the order they will be assigned."""
         return sorted(
@@ -230,22 +223,17 @@ class Book:
 
     def put(self, eff: Effects, job: Job) -> Job:
         previous = self.jobs.get(job.job_id)
-        if previous is not None:
-            self.job_counts[previous.state] -= 1
-        self.job_counts[job.state] += 1
         self.jobs[job.job_id] = job
         eff.jobs[job.job_id] = job
         self.kinds.forget(job)
-        if job.final and (previous is None or not previous.final):
-            self.finished.append(job.job_id)
-            self._forget_oldest_finished()
+        self._forget(self.finished.changed(previous, job))
         return job
 
-    def _forget_oldest_finished(self) -> None:
-        """Drop finished jobs beyond ``max_final_jobs`` from memory (the database keeps them;
-        the service answers a repeated idempotency key of a forgotten job from there)."""
-        while len(self.finished) > self.max_final_jobs:
-            job = self.jobs.pop(self.finished.popleft(), None)
+    def _forget(self, job_ids: Iterable[str]) -> None:
+        """Drop finished jobs from memory (the database keeps them; the service answers a
+        repeated idempotency key of a forgotten job from there)."""
+        for job_id in job_ids:
+            job = self.jobs.pop(job_id, None)
             if job is not None and job.idempotency_key is not None:
                 self.by_key.pop((job.client_id, job.idempotency_key), None)
 

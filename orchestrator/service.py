@@ -41,10 +41,11 @@ from bus.pubsub import declare_token, publish, subscribe, subscribe_raw, watch_l
 from bus.recorder import McapRecorder
 from bus.rpc import NoReplyError, RemoteError, aquery_one, serve_async
 from bus.session import Session
+from orchestrator.compaction import CompactionSchedule, HistoryPolicy
 from orchestrator.core import MAX_FINAL_JOBS, Book, CoreConfig, Effects
 from orchestrator.fleet import EtaModel, VehicleInfo
 from orchestrator.jobs import to_state
-from orchestrator.store import JobStore
+from orchestrator.store import JobStore, StoreError
 from orchestrator.submissions import SubmissionError, planned_durations_s, validate_submission
 from orchestrator.written import attach_written, with_written
 from showfile import Show
@@ -56,11 +57,12 @@ TICK_PERIOD_S = 0.1
 """Wall time between timer decisions (loss detection, confirmation, assignment), [s]."""
 VEHICLE_COMMAND_TIMEOUT_S = 2.0
 """How long an agent has to answer a command, [s]."""
-MAX_PENDING_PLANS = 4
+MAX_PENDING_PLANS = 64
 """Planner runs for ETAs waiting at most (one worker, about 25-100 ms each); beyond, submissions
-keep their rough estimate. 64 gave every submission of a burst its planned duration, but under
-the bus fuzz (thousands of submissions) the orchestrator's memory then grew 11 % after warm-up:
-bounded planning caches are needed first."""
+keep their rough estimate. 64 gives every submission of a burst its planned duration (the ETA
+figures of ``bench_show.py --eta`` need it; 4 left most of a 16-character burst on rough
+estimates); the planning caches it fills are bounded (``CACHED_DURATIONS``, the glyph and
+planner LRU caches), so the orchestrator's memory stays within the bus fuzz's bound."""
 CACHED_DURATIONS = 256
 """Texts whose planned durations are kept for their next submission (a show's corpus repeats;
 the kiosk's visitors do not)."""
@@ -86,6 +88,15 @@ def core_config(show: Show) -> CoreConfig:
         max_attempts=show.policy.max_attempts,
         tracking_error_alert_m=show.policy.tracking_error_alert_m,
         eta=EtaModel(time_scale=show.time_scale),
+    )
+
+
+def history_policy(show: Show) -> HistoryPolicy:
+    """How much history the show's database keeps."""
+    age_h = show.storage.job_history_max_age_h
+    return HistoryPolicy(
+        budget_bytes=int(show.storage.database_budget_mb * 1e6),
+        max_age_s=None if age_h is None else age_h * 3600.0,
     )
 
 
@@ -142,6 +153,8 @@ class OrchestratorService:
         self.fatal: BaseException | None = None
         """Set when the database failed; :meth:`run` raises it after stopping."""
         self._durations: dict[str, dict[str, float]] = {}
+        self.history = history_policy(show)
+        self._compaction = CompactionSchedule()
         log.info("show %s: %d jobs restored", show.show_id, len(stored.jobs))
 
     # --- effects ------------------------------------------------------------------------------
@@ -165,6 +178,7 @@ class OrchestratorService:
             if self._stop is not None:
                 self._stop.set()
             raise
+        self._compaction.finished += sum(1 for job in eff.jobs.values() if job.final)
         now = self.clock()
         etas = self.book.etas(now) if eff.jobs or eff.moved else {}
         moved = [
@@ -219,6 +233,35 @@ class OrchestratorService:
     def _record(self, topic: str, message: msgspec.Struct) -> None:
         if self.recorder is not None:
             self.recorder.record_message(topic, message)
+
+    def compact_history(self, now_s: float) -> None:
+        """Keep the database within the show's history policy when due (small transactions;
+        a failure is logged and retried: memory and disk still agree)."""
+        if not self._compaction.due(now_s):
+            return
+        try:
+            result = self.store.compact(self.history, now_s, resume=self._compaction.more)
+        except StoreError as exc:
+            log.error("cannot compact the database (retried later): %s", exc)
+            self._compaction.ran(now_s, more=False)
+            return
+        self._compaction.ran(now_s, more=result.more)
+        if result.jobs or result.folded or result.events:
+            log.info(
+                "database compacted: %d jobs, %d folded, %d events; %.1f -> %.1f MB",
+                result.jobs,
+                result.folded,
+                result.events,
+                result.before_bytes / 1e6,
+                result.after_bytes / 1e6,
+            )
+        if not result.more and result.after_bytes > self.history.budget_bytes:
+            log.warning(
+                "database %.1f MB over its %.1f MB budget: unfinished jobs, the newest finished"
+                " and every idempotency key are kept",
+                result.after_bytes / 1e6,
+                self.history.budget_bytes / 1e6,
+            )
 
     # --- queryables ---------------------------------------------------------------------------
     async def on_submit(self, request: SubmitRequest) -> SubmitReply:
@@ -347,6 +390,7 @@ class OrchestratorService:
             await asyncio.sleep(TICK_PERIOD_S)
             now = self.clock()
             self.apply(self.book.tick(now))
+            self.compact_history(now)
             if now >= next_fleet:
                 next_fleet = now + self.show.policy.fleet_period_s
                 self._publish(self.keys.fleet, self.book.snapshot(now, include_final=False))

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import sqlite3
+from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,13 +23,23 @@ from types import TracebackType
 
 import msgspec
 
-from bus.messages import Event, WrittenInk
+from bus.messages import Event, JobStateName, WrittenInk
+from orchestrator.compaction import (
+    FOLD_TABLES,
+    FULL_FINISHED_INDEX,
+    Compaction,
+    HistoryPolicy,
+    compact,
+)
 from orchestrator.jobs import FINAL_STATES, Job
 
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 """1: jobs, events, settings. 2: ``jobs.idempotency_key`` (client id and key of a submission,
-unique). 3: ``jobs.written`` (the ink picture of a done job, WrittenInk JSON). Both added in place
-to an older database."""
+unique). 3: ``jobs.written`` (the ink picture of a done job, WrittenInk JSON). 4: ``jobs.compacted``
+(1: a finished job's bulky parts dropped, ``orchestrator/compaction.py``), ``job_totals`` and
+``folded_keys`` (what is left of the oldest finished jobs past the budget), and incremental
+auto-vacuum (freed pages go back to the file system). All added in place to an older database
+(version 4's auto-vacuum by one ``VACUUM``, which rewrites the file once)."""
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS jobs (
@@ -53,6 +64,9 @@ _KEY_INDEX = (
     "CREATE UNIQUE INDEX IF NOT EXISTS jobs_idempotency_key ON jobs (idempotency_key) "
     "WHERE idempotency_key IS NOT NULL"
 )
+
+_INCREMENTAL = 2
+"""``PRAGMA auto_vacuum`` value of incremental mode."""
 
 _job_decoder = msgspec.json.Decoder(Job)
 _event_decoder = msgspec.json.Decoder(Event)
@@ -82,6 +96,14 @@ class StoredState:
     """Boards left half-written (no job until ``fresh_sheet``)."""
 
 
+@dataclass(frozen=True)
+class KeyedJob:
+    """What a repeated idempotency key is answered with (also of a folded job)."""
+
+    job_id: str
+    state: JobStateName
+
+
 class JobStore:
     """The orchestrator's SQLite database; use as a context manager."""
 
@@ -94,12 +116,15 @@ class JobStore:
             self._db.execute("PRAGMA synchronous=FULL")
             self._db.execute("PRAGMA busy_timeout=5000")
             version = self._db.execute("PRAGMA user_version").fetchone()[0]
-            if version not in (0, 1, 2, SCHEMA_VERSION):  # 0: new file; 1, 2: migrated below
+            if version not in (0, 1, 2, 3, SCHEMA_VERSION):  # 0: new file; 1-3: migrated below
                 raise StoreError(
                     f"{self.path}: schema version {version}, expected {SCHEMA_VERSION}"
                 )
-            self._db.executescript(_SCHEMA)
+            self._db.execute("PRAGMA auto_vacuum=INCREMENTAL")  # takes effect on a new file
+            self._db.executescript(_SCHEMA + FOLD_TABLES)
             self._migrate()
+            if self._db.execute("PRAGMA auto_vacuum").fetchone()[0] != _INCREMENTAL:
+                self._db.execute("VACUUM")  # an older file: rewritten once with the new mode
             self._db.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
         except sqlite3.Error as exc:
             raise StoreError(f"{self.path}: {exc}") from exc
@@ -112,7 +137,10 @@ class JobStore:
                 self._db.execute("ALTER TABLE jobs ADD COLUMN idempotency_key TEXT")
             if "written" not in columns:
                 self._db.execute("ALTER TABLE jobs ADD COLUMN written BLOB")
+            if "compacted" not in columns:
+                self._db.execute("ALTER TABLE jobs ADD COLUMN compacted INTEGER NOT NULL DEFAULT 0")
             self._db.execute(_KEY_INDEX)
+            self._db.execute(FULL_FINISHED_INDEX)
 
     def __enter__(self) -> JobStore:
         return self
@@ -174,7 +202,8 @@ class JobStore:
             self._db.executemany(
                 "INSERT INTO jobs (job_id, seq, state, data, idempotency_key) "
                 "VALUES (?, ?, ?, ?, ?) "
-                "ON CONFLICT(job_id) DO UPDATE SET state=excluded.state, data=excluded.data",
+                "ON CONFLICT(job_id) DO UPDATE SET state=excluded.state, data=excluded.data, "
+                "compacted=0",
                 job_rows,
             )
             self._db.executemany("INSERT INTO events (time_s, data) VALUES (?, ?)", event_rows)
@@ -196,11 +225,14 @@ class JobStore:
             (-1 if max_final is None else max_final,),
         ).fetchall()
         jobs = [_job_decoder.decode(data) for _, data in sorted(kept)]
-        counts = dict(self._db.execute("SELECT state, COUNT(*) FROM jobs GROUP BY state"))
+        counts: Counter[str] = Counter(
+            dict(self._db.execute("SELECT state, COUNT(*) FROM jobs GROUP BY state"))
+        )
+        counts.update(dict(self._db.execute("SELECT state, count FROM job_totals")))
         settings = dict(self._db.execute("SELECT key, value FROM settings").fetchall())
         return StoredState(
             jobs=jobs,
-            job_counts=counts,
+            job_counts=dict(counts),
             queue_paused=bool(json.loads(settings.get("queue_paused", "false"))),
             paused_vehicles=list(json.loads(settings.get("paused_vehicles", "[]"))),
             held_vehicles=list(json.loads(settings.get("held_vehicles", "[]"))),
@@ -212,12 +244,15 @@ class JobStore:
         row = self._db.execute("SELECT data FROM jobs WHERE job_id = ?", (job_id,)).fetchone()
         return _job_decoder.decode(row[0]) if row else None
 
-    def job_by_key(self, client_id: str, idempotency_key: str) -> Job | None:
-        """The job submitted by ``client_id`` with ``idempotency_key``, as stored."""
+    def job_by_key(self, client_id: str, idempotency_key: str) -> KeyedJob | None:
+        """The job submitted by ``client_id`` with ``idempotency_key`` (folded ones too)."""
+        key = _scope(client_id, idempotency_key)
         row = self._db.execute(
-            "SELECT data FROM jobs WHERE idempotency_key = ?", (_scope(client_id, idempotency_key),)
+            "SELECT job_id, state FROM jobs WHERE idempotency_key = ? UNION ALL "
+            "SELECT job_id, state FROM folded_keys WHERE idempotency_key = ?",
+            (key, key),
         ).fetchone()
-        return _job_decoder.decode(row[0]) if row else None
+        return KeyedJob(job_id=row[0], state=row[1]) if row else None
 
     def written(self, job_ids: Iterable[str]) -> dict[str, WrittenInk]:
         """The stored ink pictures of ``job_ids`` (jobs without one are left out)."""
@@ -233,6 +268,13 @@ class JobStore:
             )
             found.update((job_id, _ink_decoder.decode(data)) for job_id, data in rows)
         return found
+
+    def compact(self, policy: HistoryPolicy, now_s: float, *, resume: bool = False) -> Compaction:
+        """Bound the history by ``policy`` (orchestrator/compaction.py); ``now_s``: Unix time."""
+        try:
+            return compact(self._db, policy, now_s, resume=resume)
+        except sqlite3.Error as exc:
+            raise StoreError(f"{self.path}: {exc}") from exc
 
     def events(self, limit: int = 200) -> list[Event]:
         """The latest events, oldest first."""

@@ -122,6 +122,16 @@ class StorageSettings(_Model):
     """Disk for job files, in [MB], shared evenly by the vehicles; the oldest go first."""
     job_files_max_age_h: float | None = Field(default=None, gt=0.0)
     """Job files older than this are removed, in [h]; None: only the budget limits them."""
+    database_budget_mb: float = Field(default=100.0, gt=0.0)
+    """Disk for the SQLite database, in [MB] (its WAL adds up to ~4 MB). Past it, down to 80 %:
+    the oldest finished jobs are compacted (strokes and ink picture dropped, ~1.2 kB record
+    left), the oldest events deleted, then the oldest records folded into per-state totals and
+    a key table (~80 B a job), so counts stay exact and idempotency keys answered; unfinished
+    jobs are never touched (``orchestrator/compaction.py``). About 9 MB per hour of show before
+    compaction, 0.15 MB once folding."""
+    job_history_max_age_h: float | None = Field(default=None, gt=0.0)
+    """Finished jobs older than this are compacted and older events deleted, in [h], whatever
+    the database's size; None: only the budget limits them."""
 
 
 class PolicySettings(_Model):

@@ -14,7 +14,8 @@ import msgspec
 
 from bus.messages import OperatorCommand, SubmitRequest
 from orchestrator.core import MAX_FINAL_JOBS, Book
-from orchestrator.jobs import Job
+from orchestrator.finished import FinishedJobs
+from orchestrator.jobs import Job, transition
 from orchestrator.service import CACHED_DURATIONS, OrchestratorService, core_config
 from orchestrator.store import JobStore
 from showfile import load_show
@@ -103,3 +104,15 @@ class _NoSession:
 
     def __getattr__(self, name: str) -> Any:
         raise AttributeError(name)
+
+
+def test_finished_jobs_count_every_change_and_hold_the_latest_to_finish() -> None:
+    queued = _stored_jobs(1)[1]  # one queued job
+    finished = FinishedJobs([queued], max_jobs=2)
+    assert finished.counts == {"queued": 1} and finished.overflow() == []
+    jobs = [msgspec.structs.replace(queued, job_id=f"q{k}", seq=k + 2) for k in range(3)]
+    assert all(finished.changed(None, job) == [] for job in jobs)
+    done = [transition(j, "done", 10.0 - k) for k, j in enumerate(jobs)]  # finish q0, q1, q2
+    assert [finished.changed(j, d) for j, d in zip(jobs, done, strict=True)] == [[], [], ["q0"]]
+    assert finished.changed(done[1], done[1]) == []  # a finished job saved again: no new entry
+    assert finished.counts == {"queued": 1, "done": 3}

@@ -101,7 +101,7 @@ def test_a_version_1_database_is_migrated_in_place(tmp_path: Path) -> None:
         version = store._db.execute("PRAGMA user_version").fetchone()[0]
         keyed = msgspec.structs.replace(old, job_id="j2", seq=2, idempotency_key="k")
         store.save([keyed])
-    assert version == SCHEMA_VERSION == 3
+    assert version == SCHEMA_VERSION == 4
     with JobStore(db) as store:  # opening a current database again changes nothing
         assert [j.idempotency_key for j in store.load().jobs] == [None, "k"]
 

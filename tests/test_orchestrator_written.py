@@ -79,7 +79,7 @@ def test_a_version_2_database_gets_the_column_in_place(tmp_path: Path) -> None:
         assert store.load().jobs == [old] and store.written(["j1"]) == {}
         store.save(written={"j1": INK})
         version = store._db.execute("PRAGMA user_version").fetchone()[0]
-    assert version == SCHEMA_VERSION == 3
+    assert version == SCHEMA_VERSION == 4
     with JobStore(db) as store:
         assert store.written(["j1"]) == {"j1": INK}
 
