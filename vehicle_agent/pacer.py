@@ -7,7 +7,7 @@ timer for the whole host instead: at every ``period_s`` of wall time one timer c
 every vehicle due by then, and they all run their ticks in that same turn of the loop, the
 physics of the host's vehicles stepped together. A vehicle that is behind (its agent clock late
 against the wall clock) does not wait at all, so no tick is skipped; its ticks only move onto
-the host's grid, at most one period later than its own schedule would have run them.
+the host's grid, to the instant nearest its own schedule (at most half a period early or late).
 """
 
 from __future__ import annotations
@@ -47,7 +47,9 @@ class SharedTicker:
         """How many grid ticks fired (one timer each, whatever the number of vehicles)."""
 
     async def wait_until(self, wall_s: float) -> None:
-        while time.monotonic() < wall_s:
+        """Wait for the grid instant nearest ``wall_s`` (a tick due just after an instant runs
+        at it rather than a whole period later, so intervals stay one period, not 0 and 2)."""
+        while time.monotonic() < wall_s - 0.5 * self.period_s:
             await self._next_tick()
 
     def _next_tick(self) -> asyncio.Future[None]:
