@@ -1,6 +1,6 @@
 """Fleet host: N simulated vehicles' agents in one process, M of them writing at once, in real time.
 
-    nice -n 15 .venv/bin/python benchmarks/bench_fleet_host.py [--vehicles 50,100]
+    nice -n 15 .venv/bin/python benchmarks/bench_fleet_host.py [--vehicles 50,100] [--hosts 1]
         [--writing 50] [--window-s 20] [--peer 10] [--skip-peer]
 
 Each case is a real show (``bench_stop.wide_show``: the Airshow show widened to N vehicles, each
@@ -9,8 +9,8 @@ orchestrator, and the vehicles' agents. M characters are submitted at once; once
 awake (flying), for ``--window-s`` seconds:
 
 - **real-time factor** of the awake vehicles: control ticks run over ticks due by the wall clock
-  (a simulated vehicle never skips a tick: 1.00 is real time, 0.5 half speed). Fleet: counted
-  in the fleet process; agents: from telemetry (agent time over wall time);
+  (a simulated vehicle never skips a tick: 1.00 is real time, 0.5 half speed), counted in the
+  fleet processes; and for agents and fleet alike from telemetry (agent time over wall time);
 - **tick jitter** |tick interval - 10 ms| p50/p99 of the awake vehicles' loops, and the event
   loop's lag (a 10 ms timer's lateness), in the fleet process;
 - **RSS** of the fleet process (and per vehicle), of its planning workers; **CPU** in cores;
@@ -19,8 +19,10 @@ awake (flying), for ``--window-s`` seconds:
 - **nothing lost**: every submitted job finished ``done`` (waited for after the window);
 - **stop**: how long the fleet process took to stop after SIGTERM, SIGKILLed or not.
 
-The peer, in the same run: the same show with ``--peer`` vehicles as separate agent processes
-(one each, what ``skyquill up`` ran before ``fleet_hosts``) beside a fleet host of as many.
+``--hosts K`` splits the N vehicles over K fleet processes (a show's ``fleet_hosts: K``): one
+Python process runs on one core at most. The peer, in the same run: the same show with
+``--peer`` vehicles as separate agent processes (one each, what ``skyquill up`` ran before
+``fleet_hosts``) beside a fleet host of as many.
 The fleet host of the benchmark is this script in ``--child`` mode: ``vehicle_agent.fleet``'s
 ``FleetHost`` as ``skyquill fleet`` runs it, plus a task writing its figures once a second.
 """
@@ -163,6 +165,7 @@ class Case:
     cpu_cores: float = 0.0
     awake: float = 0.0
     rtf: float = float("nan")
+    telemetry_rtf: float = float("nan")
     jitter_ms: list[float] = field(default_factory=list)
     lag_ms: list[float] = field(default_factory=list)
     status_s: list[float] = field(default_factory=list)
@@ -206,25 +209,26 @@ def case_show(out: Path, count: int) -> tuple[Path, object]:
     return path, load_show(path)
 
 
-def run_case(label: str, count: int, writing: int, window_s: float, *, fleet: bool) -> Case:
+def run_case(label: str, count: int, writing: int, window_s: float, *, hosts: int) -> Case:
+    """One show run: ``hosts`` fleet host processes (0: one agent process per vehicle)."""
     case = Case(label, count, writing)
     with tempfile.TemporaryDirectory() as tmp:
         path, show = case_show(Path(tmp), count)
         ensure_show_keys(show)  # type: ignore[arg-type]
         ids = [v.id for v in show.vehicles]  # type: ignore[attr-defined]
-        stats = Path(tmp) / "fleet.jsonl"
-        specs = show_children(path, [] if fleet else ids, log_dir=Path(tmp) / "logs")
-        if fleet:
-            argv = (sys.executable, __file__, "--child", str(path), ",".join(ids), str(stats))
-            specs.append(
-                ChildSpec(
-                    "fleet", argv, Path(tmp) / "logs" / "fleet.log", None, fleet_stop_grace_s(count)
-                )
-            )
+        logs = Path(tmp) / "logs"
+        specs = show_children(path, [] if hosts else ids, log_dir=logs)
+        stats = [Path(tmp) / f"fleet{i + 1}.jsonl" for i in range(hosts)]
+        for i, figures in enumerate(stats):
+            group = ids[count * i // hosts : count * (i + 1) // hosts]
+            argv = (sys.executable, __file__, "--child", str(path), ",".join(group), str(figures))
+            grace_s = fleet_stop_grace_s(len(group))
+            name = f"fleet {i + 1}"
+            specs.append(ChildSpec(name, argv, logs / f"fleet{i + 1}.log", None, grace_s))
         supervisor = Supervisor(specs, env=child_env(), say=lambda line: None)
         supervisor.start()
         try:
-            measure(case, supervisor, show, path, stats, window_s, fleet=fleet)
+            measure(case, supervisor, show, path, stats, window_s)
         finally:
             report = supervisor.stop()
             case.killed = report.killed
@@ -238,13 +242,11 @@ def measure(
     supervisor: Supervisor,
     show: object,
     path: Path,
-    stats: Path,
+    stats: list[Path],
     window_s: float,
-    *,
-    fleet: bool,
 ) -> None:
     wait_present(show, 600.0)  # type: ignore[arg-type]
-    names = ["fleet"] if fleet else [n for n in supervisor.names if n.startswith("agent")]
+    names = [n for n in supervisor.names if n.startswith(("agent", "fleet"))]
     pids = [p for p in (supervisor.pid(n) for n in names) if p is not None]
     case.processes = len(pids)
     time.sleep(5.0)  # settled
@@ -281,10 +283,8 @@ def measure(
         cli = time.monotonic()
         subprocess.run(skyquill_argv("status", str(path)), env=child_env(), capture_output=True)
         case.status_cli_s = time.monotonic() - cli
-        if fleet:
-            window_figures(case, stats, started, ended)
-        else:
-            case.rtf = clock.factor()
+        window_figures(case, stats, started, ended)
+        case.telemetry_rtf = clock.factor()
         final = wait_final(session, keys, job_ids, timeout_s=600.0)
         heard.undeclare()  # type: ignore[no-untyped-call]
     case.final = len(final)
@@ -306,10 +306,12 @@ def worker_pids(parents: Sequence[int]) -> list[int]:
     return found
 
 
-def window_figures(case: Case, stats: Path, started: float, ended: float) -> None:
+def window_figures(case: Case, stats: list[Path], started: float, ended: float) -> None:
+    """The fleet processes' figures of the seconds inside the window."""
     ran = due = 0.0
     awake = []
-    for line in stats.read_text().splitlines():
+    lines = [line for path in stats for line in path.read_text().splitlines()]
+    for line in lines:
         figures = json.loads(line)
         if not started + STATS_PERIOD_S <= figures["t"] <= ended + STATS_PERIOD_S:
             continue  # a second not wholly inside the window
@@ -379,8 +381,11 @@ def print_case(case: Case) -> None:
         f"{case.workers} planning workers {case.worker_rss_mib:6.1f} MiB; "
         f"CPU {case.cpu_cores:4.2f} cores ({100 * case.cpu_cores / n:4.2f} % per vehicle)"
     )
-    awake = f", {case.awake:.0f} vehicles awake" if case.awake else ""
-    print(f"    real-time factor of the writing vehicles {case.rtf:5.3f}{awake}")
+    awake = f" ({case.awake:.0f} vehicles awake)" if case.awake else ""
+    print(
+        f"    real-time factor of the writing vehicles: ticks {case.rtf:5.3f}{awake}, "
+        f"telemetry {case.telemetry_rtf:5.3f}"
+    )
     if case.jitter_ms:
         print(
             f"    tick jitter p50 {pct(case.jitter_ms, 0.5):5.2f} ms, p99 "
@@ -406,6 +411,7 @@ def main() -> None:
     parser.add_argument("--window-s", type=float, default=20.0)
     parser.add_argument("--peer", type=int, default=10)
     parser.add_argument("--skip-peer", action="store_true")
+    parser.add_argument("--hosts", type=int, default=1, help="fleet host processes per show")
     parser.add_argument("--child", nargs=3, metavar=("SHOW", "IDS", "STATS"))
     args = parser.parse_args()
     if args.child:
@@ -414,12 +420,13 @@ def main() -> None:
     print(f"load average before: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     if not args.skip_peer:
         print(f"peer ({args.peer} vehicles, every one writing):")
-        print_case(run_case("agent processes", args.peer, args.peer, args.window_s, fleet=False))
-        print_case(run_case("fleet host", args.peer, args.peer, args.window_s, fleet=True))
+        print_case(run_case("agent processes", args.peer, args.peer, args.window_s, hosts=0))
+        print_case(run_case("fleet host", args.peer, args.peer, args.window_s, hosts=1))
     for count in (int(c) for c in args.vehicles.split(",")):
         writing = min(args.writing, count)
-        print(f"fleet host of {count} ({writing} writing):")
-        print_case(run_case("fleet host", count, writing, args.window_s, fleet=True))
+        print(f"{count} vehicles in {args.hosts} fleet hosts ({writing} writing):")
+        label = f"{args.hosts} fleet host{'s' if args.hosts > 1 else ''}"
+        print_case(run_case(label, count, writing, args.window_s, hosts=args.hosts))
     print(f"load average after: {os.getloadavg()[0]:.2f}")
 
 
