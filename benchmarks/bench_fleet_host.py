@@ -220,7 +220,7 @@ def run_case(label: str, count: int, writing: int, window_s: float, *, hosts: in
         specs = show_children(path, [] if hosts else ids, log_dir=logs)
         stats = [Path(tmp) / f"fleet{i + 1}.jsonl" for i in range(hosts)]
         for i, figures in enumerate(stats):
-            group = ids[count * i // hosts : count * (i + 1) // hosts]
+            group = ids[i::hosts]  # dealt round-robin, as cli/fleets.py does
             argv = (sys.executable, __file__, "--child", str(path), ",".join(group), str(figures))
             grace_s = fleet_stop_grace_s(len(group))
             name = f"fleet {i + 1}"

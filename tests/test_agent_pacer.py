@@ -39,3 +39,19 @@ def test_a_cancelled_loop_does_not_cancel_the_others() -> None:
         return leaving.cancelled()
 
     assert asyncio.run(main())
+
+
+def test_loops_behind_their_schedule_take_turns_instead_of_holding_the_event_loop() -> None:
+    async def main() -> list[str]:
+        ticker = SharedTicker(0.01)
+        order: list[str] = []
+
+        async def behind(name: str) -> None:
+            for _ in range(3):
+                await ticker.wait_until(0.0)  # long past due: ticks back to back
+                order.append(name)
+
+        await asyncio.gather(behind("a"), behind("b"))
+        return order
+
+    assert asyncio.run(main()) == ["a", "b", "a", "b", "a", "b"]

@@ -149,10 +149,10 @@ def test_up_puts_simulated_vehicles_in_fleet_hosts_and_real_ones_apart(tmp_path:
     real = base.vehicles[3].model_copy(update={"backend": "mavlink", "mavlink_url": "udpin:x:1"})
     _, show = derived_show(AIRSHOW, tmp_path, vehicles=(*base.vehicles[:3], real), fleet_hosts=2)
     alone, fleets = split_fleets(show, [v.id for v in show.vehicles])
-    assert alone == ("uav4",) and fleets == (("uav1",), ("uav2", "uav3"))
+    assert alone == ("uav4",) and fleets == (("uav1", "uav3"), ("uav2",))
     specs = show_children(Path("s.yaml"), alone, fleets=fleets, time_scale=2.0)
-    fleet = {s.name: s for s in specs}["fleet 2"]
-    assert fleet.argv[-5:] == ("s.yaml", "--vehicles", "uav2,uav3", "--time-scale", "2.0")
+    fleet = {s.name: s for s in specs}["fleet 1"]
+    assert fleet.argv[-5:] == ("s.yaml", "--vehicles", "uav1,uav3", "--time-scale", "2.0")
     assert fleet.stop_grace_s == fleet_stop_grace_s(2)
     assert "agent uav4" in {s.name for s in specs}
 

@@ -6,8 +6,9 @@ would put one timer per vehicle and tick in the loop's heap. :class:`SharedTicke
 timer for the whole host instead: at every ``period_s`` of wall time one timer callback wakes
 every vehicle due by then, and they all run their ticks in that same turn of the loop, the
 physics of the host's vehicles stepped together. A vehicle that is behind (its agent clock late
-against the wall clock) does not wait at all, so no tick is skipped; its ticks only move onto
-the host's grid, to the instant nearest its own schedule (at most half a period early or late).
+against the wall clock) does not wait for the grid but yields once per tick, so no tick is
+skipped and the other vehicles still run; a vehicle on time ticks on the host's grid, at the
+instant nearest its own schedule (at most half a period early or late).
 """
 
 from __future__ import annotations
@@ -48,7 +49,12 @@ class SharedTicker:
 
     async def wait_until(self, wall_s: float) -> None:
         """Wait for the grid instant nearest ``wall_s`` (a tick due just after an instant runs
-        at it rather than a whole period later, so intervals stay one period, not 0 and 2)."""
+        at it rather than a whole period later, so intervals stay one period, not 0 and 2).
+        A loop already due still yields once: a vehicle behind (its ticks back to back) must not
+        hold the event loop, or the other vehicles, heartbeats and commands starve."""
+        if time.monotonic() >= wall_s - 0.5 * self.period_s:
+            await asyncio.sleep(0)
+            return
         while time.monotonic() < wall_s - 0.5 * self.period_s:
             await self._next_tick()
 
