@@ -56,7 +56,7 @@ from bench_stop import wait_present, wide_show  # noqa: E402
 from bus.keys import ShowKeys  # noqa: E402
 from bus.messages import Telemetry  # noqa: E402
 from bus.pubsub import subscribe  # noqa: E402
-from bus.rpc import NoReplyError  # noqa: E402
+from bus.rpc import NoReplyError, RemoteError  # noqa: E402
 from bus.session import open_session  # noqa: E402
 from cli.showrun import snapshot, submit_texts  # noqa: E402
 from cli.supervisor import (  # noqa: E402
@@ -262,7 +262,7 @@ def measure(
     with open_session(session_settings(show, "operator"), role="client") as session:  # type: ignore[arg-type]
         heard = subscribe(session, keys.telemetry_all, Telemetry, clock.heard)
         texts = [CORPUS[i % len(CORPUS)] for i in range(case.writing)]
-        job_ids = [str(r.job_id) for r in submit_texts(session, keys, texts, timeout_s=60.0)]
+        job_ids = submit_all(session, keys, texts, timeout_s=120.0)
         wait_writing(session, keys, job_ids, timeout_s=180.0)
         started = time.monotonic()
         clock.since_s = started
@@ -289,6 +289,23 @@ def measure(
         heard.undeclare()  # type: ignore[no-untyped-call]
     case.final = len(final)
     case.done = sum(1 for state in final.values() if state == "done")
+
+
+def submit_all(session: object, keys: ShowKeys, texts: list[str], timeout_s: float) -> list[str]:
+    """Submit each text, retrying while the orchestrator does not answer in time (a query that
+    timed out at the router comes back as an error reply, not as none)."""
+    deadline = time.monotonic() + timeout_s
+    job_ids = []
+    for text in texts:
+        while True:
+            try:
+                (reply,) = submit_texts(session, keys, [text], timeout_s=10.0)  # type: ignore[arg-type]
+                break
+            except (NoReplyError, RemoteError):
+                if time.monotonic() > deadline:
+                    raise
+        job_ids.append(str(reply.job_id))
+    return job_ids
 
 
 def worker_pids(parents: Sequence[int]) -> list[int]:

@@ -5,9 +5,16 @@ own certificate (so its access-control rights, its liveliness token and its keys
 those of a separate ``skyquill agent``), its own job runner, simulated backend, job lease, report
 and event outboxes: an :class:`vehicle_agent.service.AgentService`, the same one an agent
 process runs. What the host shares is what costs without being the vehicle's: the interpreter
-and its imports, the Zenoh runtime (about 0.15 MiB a session against 60-80 MiB an agent process),
-one :class:`vehicle_agent.pacer.SharedTicker` per control rate (one timer steps every awake
-vehicle together) and a small :class:`vehicle_agent.work_pool.PlanPool` of planning workers.
+and its imports, the Zenoh runtime (0.15 MiB a session), so an idle vehicle adds about 0.3 MiB
+to the host against 71 MiB for an agent process (``benchmarks/bench_fleet_host.py``); one
+:class:`vehicle_agent.pacer.SharedTicker` per control rate (one timer steps every awake vehicle
+together) and a small :class:`vehicle_agent.work_pool.PlanPool` of planning workers.
+
+What the host cannot share is the vehicles' physics: a writing vehicle's 100 Hz tick (its
+kind's simulated world and controller, then the runner) costs about 0.6 ms of CPU, so one host,
+one core, keeps about 15 writing vehicles in real time; beyond that they all slow down together
+(no tick is skipped), and past the show's ``lost_after_s`` of unacknowledged writing they give
+their jobs up as any stalled agent would.
 
 A vehicle's service that fails is started again, alone, after :data:`RESTART_DELAY_S` (its
 session closed meanwhile, so the orchestrator sees that vehicle, and only it, leave and come
