@@ -130,6 +130,28 @@ def test_a_vehicle_of_the_fleet_cannot_speak_or_live_for_another(live: LiveFleet
     assert {live.keys.vehicle_alive(v) for v in FLEET} <= alive
 
 
+def test_a_vehicle_whose_agent_fails_is_started_again_alone(live: LiveFleet) -> None:
+    failing = live.host.services["uav2"]
+
+    def broken(*_args: object) -> None:
+        raise RuntimeError("a bug in one vehicle's agent")
+
+    def break_it() -> None:  # its next tick fails (a resting vehicle ticks every second)
+        failing.runner.step = broken  # type: ignore[method-assign, assignment]
+
+    live.loop.call_soon_threadsafe(break_it)
+    deadline = time.monotonic() + 15.0
+    while live.host.services["uav2"] is failing or "uav2" not in live.host.sessions:
+        assert time.monotonic() < deadline, "uav2 was not started again"
+        time.sleep(0.1)
+    assert live.host.restarts == {"uav1": 0, "uav2": 1, "uav3": 0}
+    while live.keys.vehicle_alive("uav2") not in alive_keys(
+        live.operator, live.keys.vehicles_alive_all
+    ):
+        assert time.monotonic() < deadline, "uav2 did not come back on the bus"
+        time.sleep(0.1)
+
+
 def test_one_vehicle_taken_off_the_bus_is_the_only_one_lost(live: LiveFleet) -> None:
     live.loop.call_soon_threadsafe(live.host.stop_vehicle, "uav3")
     deadline = time.monotonic() + 15.0
