@@ -26,6 +26,7 @@ FULL: dict[str, list[str]] = {
     "bench_stop.py": [],
     "bench_ground.py": [],
     "bench_agent.py": ["--vehicles", "50"],
+    "bench_fleet_host.py": ["--vehicles", "50,100,250", "--writing", "10"],
 }
 QUICK: dict[str, list[str]] = {
     "bench_planner.py": ["--quick"],
@@ -39,6 +40,7 @@ QUICK: dict[str, list[str]] = {
     "bench_stop.py": ["--vehicles", "4"],
     "bench_ground.py": ["--quick"],
     "bench_agent.py": ["--vehicles", "2", "--idle-s", "3"],
+    "bench_fleet_host.py": ["--vehicles", "3", "--writing", "3", "--peer", "2", "--window-s", "3"],
 }
 
 

@@ -72,14 +72,17 @@ def run(args: argparse.Namespace) -> int:
 
 def _stop_orphans(show_path: Path, show: Show, runfile: RunFile, plan: HostPlan) -> int:
     """``up`` is gone: stop the processes it left, as it would have."""
+    from cli.fleets import split_fleets
     from cli.runstate import AdoptedProcess
     from cli.supervisor import ChildSpec, Supervisor, show_children
 
+    agents, fleets = split_fleets(show, plan.vehicle_ids)
     known = {
         spec.name: spec
         for spec in show_children(
             show_path,
-            plan.vehicle_ids,
+            agents,
+            fleets=fleets,
             kiosk=True,
             mavlink_sim=True,
             services=plan.services,

@@ -2,8 +2,9 @@
 
 Every process of the show is a child that is restarted when it dies: the Zenoh router
 (``skyquill router``, first), ``skyquill sim-mavlink`` when the show says
-``mavlink_sim: {enabled: true}``, the orchestrator, one agent per vehicle and the kiosk. Their
-output goes to ``<database dir>/logs/``; ``up`` writes its pid and theirs to
+``mavlink_sim: {enabled: true}``, the orchestrator, one agent per vehicle (with
+``fleet_hosts: N``, the simulated vehicles in N ``skyquill fleet`` processes instead) and the
+kiosk. Their output goes to ``<database dir>/logs/``; ``up`` writes its pid and theirs to
 ``<database dir>/up.json``.
 
 Without ``--headless`` the operator console runs in the foreground (when this is a terminal). It
@@ -174,11 +175,14 @@ def _supervise(
     kiosk: bool,
 ) -> None:
     """Start (or adopt) the host's children and keep them up until asked to stop."""
+    from cli.fleets import split_fleets
     from cli.supervisor import child_env, show_children, skyquill_argv
 
+    agents, fleets = split_fleets(show, plan.vehicle_ids)
     specs = show_children(
         args.show,
-        plan.vehicle_ids,
+        agents,
+        fleets=fleets,
         time_scale=args.time_scale,
         kiosk=kiosk,
         mavlink_sim=show.mavlink_sim.enabled,

@@ -29,6 +29,7 @@ from bus.messages import (
 )
 from bus.rpc import NoReplyError, RemoteError, query_one
 from bus.session import Session, free_tcp_endpoint, open_session
+from cli.fleets import split_fleets
 from cli.supervisor import ChildSpec, RestartPolicy, Supervisor, child_env, show_children
 from showfile import Show, dump_show, load_show
 from trust.settings import ensure_show_keys, session_settings
@@ -84,9 +85,11 @@ class ShowRun:
     """Changes each child's spec before it starts (a benchmark runs some under a tracer)."""
 
     def __post_init__(self) -> None:
+        agents, fleets = split_fleets(self.show, [v.id for v in self.show.vehicles])
         self.specs: list[ChildSpec] = show_children(
             self.show_path,
-            [v.id for v in self.show.vehicles],
+            agents,
+            fleets=fleets,
             mavlink_sim=self.show.mavlink_sim.enabled,
             log_dir=self.log_dir,
         )

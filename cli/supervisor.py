@@ -253,6 +253,17 @@ def has_command(name: str) -> bool:
     return (Path(__file__).resolve().parent / f"cmd_{name}.py").is_file()
 
 
+FLEET_GRACE_S = 8.0
+"""A fleet host's grace to stop, in [s], as an agent's..."""
+FLEET_GRACE_PER_VEHICLE_S = 0.05
+"""...plus this much per vehicle it carries (each closes its session; pictures being drawn)."""
+
+
+def fleet_stop_grace_s(vehicles: int) -> float:
+    """How long in [s] a fleet host of ``vehicles`` may take to stop before SIGKILL."""
+    return FLEET_GRACE_S + FLEET_GRACE_PER_VEHICLE_S * vehicles
+
+
 def show_children(
     show_path: Path,
     vehicle_ids: Sequence[str],
@@ -265,10 +276,12 @@ def show_children(
     host: str | None = None,
     log_dir: Path | None = None,
     verbose: bool = False,
+    fleets: Sequence[Sequence[str]] = (),
 ) -> list[ChildSpec]:
     """The show's Zenoh router (``skyquill router``), optionally the simulated MAVLink vehicles
-    (``skyquill sim-mavlink``), the orchestrator, one agent per vehicle, then optionally the
-    kiosk; stopped agents and kiosk first, the router last. ``host``: one host of a show across
+    (``skyquill sim-mavlink``), the orchestrator, one agent per vehicle of ``vehicle_ids``, one
+    fleet host per group of ``fleets`` (``cli/fleets.py``), then optionally the kiosk; stopped
+    agents, fleet hosts and kiosk first, the router last. ``host``: one host of a show across
     machines (its router); ``services``: whether the orchestrator (and kiosk, sim-mavlink) run
     here, as on the ground station."""
     show = str(show_path)
@@ -300,6 +313,15 @@ def show_children(
             f"agent {vehicle_id}", skyquill_argv(*argv), log(vehicle_id), stop_grace_s=8.0
         )
         specs.append(spec)
+    for number, group in enumerate(fleets, start=1):
+        argv = ["fleet", show, "--vehicles", ",".join(group)]
+        if time_scale is not None:
+            argv += ["--time-scale", repr(time_scale)]
+        if verbose:
+            argv.append("--verbose")
+        grace_s = fleet_stop_grace_s(len(group))
+        name = f"fleet {number}"
+        specs.append(ChildSpec(name, skyquill_argv(*argv), log(f"fleet{number}"), None, grace_s))
     if kiosk and services:
         specs.append(ChildSpec("kiosk", skyquill_argv("kiosk", show), log("kiosk")))
     return specs

@@ -380,6 +380,10 @@ class Show(_Model):
     """Tracking, geofence and writing bounds, and the abort policy (``showfile/safety.py``)."""
     mavlink_sim: MavlinkSimSettings = Field(default_factory=MavlinkSimSettings)
     """Rehearsal: simulate the MAVLink vehicles alongside the show."""
+    fleet_hosts: int = Field(default=0, ge=0, le=64)
+    """``skyquill up`` runs the simulated vehicles of each host in this many fleet host processes
+    (``skyquill fleet``, vehicles split evenly in show order); 0: one agent process each. Real
+    vehicles always get an agent of their own."""
     hexarotor: HexarotorKindSettings | None = None
     """The ``hexarotor-sponge`` wall writers (vehicle, pen, writing limits); None: defaults."""
     omni_wheel: OmniWheelSettings | None = None

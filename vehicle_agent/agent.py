@@ -19,6 +19,7 @@ from trust.settings import session_settings
 from vehicle_agent.backends.base import VehicleBackend
 from vehicle_agent.backends.sim import SimBackend, SimVehicle
 from vehicle_agent.job_runner import JobRunner
+from vehicle_agent.pacer import Pacer
 from vehicle_agent.rest import REST_PERIOD_S
 from vehicle_agent.service import (
     AgentService,
@@ -27,9 +28,17 @@ from vehicle_agent.service import (
     run_until_signalled,
 )
 from vehicle_agent.setup import VehicleSetup, on_board, vehicle_setup
+from vehicle_agent.work import JobWork
 from vehicle_agent.worker_client import ProcessJobWork
 
-__all__ = ["make_backend", "make_runner", "run_agent", "run_agent_blocking", "vehicle_setup"]
+__all__ = [
+    "make_backend",
+    "make_runner",
+    "make_service",
+    "run_agent",
+    "run_agent_blocking",
+    "vehicle_setup",
+]
 
 JOB_FUNCTIONS = ("job_metrics", "prepare_job", "write_job_picture", "write_job_report")
 """Names of :mod:`vehicle_agent.jobs` this module also hands out, importing it on first use."""
@@ -66,15 +75,10 @@ def make_runner(setup: VehicleSetup) -> JobRunner:
     return JobRunner(setup.runner_config)
 
 
-async def run_agent(
-    setup: VehicleSetup, backend: VehicleBackend, events: EventOutbox | None = None
-) -> None:
-    """Run this vehicle's agent until SIGINT/SIGTERM (the ``skyquill agent`` process), its jobs
-    planned and measured in a planning worker process; ``events``: the outbox the backend's
-    ``on_text`` was given."""
-    vehicle = setup.show.vehicle(setup.vehicle_id)
-    simulated = vehicle.backend == "sim"
-    settings = ServiceSettings(
+def service_settings(setup: VehicleSetup) -> ServiceSettings:
+    """How this vehicle's agent joins the bus (its own identity) and paces its loop."""
+    simulated = setup.show.vehicle(setup.vehicle_id).backend == "sim"
+    return ServiceSettings(
         show_id=setup.show.show_id,
         zenoh=session_settings(setup.show, setup.vehicle_id),
         time_scale=setup.time_scale,
@@ -82,14 +86,30 @@ async def run_agent(
         lost_after_s=setup.show.policy.lost_after_s,
         rest_period_s=REST_PERIOD_S if simulated else None,
     )
-    service = AgentService(
-        settings,
-        make_runner(setup),
-        backend,
-        ProcessJobWork(setup.show, setup.vehicle_id, setup.time_scale),
-        events=events,
+
+
+def make_service(
+    setup: VehicleSetup,
+    backend: VehicleBackend,
+    work: JobWork,
+    events: EventOutbox | None = None,
+    pacer: Pacer | None = None,
+) -> AgentService:
+    """This vehicle's agent service with a fresh job runner (an agent process's, or one of a
+    fleet host's: the same service, only ``work`` and ``pacer`` are shared there)."""
+    return AgentService(
+        service_settings(setup), make_runner(setup), backend, work, events=events, pacer=pacer
     )
-    await run_until_signalled(service)
+
+
+async def run_agent(
+    setup: VehicleSetup, backend: VehicleBackend, events: EventOutbox | None = None
+) -> None:
+    """Run this vehicle's agent until SIGINT/SIGTERM (the ``skyquill agent`` process), its jobs
+    planned and measured in a planning worker process; ``events``: the outbox the backend's
+    ``on_text`` was given."""
+    work = ProcessJobWork(setup.show, setup.vehicle_id, setup.time_scale)
+    await run_until_signalled(make_service(setup, backend, work, events))
 
 
 def run_agent_blocking(

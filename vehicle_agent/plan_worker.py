@@ -1,4 +1,5 @@
-"""The planning worker: one process per agent that plans its jobs, measures and records them.
+"""The planning worker: a process that plans an agent's jobs, measures and records them (one per
+agent process; a fleet host shares a few among all its vehicles, ``vehicle_agent/work_pool.py``).
 
 ``python -m vehicle_agent.plan_worker PARENT_PID`` is started by
 :class:`vehicle_agent.worker_client.ProcessJobWork` when its agent gets its first job. It serves
@@ -40,47 +41,69 @@ log = logging.getLogger("vehicle_agent.plan_worker")
 
 
 class Worker:
-    """The requests' handlers (imports the heavy modules on ``init``)."""
+    """The requests' handlers (imports the heavy modules on ``init``).
+
+    An agent's worker is told its vehicle on ``init``; a fleet host's workers serve every
+    vehicle of the host (``init`` without a vehicle), each request wrapped as
+    ``("vehicle", vehicle_id, request)``, the vehicle's setup made on its first request."""
 
     def __init__(self) -> None:
-        self._setup: Any = None
-        self._pictures: Any = None
+        self._show: Any = None
+        self._time_scale: float | None = None
+        self._setups: dict[str, Any] = {}
+        self._pictures: dict[str, Any] = {}
+        self._vehicle_id: str | None = None
 
     def handle(self, request: tuple[Any, ...]) -> Any:
         """The value answering ``request`` (raises what the work raises)."""
         name = request[0]
         if name == "init":
             return self._init(*request[1:])
-        if self._setup is None:
+        if self._show is None:
+            raise RuntimeError("the planning worker was not told its show")
+        if name == "vehicle":
+            self._select(request[1])
+            return self.handle(request[2])
+        if self._vehicle_id is None:
             raise RuntimeError("the planning worker was not told its vehicle")
+        setup, pictures = self._setups[self._vehicle_id], self._pictures[self._vehicle_id]
         if name == "prepare":
-            return self._prepare(request[1])
+            return self._prepare(setup, request[1])
         from vehicle_agent import jobs
 
         prepared = _opened(request[1])
         if name == "measure":
-            return jobs.job_metrics(self._setup, prepared, request[2])
+            return jobs.job_metrics(setup, prepared, request[2])
         if name == "archive":
-            where = jobs.archive_job(self._setup, self._pictures, prepared, *request[2:])
+            where = jobs.archive_job(setup, pictures, prepared, *request[2:])
             return str(where)
         raise ValueError(f"the planning worker has no request {name!r}")
 
     def close(self) -> None:
-        """Wait for a picture still being drawn."""
-        if self._pictures is not None:
-            self._pictures.wait(PICTURE_WAIT_S)
+        """Wait for the pictures still being drawn."""
+        for pictures in self._pictures.values():
+            pictures.wait(PICTURE_WAIT_S)
 
-    def _init(self, show: Any, vehicle_id: str, time_scale: float) -> None:
-        from vehicle_agent.job_picture import PictureWorker
-        from vehicle_agent.setup import vehicle_setup
+    def _init(self, show: Any, vehicle_id: str | None, time_scale: float) -> None:
+        self._show, self._time_scale = show, time_scale
+        if vehicle_id is not None:
+            self._select(vehicle_id)
 
-        self._setup = vehicle_setup(show, vehicle_id, time_scale=time_scale)
-        self._pictures = PictureWorker(vehicle_id)
+    def _select(self, vehicle_id: str) -> None:
+        """Work for ``vehicle_id`` from now on (its setup and picture thread made once)."""
+        if vehicle_id not in self._setups:
+            from vehicle_agent.job_picture import PictureWorker
+            from vehicle_agent.setup import vehicle_setup
 
-    def _prepare(self, assignment: Any) -> Any:
+            setup = vehicle_setup(self._show, vehicle_id, time_scale=self._time_scale)
+            self._setups[vehicle_id] = setup
+            self._pictures[vehicle_id] = PictureWorker(vehicle_id)
+        self._vehicle_id = vehicle_id
+
+    def _prepare(self, setup: Any, assignment: Any) -> Any:
         from vehicle_agent.jobs import prepare_job
 
-        prepared = prepare_job(self._setup, assignment)
+        prepared = prepare_job(setup, assignment)
         sealed = SealedContext(pickle.dumps(prepared.context, protocol=pickle.HIGHEST_PROTOCOL))
         return replace(prepared, context=sealed)
 

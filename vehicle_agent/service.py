@@ -45,7 +45,7 @@ from bus.messages import (
 )
 from bus.pubsub import MessagePublisher, declare_token, publish, watch_liveliness
 from bus.rpc import error_info_from_exception, serve_async
-from bus.session import open_session
+from bus.session import Session, open_session
 from vehicle_agent.backends.base import (
     BackendError,
     CommandRefusedError,
@@ -58,6 +58,7 @@ from vehicle_agent.events import EventOutbox
 from vehicle_agent.fault import clear_fault
 from vehicle_agent.job_runner import JobRunner, PreparedJob, TickActions
 from vehicle_agent.lease import JobLease
+from vehicle_agent.pacer import OwnTimer, Pacer
 from vehicle_agent.reports import ReportOutbox
 from vehicle_agent.rest import at_rest
 from vehicle_agent.runner_io import ACTIVE_PHASES, result_report
@@ -83,6 +84,7 @@ class AgentService:
         backend: VehicleBackend,
         work: JobWork,
         events: EventOutbox | None = None,
+        pacer: Pacer | None = None,
     ) -> None:
         self.settings = settings
         self.runner = runner
@@ -111,6 +113,8 @@ class AgentService:
             running_job=lambda: self.runner.job_id,
             refused=self._give_up,
         )
+        self.pacer = pacer if pacer is not None else OwnTimer()
+        """What the control loop waits on for its next tick (a fleet host's shared ticker)."""
         self._wake = asyncio.Event()
         self.resting = False
         """Whether the control loop is resting (ticking every ``rest_period_s``)."""
@@ -124,45 +128,50 @@ class AgentService:
     async def run(self, stop: asyncio.Event) -> None:
         """Join the bus, fly until ``stop`` is set, then leave it cleanly."""
         with open_session(self.settings.zenoh, role="client") as session:
-            self._session = session
-            declare_token(session, self.keys.vehicle_alive(self.vehicle_id))
-            presence: FifoChannel[bool] = FifoChannel()
-            watch_liveliness(
-                session, self.keys.orchestrator_alive, lambda _key, alive: presence.push(alive)
-            )
-            serve_async(
-                session,
-                self.keys.vehicle_command(self.vehicle_id),
-                VehicleCommand,
-                self._on_command,
-                on_error=_error_reply,
-            )
-            serve_async(
-                session,
-                self.keys.vehicle_assign(self.vehicle_id),
-                VehicleCommand,
-                self._on_assign,
-                on_error=_error_reply,
-            )
-            self._telemetry = MessagePublisher(session, self.keys.telemetry(self.vehicle_id))
-            snapshot = await self.backend.start()
-            log.info("vehicle %s ready on show %s", self.vehicle_id, self.settings.show_id)
-            workers = [
-                asyncio.create_task(self._control_loop(snapshot)),
-                asyncio.create_task(self.reports.send_forever(session)),
-                asyncio.create_task(self._follow_presence(presence)),
-                asyncio.create_task(self._status_heartbeat()),
-            ]
-            stopping = asyncio.create_task(stop.wait())
-            await asyncio.wait([stopping, *workers], return_when=asyncio.FIRST_COMPLETED)
-            for task in [*workers, *self._tasks, stopping]:
-                task.cancel()
-            results = await asyncio.gather(*workers, *self._tasks, return_exceptions=True)
-            await self.backend.close()
-            await self.work.close()
-            for result in results:
-                if isinstance(result, Exception):
-                    raise result
+            await self.serve(session, stop)
+
+    async def serve(self, session: Session, stop: asyncio.Event) -> None:
+        """Fly on ``session`` (this vehicle's own, opened with its identity) until ``stop`` is
+        set; the caller closes the session afterwards, which takes the liveliness token away."""
+        self._session = session
+        declare_token(session, self.keys.vehicle_alive(self.vehicle_id))
+        presence: FifoChannel[bool] = FifoChannel()
+        watch_liveliness(
+            session, self.keys.orchestrator_alive, lambda _key, alive: presence.push(alive)
+        )
+        serve_async(
+            session,
+            self.keys.vehicle_command(self.vehicle_id),
+            VehicleCommand,
+            self._on_command,
+            on_error=_error_reply,
+        )
+        serve_async(
+            session,
+            self.keys.vehicle_assign(self.vehicle_id),
+            VehicleCommand,
+            self._on_assign,
+            on_error=_error_reply,
+        )
+        self._telemetry = MessagePublisher(session, self.keys.telemetry(self.vehicle_id))
+        snapshot = await self.backend.start()
+        log.info("vehicle %s ready on show %s", self.vehicle_id, self.settings.show_id)
+        workers = [
+            asyncio.create_task(self._control_loop(snapshot)),
+            asyncio.create_task(self.reports.send_forever(session)),
+            asyncio.create_task(self._follow_presence(presence)),
+            asyncio.create_task(self._status_heartbeat()),
+        ]
+        stopping = asyncio.create_task(stop.wait())
+        await asyncio.wait([stopping, *workers], return_when=asyncio.FIRST_COMPLETED)
+        for task in [*workers, *self._tasks, stopping]:
+            task.cancel()
+        results = await asyncio.gather(*workers, *self._tasks, return_exceptions=True)
+        await self.backend.close()
+        await self.work.close()
+        for result in results:
+            if isinstance(result, Exception):
+                raise result
 
     # --- inputs --------------------------------------------------------------------------------
     async def _on_command(self, command: VehicleCommand) -> CommandReply:
@@ -221,7 +230,7 @@ class AgentService:
             if rest_period_s is not None and at_rest(self.runner, snapshot):
                 await self._rest(rest_period_s)
             else:
-                await asyncio.sleep(self.clock.delay_s())
+                await self.pacer.wait_until(time.monotonic() + self.clock.delay_s())
             self.tick_starts_s.append(time.monotonic())
             now_s = self.clock.now_s
             self._guard_job(time.monotonic())

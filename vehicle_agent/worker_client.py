@@ -35,14 +35,49 @@ CLOSE_WAIT_S = 5.0
 """How long in [s] ``close`` waits for an idle worker to exit (it may be drawing a picture)."""
 
 
-class ProcessJobWork:
-    """:class:`vehicle_agent.work.JobWork` in a worker process of this vehicle's own."""
+class RemoteJobWork:
+    """:class:`vehicle_agent.work.JobWork` answered by a planning worker through ``_call``
+    (checks the type of each answer; a subclass says which worker answers)."""
+
+    vehicle_id: str
+
+    async def prepare(self, assignment: JobAssignment) -> PreparedJob:
+        prepared = await self._call(("prepare", assignment))
+        if not isinstance(prepared, PreparedJob):
+            raise worker_failed(self.vehicle_id, f"answered prepare with a {_name(prepared)}")
+        return prepared
+
+    async def measure(self, prepared: PreparedJob, trace: FlownTrace) -> JobMetrics:
+        metrics = await self._call(("measure", prepared, trace))
+        if not isinstance(metrics, JobMetrics):
+            raise worker_failed(self.vehicle_id, f"answered measure with a {_name(metrics)}")
+        return metrics
+
+    async def archive(
+        self, prepared: PreparedJob, trace: FlownTrace, metrics: JobMetrics | None
+    ) -> object:
+        return await self._call(("archive", prepared, trace, metrics))
+
+    async def _call(self, request: tuple[Any, ...]) -> Any:
+        raise NotImplementedError
+
+
+class ProcessJobWork(RemoteJobWork):
+    """A planning worker process of this agent's own (``vehicle_id``), or, with ``vehicle_id``
+    None, one serving any vehicle of ``show`` through :meth:`call` (a fleet host's pool)."""
 
     def __init__(
-        self, show: Show, vehicle_id: str, time_scale: float, *, idle_exit_s: float = IDLE_EXIT_S
+        self,
+        show: Show,
+        vehicle_id: str | None,
+        time_scale: float,
+        *,
+        idle_exit_s: float = IDLE_EXIT_S,
+        name: str | None = None,
     ) -> None:
         self._init = ("init", show, vehicle_id, time_scale)
-        self.vehicle_id = vehicle_id
+        self.vehicle_id = name or vehicle_id or "the fleet host"
+        """Who the worker works for (log lines, errors)."""
         self.idle_exit_s = idle_exit_s
         self._process: asyncio.subprocess.Process | None = None
         self._lock = asyncio.Lock()
@@ -60,22 +95,9 @@ class ProcessJobWork:
         process = self._process
         return None if process is None or process.returncode is not None else process.pid
 
-    async def prepare(self, assignment: JobAssignment) -> PreparedJob:
-        prepared = await self._call(("prepare", assignment))
-        if not isinstance(prepared, PreparedJob):
-            raise self._failed(f"answered prepare with a {type(prepared).__name__}")
-        return prepared
-
-    async def measure(self, prepared: PreparedJob, trace: FlownTrace) -> JobMetrics:
-        metrics = await self._call(("measure", prepared, trace))
-        if not isinstance(metrics, JobMetrics):
-            raise self._failed(f"answered measure with a {type(metrics).__name__}")
-        return metrics
-
-    async def archive(
-        self, prepared: PreparedJob, trace: FlownTrace, metrics: JobMetrics | None
-    ) -> object:
-        return await self._call(("archive", prepared, trace, metrics))
+    async def call(self, request: tuple[Any, ...]) -> Any:
+        """The worker's answer to ``request`` (JobWorkError when it failed or died)."""
+        return await self._call(request)
 
     async def close(self) -> None:
         """Stop the worker: let an idle one finish its picture, kill a busy one."""
@@ -151,11 +173,20 @@ class ProcessJobWork:
         raise self._failed(f"answered {request_name} with {type(reply).__name__}")
 
     def _failed(self, what: str) -> JobWorkError:
-        message = f"the planning worker of {self.vehicle_id} {what}"
-        return JobWorkError(ErrorInfo(code="worker_failed", message=message))
+        return worker_failed(self.vehicle_id, what)
 
     def _idle_exit(self) -> None:
         self._idle_timer = None
         if not self._busy and self._process is not None:
             log.info("%s: planning worker idle; stopping it", self.vehicle_id)
             self._closing = asyncio.get_running_loop().create_task(self.close())
+
+
+def worker_failed(vehicle_id: str, what: str) -> JobWorkError:
+    """The error of a request the planning worker of ``vehicle_id`` could not answer."""
+    message = f"the planning worker of {vehicle_id} {what}"
+    return JobWorkError(ErrorInfo(code="worker_failed", message=message))
+
+
+def _name(value: object) -> str:
+    return type(value).__name__

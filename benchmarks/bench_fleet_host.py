@@ -1,0 +1,467 @@
+"""Fleet host: N simulated vehicles' agents in one process, M of them writing at once, in real time.
+
+    nice -n 15 .venv/bin/python benchmarks/bench_fleet_host.py [--vehicles 50,100] [--hosts 1]
+        [--writing 50] [--window-s 20] [--peer 10] [--skip-peer]
+
+Each case is a real show (``bench_stop.wide_show``: the Airshow show widened to N vehicles, each
+over its own board, time scale 1, mutual TLS) run as separate processes: the router, the real
+orchestrator, and the vehicles' agents. M characters are submitted at once; once M vehicles are
+awake (flying), for ``--window-s`` seconds:
+
+- **real-time factor** of the awake vehicles: control ticks run over ticks due by the wall clock
+  (a simulated vehicle never skips a tick: 1.00 is real time, 0.5 half speed), counted in the
+  fleet processes; and for agents and fleet alike from telemetry (agent time over wall time);
+- **tick jitter** |tick interval - 10 ms| p50/p99 of the awake vehicles' loops, and the event
+  loop's lag (a 10 ms timer's lateness), in the fleet process;
+- **RSS** of the fleet process (and per vehicle), of its planning workers; **CPU** in cores;
+- **status latency**: the orchestrator's snapshot query (what ``skyquill status`` asks), every
+  0.5 s from this process, and one ``skyquill status`` command's wall time;
+- **nothing lost**: every submitted job finished ``done`` (waited for after the window);
+- **stop**: how long the fleet process took to stop after SIGTERM, SIGKILLed or not.
+
+``--hosts K`` splits the N vehicles over K fleet processes (a show's ``fleet_hosts: K``): one
+Python process runs on one core at most. The peer, in the same run: the same show with
+``--peer`` vehicles as separate agent processes (one each, what ``skyquill up`` ran before
+``fleet_hosts``) beside a fleet host of as many.
+The fleet host of the benchmark is this script in ``--child`` mode: ``vehicle_agent.fleet``'s
+``FleetHost`` as ``skyquill fleet`` runs it, plus a task writing its figures once a second.
+
+Measured on the shared 2-core machine under ``nice -n 15`` (others' load average 1.5-10):
+
+- 10 vehicles, all writing: agent processes 814 MiB + 10 planning workers 1,600 MiB, 0.84
+  cores; one fleet host 137 MiB + 2 workers 344 MiB, 0.61 cores; real time in both (1.00),
+  the host's tick jitter p50 0.7 ms, p99 9.6 ms; all 10 jobs done in both;
+- idle, per vehicle: 71 MiB an agent process; in a fleet host 0.27 MiB (host RSS 75.6, 86.2,
+  100.1, 139.4 MiB at 10, 50, 100, 250 vehicles) and 0.1 % of a core;
+- 100 vehicles, 10 writing: real-time factor 0.97, status p95 0.21 s, 10/10 done;
+- 250 vehicles: all on the bus 9.9 s after start; idle, the host takes 0.24 cores, the
+  orchestrator 0.63 and the router 0.21 (250 heartbeats at 2.7 Hz); 10 writing: factor 0.92
+  but status p50 1.1 s, p95 4.3 s, and acknowledgements later than ``lost_after_s`` made the
+  vehicles give their jobs up: the orchestrator is the limit there;
+- 50 writing at once (50 vehicles, one host): factor 0.11, the host's loop 250 ms late: a
+  writing tick costs 0.6-1.2 ms of CPU (the kind's world and controller about 60 % of it), so
+  50 writers need about 3-5 cores; 40/50 done, the others given up and requeued.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import collections
+import itertools
+import json
+import os
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from bench_agent import cpu_ticks, rss_mib, worker_count  # noqa: E402
+from bench_stop import wait_present, wide_show  # noqa: E402
+
+from bus.keys import ShowKeys  # noqa: E402
+from bus.messages import Telemetry  # noqa: E402
+from bus.pubsub import subscribe  # noqa: E402
+from bus.rpc import NoReplyError, RemoteError  # noqa: E402
+from bus.session import open_session  # noqa: E402
+from cli.showrun import snapshot, submit_texts  # noqa: E402
+from cli.supervisor import (  # noqa: E402
+    ChildSpec,
+    Supervisor,
+    child_env,
+    fleet_stop_grace_s,
+    show_children,
+    skyquill_argv,
+)
+from showfile import dump_show, load_show  # noqa: E402
+from trust.settings import ensure_show_keys, session_settings  # noqa: E402
+
+CORPUS = ("永", "書", "龍", "風", "雲", "飛", "鳥", "魚", "水", "鬱")
+"""Characters written (cycled), long enough to keep M vehicles writing through the window."""
+PERIOD_S = 0.01
+STATS_PERIOD_S = 1.0
+
+
+# --- the fleet process (--child) -----------------------------------------------------------------
+async def record_figures(host: object, path: Path) -> None:
+    """Once a second, one JSON line: ticks run and due of the vehicles awake throughout the
+    second, their tick jitter, the loop's lag, RSS and CPU."""
+    from vehicle_agent.fleet import FleetHost
+
+    assert isinstance(host, FleetHost)
+    lags: list[float] = []
+
+    async def probe() -> None:
+        while True:
+            started = time.monotonic()
+            await asyncio.sleep(PERIOD_S)
+            lags.append((time.monotonic() - started - PERIOD_S) * 1e3)
+
+    prober = asyncio.create_task(probe())
+    before: dict[str, tuple[int, bool]] = {}
+    wall_s = time.monotonic()
+    with path.open("a") as out:
+        try:
+            while True:
+                await asyncio.sleep(STATS_PERIOD_S)
+                now_s = time.monotonic()
+                ran = due = 0.0
+                jitter: list[float] = []
+                awake = 0
+                for vehicle_id, service in list(host.services.items()):
+                    tick, resting = service.clock.tick, service.resting
+                    last = before.get(vehicle_id)
+                    before[vehicle_id] = (tick, resting)
+                    if last is None or last[1] or resting:
+                        continue
+                    awake += 1
+                    ran += tick - last[0]
+                    due += (now_s - wall_s) / service.clock.wall_period_s
+                    starts = [s for s in service.tick_starts_s if s > wall_s]
+                    jitter += [abs(b - a - PERIOD_S) * 1e3 for a, b in itertools.pairwise(starts)]
+                line = {
+                    "t": now_s,
+                    "awake": awake,
+                    "ran": ran,
+                    "due": due,
+                    "jitter_ms": [round(j, 2) for j in jitter],
+                    "lag_ms": [round(lag, 2) for lag in lags],
+                    "restarts": sum(host.restarts.values()),
+                }
+                lags.clear()
+                out.write(json.dumps(line) + "\n")
+                out.flush()
+                wall_s = now_s
+        finally:
+            prober.cancel()
+
+
+def child_main(show_path: Path, vehicle_ids: list[str], stats: Path) -> None:
+    from vehicle_agent.fleet import FleetHost
+
+    host = FleetHost(load_show(show_path), vehicle_ids)
+
+    async def main() -> None:
+        stop = asyncio.Event()
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, stop.set)
+        figures = asyncio.create_task(record_figures(host, stats))
+        await host.run(stop)
+        figures.cancel()
+
+    asyncio.run(main())
+    os._exit(0)
+
+
+# --- one case ------------------------------------------------------------------------------------
+@dataclass
+class Case:
+    """The figures of one show run."""
+
+    label: str
+    vehicles: int
+    writing: int
+    processes: int = 0
+    idle_rss_mib: float = 0.0
+    idle_cpu_cores: float = 0.0
+    rss_mib: float = 0.0
+    worker_rss_mib: float = 0.0
+    workers: int = 0
+    cpu_cores: float = 0.0
+    awake: float = 0.0
+    rtf: float = float("nan")
+    telemetry_rtf: float = float("nan")
+    jitter_ms: list[float] = field(default_factory=list)
+    lag_ms: list[float] = field(default_factory=list)
+    status_s: list[float] = field(default_factory=list)
+    status_cli_s: float = float("nan")
+    done: int = 0
+    final: int = 0
+    stop_s: float = float("nan")
+    killed: list[str] = field(default_factory=list)
+
+
+class TelemetryClock:
+    """Per vehicle, the first and last (wall, agent time) of telemetry heard with a job."""
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.since_s = float("inf")
+        self.first: dict[str, tuple[float, float]] = {}
+        self.last: dict[str, tuple[float, float]] = {}
+
+    def heard(self, _key: str, message: Telemetry) -> None:
+        now_s = time.monotonic()
+        if message.job_id is None or now_s < self.since_s:
+            return
+        with self.lock:
+            self.first.setdefault(message.vehicle_id, (now_s, message.t_s))
+            self.last[message.vehicle_id] = (now_s, message.t_s)
+
+    def factor(self) -> float:
+        """Agent time over wall time of the vehicles heard flying a job."""
+        with self.lock:
+            pairs = [(self.first[v], self.last[v]) for v in self.first]
+        wall = sum(b[0] - a[0] for a, b in pairs)
+        agent = sum(b[1] - a[1] for a, b in pairs)
+        return agent / wall if wall > 0 else float("nan")
+
+
+def case_show(out: Path, count: int) -> tuple[Path, object]:
+    path, show = wide_show(out, count)
+    show = show.model_copy(update={"time_scale": 1.0})
+    dump_show(show, path)
+    return path, load_show(path)
+
+
+def run_case(label: str, count: int, writing: int, window_s: float, *, hosts: int) -> Case:
+    """One show run: ``hosts`` fleet host processes (0: one agent process per vehicle)."""
+    case = Case(label, count, writing)
+    with tempfile.TemporaryDirectory() as tmp:
+        path, show = case_show(Path(tmp), count)
+        ensure_show_keys(show)  # type: ignore[arg-type]
+        ids = [v.id for v in show.vehicles]  # type: ignore[attr-defined]
+        logs = Path(tmp) / "logs"
+        specs = show_children(path, [] if hosts else ids, log_dir=logs)
+        stats = [Path(tmp) / f"fleet{i + 1}.jsonl" for i in range(hosts)]
+        for i, figures in enumerate(stats):
+            group = ids[i::hosts]  # dealt round-robin, as cli/fleets.py does
+            argv = (sys.executable, __file__, "--child", str(path), ",".join(group), str(figures))
+            grace_s = fleet_stop_grace_s(len(group))
+            name = f"fleet {i + 1}"
+            specs.append(ChildSpec(name, argv, logs / f"fleet{i + 1}.log", None, grace_s))
+        supervisor = Supervisor(specs, env=child_env(), say=lambda line: None)
+        supervisor.start()
+        try:
+            measure(case, supervisor, show, path, stats, window_s)
+        finally:
+            report = supervisor.stop()
+            case.killed = report.killed
+            agents = [n for n in report.stop_s if n.startswith(("agent", "fleet"))]
+            case.stop_s = max((report.stop_s[n] for n in agents), default=float("nan"))
+    return case
+
+
+def measure(
+    case: Case,
+    supervisor: Supervisor,
+    show: object,
+    path: Path,
+    stats: list[Path],
+    window_s: float,
+) -> None:
+    wait_present(show, 600.0)  # type: ignore[arg-type]
+    names = [n for n in supervisor.names if n.startswith(("agent", "fleet"))]
+    pids = [p for p in (supervisor.pid(n) for n in names) if p is not None]
+    case.processes = len(pids)
+    time.sleep(5.0)  # settled
+    ticks0, idle_s = sum(cpu_ticks(p) for p in pids), time.monotonic()
+    time.sleep(5.0)
+    hz = os.sysconf("SC_CLK_TCK")
+    case.idle_cpu_cores = (
+        (sum(cpu_ticks(p) for p in pids) - ticks0) / hz / (time.monotonic() - idle_s)
+    )
+    case.idle_rss_mib = sum(rss_mib(p) for p in pids)
+    keys = ShowKeys(show.show_id)  # type: ignore[attr-defined]
+    clock = TelemetryClock()
+    with open_session(session_settings(show, "operator"), role="client") as session:  # type: ignore[arg-type]
+        heard = subscribe(session, keys.telemetry_all, Telemetry, clock.heard)
+        texts = [CORPUS[i % len(CORPUS)] for i in range(case.writing)]
+        job_ids = submit_all(session, keys, texts, timeout_s=120.0)
+        wait_writing(session, keys, job_ids, timeout_s=180.0)
+        started = time.monotonic()
+        clock.since_s = started
+        ticks0 = sum(cpu_ticks(p) for p in pids)
+        while time.monotonic() - started < window_s:
+            asked = time.monotonic()
+            try:
+                snapshot(session, keys, timeout_s=5.0)
+                case.status_s.append(time.monotonic() - asked)
+            except NoReplyError:
+                case.status_s.append(float("inf"))
+            time.sleep(max(0.0, 0.5 - (time.monotonic() - asked)))
+        ended = time.monotonic()
+        case.cpu_cores = (sum(cpu_ticks(p) for p in pids) - ticks0) / hz / (ended - started)
+        case.rss_mib = sum(rss_mib(p) for p in pids)
+        case.workers = worker_count(pids)
+        case.worker_rss_mib = sum(rss_mib(p) for p in worker_pids(pids))
+        cli = time.monotonic()
+        subprocess.run(skyquill_argv("status", str(path)), env=child_env(), capture_output=True)
+        case.status_cli_s = time.monotonic() - cli
+        window_figures(case, stats, started, ended)
+        case.telemetry_rtf = clock.factor()
+        final = wait_final(session, keys, job_ids, timeout_s=600.0)
+        heard.undeclare()  # type: ignore[no-untyped-call]
+    case.final = len(final)
+    case.done = sum(1 for state in final.values() if state == "done")
+
+
+def submit_all(session: object, keys: ShowKeys, texts: list[str], timeout_s: float) -> list[str]:
+    """Submit each text, retrying while the orchestrator does not answer in time (a query that
+    timed out at the router comes back as an error reply, not as none)."""
+    deadline = time.monotonic() + timeout_s
+    job_ids = []
+    for text in texts:
+        while True:
+            try:
+                (reply,) = submit_texts(session, keys, [text], timeout_s=10.0)  # type: ignore[arg-type]
+                break
+            except (NoReplyError, RemoteError):
+                if time.monotonic() > deadline:
+                    raise
+        job_ids.append(str(reply.job_id))
+    return job_ids
+
+
+def worker_pids(parents: Sequence[int]) -> list[int]:
+    found = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            cmdline = (entry / "cmdline").read_bytes()
+            ppid = int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1])
+        except (OSError, ValueError, IndexError):
+            continue
+        if ppid in parents and b"vehicle_agent.plan_worker" in cmdline:
+            found.append(int(entry.name))
+    return found
+
+
+def window_figures(case: Case, stats: list[Path], started: float, ended: float) -> None:
+    """The fleet processes' figures of the seconds inside the window."""
+    ran = due = 0.0
+    awake = []
+    lines = [line for path in stats for line in path.read_text().splitlines()]
+    for line in lines:
+        figures = json.loads(line)
+        if not started + STATS_PERIOD_S <= figures["t"] <= ended + STATS_PERIOD_S:
+            continue  # a second not wholly inside the window
+        ran += figures["ran"]
+        due += figures["due"]
+        awake.append(figures["awake"])
+        case.jitter_ms += figures["jitter_ms"]
+        case.lag_ms += figures["lag_ms"]
+    case.rtf = ran / due if due > 0 else float("nan")
+    case.awake = statistics.mean(awake) if awake else 0.0
+
+
+def wait_writing(session: object, keys: ShowKeys, job_ids: list[str], timeout_s: float) -> None:
+    """Until every job is being written (or ``timeout_s``)."""
+    deadline = time.monotonic() + timeout_s
+    wanted = set(job_ids)
+    states: dict[str, int] = {}
+    while time.monotonic() < deadline:
+        try:
+            jobs = snapshot(session, keys, timeout_s=5.0).jobs  # type: ignore[arg-type]
+        except NoReplyError:
+            continue
+        states = collections.Counter(j.state for j in jobs if j.job_id in wanted)
+        if states["writing"] + states["done"] == len(wanted):
+            return
+        time.sleep(0.5)
+    print(
+        f"    (not every job under way after {timeout_s:.0f} s: {dict(states)}; measuring anyway)"
+    )
+
+
+def wait_final(
+    session: object, keys: ShowKeys, job_ids: list[str], timeout_s: float
+) -> dict[str, str]:
+    """The final state of each job that reached one within ``timeout_s``."""
+    deadline = time.monotonic() + timeout_s
+    final: dict[str, str] = {}
+    while time.monotonic() < deadline and len(final) < len(job_ids):
+        try:
+            jobs = snapshot(session, keys, timeout_s=5.0).jobs  # type: ignore[arg-type]
+        except NoReplyError:
+            continue
+        for job in jobs:
+            if job.job_id in job_ids and job.state in ("done", "failed", "cancelled", "rejected"):
+                final[job.job_id] = job.state
+        time.sleep(1.0)
+    return final
+
+
+# --- printing ------------------------------------------------------------------------------------
+def pct(values: Sequence[float], q: float) -> float:
+    if not values:
+        return float("nan")
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, int(q * len(ordered)))]
+
+
+def print_case(case: Case) -> None:
+    n = case.vehicles
+    print(f"  {case.label}: {n} vehicles in {case.processes} processes, {case.writing} writing")
+    print(
+        f"    idle: RSS {case.idle_rss_mib:7.1f} MiB ({case.idle_rss_mib / n:5.2f} per vehicle), "
+        f"CPU {case.idle_cpu_cores:4.2f} cores ({100 * case.idle_cpu_cores / n:4.2f} % per vehicle)"
+    )
+    print(
+        f"    writing: RSS {case.rss_mib:7.1f} MiB ({case.rss_mib / n:5.2f} per vehicle) + "
+        f"{case.workers} planning workers {case.worker_rss_mib:6.1f} MiB; "
+        f"CPU {case.cpu_cores:4.2f} cores ({100 * case.cpu_cores / n:4.2f} % per vehicle)"
+    )
+    awake = f" ({case.awake:.0f} vehicles awake)" if case.awake else ""
+    print(
+        f"    real-time factor of the writing vehicles: ticks {case.rtf:5.3f}{awake}, "
+        f"telemetry {case.telemetry_rtf:5.3f}"
+    )
+    if case.jitter_ms:
+        print(
+            f"    tick jitter p50 {pct(case.jitter_ms, 0.5):5.2f} ms, p99 "
+            f"{pct(case.jitter_ms, 0.99):6.2f} ms ({len(case.jitter_ms)} ticks); loop lag p50 "
+            f"{pct(case.lag_ms, 0.5):5.2f} ms, p99 {pct(case.lag_ms, 0.99):6.2f} ms"
+        )
+    print(
+        f"    status: p50 {pct(case.status_s, 0.5):5.3f} s, p95 {pct(case.status_s, 0.95):5.3f} s, "
+        f"max {max(case.status_s, default=float('nan')):5.3f} s; `skyquill status` "
+        f"{case.status_cli_s:4.2f} s"
+    )
+    killed = ", ".join(case.killed) or "none"
+    print(
+        f"    jobs done {case.done}/{case.writing} ({case.final} final); stop "
+        f"{case.stop_s:4.1f} s, SIGKILLed: {killed}"
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--vehicles", default="50", help="comma-separated fleet sizes")
+    parser.add_argument("--writing", type=int, default=50)
+    parser.add_argument("--window-s", type=float, default=20.0)
+    parser.add_argument("--peer", type=int, default=10)
+    parser.add_argument("--skip-peer", action="store_true")
+    parser.add_argument("--hosts", type=int, default=1, help="fleet host processes per show")
+    parser.add_argument("--child", nargs=3, metavar=("SHOW", "IDS", "STATS"))
+    args = parser.parse_args()
+    if args.child:
+        child_main(Path(args.child[0]), args.child[1].split(","), Path(args.child[2]))
+        return
+    print(f"load average before: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    if not args.skip_peer:
+        print(f"peer ({args.peer} vehicles, every one writing):")
+        print_case(run_case("agent processes", args.peer, args.peer, args.window_s, hosts=0))
+        print_case(run_case("fleet host", args.peer, args.peer, args.window_s, hosts=1))
+    for count in (int(c) for c in args.vehicles.split(",")):
+        writing = min(args.writing, count)
+        print(f"{count} vehicles in {args.hosts} fleet hosts ({writing} writing):")
+        label = f"{args.hosts} fleet host{'s' if args.hosts > 1 else ''}"
+        print_case(run_case(label, count, writing, args.window_s, hosts=args.hosts))
+    print(f"load average after: {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
