@@ -40,7 +40,8 @@ def run(args: argparse.Namespace) -> int:
     import asyncio
 
     from showfile import ShowError, load_show
-    from vehicle_agent.fleet import FleetError, FleetHost, run_fleet_until_signalled
+    from vehicle_agent.fleet import FleetError, FleetHost
+    from vehicle_agent.service import run_until_signalled
 
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,
@@ -61,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"skyquill fleet: {exc}", file=sys.stderr)
         return 2
     with contextlib.suppress(KeyboardInterrupt):
-        asyncio.run(run_fleet_until_signalled(host))
+        asyncio.run(run_until_signalled(host))
     # Every session is closed and the pictures written: skip the interpreter's teardown (about a
     # second of CPU unloading modules), as an agent does.
     logging.shutdown()

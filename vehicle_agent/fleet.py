@@ -27,7 +27,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import signal
 from collections.abc import Sequence
 
 from bus.session import Session, open_session
@@ -157,13 +156,3 @@ class FleetHost:
 def _open(service: AgentService) -> Session:
     """The vehicle's own session, with its own certificate (in a thread: opening blocks)."""
     return open_session(service.settings.zenoh, role="client")
-
-
-async def run_fleet_until_signalled(host: FleetHost) -> None:
-    """Run ``host`` until SIGINT or SIGTERM."""
-    stop = asyncio.Event()
-    loop = asyncio.get_running_loop()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        with contextlib.suppress(NotImplementedError):
-            loop.add_signal_handler(sig, stop.set)
-    await host.run(stop)

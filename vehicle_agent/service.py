@@ -30,6 +30,7 @@ import signal
 import time
 from collections import deque
 from dataclasses import replace
+from typing import Protocol
 
 import msgspec
 
@@ -404,11 +405,17 @@ def _with_fault(snapshot: VehicleSnapshot, fault: str) -> VehicleSnapshot:
     return replace(snapshot, fault=fault)
 
 
-async def run_until_signalled(service: AgentService) -> None:
-    """Run ``service`` until SIGINT or SIGTERM."""
+class Stoppable(Protocol):
+    """Runs until its stop event is set (an agent's service, a fleet host)."""
+
+    async def run(self, stop: asyncio.Event) -> None: ...
+
+
+async def run_until_signalled(runner: Stoppable) -> None:
+    """Run ``runner`` until SIGINT or SIGTERM."""
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
         with contextlib.suppress(NotImplementedError):
             loop.add_signal_handler(sig, stop.set)
-    await service.run(stop)
+    await runner.run(stop)
