@@ -34,6 +34,9 @@ from vehicle_agent.job_runner import JobRunner
 ROOT = Path(__file__).resolve().parents[1]
 HOME_M_ENU = (0.0, -1.0, 0.0)
 SITL_INDEX = 7
+SITL_MOCAP = {"ardupilot": "vision_position_estimate", "px4": "odometry"}
+"""How each autopilot gets the mocap: PX4 SIH hovers within 1-1.5 cm only with the mocap's
+velocity fused (ODOMETRY); ArduCopter writes as well on the position alone."""
 """SITL instance number used here (apart from shows, probe 4, step_response 5, conformance 6)."""
 SHOW = """
 show_id: mavlink-writing
@@ -200,7 +203,7 @@ def _write_sitl(kind: str, texts: list[str]) -> list[Written]:
             launch.wait_ready(inst, process, launch.READY_TIMEOUT_S)
         vehicle = (
             f'backend: mavlink, mavlink_url: "{inst.url}", mavlink_system_id: {inst.system_id}, '
-            "mavlink_truth: sitl, mavlink_mocap: vision_position_estimate"
+            f"mavlink_truth: sitl, mavlink_mocap: {SITL_MOCAP[kind]}"
         )
         return _fly_mavlink(kind, parse_show(SHOW.format(vehicle=vehicle)), texts)
     finally:

@@ -70,13 +70,17 @@ class Autopilot(AutopilotCore):
     def _follow_gain_params(self) -> None:
         """Each flies its position gains as they are set now (unless the configuration fixes
         them): ArduCopter PSC_POSXY_P, PSC_VELXY_P, PSC_VELXY_I; PX4 MPC_XY_P, MPC_XY_VEL_P_ACC,
-        MPC_XY_VEL_I_ACC, MPC_Z_P."""
+        MPC_XY_VEL_I_ACC, MPC_Z_P, MPC_Z_VEL_P_ACC."""
         if self.config.gains is not None:
             return
         p = self.params
         if self.flavor == "px4":
             gains = PositionGains.px4(
-                p["MPC_XY_P"], p["MPC_XY_VEL_P_ACC"], p["MPC_XY_VEL_I_ACC"], p["MPC_Z_P"]
+                p["MPC_XY_P"],
+                p["MPC_XY_VEL_P_ACC"],
+                p["MPC_XY_VEL_I_ACC"],
+                p["MPC_Z_P"],
+                p["MPC_Z_VEL_P_ACC"],
             )
         else:
             gains = PositionGains.ardupilot(p["PSC_POSXY_P"], p["PSC_VELXY_P"], p["PSC_VELXY_I"])

@@ -72,13 +72,19 @@ class PositionGains:
 
     @classmethod
     def px4(
-        cls, xy_p: float = 0.95, xy_vel_p: float = 1.8, xy_vel_i: float = 0.4, z_p: float = 1.0
+        cls,
+        xy_p: float = 0.95,
+        xy_vel_p: float = 1.8,
+        xy_vel_i: float = 0.4,
+        z_p: float = 1.0,
+        z_vel_p: float = 4.0,
     ) -> PositionGains:
-        """PX4 v1.16's: MPC_XY_P, MPC_XY_VEL_P_ACC, MPC_XY_VEL_I_ACC and MPC_Z_P as given (their
-        defaults 0.95, 1.8, 0.4 and 1 by default); MPC_Z_VEL_P_ACC 4, MPC_Z_VEL_I_ACC 2."""
+        """PX4 v1.16's: MPC_XY_P, MPC_XY_VEL_P_ACC, MPC_XY_VEL_I_ACC, MPC_Z_P and
+        MPC_Z_VEL_P_ACC as given (their defaults 0.95, 1.8, 0.4, 1 and 4 by default);
+        MPC_Z_VEL_I_ACC 2."""
         (kp, kd, ki, kvi), (kpz, kdz, kiz, kviz) = (
             _cascade(xy_p, xy_vel_p, xy_vel_i),
-            _cascade(z_p, 4.0, 2.0),
+            _cascade(z_p, z_vel_p, 2.0),
         )
         return cls(kp, kd, ki, kvi, kpz, kdz, kiz, kviz)
 

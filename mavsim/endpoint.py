@@ -27,6 +27,7 @@ from mavsim.autopilot_core import Result
 from mavsim.config import VehicleConfig
 from mavsim.errors import MavsimError
 from mavsim.frames import attitude_enu_to_ned, enu_to_ned
+from mavsim.mocap import odometry_is_pose
 from mavsim.modes import CopterMode, from_px4, px4_custom_mode
 from mavsim.params import ParamTable
 from mavsim.px4 import Px4Autopilot
@@ -155,6 +156,11 @@ class VehicleEndpoint:
             self._param(kind, message)
         elif kind in ("VISION_POSITION_ESTIMATE", "ATT_POS_MOCAP"):
             ap.mocap_pose()
+        elif kind == "ODOMETRY":
+            xyz = (message.x, message.y, message.z)
+            if odometry_is_pose(ap.flavor, message.frame_id, message.child_frame_id,
+                                message.estimator_type, xyz):  # fmt: skip
+                ap.mocap_pose()
         elif kind == "SET_GPS_GLOBAL_ORIGIN":  # both autopilots answer with the origin taken
             ap.ekf_origin_lla = (message.latitude * 1e-7, message.longitude * 1e-7,
                                  message.altitude * 1e-3)  # fmt: skip

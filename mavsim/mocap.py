@@ -1,7 +1,8 @@
 """Motion capture as the estimator's only position source, as each autopilot configures it (pure).
 
-A companion that forwards mocap (VISION_POSITION_ESTIMATE, ATT_POS_MOCAP) sets the estimator up
-to fuse it; from then on the vehicle has a position only while poses keep arriving:
+A companion that forwards mocap (VISION_POSITION_ESTIMATE, ATT_POS_MOCAP, or ODOMETRY in the frames
+the autopilot takes: :func:`odometry_is_pose`) sets the estimator up to fuse it; from then on the
+vehicle has a position only while poses keep arriving:
 
 - ArduCopter: ExternalNav is the position source when VISO_TYPE (read at boot) is non-zero and
   EK3_SRC1_POSXY is 6; the visual odometry is healthy while a pose came within 0.3 s
@@ -17,6 +18,8 @@ read-at-boot parameters need (scripts/sitl/start.py gives the real SITL binaries
 """
 
 from __future__ import annotations
+
+import math
 
 from mavsim.params import Flavor, ParamTable
 
@@ -37,6 +40,29 @@ STALE_REFUSAL: dict[Flavor, str] = {
 }
 """The pre-arm refusal while mocap is the position source and no recent pose came (PX4 1.16's
 commander words any failed health check so; SIH said it when its vision had lapsed)."""
+
+
+MAV_FRAME_LOCAL_NED, MAV_FRAME_LOCAL_ENU, MAV_FRAME_BODY_FRD = 1, 4, 12
+MAV_FRAME_LOCAL_FRD, MAV_FRAME_LOCAL_FLU = 20, 21
+PX4_ODOMETRY_POSE_FRAMES = frozenset(
+    {MAV_FRAME_LOCAL_NED, MAV_FRAME_LOCAL_ENU, MAV_FRAME_LOCAL_FRD, MAV_FRAME_LOCAL_FLU}
+)
+PX4_VISION_ESTIMATORS = frozenset({0, 1, 2, 3})
+"""MAV_ESTIMATOR_TYPE UNKNOWN, NAIVE, VISION, VIO: what PX4 1.16 hands EKF2 as vision (MOCAP goes
+to a topic EKF2 does not read; GPS, LIDAR, AUTOPILOT are refused)."""
+
+
+def odometry_is_pose(
+    flavor: Flavor, frame_id: int, child_frame_id: int, estimator_type: int, xyz: tuple[float, ...]
+) -> bool:
+    """An ODOMETRY message reaches the estimator as a mocap pose: ArduPilot takes only
+    MAV_FRAME_LOCAL_FRD with the velocity in MAV_FRAME_BODY_FRD (any other pair is dropped);
+    PX4 a finite position in a local frame from a vision-like estimator."""
+    if flavor == "ardupilot":
+        return frame_id == MAV_FRAME_LOCAL_FRD and child_frame_id == MAV_FRAME_BODY_FRD
+    finite = all(math.isfinite(v) for v in xyz)
+    vision = estimator_type in PX4_VISION_ESTIMATORS
+    return finite and vision and frame_id in PX4_ODOMETRY_POSE_FRAMES
 
 
 def fuses_mocap(flavor: Flavor, params: ParamTable, viso_type_at_boot: float) -> bool:

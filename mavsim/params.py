@@ -17,12 +17,14 @@ maximum altitude, bit 1 circle), FENCE_RADIUS [m], FENCE_ALT_MAX [m], FENCE_ACTI
 2 land, others: RTL). PX4: COM_OF_LOSS_T [s], COM_OBL_RC_ACT (what flies when the
 offboard stream is lost, :mod:`mavsim.px4`), GF_MAX_HOR_DIST [m], GF_MAX_VER_DIST [m] (0: off),
 GF_ACTION (0 none, 1 warning, 2 hold, 3 return, 5 land), MPC_XY_P [1/s], MPC_XY_VEL_P_ACC [1/s]
-and MPC_XY_VEL_I_ACC [1/s^2] (the horizontal P-PI cascade), MPC_Z_P [1/s].
+and MPC_XY_VEL_I_ACC [1/s^2] (the horizontal P-PI cascade), MPC_Z_P [1/s] and MPC_Z_VEL_P_ACC
+[1/s] (the vertical one).
 
 Motion-capture fusion (:mod:`mavsim.mocap`): ArduCopter VISO_TYPE (read at boot) and
 EK3_SRC1_POSXY decide whether mocap is the position source; PX4 EKF2_EV_CTRL and EKF2_GPS_CTRL.
 The other estimator parameters a companion sets with them (EK3_SRC1_POSZ/VELXY/VELZ,
-VISO_POS_M_NSE, VISO_DELAY_MS, EK3_TAU_OUTPUT; EKF2_HGT_REF, EKF2_EVP_NOISE, EKF2_TAU_POS/VEL,
+VISO_POS_M_NSE, VISO_DELAY_MS, EK3_TAU_OUTPUT; EKF2_HGT_REF, EKF2_EVP_NOISE, EKF2_EVV_NOISE,
+EKF2_ACC_NOISE, EKF2_TAU_POS/VEL,
 EKF2_RNG_CTRL, EKF2_ASP_DELAY, EKF2_DELAY_MAX) are kept and read back with the real defaults; the
 simulated estimator is exact, so they change nothing else.
 """
@@ -90,10 +92,13 @@ PX4_PARAMS = (
     ParamDef("MPC_XY_VEL_P_ACC", REAL32, 1.8),
     ParamDef("MPC_XY_VEL_I_ACC", REAL32, 0.4),
     ParamDef("MPC_Z_P", REAL32, 1.0),
+    ParamDef("MPC_Z_VEL_P_ACC", REAL32, 4.0),
     ParamDef("EKF2_EV_CTRL", INT32, 0),
     ParamDef("EKF2_HGT_REF", INT32, 1),
     ParamDef("EKF2_GPS_CTRL", INT32, 7),
     ParamDef("EKF2_EVP_NOISE", REAL32, 0.1),
+    ParamDef("EKF2_EVV_NOISE", REAL32, 0.1),
+    ParamDef("EKF2_ACC_NOISE", REAL32, 0.35),
     ParamDef("EKF2_TAU_POS", REAL32, 0.25),
     ParamDef("EKF2_TAU_VEL", REAL32, 0.25),
     ParamDef("EKF2_RNG_CTRL", INT32, 1),

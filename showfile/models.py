@@ -319,7 +319,7 @@ class Vehicle(_Model):
     [m], world ENU; None: ``home_m_enu`` (mavlink backend only)."""
     mavlink_setpoint_rate_hz: float = Field(default=50.0, gt=0.0)
     """Rate of the setpoint stream, in [Hz], at most ``controller.rate_hz`` (mavlink only)."""
-    mavlink_mocap: Literal["none", "vision_position_estimate", "att_pos_mocap"] = "none"
+    mavlink_mocap: Literal["none", "vision_position_estimate", "att_pos_mocap", "odometry"] = "none"
     """Forward motion-capture poses to the autopilot with this message (indoor flight); needs a
     mocap source handed to the backend (mavlink backend only)."""
     mavlink_truth: Literal["none", "sitl"] = "none"

@@ -352,18 +352,22 @@ def test_mocap_flows_at_its_rate_while_the_control_loop_awaits_the_autopilot() -
         asyncio.run(scenario(server))
 
 
-@pytest.mark.parametrize(
-    ("autopilot", "boot", "refusal"),
-    [
-        ("ardupilot", (("VISO_TYPE", 1),), "PreArm: VisOdom: not healthy"),
-        ("px4", (("EKF2_ASP_DELAY", 0.0), ("EKF2_DELAY_MAX", 20.0)), "Arming denied: Resolve"),
-    ],
-)
+MOCAP_AUTOPILOTS = [
+    ("ardupilot", (("VISO_TYPE", 1),), "PreArm: VisOdom: not healthy"),
+    ("px4", (("EKF2_ASP_DELAY", 0.0), ("EKF2_DELAY_MAX", 20.0)), "Arming denied: Resolve"),
+]
+VELOCITY_FUSED = {"ardupilot": ("EK3_SRC1_VELXY", 6.0), "px4": ("EKF2_EV_CTRL", 7.0)}
+"""The parameter that makes each estimator fuse the velocity ODOMETRY carries, and its value."""
+
+
+@pytest.mark.parametrize("message", ["vision_position_estimate", "odometry"])
+@pytest.mark.parametrize(("autopilot", "boot", "refusal"), MOCAP_AUTOPILOTS)
 def test_a_mocap_vehicle_is_set_up_at_connect_and_arms_only_while_poses_flow(
-    autopilot: str, boot: tuple[tuple[str, float], ...], refusal: str
+    autopilot: str, boot: tuple[tuple[str, float], ...], refusal: str, message: str
 ) -> None:
     # The agent's fusion parameters are set and read back as on SITL; with mocap the estimator's
     # only position source, arming waits for poses (a stalled mocap task was refused on PX4 SIH).
+    # ODOMETRY counts only in the frames each autopilot takes (mavsim drops the others as they do).
     poses = {"on": False}
 
     def source(_now_s: float) -> MocapPose | None:
@@ -371,12 +375,11 @@ def test_a_mocap_vehicle_is_set_up_at_connect_and_arms_only_while_poses_flow(
 
     async def scenario(server: MavsimServer) -> None:
         ap = server.endpoints[0].autopilot
-        async with connected(server, mocap="vision_position_estimate", mocap_rate_hz=50.0) as (
-            backend,
-            driver,
-        ):
+        async with connected(server, mocap=message, mocap_rate_hz=50.0) as (backend, driver):
             backend._mocap.source = source
             assert ap.fuses_mocap  # the agent's parameters made mocap the position source
+            name, fused = VELOCITY_FUSED[autopilot]
+            assert (ap.params[name] == fused) == (message == "odometry")
             for _ in range(30):
                 await driver.tick()
             with pytest.raises(ArmingRefusedError) as refused:

@@ -105,7 +105,7 @@ class MavlinkBackend:
         self.aid = ResponseAid(settings, seed=settings.system_id or 0)
         """The vehicle's true state (SITL) and its identified lag."""
         source = mocap_source if mocap_source is not None else self.aid.mocap_source()
-        self._mocap = MocapForwarder(settings, self.frame, source)
+        self._mocap = MocapForwarder(settings, self.frame, source, lambda: self._flavor().name)
         self._mocap_task: asyncio.Task[None] | None = None
         self.tick_time = TickTime()
         """The agent's clock between ticks (truth stamps, mocap)."""
@@ -192,7 +192,7 @@ class MavlinkBackend:
         specs = show_params(self._flavor().name, setpoint_timeout_s=s.setpoint_timeout_s,
                             fence=s.fence)  # fmt: skip
         if s.mocap != "none":
-            specs += mocap_params(self._flavor().name)
+            specs += mocap_params(self._flavor().name, with_velocity=s.mocap == "odometry")
         for spec in specs:
             try:
                 self.params_set[spec.name] = await self.params.ensure(spec)

@@ -2,8 +2,9 @@
 
 With ``mocap: vision_position_estimate`` (ArduPilot with EK3_SRC1_POSXY = 6 ExternalNav, PX4 with
 EKF2_EV_CTRL) or ``att_pos_mocap`` the backend sends the pose from ``mocap_source`` at
-``mocap_rate_hz``, converted to the vehicle's LOCAL_NED frame. The source is whatever the venue's
-mocap client provides; it is asked for the pose at the agent's time.
+``mocap_rate_hz``, converted to the vehicle's LOCAL_NED frame; with ``odometry`` the pose and the
+velocity between poses (:mod:`vehicle_agent.backends.mavlink_odometry`). The source is whatever
+the venue's mocap client provides; it is asked for the pose at the agent's time.
 
 The poses flow from a task of their own, not from the control loop's tick: the loop awaits the
 autopilot's answers to mode changes and arming (seconds, with retries), and an estimator left
@@ -28,6 +29,8 @@ from vehicle_agent.backends.mavlink_frames import (
     attitude_enu_to_ned,
     euler_to_quaternion,
 )
+from vehicle_agent.backends.mavlink_odometry import PoseVelocity, encode_odometry
+from vehicle_agent.backends.mavlink_params import Flavor
 
 if TYPE_CHECKING:
     from vehicle_agent.backends.mavlink_link import MavlinkLink
@@ -82,8 +85,17 @@ class TickTime:
 class MocapForwarder:
     """Sends poses at a fixed rate (:meth:`run`) when the settings ask for it."""
 
-    def __init__(self, settings: MavlinkSettings, frame: LocalFrame, source: MocapSource | None):
+    def __init__(
+        self,
+        settings: MavlinkSettings,
+        frame: LocalFrame,
+        source: MocapSource | None,
+        flavor: Callable[[], Flavor],
+    ):
         self.kind = settings.mocap
+        self.flavor = flavor
+        """The autopilot's flavour (known once its heartbeat came)."""
+        self.velocity = PoseVelocity()
         self.period_s = 1.0 / settings.mocap_rate_hz
         self.frame = frame
         self.source = source
@@ -116,7 +128,11 @@ class MocapForwarder:
         x, y, z = self.frame.position_to_ned(pose.position_m_enu)
         roll, pitch, yaw = attitude_enu_to_ned(*pose.attitude_rad)
         usec = int((pose.time_s if pose.time_s is not None else now_s) * 1e6)
-        if self.kind == "vision_position_estimate":
+        if self.kind == "odometry":
+            velocity = self.velocity.update(usec * 1e-6, (x, y, z))
+            message = encode_odometry(link.mav, self.flavor(), usec, (x, y, z), (roll, pitch, yaw),
+                                      velocity)  # fmt: skip
+        elif self.kind == "vision_position_estimate":
             message = link.mav.vision_position_estimate_encode(usec, x, y, z, roll, pitch, yaw)
         else:
             q = euler_to_quaternion(roll, pitch, yaw)

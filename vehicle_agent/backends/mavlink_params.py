@@ -45,6 +45,16 @@ predictor, which carries the fused state to now on the IMU, is pulled to it. SIH
 transit with EKF2_DELAY_MAX 20 ms: estimate minus truth RMS 1.4 / 0.5 / 3.1 cm (x, y, z)."""
 PX4_EV_CTRL_POSITION_3D = 3
 """EKF2_EV_CTRL bits 0 and 1: fuse external-vision horizontal and vertical position."""
+PX4_EV_CTRL_VELOCITY = 4
+"""EKF2_EV_CTRL bit 2: fuse external-vision velocity (ODOMETRY carries it)."""
+PX4_MOCAP_VELOCITY_NOISE_MPS = 0.02
+"""EKF2_EVV_NOISE in [m/s] (default 0.1): the velocity of poses 20 ms apart with the show's
+0.2 mm mocap noise is ~0.014 m/s off."""
+PX4_MOCAP_ACC_NOISE_MPS2 = 1.0
+"""EKF2_ACC_NOISE in [m/s^2] (default 0.35): how far EKF2 lets the accelerometer carry the state
+between mocap samples. PX4 SIH's accelerometer is a vibrating airframe's (std 0.5 / 1.7 /
+1.4 m/s^2 armed): with the mocap's velocity fused, estimate minus truth 9.7 / 1.6 / 4.6 mm RMS
+(x, y, z in a hover) at the default, 2.8 / 1.3 / 3.1 mm at 1.0."""
 PX4_HGT_REF_VISION = 3
 """EKF2_HGT_REF: external vision. EKF2 (v1.16) takes the vision's z as down from altitude 0, so
 the agent sets the EKF origin at altitude 0 (``MavlinkBackend._set_ekf_origin``): its local z is
@@ -116,15 +126,18 @@ and four times its jerk limit (5 m/s^3), so a stroke's target is shaped less and
 closer. On ArduCopter SITL with mocap, 一's pen-down RMSE 39 mm -> 17 mm (15 mm with the truth
 de-quantized); three times the defaults (and ATC_INPUT_TC 0.1) gave no more (18 mm)."""
 PX4_TRACKING = (
-    ("MPC_XY_P", 1.8),
-    ("MPC_XY_VEL_P_ACC", 3.6),
-    ("MPC_XY_VEL_I_ACC", 1.6),
-    ("MPC_Z_P", 1.5),
+    ("MPC_XY_P", 2.5),
+    ("MPC_XY_VEL_P_ACC", 5.0),
+    ("MPC_XY_VEL_I_ACC", 2.5),
+    ("MPC_Z_P", 2.0),
+    ("MPC_Z_VEL_P_ACC", 6.0),
 )
-"""PX4's position loop for writing: about twice its default P-PI cascade (0.95, 1.8, 0.4) and
-MPC_Z_P 1.5 (default 1). PX4 1.16 SIH on mocap, 一: with the defaults the vehicle drifted 0.1-0.2 m
-from a still setpoint and the transit was aborted (deviation 0.18-0.2 m > 0.15 m); with these
-it followed the transit within 3-13 cm and hovered within 3-9 cm (the 1 cm settle not reached)."""
+"""PX4's position loop for writing: about 2.5 times its default P-PI cascade (0.95, 1.8, 0.4),
+MPC_Z_P 2 and MPC_Z_VEL_P_ACC 6 (defaults 1 and 4). PX4 1.16 SIH on mocap: with the defaults
+the vehicle drifted 0.1-0.2 m from a still setpoint and the transit was aborted (deviation
+0.18-0.2 m > 0.15 m); with twice the defaults and the position alone fused it hovered 29-47 /
+15-31 / 25-53 mm RMS (x, y, z) off its setpoint; with the mocap's velocity fused too (ODOMETRY)
+and these, 15 / 10 / 8 mm. Three times the defaults shook the x axis (16 mm at 1 Hz)."""
 
 
 def show_params(
@@ -164,31 +177,15 @@ def show_params(
     return specs
 
 
-def mocap_params(flavor: Flavor) -> list[ParamSpec]:
-    """What fusing forwarded motion capture needs: ArduPilot's EKF3 takes position from
-    ExternalNav (VISO_TYPE 1, MAVLink; read at boot) with yaw from its compass; PX4's EKF2 fuses
-    external-vision position with GPS off (a consumer GPS next to it would pull the estimate off
-    by decimetres), height from the vision too (see PX4_HGT_REF_VISION)."""
+def mocap_params(flavor: Flavor, *, with_velocity: bool = False) -> list[ParamSpec]:
+    """What fusing forwarded motion capture needs: ArduPilot's EKF3 takes position (and, with
+    ``with_velocity``, the velocity ODOMETRY carries) from ExternalNav (VISO_TYPE 1, MAVLink;
+    read at boot) with yaw from its compass; PX4's EKF2 fuses external-vision position (and
+    velocity) with GPS off (a consumer GPS next to it would pull the estimate off by decimetres),
+    height from the vision too (see PX4_HGT_REF_VISION)."""
     if flavor == "px4":
-        return [
-            ParamSpec("EKF2_EV_CTRL", PX4_EV_CTRL_POSITION_3D, MAV_PARAM_TYPE_INT32,
-                      why="fuse mocap position"),
-            ParamSpec("EKF2_HGT_REF", PX4_HGT_REF_VISION, MAV_PARAM_TYPE_INT32,
-                      why="height from mocap (the barometer wanders by decimetres)"),
-            ParamSpec("EKF2_GPS_CTRL", 0, MAV_PARAM_TYPE_INT32, why="position from mocap only"),
-            ParamSpec("EKF2_EVP_NOISE", 0.01, MAV_PARAM_TYPE_REAL32,
-                      why="mocap is millimetre-grade (its smallest value)"),
-            ParamSpec("EKF2_TAU_POS", PX4_OUTPUT_TAU_S, MAV_PARAM_TYPE_REAL32,
-                      why="the estimate follows the mocap closely"),
-            ParamSpec("EKF2_TAU_VEL", PX4_OUTPUT_TAU_S, MAV_PARAM_TYPE_REAL32,
-                      why="the estimate follows the mocap closely"),
-            ParamSpec("EKF2_RNG_CTRL", 0, MAV_PARAM_TYPE_INT32,
-                      why="no range-finder height: over the board it measures the table"),
-            ParamSpec("EKF2_ASP_DELAY", 0.0, MAV_PARAM_TYPE_REAL32,
-                      why="no airspeed sensor (EKF2 raises EKF2_DELAY_MAX to each delay)"),
-            ParamSpec("EKF2_DELAY_MAX", PX4_DELAY_MAX_MS, MAV_PARAM_TYPE_REAL32,
-                      why="fuse the mocap as it arrives", needs_reboot=True),
-        ]  # fmt: skip
+        return _px4_mocap_params(with_velocity)
+    velocity_source = ARDUPILOT_SOURCE_EXTERNAL_NAV if with_velocity else 0
     return [
         ParamSpec("VISO_TYPE", 1, MAV_PARAM_TYPE_INT8, why="mocap over MAVLink",
                   needs_reboot=True),
@@ -196,8 +193,10 @@ def mocap_params(flavor: Flavor) -> list[ParamSpec]:
                   why="horizontal position from mocap"),
         ParamSpec("EK3_SRC1_POSZ", ARDUPILOT_SOURCE_EXTERNAL_NAV, MAV_PARAM_TYPE_INT8,
                   why="height from mocap"),
-        ParamSpec("EK3_SRC1_VELXY", 0, MAV_PARAM_TYPE_INT8, why="no velocity source but mocap"),
-        ParamSpec("EK3_SRC1_VELZ", 0, MAV_PARAM_TYPE_INT8, why="no velocity source but mocap"),
+        ParamSpec("EK3_SRC1_VELXY", velocity_source, MAV_PARAM_TYPE_INT8,
+                  why="no velocity source but mocap"),
+        ParamSpec("EK3_SRC1_VELZ", velocity_source, MAV_PARAM_TYPE_INT8,
+                  why="no velocity source but mocap"),
         ParamSpec("VISO_POS_M_NSE", ARDUPILOT_MOCAP_NOISE_M, MAV_PARAM_TYPE_REAL32,
                   why="mocap is millimetre-grade"),
         ParamSpec("VISO_DELAY_MS", ARDUPILOT_MOCAP_DELAY_MS, MAV_PARAM_TYPE_INT16,
@@ -205,6 +204,36 @@ def mocap_params(flavor: Flavor) -> list[ParamSpec]:
         ParamSpec("EK3_TAU_OUTPUT", ARDUPILOT_OUTPUT_TAU_CS, MAV_PARAM_TYPE_INT8,
                   why="the estimate follows the mocap closely"),
     ]  # fmt: skip
+
+
+def _px4_mocap_params(with_velocity: bool) -> list[ParamSpec]:
+    ev_ctrl = PX4_EV_CTRL_POSITION_3D | (PX4_EV_CTRL_VELOCITY if with_velocity else 0)
+    specs = [
+        ParamSpec("EKF2_EV_CTRL", ev_ctrl, MAV_PARAM_TYPE_INT32, why="fuse mocap"),
+        ParamSpec("EKF2_HGT_REF", PX4_HGT_REF_VISION, MAV_PARAM_TYPE_INT32,
+                  why="height from mocap (the barometer wanders by decimetres)"),
+        ParamSpec("EKF2_GPS_CTRL", 0, MAV_PARAM_TYPE_INT32, why="position from mocap only"),
+        ParamSpec("EKF2_EVP_NOISE", 0.01, MAV_PARAM_TYPE_REAL32,
+                  why="mocap is millimetre-grade (its smallest value)"),
+        ParamSpec("EKF2_TAU_POS", PX4_OUTPUT_TAU_S, MAV_PARAM_TYPE_REAL32,
+                  why="the estimate follows the mocap closely"),
+        ParamSpec("EKF2_TAU_VEL", PX4_OUTPUT_TAU_S, MAV_PARAM_TYPE_REAL32,
+                  why="the estimate follows the mocap closely"),
+        ParamSpec("EKF2_RNG_CTRL", 0, MAV_PARAM_TYPE_INT32,
+                  why="no range-finder height: over the board it measures the table"),
+        ParamSpec("EKF2_ASP_DELAY", 0.0, MAV_PARAM_TYPE_REAL32,
+                  why="no airspeed sensor (EKF2 raises EKF2_DELAY_MAX to each delay)"),
+        ParamSpec("EKF2_DELAY_MAX", PX4_DELAY_MAX_MS, MAV_PARAM_TYPE_REAL32,
+                  why="fuse the mocap as it arrives", needs_reboot=True),
+    ]  # fmt: skip
+    if with_velocity:
+        specs += [
+            ParamSpec("EKF2_EVV_NOISE", PX4_MOCAP_VELOCITY_NOISE_MPS, MAV_PARAM_TYPE_REAL32,
+                      why="velocity differenced from millimetre-grade poses"),
+            ParamSpec("EKF2_ACC_NOISE", PX4_MOCAP_ACC_NOISE_MPS2, MAV_PARAM_TYPE_REAL32,
+                      why="the mocap, not the vibrating accelerometer, carries the motion"),
+        ]  # fmt: skip
+    return specs
 
 
 def encode_value(flavor: Flavor, value: float, param_type: int) -> float:

@@ -9,7 +9,7 @@ from showfile import Show, Vehicle
 from vehicle_agent.backends.base import BackendError, Vec3
 from vehicle_agent.backends.mavlink_params import FenceSpec
 
-MocapMessage = Literal["none", "vision_position_estimate", "att_pos_mocap"]
+MocapMessage = Literal["none", "vision_position_estimate", "att_pos_mocap", "odometry"]
 TruthSource = Literal["none", "sitl"]
 
 

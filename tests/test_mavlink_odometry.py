@@ -1,0 +1,82 @@
+"""Mocap as ODOMETRY: the velocity between poses, and each autopilot's frames, checked against
+how ArduPilot and PX4 read the message back (mavsim's :func:`odometry_is_pose` and ArduPilot's
+``vel = q * vel_body``)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from mavsim.mocap import odometry_is_pose
+from vehicle_agent.backends.mavlink_odometry import PoseVelocity, encode_odometry
+
+MAV = mavlink.MAVLink(None, srcSystem=255, srcComponent=191)
+ANGLE = st.floats(-1.2, 1.2)
+SPEED = st.floats(-3.0, 3.0)
+
+
+def decoded(message: mavlink.MAVLink_message) -> mavlink.MAVLink_message:
+    """The message as the autopilot receives it: packed to bytes and parsed back."""
+    parser = mavlink.MAVLink(None)
+    return parser.decode(bytearray(message.pack(MAV)))
+
+
+def rotate(q: list[float], v: tuple[float, float, float]) -> tuple[float, float, float]:
+    """``v`` rotated by the unit quaternion ``q`` (w, x, y, z): q v q*."""
+    w, x, y, z = q
+    vx, vy, vz = v
+    # t = 2 q_vec x v; v' = v + w t + q_vec x t
+    tx, ty, tz = 2 * (y * vz - z * vy), 2 * (z * vx - x * vz), 2 * (x * vy - y * vx)
+    return (vx + w * tx + (y * tz - z * ty), vy + w * ty + (z * tx - x * tz),
+            vz + w * tz + (x * ty - y * tx))  # fmt: skip
+
+
+def test_the_velocity_is_the_difference_of_distinct_captures() -> None:
+    velocity = PoseVelocity()
+    assert all(math.isnan(v) for v in velocity.update(1.00, (0.0, 0.0, -1.0)))
+    assert velocity.update(1.02, (0.004, -0.002, -1.0)) == pytest.approx((0.2, -0.1, 0.0))
+    # the same capture again (a mocap frame asked for twice): nothing new to difference
+    assert all(math.isnan(v) for v in velocity.update(1.02, (0.004, -0.002, -1.0)))
+    assert velocity.update(1.04, (0.008, -0.002, -1.0)) == pytest.approx((0.2, 0.0, 0.0))
+
+
+@given(ANGLE, ANGLE, st.floats(-3.1, 3.1), SPEED, SPEED, SPEED)
+def test_ardupilot_turns_the_body_velocity_back_into_the_ned_one(
+    roll: float, pitch: float, yaw: float, vn: float, ve: float, vd: float
+) -> None:
+    # ArduPilot takes the velocity in BODY_FRD and rotates it with the message's quaternion.
+    message = decoded(encode_odometry(MAV, "ardupilot", 1_000_000, (1.0, 2.0, -1.5),
+                                      (roll, pitch, yaw), (vn, ve, vd)))  # fmt: skip
+    assert rotate(list(message.q), (message.vx, message.vy, message.vz)) == pytest.approx(
+        (vn, ve, vd), abs=1e-5
+    )
+    assert (message.x, message.y, message.z) == pytest.approx((1.0, 2.0, -1.5))
+
+
+def test_px4_gets_the_ned_velocity_from_a_vision_estimator() -> None:
+    message = decoded(encode_odometry(MAV, "px4", 2_000_000, (1.0, 2.0, -1.5), (0.1, 0.2, 1.0),
+                                      (0.3, -0.2, 0.1)))  # fmt: skip
+    assert (message.vx, message.vy, message.vz) == pytest.approx((0.3, -0.2, 0.1))
+    assert message.time_usec == 2_000_000 and message.estimator_type == 2
+    assert all(math.isnan(c) for c in message.pose_covariance)  # each takes its noise parameter
+
+
+@pytest.mark.parametrize("flavor", ["ardupilot", "px4"])
+def test_each_autopilot_takes_its_own_frames_and_ardupilot_drops_the_others(flavor: str) -> None:
+    own = decoded(encode_odometry(MAV, flavor, 0, (0.0, 0.0, -1.0), (0.0, 0.0, 0.0),
+                                  (0.0, 0.0, 0.0)))  # fmt: skip
+    fields = (own.frame_id, own.child_frame_id, own.estimator_type, (own.x, own.y, own.z))
+    assert odometry_is_pose(flavor, *fields)
+    if flavor == "px4":  # PX4's NED frames are not what ArduPilot 4.7 accepts
+        assert not odometry_is_pose("ardupilot", *fields)
+
+
+def test_px4_hands_ekf2_no_mocap_typed_or_positionless_odometry() -> None:
+    local_ned, vision, mocap = 1, 2, 6
+    assert odometry_is_pose("px4", local_ned, local_ned, vision, (0.0, 0.0, -1.0))
+    assert not odometry_is_pose("px4", local_ned, local_ned, mocap, (0.0, 0.0, -1.0))
+    assert not odometry_is_pose("px4", local_ned, local_ned, vision, (math.nan, 0.0, -1.0))
