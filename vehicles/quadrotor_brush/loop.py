@@ -49,7 +49,8 @@ class ClosedLoop:
 
 
 def _vec(row: FloatArray) -> Vec3:
-    return (float(row[0]), float(row[1]), float(row[2]))
+    x, y, z = row.tolist()
+    return (x, y, z)
 
 
 class SimulatedQuadrotor:
