@@ -10,7 +10,11 @@
    simulated vehicle (its world, controller and brush, ``SimVehicle.tick``). With
    ``--peer-rev`` the same tick measured on that git revision (exported with ``git archive``,
    run in turns with this tree, best of three each) and the ratio.
-2. Show: the Airshow show (orchestrator + four agent processes, real Zenoh on loopback) at
+2. Fleet tick: ``--fleet`` vehicles writing at once in one process, in lock step as a fleet
+   host's shared ticker wakes them: CPU microseconds per vehicle-tick with their simulated
+   vehicles stepped together (one :class:`vehicles.quadrotor_brush.loop.QuadrotorFleet`) and,
+   the peer in the same run, each stepped alone.
+3. Show: the Airshow show (orchestrator + four agent processes, real Zenoh on loopback) at
    ``--show-scale``; characters submitted at once; wall time until all are written.
 """
 
@@ -35,6 +39,7 @@ from cli.showrun import ShowRun, derived_show, submit_texts, wait_for_jobs  # no
 from showfile import load_show  # noqa: E402
 from vehicle_agent.agent import make_backend, prepare_job, vehicle_setup  # noqa: E402
 from vehicle_agent.backends.sim import SimBackend  # noqa: E402
+from vehicle_agent.backends.sim_round import StepRounds  # noqa: E402
 from vehicle_agent.job_runner import JobRunner  # noqa: E402
 
 AIRSHOW = ROOT / "shows" / "airshow-2014.yaml"
@@ -96,6 +101,41 @@ def tick_cost(text: str) -> TickCost:
     )
 
 
+def fleet_tick_us(text: str, count: int, *, together: bool) -> float:
+    """CPU microseconds per vehicle-tick of ``count`` vehicles writing ``text`` at once in one
+    process, in lock step (runners, then the simulated vehicles), from assignment to landing:
+    their simulated vehicles stepped together (one fleet, as a fleet host does) or each alone."""
+    setup = vehicle_setup(load_show(AIRSHOW), "uav1")
+    prepared = prepare_job(setup, JobAssignment(job_id="b", text=text))
+    rounds = StepRounds() if together else None
+    vehicles, runners = [], []
+    for seed in range(count):
+        backend = make_backend(setup, seed=seed, rounds=rounds)
+        assert isinstance(backend, SimBackend)
+        vehicles.append(backend.vehicle)
+        runner = JobRunner(setup.runner_config)
+        runner.set_orchestrator_alive(True, 0.0)
+        runner.handle_command(VehicleCommand(command="assign", job=JobAssignment(job_id="b")), 0.0)
+        runner.plan_ready(prepared)
+        runners.append(runner)
+    fleet = vehicles[0].fleet
+    snapshots = [v.snapshot() for v in vehicles]
+    ticks = 0
+    started = time.process_time()
+    while ticks < 10 or any(r.phase != "ground" for r in runners):
+        for runner, vehicle, snapshot in zip(runners, vehicles, snapshots, strict=True):
+            actions = runner.step(snapshot, ticks * vehicle.dt_s)
+            if actions.backend_command is not None:
+                name, hover = actions.backend_command
+                getattr(vehicle, name)(*(() if hover is None else (hover,)))
+            vehicle.begin_tick(actions.setpoint)
+        if fleet is not None:
+            fleet.step()
+        snapshots = [v.end_tick() for v in vehicles]
+        ticks += 1
+    return (time.process_time() - started) / (ticks * count) * 1e6
+
+
 def peer_tick_us(rev: str, text: str, tree: Path) -> float:
     """Microseconds per control tick of this benchmark as it was at ``rev`` (exported once into
     ``tree``), in a child process."""
@@ -154,6 +194,8 @@ def main() -> None:
     parser.add_argument("--characters", type=int, default=8)
     parser.add_argument("--skip-show", action="store_true")
     parser.add_argument("--peer-rev", help="git revision whose control tick to measure beside")
+    parser.add_argument("--fleet", type=int, default=20, help="vehicles writing at once (0: no)")
+    parser.add_argument("--fleet-text", default="一")
     args = parser.parse_args()
     if args.peer_rev is None:
         cost = tick_cost(args.text)
@@ -179,6 +221,14 @@ def main() -> None:
         print(
             f"      peer {args.peer_rev}: {peer_us:.0f} us/tick; this tree / peer "
             f"{us / peer_us:.2f} (best of {len(runs)} each, in turns)"
+        )
+    if args.fleet > 0:
+        alone = fleet_tick_us(args.fleet_text, args.fleet, together=False)
+        together = fleet_tick_us(args.fleet_text, args.fleet, together=True)
+        print(
+            f"{args.fleet} vehicles writing {args.fleet_text!r} at once (lock step, CPU time): "
+            f"{alone:.0f} us per vehicle-tick each stepped alone, {together:.0f} us stepped "
+            f"together (alone / together {alone / together:.2f})"
         )
     if not args.skip_show:
         show_throughput(args.show_scale, args.characters)
