@@ -1,7 +1,7 @@
 """Fleet host: N simulated vehicles' agents in one process, M of them writing at once, in real time.
 
     nice -n 15 .venv/bin/python benchmarks/bench_fleet_host.py [--vehicles 50,100] [--hosts 1]
-        [--writing 50] [--window-s 20] [--peer 10] [--skip-peer]
+        [--writing 50] [--window-s 20] [--peer 10] [--skip-peer] [--profile PATH]
 
 Each case is a real show (``bench_stop.wide_show``: the Airshow show widened to N vehicles, each
 over its own board, time scale 1, mutual TLS) run as separate processes: the router, the real
@@ -38,9 +38,16 @@ Measured on the shared 2-core machine under ``nice -n 15`` (others' load average
   orchestrator 0.63 and the router 0.21 (250 heartbeats at 2.7 Hz); 10 writing: factor 0.92
   but status p50 1.1 s, p95 4.3 s, and acknowledgements later than ``lost_after_s`` made the
   vehicles give their jobs up: the orchestrator is the limit there;
-- 50 writing at once (50 vehicles, one host): factor 0.11, the host's loop 250 ms late: a
-  writing tick costs 0.6-1.2 ms of CPU (the kind's world and controller about 60 % of it), so
-  50 writers need about 3-5 cores; 40/50 done, the others given up and requeued.
+- 50 writing at once (50 vehicles, one host): factor 0.11 when each vehicle's world and
+  controller were stepped alone (a writing tick 0.6-1.2 ms of CPU, 60 % of it the world and
+  controller), the host's loop 250 ms late, 40/50 done. With the per-tick geometry in floats
+  and the vehicles in flight stepped together (one fleet, ``vehicles/quadrotor_brush/loop.py``):
+  factor 0.49 on 0.81 cores (others' load average 4-8 meanwhile), about 0.34 ms of host CPU per
+  vehicle-tick, loop lag p50 16 ms, 50/50 done, status p95 0.07 s; 20 writing (50 vehicles, the
+  geometry change only): factor 0.56 on 0.82 cores. What is left per vehicle-tick is the
+  service around the runner (pacing, lease, status, telemetry on its own Zenoh session).
+
+``--profile PATH`` writes a cProfile of each fleet host to ``PATH.<host number>``.
 """
 
 from __future__ import annotations
@@ -146,7 +153,10 @@ async def record_figures(host: object, path: Path) -> None:
             prober.cancel()
 
 
-def child_main(show_path: Path, vehicle_ids: list[str], stats: Path) -> None:
+def child_main(
+    show_path: Path, vehicle_ids: list[str], stats: Path, profile: Path | None = None
+) -> None:
+    """The fleet host of a case; with ``profile``, a cProfile of it written there at the end."""
     from vehicle_agent.fleet import FleetHost
 
     host = FleetHost(load_show(show_path), vehicle_ids)
@@ -160,7 +170,12 @@ def child_main(show_path: Path, vehicle_ids: list[str], stats: Path) -> None:
         await host.run(stop)
         figures.cancel()
 
-    asyncio.run(main())
+    if profile is None:
+        asyncio.run(main())
+    else:
+        import cProfile
+
+        cProfile.runctx("asyncio.run(main())", globals(), {"main": main}, str(profile))
     os._exit(0)
 
 
@@ -225,7 +240,9 @@ def case_show(out: Path, count: int) -> tuple[Path, object]:
     return path, load_show(path)
 
 
-def run_case(label: str, count: int, writing: int, window_s: float, *, hosts: int) -> Case:
+def run_case(
+    label: str, count: int, writing: int, window_s: float, *, hosts: int, profile: str | None = None
+) -> Case:
     """One show run: ``hosts`` fleet host processes (0: one agent process per vehicle)."""
     case = Case(label, count, writing)
     with tempfile.TemporaryDirectory() as tmp:
@@ -237,7 +254,10 @@ def run_case(label: str, count: int, writing: int, window_s: float, *, hosts: in
         stats = [Path(tmp) / f"fleet{i + 1}.jsonl" for i in range(hosts)]
         for i, figures in enumerate(stats):
             group = ids[i::hosts]  # dealt round-robin, as cli/fleets.py does
-            argv = (sys.executable, __file__, "--child", str(path), ",".join(group), str(figures))
+            argv: tuple[str, ...] = (sys.executable, __file__, "--child", str(path))
+            argv += (",".join(group), str(figures))
+            if profile is not None:
+                argv += ("--profile", f"{profile}.{i + 1}")
             grace_s = fleet_stop_grace_s(len(group))
             name = f"fleet {i + 1}"
             specs.append(ChildSpec(name, argv, logs / f"fleet{i + 1}.log", None, grace_s))
@@ -446,9 +466,11 @@ def main() -> None:
     parser.add_argument("--skip-peer", action="store_true")
     parser.add_argument("--hosts", type=int, default=1, help="fleet host processes per show")
     parser.add_argument("--child", nargs=3, metavar=("SHOW", "IDS", "STATS"))
+    parser.add_argument("--profile", help="cProfile each fleet host to PROFILE.<host number>")
     args = parser.parse_args()
     if args.child:
-        child_main(Path(args.child[0]), args.child[1].split(","), Path(args.child[2]))
+        profile = None if args.profile is None else Path(args.profile)
+        child_main(Path(args.child[0]), args.child[1].split(","), Path(args.child[2]), profile)
         return
     print(f"load average before: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     if not args.skip_peer:
@@ -459,7 +481,10 @@ def main() -> None:
         writing = min(args.writing, count)
         print(f"{count} vehicles in {args.hosts} fleet hosts ({writing} writing):")
         label = f"{args.hosts} fleet host{'s' if args.hosts > 1 else ''}"
-        print_case(run_case(label, count, writing, args.window_s, hosts=args.hosts))
+        case = run_case(
+            label, count, writing, args.window_s, hosts=args.hosts, profile=args.profile
+        )
+        print_case(case)
     print(f"load average after: {os.getloadavg()[0]:.2f}")
 
 

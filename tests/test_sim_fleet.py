@@ -77,8 +77,12 @@ def test_noise_streams_keep_their_numbers_when_taken_apart_and_stacked() -> None
     np.testing.assert_array_equal([g[1] for g in got], [e[1] for e in expected[3:24]])
 
 
-async def fly_three(rounds: StepRounds | None) -> list[list[VehicleSnapshot]]:
-    """Three simulated vehicles' backends ticking concurrently: take-off, hold, a setpoint."""
+async def fly_three(
+    rounds: StepRounds | None, offsets: tuple[int, ...] = (0, 0, 0)
+) -> list[list[VehicleSnapshot]]:
+    """Three simulated vehicles' backends ticking concurrently: take-off, hold, a setpoint;
+    each starts ``offsets`` turns of the event loop late and yields a turn between its ticks
+    (as vehicles behind the wall clock do)."""
     backends = []
     for i, home in enumerate(STARTS):
         step_round = None if rounds is None else rounds.round_for(KIND, SETTINGS)
@@ -89,7 +93,10 @@ async def fly_three(rounds: StepRounds | None) -> list[list[VehicleSnapshot]]:
     snaps: list[list[VehicleSnapshot]] = [[] for _ in backends]
 
     async def loop(i: int) -> None:
+        for _ in range(offsets[i]):
+            await asyncio.sleep(0)
         for tick in range(300):
+            await asyncio.sleep(0)
             setpoint = Setpoint(position_m_enu=(0.1 * i, 0.0, 1.5)) if tick > 250 else None
             snaps[i].append(await backends[i].tick(setpoint, 0.0))
 
@@ -107,3 +114,12 @@ def test_a_round_steps_the_fleet_once_for_every_vehicle_ticking_in_it() -> None:
     assert isinstance(step_round, StepRound)
     assert step_round.steps == 300  # one fleet step per turn for the three vehicles
     assert isinstance(step_round.fleet, QuadrotorFleet) and len(step_round.fleet) == 0
+
+
+def test_vehicles_ticking_a_turn_apart_fall_into_one_round() -> None:
+    rounds = StepRounds()
+    together = asyncio.run(fly_three(rounds, offsets=(0, 1, 2)))
+    assert together == asyncio.run(fly_three(None, offsets=(0, 1, 2)))
+    step_round = rounds.round_for(KIND, SETTINGS)
+    assert isinstance(step_round, StepRound)
+    assert step_round.steps <= 302  # 900 vehicle-ticks: all three in one round after the first

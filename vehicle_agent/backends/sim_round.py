@@ -3,10 +3,15 @@
 A fleet host wakes its awake vehicles together (one :class:`vehicle_agent.pacer.SharedTicker`):
 their control loops run one after the other in the same turn of the event loop. Each hands its
 reference to its live vehicle and awaits :meth:`StepRound.stepped`; the first to ask schedules
-the fleet's step at the end of that turn (``call_soon`` runs after every callback already
-queued, i.e. after the other vehicles woken by the same tick), so one call steps them all, then
-each reads its vehicle back. A vehicle whose tick comes in another turn is stepped in that
-turn's round: every tick is stepped once, whoever else shares it.
+the fleet's step, so one call steps them all, then each reads its vehicle back. A vehicle whose
+tick comes later is stepped in a later round: every tick is stepped once, whoever shares it.
+
+The step waits two turns, not one: vehicles behind the wall clock run their ticks back to back
+(a ``sleep(0)`` between them, :class:`vehicle_agent.pacer.SharedTicker`), three turns a tick
+(tick, step, read back). Stepped one turn after the first asks, vehicles whose cycles are a turn
+apart never met (a 20-vehicle host stepped about 8 at a time, and paid for splitting its fleet
+at every step); waiting a turn more gathers them, and, resumed together after a shared step, they
+keep ticking in the same turns from then on.
 """
 
 from __future__ import annotations
@@ -30,7 +35,7 @@ class StepRound:
         """Return once the fleet has stepped (with every vehicle given a reference by then)."""
         loop = asyncio.get_running_loop()
         if not self._waiters:
-            loop.call_soon(self._step)
+            loop.call_soon(loop.call_soon, self._step)  # two turns (see the module docstring)
         waiter: asyncio.Future[None] = loop.create_future()
         self._waiters.append(waiter)
         await waiter
