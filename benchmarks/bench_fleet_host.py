@@ -47,13 +47,17 @@ Measured on the shared 2-core machine under ``nice -n 15`` (others' load average
   ``vehicle_agent/backends/sim_round.py``); 20 writing (50 vehicles, the geometry change only):
   factor 0.56 on 0.82 cores, 0.73 ms of host CPU per vehicle-tick;
 - 20 writing (20 vehicles, rounds merged; load average 8-10, the host given 0.32 cores): factor
-  0.67, i.e. 0.24 ms of host CPU per vehicle-tick, 20/20 done. The real-time factor is the
-  CPU the host gets over what its vehicles need: read it with the host's CPU beside it. Where
-  the time goes (``--profile``, 20 writing, before the rounds were merged): the fleet's step
-  33 % (two thirds of it splitting the fleet for vehicles a turn apart, since gone), the
-  runner 20 % (reference interpolation 7 %, safety 4 %), the service around it about 25 %
-  (status and telemetry on each vehicle's own Zenoh session: ``Publisher.put`` about 0.3 ms a
-  message, reports, heartbeats), the simulated vehicles' snapshots 6 %.
+  0.67, i.e. 0.24 ms of host CPU per vehicle-tick, 20/20 done; 50 writing (same code, load
+  average 8, the host given 0.56 cores): factor 0.29, 0.39 ms per vehicle-tick, loop lag p50
+  17 ms, status p95 0.21 s, and only 9/50 final within 600 s after the window (the others given
+  up and requeued as their writing went unacknowledged): to be run again on a quiet machine.
+  The real-time factor is the CPU the host gets over what its vehicles need: read it with the
+  host's CPU beside it. Where the time goes (``--profile``, 20 writing, before the rounds were
+  merged): the fleet's step 33 % (two thirds of it splitting the fleet for vehicles a turn
+  apart; merged rounds were checked in ``tests/test_sim_fleet.py``, not yet profiled in a
+  host), the runner 20 % (reference interpolation 7 %, safety 4 %), the service around it about
+  25 % (status and telemetry on each vehicle's own Zenoh session: ``Publisher.put`` about
+  0.3 ms a message, reports, heartbeats), the simulated vehicles' snapshots 6 %.
 
 ``--profile PATH`` writes a cProfile of each fleet host to ``PATH.<host number>``.
 """
