@@ -173,6 +173,8 @@ class OrchestratorService:
     # --- effects ------------------------------------------------------------------------------
     def apply(self, eff: Effects) -> None:
         """Store, then publish, then send: the order that keeps acknowledged data safe."""
+        if eff.empty:
+            return
         settings: dict[str, Any] = {}
         if eff.settings_changed:
             settings = {
