@@ -21,16 +21,17 @@ in the same run, all at once (what reading them from a channel one by one did).
 ``--profile`` prints cProfile's top functions of the handling.
 
 Measured on the shared 2-core machine under ``nice -n 15`` (250 vehicles, 10 writing), the code
-before this benchmark's change (bf40be4, methods shimmed) -> after:
+before issue 15's orchestrator work (bf40be4, methods shimmed) -> after:
 
-- 10 jobs in memory (a fresh show): 789 us of CPU per status -> 18 us (json.loads peer 4-7 us,
-  2.7x); 250 vehicles at 2.7 Hz: 0.53 -> 0.012 cores. Before, every status swept the fleet
+- 10 jobs in memory (a fresh show): 789 us of CPU per status -> 12 us (json.loads peer 4-7 us,
+  about 2x); 250 vehicles at 2.7 Hz: 0.53 -> 0.008 cores. Before, every status swept the fleet
   (``tick_into``: 250 vehicles, each asking for its active job by scanning every job) and
   recomputed every ETA;
-- 500 finished jobs in memory (any show past 500 characters): 43,700 us -> 18 us: the scan
+- 500 finished jobs in memory (any show past 500 characters): 43,700 us -> 12 us: the scan
   grew with the finished jobs held, so a 250-vehicle show could not keep up with one status;
-- a report's reply after a burst of 250 statuses: 4.5 ms (one chunk of 32 first) against
-  6.4 ms when decided at once in the same run; before, 250 x 0.8-44 ms (0.2-11 s).
+- a report's reply after a burst of 250 statuses: 3.7-8 ms, against 3.2-6.4 ms with the burst
+  decided at once in the same runs (the burst is 3 ms of work now: chunks bound the wait when
+  statuses are costlier); before, 250 x 0.8-44 ms (0.2-11 s).
 """
 
 from __future__ import annotations

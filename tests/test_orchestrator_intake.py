@@ -170,3 +170,14 @@ def test_a_malformed_status_is_refused_with_one_line_and_never_decided(
     [line] = [r.getMessage() for r in caplog.records]
     assert line.startswith("undecodable VehicleStatus on skyquill/show/vehicles/uav0/status: ")
     assert "dancing" in line and "\n" not in line
+
+
+def test_fleet_changes_are_merged_into_the_timers_next_snapshot(tmp_path: Path) -> None:
+    show = _wide_show(3)
+    keys = ShowKeys(show.show_id)
+    session = _Session()
+    with JobStore(tmp_path / "s.sqlite3") as store:
+        service = OrchestratorService(show, session, store)  # type: ignore[arg-type]
+        for k, vehicle in enumerate(show.vehicles):  # three vehicles come: three changes
+            service.apply(service.book.liveliness(vehicle.id, True, 1.0 + k))
+    assert keys.fleet not in session.published and service.fleet_changed
