@@ -13,7 +13,8 @@ awake (flying), for ``--window-s`` seconds:
   fleet processes; and for agents and fleet alike from telemetry (agent time over wall time);
 - **tick jitter** |tick interval - 10 ms| p50/p99 of the awake vehicles' loops, and the event
   loop's lag (a 10 ms timer's lateness), in the fleet process;
-- **RSS** of the fleet process (and per vehicle), of its planning workers; **CPU** in cores;
+- **RSS** of the fleet process (and per vehicle), of its planning workers; **CPU** in cores,
+  and that of the orchestrator and of the router, idle and in the window;
 - **status latency**: the orchestrator's snapshot query (what ``skyquill status`` asks), every
   0.5 s from this process, and one ``skyquill status`` command's wall time;
 - **nothing lost**: every submitted job finished ``done`` (waited for after the window);
@@ -37,7 +38,15 @@ Measured on the shared 2-core machine under ``nice -n 15`` (others' load average
 - 250 vehicles: all on the bus 9.9 s after start; idle, the host takes 0.24 cores, the
   orchestrator 0.63 and the router 0.21 (250 heartbeats at 2.7 Hz); 10 writing: factor 0.92
   but status p50 1.1 s, p95 4.3 s, and acknowledgements later than ``lost_after_s`` made the
-  vehicles give their jobs up: the orchestrator is the limit there;
+  vehicles give their jobs up: the orchestrator was the limit there. After issue 15's
+  orchestrator work (statuses decided per vehicle, merged and in chunks, ``bench_heartbeat.py``;
+  a resting vehicle's status at 1 Hz; fleet snapshots merged), at load average 6-14 from
+  others: 10 writing, status p50 0.009 s, p95 0.157 s, 10/10 done, no vehicle lost; idle,
+  the orchestrator 0.23 cores and the router 0.17 (at 100 vehicles 0.05 and 0.04). The
+  recording shows 340-390 statuses and 415-480 telemetry samples a second from 250 resting
+  vehicles (their resting telemetry comes at ~1.8 Hz, not 1); per thread, the orchestrator's
+  Python threads (event loop, MCAP recorder) took 0.16-0.19 cores and Zenoh's receiving
+  threads 0.05: per message far more than deciding a status (12 us) costs;
 - 50 writing at once (50 vehicles, one host): factor 0.11 when each vehicle's world and
   controller were stepped alone (a writing tick 0.6-1.2 ms of CPU, 60 % of it the world and
   controller), the host's loop 250 ms late, 40/50 done. With the per-tick geometry in floats
@@ -202,6 +211,10 @@ class Case:
     processes: int = 0
     idle_rss_mib: float = 0.0
     idle_cpu_cores: float = 0.0
+    idle_service_cores: dict[str, float] = field(default_factory=dict)
+    """Cores of the orchestrator and of the router while every vehicle is idle."""
+    service_cores: dict[str, float] = field(default_factory=dict)
+    """Cores of the orchestrator and of the router in the writing window."""
     rss_mib: float = 0.0
     worker_rss_mib: float = 0.0
     workers: int = 0
@@ -297,13 +310,16 @@ def measure(
     names = [n for n in supervisor.names if n.startswith(("agent", "fleet"))]
     pids = [p for p in (supervisor.pid(n) for n in names) if p is not None]
     case.processes = len(pids)
+    services = {n: supervisor.pid(n) for n in SERVICES}
     time.sleep(5.0)  # settled
     ticks0, idle_s = sum(cpu_ticks(p) for p in pids), time.monotonic()
+    service_ticks0 = {n: cpu_ticks(p) for n, p in services.items() if p is not None}
     time.sleep(5.0)
     hz = os.sysconf("SC_CLK_TCK")
     case.idle_cpu_cores = (
         (sum(cpu_ticks(p) for p in pids) - ticks0) / hz / (time.monotonic() - idle_s)
     )
+    case.idle_service_cores = cores_since(services, service_ticks0, idle_s)
     case.idle_rss_mib = sum(rss_mib(p) for p in pids)
     keys = ShowKeys(show.show_id)  # type: ignore[attr-defined]
     clock = TelemetryClock()
@@ -315,6 +331,7 @@ def measure(
         started = time.monotonic()
         clock.since_s = started
         ticks0 = sum(cpu_ticks(p) for p in pids)
+        service_ticks0 = {n: cpu_ticks(p) for n, p in services.items() if p is not None}
         while time.monotonic() - started < window_s:
             asked = time.monotonic()
             try:
@@ -325,6 +342,7 @@ def measure(
             time.sleep(max(0.0, 0.5 - (time.monotonic() - asked)))
         ended = time.monotonic()
         case.cpu_cores = (sum(cpu_ticks(p) for p in pids) - ticks0) / hz / (ended - started)
+        case.service_cores = cores_since(services, service_ticks0, started)
         case.rss_mib = sum(rss_mib(p) for p in pids)
         case.workers = worker_count(pids)
         case.worker_rss_mib = sum(rss_mib(p) for p in worker_pids(pids))
@@ -337,6 +355,23 @@ def measure(
         heard.undeclare()  # type: ignore[no-untyped-call]
     case.final = len(final)
     case.done = sum(1 for state in final.values() if state == "done")
+
+
+SERVICES = ("orchestrator", "router")
+"""The show's processes besides the vehicles whose CPU is printed."""
+
+
+def cores_since(
+    pids: dict[str, int | None], ticks0: dict[str, int], since_s: float
+) -> dict[str, float]:
+    """Cores each named process used since ``since_s`` (monotonic) from its ticks then."""
+    elapsed_s = time.monotonic() - since_s
+    hz = os.sysconf("SC_CLK_TCK")
+    return {
+        name: (cpu_ticks(pid) - ticks0[name]) / hz / elapsed_s
+        for name, pid in pids.items()
+        if pid is not None and name in ticks0
+    }
 
 
 def submit_all(session: object, keys: ShowKeys, texts: list[str], timeout_s: float) -> list[str]:
@@ -446,6 +481,9 @@ def print_case(case: Case) -> None:
         f"{case.workers} planning workers {case.worker_rss_mib:6.1f} MiB; "
         f"CPU {case.cpu_cores:4.2f} cores ({100 * case.cpu_cores / n:4.2f} % per vehicle)"
     )
+    for when, cores in (("idle", case.idle_service_cores), ("writing", case.service_cores)):
+        figures = ", ".join(f"{name} {value:4.2f}" for name, value in cores.items())
+        print(f"    {when}: cores of the {figures}")
     awake = f" ({case.awake:.0f} vehicles awake)" if case.awake else ""
     print(
         f"    real-time factor of the writing vehicles: ticks {case.rtf:5.3f}{awake}, "

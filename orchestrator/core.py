@@ -71,8 +71,12 @@ class Book:
             if vid in self.vehicles:
                 self.vehicles[vid].paused = self.vehicles[vid].held = True
         self.jobs: dict[str, Job] = {}
+        self._active: dict[str, str] = {}
+        """Vehicle id -> id of its active job: every status, snapshot and assignment asks,
+        and scanning every job held (up to ``MAX_FINAL_JOBS`` finished) per vehicle cost ~50 ms
+        of CPU per status at 250 vehicles (``benchmarks/bench_heartbeat.py``)."""
         for job in jobs:  # restart: active jobs must be confirmed by their vehicle again
-            self.jobs[job.job_id] = update(job, now_s, assigned_at_s=now_s) if job.active else job
+            self._index(None, update(job, now_s, assigned_at_s=now_s) if job.active else job)
         self.finished = FinishedJobs(self.jobs.values(), job_counts, max_final_jobs)
         """Jobs per state and the held finished jobs (``orchestrator/finished.py``)."""
         self.next_seq = max((j.seq for j in self.jobs.values()), default=0) + 1
@@ -108,13 +112,15 @@ class Book:
         return sum(1 for j in self.jobs.values() if j.state in ("awaiting_approval", "queued"))
 
     def active_job_of(self, vehicle_id: str) -> Job | None:
-        for job in self.jobs.values():
-            if job.active and job.vehicle_id == vehicle_id:
-                return job
-        return None
+        job_id = self._active.get(vehicle_id)
+        return None if job_id is None else self.jobs[job_id]
+
+    def active_jobs(self) -> list[Job]:
+        """Assigned and writing jobs, in submission order."""
+        return sorted((self.jobs[j] for j in self._active.values()), key=lambda j: j.seq)
 
     def busy_boards(self) -> set[str]:
-        return {j.board_id for j in self.jobs.values() if j.active and j.board_id is not None}
+        return {j.board_id for j in self.active_jobs() if j.board_id is not None}
 
     def etas(self, now_s: float) -> dict[str, tuple[int, float | None]]:
         """Queue position (1 = next) and ETA in [s] of every queued job."""
@@ -124,7 +130,7 @@ class Book:
             for vid, v in self.vehicles.items()
             if v.alive and not v.lost and not (v.paused or v.held)
         }
-        active = [j for j in self.jobs.values() if j.active]
+        active = self.active_jobs()
         busy = {j.vehicle_id for j in active}
         landing = [
             vid
@@ -223,7 +229,7 @@ class Book:
 
     def put(self, eff: Effects, job: Job) -> Job:
         previous = self.jobs.get(job.job_id)
-        self.jobs[job.job_id] = job
+        self._index(previous, job)
         eff.jobs[job.job_id] = job
         self.kinds.forget(job)
         self._forget(self.finished.changed(previous, job))
@@ -236,6 +242,15 @@ class Book:
             job = self.jobs.pop(job_id, None)
             if job is not None and job.idempotency_key is not None:
                 self.by_key.pop((job.client_id, job.idempotency_key), None)
+
+    def _index(self, previous: Job | None, job: Job) -> None:
+        """Hold ``job`` (replacing ``previous``, its older version) and keep ``_active`` true."""
+        self.jobs[job.job_id] = job
+        was = previous.vehicle_id if previous is not None and previous.active else None
+        if was is not None and self._active.get(was) == job.job_id:
+            del self._active[was]
+        if job.active and job.vehicle_id is not None:
+            self._active[job.vehicle_id] = job.job_id
 
     def requeue(self, eff: Effects, job: Job, now_s: float, reason: str, *, lost: bool) -> None:
         """Take an active job back: queued again, or failed after too many lost attempts."""
@@ -355,7 +370,7 @@ class Book:
         if not queue:
             return
         busy_boards = self.busy_boards()
-        busy_vehicles = {j.vehicle_id for j in self.jobs.values() if j.active}
+        busy_vehicles = set(self._active)
         for view in self.vehicles.values():
             if not queue:
                 break
@@ -432,8 +447,9 @@ class Book:
         return self.settle(presence.liveliness(self, vehicle_id, alive, now_s), now_s)
 
     def status(self, status: VehicleStatus, now_s: float) -> Effects:
-        """A vehicle's published status."""
-        return self.settle(presence.status(self, status, now_s), now_s)
+        """A vehicle's published status (a heartbeat that changes nothing moves no ETA)."""
+        eff = presence.status(self, status, now_s)
+        return self.settle(eff, now_s) if eff.fleet_changed or eff.jobs or eff.events else eff
 
     def telemetry(
         self, vehicle_id: str, tracking_error_m: float, job_id: str | None, now_s: float

@@ -58,5 +58,18 @@ class Effects:
     """Job id -> the ink picture of a job just done (kept out of ``jobs``): store it with the
     job, and send it on that job's ``jobs/<id>`` publication."""
 
+    @property
+    def empty(self) -> bool:
+        """Nothing to do (most heartbeats): the service skips storing and publishing."""
+        return not (
+            self.jobs
+            or self.moved
+            or self.events
+            or self.commands
+            or self.fleet_changed
+            or self.settings_changed
+            or self.written
+        )
+
 
 Level = Literal["info", "warning", "alert"]

@@ -500,6 +500,12 @@ class FleetMachine(RuleBasedStateMachine):
         boards = [j.board_id for j in active]
         assert len(vehicles) == len(set(vehicles)) and None not in vehicles
         assert len(boards) == len(set(boards))
+        # the Book's index of active jobs answers as a scan of every job would
+        assert self.book.active_jobs() == sorted(active, key=lambda j: j.seq)
+        for vid in self.book.vehicles:
+            assert self.book.active_job_of(vid) == next(
+                (j for j in active if j.vehicle_id == vid), None
+            )
 
     @invariant()
     def active_jobs_are_on_vehicles_not_yet_lost(self) -> None:

@@ -13,7 +13,7 @@ from types import ModuleType
 
 import pytest
 
-from vehicle_agent.backends.mavlink_params import PX4_DELAY_MAX_MS
+from vehicle_agent.backends.mavlink_params import PX4_DELAY_MAX_MS, mocap_params
 
 START_PY = Path(__file__).resolve().parents[1] / "scripts" / "sitl" / "start.py"
 
@@ -93,6 +93,15 @@ def test_arducopter_starts_with_its_defaults_sysid_home_and_serial0_not_waiting(
     with_mocap = launch.command(replace(inst, mocap=True))[0]
     mocap_parm = str(tmp_path / "run" / "mocap.parm")
     assert with_mocap[with_mocap.index("--defaults") + 1] == f"{defaults.resolve()},{mocap_parm}"
+
+
+def test_arducopter_boots_with_the_mocap_sources_the_agent_sets(launch: ModuleType) -> None:
+    # Set only at connect, a GPS fix that came first gave the EKF its origin and it never used
+    # the mocap: the boot defaults must be what the agent sets (position alone).
+    booted = dict(line.split() for line in launch.MOCAP_BOOT_PARAMS.splitlines())
+    agent = {spec.name: spec.value for spec in mocap_params("ardupilot")}
+    assert booted.keys() == {"VISO_TYPE"} | {k for k in agent if k.startswith("EK3_SRC1_")}
+    assert all(float(value) == agent[name] for name, value in booted.items())
 
 
 def test_px4_starts_sih_at_its_home(launch: ModuleType, tmp_path: Path) -> None:

@@ -46,8 +46,15 @@ REFERENCE_LLA = (-35.363261, 149.165230, 584.0)
 EARTH_RADIUS_M = 6_378_137.0
 ARDUPILOT_BASE_PORT = 5760
 MOCAP_PARM = "mocap.parm"
-MOCAP_BOOT_PARAMS = "VISO_TYPE 1\n"
-"""ArduCopter parameters read only at boot that fusing forwarded mocap needs."""
+MOCAP_BOOT_PARAMS = (
+    "VISO_TYPE 1\nEK3_SRC1_POSXY 6\nEK3_SRC1_POSZ 6\nEK3_SRC1_VELXY 0\nEK3_SRC1_VELZ 0\n"
+)
+"""ArduCopter parameters that fusing forwarded mocap needs from boot on: VISO_TYPE is read only at
+boot; the EKF3 sources (ExternalNav; the agent sets them too, as in
+``vehicle_agent/backends/mavlink_params.py``) because a SITL whose GPS gets its fix before the
+agent has set them takes its EKF origin from the GPS, then never uses the mocap ("PreArm: Fence
+enabled, need position estimate", "Check mag field"): 7 of 10 ArduCopter starts with mocap in
+one day, where connecting and setting the parameters took up to 18 s instead of 6."""
 PX4_MOCAP_BOOT_PARAMS = {"EKF2_ASP_DELAY": "0", "EKF2_DELAY_MAX": "20"}
 """The same for PX4, given as PX4_PARAM_* variables (vehicle_agent/backends/mavlink_params.py
 sets and checks them at connect, and refuses a vehicle that would need a reboot)."""
@@ -78,8 +85,8 @@ class Instance:
     run_dir: Path
     """Working directory of this instance (created)."""
     mocap: bool = False
-    """The agent forwards motion capture: ArduCopter boots with VISO_TYPE 1 (read only at boot;
-    the agent sets and verifies the EKF sources itself at connect)."""
+    """The agent forwards motion capture: ArduCopter boots with VISO_TYPE 1 and ExternalNav as
+    its EKF3 sources (``MOCAP_BOOT_PARAMS``; the agent sets and verifies them again at connect)."""
 
     @property
     def url(self) -> str:

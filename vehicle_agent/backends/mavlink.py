@@ -70,12 +70,6 @@ FORCE_DISARM = 21196.0
 STREAMED = {32: "LOCAL_POSITION_NED", 30: "ATTITUDE", 85: "POSITION_TARGET_LOCAL_NED"}
 SLOW = {1: "SYS_STATUS", 147: "BATTERY_STATUS", 245: "EXTENDED_SYS_STATE"}
 TextHandler = Callable[[int, str], None]
-EKF_ORIGIN_LLA = (-35.363261, 149.165230, 584.0)
-"""EKF origin (lat [deg], lon [deg], alt [m]) given to an autopilot flying on forwarded mocap:
-its local frame is the mocap's whichever origin it has, but its EKF needs one. ArduPilot: the one
-its GPS would set later while it fuses ExternalNav crashes ArduCopter 4.7 SITL (floating point
-exception at "origin set", measured); set first, the GPS leaves it alone. PX4 gets it at altitude
-0 (see ``mavlink_params.PX4_HGT_REF_VISION``)."""
 GCS_HEARTBEAT_PERIOD_S = 0.5
 """Our heartbeat period in [s]: PX4 drops a ground station unheard for 2.5 s (and its texts with
 it), so a stall of the agent of up to 2 s keeps the texts coming."""
@@ -106,7 +100,6 @@ class MavlinkBackend:
         """The vehicle's true state (SITL) and its identified lag."""
         source = mocap_source if mocap_source is not None else self.aid.mocap_source()
         self._mocap = MocapForwarder(settings, self.frame, source, lambda: self._flavor().name)
-        self._mocap_task: asyncio.Task[None] | None = None
         self.tick_time = TickTime()
         """The agent's clock between ticks (truth stamps, mocap)."""
         self._link: MavlinkLink | None = None
@@ -124,7 +117,6 @@ class MavlinkBackend:
         self._commanded_mode: int | None = None
         self._commanded_at = 0  # heartbeat count when our last mode/arming change was accepted
         self._last_gcs_heartbeat_s = -math.inf
-        self._origin_sent = False
         self._hold: Setpoint | None = None
         self._climb: Move | None = None
         self._climb_to: tuple[Vec3, Vec3] | None = None  # (from, to): planned at the next tick
@@ -171,17 +163,15 @@ class MavlinkBackend:
                 "ArduPilot nor PX4"
             )
         self._request_telemetry()
-        if self._mocap.kind != "none":
-            # also after a fault: the autopilot (or the pilot) still flies on the mocap
-            forwarding = self._mocap.run(lambda: self._link, self.tick_time)
-            self._mocap_task = asyncio.create_task(forwarding)
+        # also after a fault: the autopilot (or the pilot) still flies on the mocap
+        self._mocap.start(lambda: self._link, self.tick_time)
         if self.state.armed:
             self.fault = "vehicle already armed when the agent connected: the pilot has it"
         else:
             if self.settings.set_params:
                 await self._configure()
             if self._flavor().name == "px4":  # ArduPilot: once it says it uses external nav
-                self._set_ekf_origin()
+                self._mocap.set_ekf_origin(self.link, self.state.system_id or 0)
         log.info("MAVLink vehicle %s (%s) on %s", self.state.system_id,
                  self.state.flavor.name, self.settings.url)  # fmt: skip
         return self._snapshot(0.0)
@@ -226,26 +216,12 @@ class MavlinkBackend:
             severity, text = self.state.recent_texts[-1]
             self.commands.on_text(text)
             self.events.append((severity, text))
-            if "using external nav" in text:
-                self._set_ekf_origin()
+            if "using external nav" in text and self._link is not None:
+                self._mocap.set_ekf_origin(self._link, self.state.system_id or 0)
             log.log(logging.WARNING if severity <= SEVERITY_WARNING else logging.INFO,
                     "vehicle %s: %s", self.state.system_id, text)  # fmt: skip
             if self._on_text is not None:
                 self._on_text(severity, text)
-
-    def _set_ekf_origin(self) -> None:
-        """An autopilot fusing our mocap: give its EKF an origin (once), before its GPS does."""
-        if self._origin_sent or self._link is None or self.settings.mocap == "none":
-            return
-        self._origin_sent = True
-        lat, lon, alt = EKF_ORIGIN_LLA
-        if self._flavor().name == "px4":
-            alt = 0.0
-        message = self._link.mav.set_gps_global_origin_encode(
-            self.state.system_id or 0, round(lat * 1e7), round(lon * 1e7), round(alt * 1000)
-        )
-        self._link.send(message)
-        log.info("vehicle %s: EKF origin set for mocap flight", self.state.system_id)
 
     # --- commands ----------------------------------------------------------------------------
     async def _set_mode(self, custom_mode: int) -> None:
@@ -344,9 +320,7 @@ class MavlinkBackend:
             log.error("estop of vehicle %s not confirmed: %s", self.state.system_id, exc)
 
     def close_link(self) -> None:
-        if self._mocap_task is not None:
-            self._mocap_task.cancel()
-            self._mocap_task = None
+        self._mocap.stop()
         self.commands.cancel_all()
         self.params.cancel_all()
         if self._link is not None:

@@ -38,6 +38,13 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
+EKF_ORIGIN_LLA = (-35.363261, 149.165230, 584.0)
+"""EKF origin (lat [deg], lon [deg], alt [m]) given to an autopilot flying on forwarded mocap:
+its local frame is the mocap's whichever origin it has, but its EKF needs one. ArduPilot: the one
+its GPS would set later while it fuses ExternalNav crashes ArduCopter 4.7 SITL (floating point
+exception at "origin set", measured); set first, the GPS leaves it alone. PX4 gets it at altitude
+0 (see ``mavlink_params.PX4_HGT_REF_VISION``)."""
+
 
 @dataclass(frozen=True)
 class MocapPose:
@@ -96,11 +103,35 @@ class MocapForwarder:
         self.flavor = flavor
         """The autopilot's flavour (known once its heartbeat came)."""
         self.velocity = PoseVelocity()
+        self._task: asyncio.Task[None] | None = None
+        self._origin_sent = False
         self.period_s = 1.0 / settings.mocap_rate_hz
         self.frame = frame
         self.source = source
         self.sent = 0
         self.failed = 0
+
+    def start(self, link: Callable[[], MavlinkLink | None], clock: TickTime) -> None:
+        """Forward from a task of its own (:meth:`run`) when the settings ask for mocap."""
+        if self.kind != "none" and self._task is None:
+            self._task = asyncio.create_task(self.run(link, clock))
+
+    def stop(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+            self._task = None
+
+    def set_ekf_origin(self, link: MavlinkLink, system_id: int) -> None:
+        """An autopilot fusing our mocap: give its EKF an origin (once), before its GPS does."""
+        if self._origin_sent or self.kind == "none":
+            return
+        self._origin_sent = True
+        lat, lon, alt = EKF_ORIGIN_LLA
+        if self.flavor() == "px4":
+            alt = 0.0
+        link.send(link.mav.set_gps_global_origin_encode(
+            system_id, round(lat * 1e7), round(lon * 1e7), round(alt * 1000)))  # fmt: skip
+        log.info("vehicle %s: EKF origin set for mocap flight", system_id)
 
     async def run(self, link: Callable[[], MavlinkLink | None], clock: TickTime) -> None:
         """Forward poses at the rate until cancelled, whatever the control loop awaits;

@@ -57,7 +57,7 @@ between mocap samples. PX4 SIH's accelerometer is a vibrating airframe's (std 0.
 (x, y, z in a hover) at the default, 2.8 / 1.3 / 3.1 mm at 1.0."""
 PX4_HGT_REF_VISION = 3
 """EKF2_HGT_REF: external vision. EKF2 (v1.16) takes the vision's z as down from altitude 0, so
-the agent sets the EKF origin at altitude 0 (``MavlinkBackend._set_ekf_origin``): its local z is
+the agent sets the EKF origin at altitude 0 (``MocapForwarder.set_ekf_origin``): its local z is
 then the mocap's. Measured on SIH, one take-off to 1.05 m: the barometer as reference left the
 height 0.28 m off the truth (estimate 0.96 m, truth 1.24 m); vision with the origin at the home
 altitude read z = +584 m NED on the ground; vision with the origin at 0: within 2-8 cm."""
