@@ -62,11 +62,14 @@ Measured on the shared 2-core machine under ``nice -n 15`` (others' load average
   up and requeued as their writing went unacknowledged): to be run again on a quiet machine.
   The real-time factor is the CPU the host gets over what its vehicles need: read it with the
   host's CPU beside it. Where the time goes (``--profile``, 20 writing, before the rounds were
-  merged): the fleet's step 33 % (two thirds of it splitting the fleet for vehicles a turn
-  apart; merged rounds were checked in ``tests/test_sim_fleet.py``, not yet profiled in a
-  host), the runner 20 % (reference interpolation 7 %, safety 4 %), the service around it about
-  25 % (status and telemetry on each vehicle's own Zenoh session: ``Publisher.put`` about
-  0.3 ms a message, reports, heartbeats), the simulated vehicles' snapshots 6 %.
+  merged): the fleet's step 33 %, two thirds of it splitting the fleet for vehicles a turn
+  apart. With merged rounds (50 writing, profiled: 44 vehicles per fleet step on average, 49
+  splits in the run, 50/50 done): the fleet's step 6.5 % of the host's CPU (world and
+  controller 3.9 %, brushes and states 2.5 %); the runner 24 % (reference interpolation 9 %,
+  safety 4.5 %); report delivery 12 %, status publishing 7 % and the status heartbeat 7 %,
+  ``Publisher.put`` 8 % (about 0.3 ms a message on each vehicle's own Zenoh session), the
+  simulated vehicles' snapshots 6 %, the lease 4 %: the service around the runner is the
+  limit now, not the physics.
 
 ``--profile PATH`` writes a cProfile of each fleet host to ``PATH.<host number>``.
 """
