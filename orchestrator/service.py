@@ -216,6 +216,10 @@ class OrchestratorService:
         for vehicle_id, command in eff.commands:
             self._spawn(self._send(vehicle_id, command))
 
+    def _publish_fleet(self) -> None:
+        self.fleet_changed = False
+        self._publish(self.keys.fleet, self.book.snapshot(self.clock(), include_final=False))
+
     def _publish(self, key: str, message: msgspec.Struct) -> None:
         try:
             publish(self.session, key, message)
@@ -430,8 +434,7 @@ class OrchestratorService:
             self.apply(self.book.tick(now))
             self.compact_history(now)
             if self.fleet_changed or now >= next_fleet:
-                self.fleet_changed = False
-                self._publish(self.keys.fleet, self.book.snapshot(now, include_final=False))
+                self._publish_fleet()
             if now >= next_fleet:
                 next_fleet = now + self.show.policy.fleet_period_s
                 if self.recorder is not None:
@@ -503,10 +506,13 @@ class OrchestratorService:
         self._stop = stop
         declared = self._declare()
         self.apply(self.book.tick(self.clock()))
+        self._publish_fleet()  # viewers see the fleet at once, not a tick later
         log.info("orchestrator of %s ready", self.show.show_id)
         try:
             await stop.wait()
         finally:
+            if self.fleet_changed:  # a change of the last tick is still told
+                self._publish_fleet()
             for entity in reversed(declared):
                 with contextlib.suppress(Exception):
                     entity.undeclare()
