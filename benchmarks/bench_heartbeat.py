@@ -98,34 +98,29 @@ def stored_jobs(show: Any, writing: int, finished: int, now_s: float) -> list[Jo
 def everyone_present(service: OrchestratorService, now_s: float) -> None:
     """Every vehicle's token seen, and its first status (naming its job, if it has one)."""
     book = service.book
-    for vid, view in book.vehicles.items():
+    for vid in book.vehicles:
         service.apply(book.liveliness(vid, True, now_s))
-        job = book.active_job_of(vid)
-        status = VehicleStatus(
-            vehicle_id=vid,
-            kind=view.info.kind,
-            state="idle" if job is None else "writing",
-            board_id=view.info.board_id,
-            job_id=None if job is None else job.job_id,
-        )
-        service.apply(book.status(status, now_s))
+        service.apply(book.status(status_of(service, vid), now_s))
 
 
 def statuses(service: OrchestratorService) -> list[tuple[str, bytes]]:
     """One heartbeat per vehicle as it arrives: (key, JSON bytes), saying what it said last."""
-    keys, book = ShowKeys(service.show.show_id), service.book
-    stream = []
-    for vid, view in book.vehicles.items():
-        job = book.active_job_of(vid)
-        status = VehicleStatus(
-            vehicle_id=vid,
-            kind=view.info.kind,
-            state="idle" if job is None else "writing",
-            board_id=view.info.board_id,
-            job_id=None if job is None else job.job_id,
-        )
-        stream.append((keys.vehicle_status(vid), encode(status)))
-    return stream
+    keys = ShowKeys(service.show.show_id)
+    return [
+        (keys.vehicle_status(vid), encode(status_of(service, vid))) for vid in service.book.vehicles
+    ]
+
+
+def status_of(service: OrchestratorService, vehicle_id: str) -> VehicleStatus:
+    """What ``vehicle_id`` says of itself: idle, or writing the job it was given."""
+    view, job = service.book.vehicles[vehicle_id], service.book.active_job_of(vehicle_id)
+    return VehicleStatus(
+        vehicle_id=vehicle_id,
+        kind=view.info.kind,
+        state="idle" if job is None else "writing",
+        board_id=view.info.board_id,
+        job_id=None if job is None else job.job_id,
+    )
 
 
 async def orchestrator_us(service: OrchestratorService, stream: Stream, rounds: int) -> float:
