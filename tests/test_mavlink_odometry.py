@@ -42,6 +42,9 @@ def test_the_velocity_is_the_difference_of_distinct_captures() -> None:
     # the same capture again (a mocap frame asked for twice): nothing new to difference
     assert all(math.isnan(v) for v in velocity.update(1.02, (0.004, -0.002, -1.0)))
     assert velocity.update(1.04, (0.008, -0.002, -1.0)) == pytest.approx((0.2, 0.0, 0.0))
+    # the mocap lost the vehicle for half a second: no average across the gap, then again
+    assert all(math.isnan(v) for v in velocity.update(1.54, (0.108, -0.002, -1.0)))
+    assert velocity.update(1.56, (0.112, -0.002, -1.0)) == pytest.approx((0.2, 0.0, 0.0))
 
 
 @given(ANGLE, ANGLE, st.floats(-3.1, 3.1), SPEED, SPEED, SPEED)

@@ -50,19 +50,22 @@ ODOMETRY_FRAMES: dict[Flavor, OdometryFrames] = {
 
 
 class PoseVelocity:
-    """The velocity between the last two distinct poses, in [m/s] (NaN until two came)."""
+    """The velocity between the last two distinct poses, in [m/s] (NaN until two came, and
+    after a gap: a difference across it would be an average, not the velocity)."""
 
-    def __init__(self) -> None:
+    def __init__(self, max_gap_s: float = 0.1) -> None:
+        self.max_gap_s = max_gap_s
+        """Longest time in [s] between two captures that are differenced."""
         self._last: tuple[float, Vec3] | None = None
 
     def update(self, time_s: float, position_m: Vec3) -> Vec3:
         """The pose captured at ``time_s`` [s] at ``position_m`` [m]: the velocity since the
-        previous one (NaN for the first, and for the same capture again)."""
+        previous one (NaN for the first, after a gap, and for the same capture again)."""
         last = self._last
         if last is not None and time_s - last[0] <= 1e-6:
             return NAN3
         self._last = (time_s, position_m)
-        if last is None:
+        if last is None or time_s - last[0] > self.max_gap_s:
             return NAN3
         dt, p0 = time_s - last[0], last[1]
         return ((position_m[0] - p0[0]) / dt, (position_m[1] - p0[1]) / dt,
