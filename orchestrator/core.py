@@ -29,7 +29,7 @@ from bus.messages import (
     VehicleCommand,
     VehicleStatus,
 )
-from orchestrator import positions, presence, reports
+from orchestrator import holders, positions, presence, reports
 from orchestrator.core_types import CoreConfig, Effects, Level
 from orchestrator.finished import MAX_FINAL_JOBS, FinishedJobs
 from orchestrator.fleet import VehicleView, queue_etas, ready_for_job
@@ -72,6 +72,8 @@ class Book:
                 self.vehicles[vid].paused = self.vehicles[vid].held = True
         self.jobs: dict[str, Job] = {}
         self._active: dict[str, str] = {}
+        self._awaited: dict[str, str] = {}
+        """Vehicle id -> id of the queued job that waits for it (``orchestrator/holders.py``)."""
         """Vehicle id -> id of its active job: every status, snapshot and assignment asks,
         and scanning every job held (up to ``MAX_FINAL_JOBS`` finished) per vehicle cost ~50 ms
         of CPU per status at 250 vehicles (``benchmarks/bench_heartbeat.py``)."""
@@ -113,6 +115,11 @@ class Book:
 
     def active_job_of(self, vehicle_id: str) -> Job | None:
         job_id = self._active.get(vehicle_id)
+        return None if job_id is None else self.jobs[job_id]
+
+    def awaited_by(self, vehicle_id: str) -> Job | None:
+        """The queued job that was taken back from this lost vehicle and may wait for it."""
+        job_id = self._awaited.get(vehicle_id)
         return None if job_id is None else self.jobs[job_id]
 
     def active_jobs(self) -> list[Job]:
@@ -244,16 +251,33 @@ class Book:
                 self.by_key.pop((job.client_id, job.idempotency_key), None)
 
     def _index(self, previous: Job | None, job: Job) -> None:
-        """Hold ``job`` (replacing ``previous``, its older version) and keep ``_active`` true."""
+        """Hold ``job`` (replacing ``previous``, its older version) and keep ``_active`` and
+        ``_awaited`` true."""
         self.jobs[job.job_id] = job
         was = previous.vehicle_id if previous is not None and previous.active else None
         if was is not None and self._active.get(was) == job.job_id:
             del self._active[was]
         if job.active and job.vehicle_id is not None:
             self._active[job.vehicle_id] = job.job_id
+        held_for = previous.vehicle_id if previous is not None else None
+        if held_for is not None and self._awaited.get(held_for) == job.job_id:
+            del self._awaited[held_for]
+        if job.state == "queued" and job.holder_hold_until_s is not None and job.vehicle_id:
+            self._awaited[job.vehicle_id] = job.job_id
 
-    def requeue(self, eff: Effects, job: Job, now_s: float, reason: str, *, lost: bool) -> None:
-        """Take an active job back: queued again, or failed after too many lost attempts."""
+    def requeue(
+        self,
+        eff: Effects,
+        job: Job,
+        now_s: float,
+        reason: str,
+        *,
+        lost: bool,
+        wait_for_holder: bool = False,
+    ) -> None:
+        """Take an active job back: queued again, or failed after too many lost attempts;
+        ``wait_for_holder``: its vehicle was lost, and the job waits for it a while
+        (``orchestrator/holders.py``)."""
         info = ErrorInfo(code="vehicle_lost" if lost else "requeued", message=reason)
         if job.board_id is not None and (job.state == "writing" or job.progress > 0):
             self.dirty_boards.add(job.board_id)
@@ -279,9 +303,19 @@ class Book:
                 job_id=job.job_id,
             )
             return
-        self.put(
-            eff, transition(job, "queued", now_s, error=info, progress=0.0, assigned_at_s=None)
+        hold_until_s = now_s + self.config.lost_job_hold_s if wait_for_holder else None
+        if hold_until_s is not None:
+            reason = f"{reason}; waits {self.config.lost_job_hold_s:.0f} s for it to come back"
+        queued = transition(
+            job,
+            "queued",
+            now_s,
+            error=info,
+            progress=0.0,
+            assigned_at_s=None,
+            holder_hold_until_s=hold_until_s,
         )
+        self.put(eff, queued)
         self.event(
             eff,
             now_s,
@@ -381,10 +415,18 @@ class Book:
                 continue
             if not ready_for_job(view, now_s):
                 continue
-            job = next((j for j in queue if self.kinds.may_take(j, vid)), None)
+            job = next(
+                (
+                    j
+                    for j in queue
+                    if self.kinds.may_take(j, vid) and holders.assignable(j, now_s)
+                ),
+                None,
+            )
             if job is None:
                 continue
             queue.remove(job)
+            holders.warn_if_taken_over(self, eff, job, vid, now_s)
             job = self.put(
                 eff,
                 transition(
@@ -397,6 +439,7 @@ class Book:
                     attempts=job.attempts + 1,
                     progress=0.0,
                     error=None,
+                    holder_hold_until_s=None,
                 ),
             )
             busy_boards.add(view.info.board_id)

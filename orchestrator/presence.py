@@ -19,6 +19,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from bus.messages import Event, VehicleStatus
+from orchestrator import holders
 from orchestrator.core_types import Effects
 from orchestrator.fleet import VehicleView
 from orchestrator.jobs import transition
@@ -76,6 +77,8 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
     view.message = status.message
     changed = _maybe_back(book, eff, view, now_s) or changed
     _reclaim(book, eff, view, status.job_id, now_s)
+    if not view.lost:
+        holders.heard_without(book, eff, view.info.vehicle_id, status.job_id, now_s)
     job = book.active_job_of(status.vehicle_id)
     if job is not None and status.job_id != job.job_id:
         view.mismatch_since_s = view.mismatch_since_s or now_s
@@ -115,7 +118,15 @@ def _reclaim(book: Book, eff: Effects, view: VehicleView, job_id: str | None, no
     board = view.info.board_id
     book.put(
         eff,
-        transition(job, "assigned", now_s, board_id=board, assigned_at_s=now_s, error=None),
+        transition(
+            job,
+            "assigned",
+            now_s,
+            board_id=board,
+            assigned_at_s=now_s,
+            error=None,
+            holder_hold_until_s=None,
+        ),
     )
     message = f"{vid} still has {job.label}"
     book.event(eff, now_s, "info", "job_reclaimed", message, vehicle_id=vid, job_id=job.job_id)
@@ -228,7 +239,7 @@ def check_vehicle(book: Book, eff: Effects, view: VehicleView, now_s: float) -> 
                 )
         job = book.active_job_of(vid)
         if job is not None:
-            book.requeue(eff, job, now_s, f"{vid} was lost", lost=True)
+            book.requeue(eff, job, now_s, f"{vid} was lost", lost=True, wait_for_holder=True)
     job = book.active_job_of(vid)
     if job is None or not view.alive or view.mismatch_since_s is None:
         return

@@ -95,6 +95,7 @@ def core_config(show: Show) -> CoreConfig:
         ),
         moderation=show.policy.moderation,
         lost_after_s=show.policy.lost_after_s,
+        lost_job_hold_s=show.policy.lost_job_hold_s,
         max_queue=show.policy.max_queue,
         max_attempts=show.policy.max_attempts,
         tracking_error_alert_m=show.policy.tracking_error_alert_m,

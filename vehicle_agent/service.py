@@ -270,10 +270,13 @@ class AgentService:
 
     def _guard_job(self, wall_s: float) -> None:
         """Before a tick: give the job up if it may be someone else's by now; ask the
-        orchestrator to confirm it when writing has gone unacknowledged for a while."""
+        orchestrator to confirm it when the flown job has gone unacknowledged for a while."""
         lease, runner = self._lease, self.runner
         gap_s, self._stalled_s = max(lease.tick(wall_s), self._stalled_s), 0.0
-        lease.hold(runner.job_id, runner.phase == "write", wall_s)
+        writing = runner.phase == "write"
+        lease.hold(
+            runner.job_id, active=runner.phase in ACTIVE_PHASES, writing=writing, now_s=wall_s
+        )
         why = lease.breach(gap_s, wall_s)
         if why is not None:
             self._give_up(why)
@@ -281,8 +284,8 @@ class AgentService:
             probe = AgentReport(
                 vehicle_id=self.vehicle_id,
                 job_id=lease.job_id,
-                event="progress",
-                progress=self._progress,
+                event="progress" if writing else "holding",
+                progress=self._progress if writing else 0.0,
             )
             self.reports.queue(probe)
 
