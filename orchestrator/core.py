@@ -416,11 +416,7 @@ class Book:
             if not ready_for_job(view, now_s):
                 continue
             job = next(
-                (
-                    j
-                    for j in queue
-                    if self.kinds.may_take(j, vid) and holders.assignable(j, now_s)
-                ),
+                (j for j in queue if self.kinds.may_take(j, vid) and holders.assignable(j, now_s)),
                 None,
             )
             if job is None:
