@@ -76,3 +76,34 @@ def test_plan_with_one_blas_thread_is_the_plan_of_the_default_threads(tmp_path: 
     for doc in docs:
         doc.pop("timing_ms")
     assert docs[0] == docs[1]
+
+
+def test_status_imports_neither_numpy_nor_pydantic(tmp_path: Path) -> None:
+    """Up to asking the orchestrator (here nobody answers: no router, no retry), then decoding
+    a snapshot as large as a busy show's (500 jobs with errors, 250 vehicles)."""
+    show = tmp_path / "show.yaml"
+    text = (ROOT / "shows" / "solo.yaml").read_text(encoding="utf-8")
+    text = text.replace("tcp/127.0.0.1:7448", "tcp/127.0.0.1:9")  # the discard port: no router
+    text = text.replace("mode: mtls", "mode: none")
+    text = text.replace(
+        "multicast_scouting: false", "multicast_scouting: false\n  open_timeout_s: 0"
+    )
+    show.write_text(text, encoding="utf-8")
+    unwanted = ("numpy", "pydantic", "showfile.models", "orchestrator", "asyncio")
+    code = (
+        "import contextlib, io, json, sys\n"
+        "from cli.main import main\n"
+        "with contextlib.redirect_stderr(io.StringIO()) as err:\n"
+        f"    assert main(['status', {str(show)!r}, '--timeout', '0.1']) == 2\n"
+        "assert 'skyquill status' in err.getvalue(), err.getvalue()\n"
+        "from bus.messages import ShowSnapshot, decode\n"
+        "error = dict(code='plan_failed', message='too wide', field='text')\n"
+        "jobs = [dict(job_id=f'j{k}', state='done', label='永', kind='text', client_id='c',\n"
+        "             created_at_s=1.0, updated_at_s=2.0, error=error) for k in range(500)]\n"
+        "vehicles = [dict(vehicle_id=f'u{k}', kind='quadrotor-brush', state='idle', alive=True)\n"
+        "            for k in range(250)]\n"
+        "raw = json.dumps(dict(show_id='s', time_s=0.0, queue_paused=False, jobs=jobs,\n"
+        "                      vehicles=vehicles, job_counts={'done': 500}))\n"
+        "assert len(decode(raw, ShowSnapshot).jobs) == 500\n" + _loaded(unwanted)
+    )
+    assert _probe(code) == []
