@@ -38,6 +38,7 @@ def _loaded(prefixes: tuple[str, ...]) -> str:
 
 def test_plan_of_chinese_text_imports_no_font_plot_or_show_models() -> None:
     unwanted = ("HersheyFonts", "matplotlib", "scipy.optimize", "pydantic", "yaml", "showfile")
+    unwanted += ("planner.retime", "planner.lbfgs")  # the paper's re-segmentation: not the default
     code = (
         "import contextlib, io, json, os, sys\n"
         "from cli.main import main\n"
