@@ -1,7 +1,7 @@
 """Fleet host: N simulated vehicles' agents in one process, M of them writing at once, in real time.
 
     nice -n 15 .venv/bin/python benchmarks/bench_fleet_host.py [--vehicles 50,100] [--hosts 1]
-        [--writing 50] [--window-s 20] [--peer 10] [--skip-peer]
+        [--writing 50] [--window-s 20] [--peer 10] [--skip-peer] [--profile PATH]
 
 Each case is a real show (``bench_stop.wide_show``: the Airshow show widened to N vehicles, each
 over its own board, time scale 1, mutual TLS) run as separate processes: the router, the real
@@ -13,7 +13,8 @@ awake (flying), for ``--window-s`` seconds:
   fleet processes; and for agents and fleet alike from telemetry (agent time over wall time);
 - **tick jitter** |tick interval - 10 ms| p50/p99 of the awake vehicles' loops, and the event
   loop's lag (a 10 ms timer's lateness), in the fleet process;
-- **RSS** of the fleet process (and per vehicle), of its planning workers; **CPU** in cores;
+- **RSS** of the fleet process (and per vehicle), of its planning workers; **CPU** in cores,
+  and that of the orchestrator and of the router, idle and in the window;
 - **status latency**: the orchestrator's snapshot query (what ``skyquill status`` asks), every
   0.5 s from this process, and one ``skyquill status`` command's wall time;
 - **nothing lost**: every submitted job finished ``done`` (waited for after the window);
@@ -37,10 +38,40 @@ Measured on the shared 2-core machine under ``nice -n 15`` (others' load average
 - 250 vehicles: all on the bus 9.9 s after start; idle, the host takes 0.24 cores, the
   orchestrator 0.63 and the router 0.21 (250 heartbeats at 2.7 Hz); 10 writing: factor 0.92
   but status p50 1.1 s, p95 4.3 s, and acknowledgements later than ``lost_after_s`` made the
-  vehicles give their jobs up: the orchestrator is the limit there;
-- 50 writing at once (50 vehicles, one host): factor 0.11, the host's loop 250 ms late: a
-  writing tick costs 0.6-1.2 ms of CPU (the kind's world and controller about 60 % of it), so
-  50 writers need about 3-5 cores; 40/50 done, the others given up and requeued.
+  vehicles give their jobs up: the orchestrator was the limit there. After issue 15's
+  orchestrator work (statuses decided per vehicle, merged and in chunks, ``bench_heartbeat.py``;
+  a resting vehicle's status at 1 Hz; fleet snapshots merged), at load average 6-14 from
+  others: 10 writing, status p50 0.009 s, p95 0.157 s, 10/10 done, no vehicle lost; idle,
+  the orchestrator 0.23 cores and the router 0.17 (at 100 vehicles 0.05 and 0.04). The
+  recording shows 340-390 statuses and 415-480 telemetry samples a second from 250 resting
+  vehicles (their resting telemetry comes at ~1.8 Hz, not 1); per thread, the orchestrator's
+  Python threads (event loop, MCAP recorder) took 0.16-0.19 cores and Zenoh's receiving
+  threads 0.05: per message far more than deciding a status (12 us) costs;
+- 50 writing at once (50 vehicles, one host): factor 0.11 when each vehicle's world and
+  controller were stepped alone (a writing tick 0.6-1.2 ms of CPU, 60 % of it the world and
+  controller), the host's loop 250 ms late, 40/50 done. With the per-tick geometry in floats
+  and the vehicles in flight stepped together (one fleet, ``vehicles/quadrotor_brush/loop.py``):
+  factor 0.49 on 0.81 cores (others' load average 4-8 meanwhile), about 0.34 ms of host CPU per
+  vehicle-tick, loop lag p50 16 ms, 50/50 done, status p95 0.07 s (its rounds still split, see
+  ``vehicle_agent/backends/sim_round.py``); 20 writing (50 vehicles, the geometry change only):
+  factor 0.56 on 0.82 cores, 0.73 ms of host CPU per vehicle-tick;
+- 20 writing (20 vehicles, rounds merged; load average 8-10, the host given 0.32 cores): factor
+  0.67, i.e. 0.24 ms of host CPU per vehicle-tick, 20/20 done; 50 writing (same code, load
+  average 8, the host given 0.56 cores): factor 0.29, 0.39 ms per vehicle-tick, loop lag p50
+  17 ms, status p95 0.21 s, and only 9/50 final within 600 s after the window (the others given
+  up and requeued as their writing went unacknowledged): to be run again on a quiet machine.
+  The real-time factor is the CPU the host gets over what its vehicles need: read it with the
+  host's CPU beside it. Where the time goes (``--profile``, 20 writing, before the rounds were
+  merged): the fleet's step 33 %, two thirds of it splitting the fleet for vehicles a turn
+  apart. With merged rounds (50 writing, profiled: 44 vehicles per fleet step on average, 49
+  splits in the run, 50/50 done): the fleet's step 6.5 % of the host's CPU (world and
+  controller 3.9 %, brushes and states 2.5 %); the runner 24 % (reference interpolation 9 %,
+  safety 4.5 %); report delivery 12 %, status publishing 7 % and the status heartbeat 7 %,
+  ``Publisher.put`` 8 % (about 0.3 ms a message on each vehicle's own Zenoh session), the
+  simulated vehicles' snapshots 6 %, the lease 4 %: the service around the runner is the
+  limit now, not the physics.
+
+``--profile PATH`` writes a cProfile of each fleet host to ``PATH.<host number>``.
 """
 
 from __future__ import annotations
@@ -146,7 +177,10 @@ async def record_figures(host: object, path: Path) -> None:
             prober.cancel()
 
 
-def child_main(show_path: Path, vehicle_ids: list[str], stats: Path) -> None:
+def child_main(
+    show_path: Path, vehicle_ids: list[str], stats: Path, profile: Path | None = None
+) -> None:
+    """The fleet host of a case; with ``profile``, a cProfile of it written there at the end."""
     from vehicle_agent.fleet import FleetHost
 
     host = FleetHost(load_show(show_path), vehicle_ids)
@@ -160,7 +194,12 @@ def child_main(show_path: Path, vehicle_ids: list[str], stats: Path) -> None:
         await host.run(stop)
         figures.cancel()
 
-    asyncio.run(main())
+    if profile is None:
+        asyncio.run(main())
+    else:
+        import cProfile
+
+        cProfile.runctx("asyncio.run(main())", globals(), {"main": main}, str(profile))
     os._exit(0)
 
 
@@ -175,6 +214,10 @@ class Case:
     processes: int = 0
     idle_rss_mib: float = 0.0
     idle_cpu_cores: float = 0.0
+    idle_service_cores: dict[str, float] = field(default_factory=dict)
+    """Cores of the orchestrator and of the router while every vehicle is idle."""
+    service_cores: dict[str, float] = field(default_factory=dict)
+    """Cores of the orchestrator and of the router in the writing window."""
     rss_mib: float = 0.0
     worker_rss_mib: float = 0.0
     workers: int = 0
@@ -225,7 +268,9 @@ def case_show(out: Path, count: int) -> tuple[Path, object]:
     return path, load_show(path)
 
 
-def run_case(label: str, count: int, writing: int, window_s: float, *, hosts: int) -> Case:
+def run_case(
+    label: str, count: int, writing: int, window_s: float, *, hosts: int, profile: str | None = None
+) -> Case:
     """One show run: ``hosts`` fleet host processes (0: one agent process per vehicle)."""
     case = Case(label, count, writing)
     with tempfile.TemporaryDirectory() as tmp:
@@ -237,7 +282,10 @@ def run_case(label: str, count: int, writing: int, window_s: float, *, hosts: in
         stats = [Path(tmp) / f"fleet{i + 1}.jsonl" for i in range(hosts)]
         for i, figures in enumerate(stats):
             group = ids[i::hosts]  # dealt round-robin, as cli/fleets.py does
-            argv = (sys.executable, __file__, "--child", str(path), ",".join(group), str(figures))
+            argv: tuple[str, ...] = (sys.executable, __file__, "--child", str(path))
+            argv += (",".join(group), str(figures))
+            if profile is not None:
+                argv += ("--profile", f"{profile}.{i + 1}")
             grace_s = fleet_stop_grace_s(len(group))
             name = f"fleet {i + 1}"
             specs.append(ChildSpec(name, argv, logs / f"fleet{i + 1}.log", None, grace_s))
@@ -265,13 +313,16 @@ def measure(
     names = [n for n in supervisor.names if n.startswith(("agent", "fleet"))]
     pids = [p for p in (supervisor.pid(n) for n in names) if p is not None]
     case.processes = len(pids)
+    services = {n: supervisor.pid(n) for n in SERVICES}
     time.sleep(5.0)  # settled
     ticks0, idle_s = sum(cpu_ticks(p) for p in pids), time.monotonic()
+    service_ticks0 = {n: cpu_ticks(p) for n, p in services.items() if p is not None}
     time.sleep(5.0)
     hz = os.sysconf("SC_CLK_TCK")
     case.idle_cpu_cores = (
         (sum(cpu_ticks(p) for p in pids) - ticks0) / hz / (time.monotonic() - idle_s)
     )
+    case.idle_service_cores = cores_since(services, service_ticks0, idle_s)
     case.idle_rss_mib = sum(rss_mib(p) for p in pids)
     keys = ShowKeys(show.show_id)  # type: ignore[attr-defined]
     clock = TelemetryClock()
@@ -283,6 +334,7 @@ def measure(
         started = time.monotonic()
         clock.since_s = started
         ticks0 = sum(cpu_ticks(p) for p in pids)
+        service_ticks0 = {n: cpu_ticks(p) for n, p in services.items() if p is not None}
         while time.monotonic() - started < window_s:
             asked = time.monotonic()
             try:
@@ -293,6 +345,7 @@ def measure(
             time.sleep(max(0.0, 0.5 - (time.monotonic() - asked)))
         ended = time.monotonic()
         case.cpu_cores = (sum(cpu_ticks(p) for p in pids) - ticks0) / hz / (ended - started)
+        case.service_cores = cores_since(services, service_ticks0, started)
         case.rss_mib = sum(rss_mib(p) for p in pids)
         case.workers = worker_count(pids)
         case.worker_rss_mib = sum(rss_mib(p) for p in worker_pids(pids))
@@ -305,6 +358,23 @@ def measure(
         heard.undeclare()  # type: ignore[no-untyped-call]
     case.final = len(final)
     case.done = sum(1 for state in final.values() if state == "done")
+
+
+SERVICES = ("orchestrator", "router")
+"""The show's processes besides the vehicles whose CPU is printed."""
+
+
+def cores_since(
+    pids: dict[str, int | None], ticks0: dict[str, int], since_s: float
+) -> dict[str, float]:
+    """Cores each named process used since ``since_s`` (monotonic) from its ticks then."""
+    elapsed_s = time.monotonic() - since_s
+    hz = os.sysconf("SC_CLK_TCK")
+    return {
+        name: (cpu_ticks(pid) - ticks0[name]) / hz / elapsed_s
+        for name, pid in pids.items()
+        if pid is not None and name in ticks0
+    }
 
 
 def submit_all(session: object, keys: ShowKeys, texts: list[str], timeout_s: float) -> list[str]:
@@ -385,7 +455,7 @@ def wait_final(
     while time.monotonic() < deadline and len(final) < len(job_ids):
         try:
             jobs = snapshot(session, keys, timeout_s=5.0).jobs  # type: ignore[arg-type]
-        except NoReplyError:
+        except (NoReplyError, RemoteError):  # a busy orchestrator (load 8-10): ask again
             continue
         for job in jobs:
             if job.job_id in job_ids and job.state in ("done", "failed", "cancelled", "rejected"):
@@ -414,6 +484,9 @@ def print_case(case: Case) -> None:
         f"{case.workers} planning workers {case.worker_rss_mib:6.1f} MiB; "
         f"CPU {case.cpu_cores:4.2f} cores ({100 * case.cpu_cores / n:4.2f} % per vehicle)"
     )
+    for when, cores in (("idle", case.idle_service_cores), ("writing", case.service_cores)):
+        figures = ", ".join(f"{name} {value:4.2f}" for name, value in cores.items())
+        print(f"    {when}: cores of the {figures}")
     awake = f" ({case.awake:.0f} vehicles awake)" if case.awake else ""
     print(
         f"    real-time factor of the writing vehicles: ticks {case.rtf:5.3f}{awake}, "
@@ -446,9 +519,11 @@ def main() -> None:
     parser.add_argument("--skip-peer", action="store_true")
     parser.add_argument("--hosts", type=int, default=1, help="fleet host processes per show")
     parser.add_argument("--child", nargs=3, metavar=("SHOW", "IDS", "STATS"))
+    parser.add_argument("--profile", help="cProfile each fleet host to PROFILE.<host number>")
     args = parser.parse_args()
     if args.child:
-        child_main(Path(args.child[0]), args.child[1].split(","), Path(args.child[2]))
+        profile = None if args.profile is None else Path(args.profile)
+        child_main(Path(args.child[0]), args.child[1].split(","), Path(args.child[2]), profile)
         return
     print(f"load average before: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     if not args.skip_peer:
@@ -459,7 +534,10 @@ def main() -> None:
         writing = min(args.writing, count)
         print(f"{count} vehicles in {args.hosts} fleet hosts ({writing} writing):")
         label = f"{args.hosts} fleet host{'s' if args.hosts > 1 else ''}"
-        print_case(run_case(label, count, writing, args.window_s, hosts=args.hosts))
+        case = run_case(
+            label, count, writing, args.window_s, hosts=args.hosts, profile=args.profile
+        )
+        print_case(case)
     print(f"load average after: {os.getloadavg()[0]:.2f}")
 
 

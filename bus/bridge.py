@@ -14,6 +14,7 @@ in the loop with ``await channel.get()`` or ``async for item in channel``.
 from __future__ import annotations
 
 import asyncio
+import threading
 from collections import deque
 from collections.abc import Hashable
 from typing import Generic, TypeVar
@@ -158,41 +159,53 @@ class FifoChannel(_Channel[T]):
 
 
 class LatestByKey(_LoopBound, Generic[K, T]):
-    """Newest item per key; :meth:`take` returns what changed since the previous take."""
+    """Newest item per key; :meth:`take` returns what changed since the previous take.
+
+    A push from another thread wakes the loop only when a reader is waiting: one that takes at
+    intervals (the orchestrator: every 50 ms) costs no turn of the loop per item, where 250
+    vehicles' statuses and telemetry are about 900 items a second.
+    """
 
     def __init__(self, *, loop: asyncio.AbstractEventLoop | None = None) -> None:
         super().__init__(loop)
+        self._lock = threading.Lock()
         self._latest: dict[K, T] = {}
         self._changed: dict[K, T] = {}
         self._event = asyncio.Event()
+        self._reader_waiting = False
         self.replaced = 0
         """Items overwritten by a newer one before anybody took them."""
 
     def push(self, key: K, item: T) -> None:
         """Record the newest item for ``key``; safe from any thread."""
-        self._call(self._put, key, item)
-
-    def _put(self, key: K, item: T) -> None:
-        if key in self._changed:
-            self.replaced += 1
-        self._latest[key] = item
-        self._changed[key] = item
-        self._event.set()
+        with self._lock:
+            if key in self._changed:
+                self.replaced += 1
+            self._latest[key] = item
+            self._changed[key] = item
+            wake, self._reader_waiting = self._reader_waiting, False
+        if wake:
+            self._call(self._event.set)
 
     def latest(self) -> dict[K, T]:
-        """Newest item of every key seen so far (loop thread)."""
-        return dict(self._latest)
+        """Newest item of every key seen so far."""
+        with self._lock:
+            return dict(self._latest)
 
     def take_nowait(self) -> dict[K, T]:
         """Items changed since the previous take (possibly empty)."""
-        changed, self._changed = self._changed, {}
-        self._event.clear()
+        with self._lock:
+            changed, self._changed = self._changed, {}
         return changed
 
     async def take(self) -> dict[K, T]:
-        """Wait until something changed, then return the changed items."""
-        while not self._changed:
-            await self._event.wait()
-            if not self._changed:
+        """Wait until something changed, then return the changed items (loop thread)."""
+        while True:
+            with self._lock:
+                if self._changed:
+                    changed, self._changed = self._changed, {}
+                    self._reader_waiting = False
+                    return changed
+                self._reader_waiting = True
                 self._event.clear()
-        return self.take_nowait()
+            await self._event.wait()

@@ -78,7 +78,8 @@ class ShowKeys:
 
     @property
     def fleet(self) -> str:
-        """Published (orchestrator) on change and at 1 Hz: ShowSnapshot without finished jobs."""
+        """Published (orchestrator) on change (every 0.1 s at most) and at 1 Hz: ShowSnapshot
+        without finished jobs."""
         return f"{self.prefix}/fleet"
 
     # --- vehicles -----------------------------------------------------------------------------

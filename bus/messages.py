@@ -283,7 +283,9 @@ class AgentReport(Request, frozen=True):
 
     vehicle_id: Id
     job_id: Id
-    event: Literal["started", "progress", "done", "failed"]
+    event: Literal["holding", "started", "progress", "done", "failed"]
+    """``holding``: the vehicle flies the job and has not begun writing it (a lease renewal);
+    ``started``: writing begins; ``progress`` while writing; then ``done`` or ``failed``."""
     planned_duration_s: Duration | None = None
     progress: Fraction = 0.0
     metrics: JobMetrics | None = None

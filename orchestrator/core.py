@@ -29,7 +29,7 @@ from bus.messages import (
     VehicleCommand,
     VehicleStatus,
 )
-from orchestrator import positions, presence, reports
+from orchestrator import holders, positions, presence, reports
 from orchestrator.core_types import CoreConfig, Effects, Level
 from orchestrator.finished import MAX_FINAL_JOBS, FinishedJobs
 from orchestrator.fleet import VehicleView, queue_etas, ready_for_job
@@ -71,8 +71,14 @@ class Book:
             if vid in self.vehicles:
                 self.vehicles[vid].paused = self.vehicles[vid].held = True
         self.jobs: dict[str, Job] = {}
+        self._active: dict[str, str] = {}
+        self._awaited: dict[str, str] = {}
+        """Vehicle id -> id of the queued job that waits for it (``orchestrator/holders.py``)."""
+        """Vehicle id -> id of its active job: every status, snapshot and assignment asks,
+        and scanning every job held (up to ``MAX_FINAL_JOBS`` finished) per vehicle cost ~50 ms
+        of CPU per status at 250 vehicles (``benchmarks/bench_heartbeat.py``)."""
         for job in jobs:  # restart: active jobs must be confirmed by their vehicle again
-            self.jobs[job.job_id] = update(job, now_s, assigned_at_s=now_s) if job.active else job
+            self._index(None, update(job, now_s, assigned_at_s=now_s) if job.active else job)
         self.finished = FinishedJobs(self.jobs.values(), job_counts, max_final_jobs)
         """Jobs per state and the held finished jobs (``orchestrator/finished.py``)."""
         self.next_seq = max((j.seq for j in self.jobs.values()), default=0) + 1
@@ -108,13 +114,20 @@ class Book:
         return sum(1 for j in self.jobs.values() if j.state in ("awaiting_approval", "queued"))
 
     def active_job_of(self, vehicle_id: str) -> Job | None:
-        for job in self.jobs.values():
-            if job.active and job.vehicle_id == vehicle_id:
-                return job
-        return None
+        job_id = self._active.get(vehicle_id)
+        return None if job_id is None else self.jobs[job_id]
+
+    def awaited_by(self, vehicle_id: str) -> Job | None:
+        """The queued job that was taken back from this lost vehicle and may wait for it."""
+        job_id = self._awaited.get(vehicle_id)
+        return None if job_id is None else self.jobs[job_id]
+
+    def active_jobs(self) -> list[Job]:
+        """Assigned and writing jobs, in submission order."""
+        return sorted((self.jobs[j] for j in self._active.values()), key=lambda j: j.seq)
 
     def busy_boards(self) -> set[str]:
-        return {j.board_id for j in self.jobs.values() if j.active and j.board_id is not None}
+        return {j.board_id for j in self.active_jobs() if j.board_id is not None}
 
     def etas(self, now_s: float) -> dict[str, tuple[int, float | None]]:
         """Queue position (1 = next) and ETA in [s] of every queued job."""
@@ -124,7 +137,7 @@ class Book:
             for vid, v in self.vehicles.items()
             if v.alive and not v.lost and not (v.paused or v.held)
         }
-        active = [j for j in self.jobs.values() if j.active]
+        active = self.active_jobs()
         busy = {j.vehicle_id for j in active}
         landing = [
             vid
@@ -223,7 +236,7 @@ class Book:
 
     def put(self, eff: Effects, job: Job) -> Job:
         previous = self.jobs.get(job.job_id)
-        self.jobs[job.job_id] = job
+        self._index(previous, job)
         eff.jobs[job.job_id] = job
         self.kinds.forget(job)
         self._forget(self.finished.changed(previous, job))
@@ -237,8 +250,34 @@ class Book:
             if job is not None and job.idempotency_key is not None:
                 self.by_key.pop((job.client_id, job.idempotency_key), None)
 
-    def requeue(self, eff: Effects, job: Job, now_s: float, reason: str, *, lost: bool) -> None:
-        """Take an active job back: queued again, or failed after too many lost attempts."""
+    def _index(self, previous: Job | None, job: Job) -> None:
+        """Hold ``job`` (replacing ``previous``, its older version) and keep ``_active`` and
+        ``_awaited`` true."""
+        self.jobs[job.job_id] = job
+        was = previous.vehicle_id if previous is not None and previous.active else None
+        if was is not None and self._active.get(was) == job.job_id:
+            del self._active[was]
+        if job.active and job.vehicle_id is not None:
+            self._active[job.vehicle_id] = job.job_id
+        held_for = previous.vehicle_id if previous is not None else None
+        if held_for is not None and self._awaited.get(held_for) == job.job_id:
+            del self._awaited[held_for]
+        if job.state == "queued" and job.holder_hold_until_s is not None and job.vehicle_id:
+            self._awaited[job.vehicle_id] = job.job_id
+
+    def requeue(
+        self,
+        eff: Effects,
+        job: Job,
+        now_s: float,
+        reason: str,
+        *,
+        lost: bool,
+        wait_for_holder: bool = False,
+    ) -> None:
+        """Take an active job back: queued again, or failed after too many lost attempts;
+        ``wait_for_holder``: its vehicle was lost, and the job waits for it a while
+        (``orchestrator/holders.py``)."""
         info = ErrorInfo(code="vehicle_lost" if lost else "requeued", message=reason)
         if job.board_id is not None and (job.state == "writing" or job.progress > 0):
             self.dirty_boards.add(job.board_id)
@@ -264,9 +303,19 @@ class Book:
                 job_id=job.job_id,
             )
             return
-        self.put(
-            eff, transition(job, "queued", now_s, error=info, progress=0.0, assigned_at_s=None)
+        hold_until_s = now_s + self.config.lost_job_hold_s if wait_for_holder else None
+        if hold_until_s is not None:
+            reason = f"{reason}; waits {self.config.lost_job_hold_s:.0f} s for it to come back"
+        queued = transition(
+            job,
+            "queued",
+            now_s,
+            error=info,
+            progress=0.0,
+            assigned_at_s=None,
+            holder_hold_until_s=hold_until_s,
         )
+        self.put(eff, queued)
         self.event(
             eff,
             now_s,
@@ -355,7 +404,7 @@ class Book:
         if not queue:
             return
         busy_boards = self.busy_boards()
-        busy_vehicles = {j.vehicle_id for j in self.jobs.values() if j.active}
+        busy_vehicles = set(self._active)
         for view in self.vehicles.values():
             if not queue:
                 break
@@ -366,10 +415,18 @@ class Book:
                 continue
             if not ready_for_job(view, now_s):
                 continue
-            job = next((j for j in queue if self.kinds.may_take(j, vid)), None)
+            job = next(
+                (
+                    j
+                    for j in queue
+                    if self.kinds.may_take(j, vid) and holders.assignable(j, now_s)
+                ),
+                None,
+            )
             if job is None:
                 continue
             queue.remove(job)
+            holders.warn_if_taken_over(self, eff, job, vid, now_s)
             job = self.put(
                 eff,
                 transition(
@@ -382,6 +439,7 @@ class Book:
                     attempts=job.attempts + 1,
                     progress=0.0,
                     error=None,
+                    holder_hold_until_s=None,
                 ),
             )
             busy_boards.add(view.info.board_id)
@@ -432,8 +490,9 @@ class Book:
         return self.settle(presence.liveliness(self, vehicle_id, alive, now_s), now_s)
 
     def status(self, status: VehicleStatus, now_s: float) -> Effects:
-        """A vehicle's published status."""
-        return self.settle(presence.status(self, status, now_s), now_s)
+        """A vehicle's published status (a heartbeat that changes nothing moves no ETA)."""
+        eff = presence.status(self, status, now_s)
+        return self.settle(eff, now_s) if eff.fleet_changed or eff.jobs or eff.events else eff
 
     def telemetry(
         self, vehicle_id: str, tracking_error_m: float, job_id: str | None, now_s: float

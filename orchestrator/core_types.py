@@ -28,6 +28,9 @@ class CoreConfig:
     """Assignments lost before the job fails."""
     confirm_grace_s: float = 3.0
     """How long a vehicle may not mention its assigned job before it is taken back, [s]."""
+    lost_job_hold_s: float = 5.0
+    """A job taken back from a lost vehicle waits this long for it before another vehicle may
+    take it, [s] (``policy.lost_job_hold_s``, ``orchestrator/holders.py``)."""
     refuse_backoff_s: float = 2.0
     """No new assignment to a vehicle this long after it refused or did not answer, [s]."""
     tracking_error_alert_m: float = 0.05
@@ -57,6 +60,19 @@ class Effects:
     written: dict[str, WrittenInk] = field(default_factory=dict)
     """Job id -> the ink picture of a job just done (kept out of ``jobs``): store it with the
     job, and send it on that job's ``jobs/<id>`` publication."""
+
+    @property
+    def empty(self) -> bool:
+        """Nothing to do (most heartbeats): the service skips storing and publishing."""
+        return not (
+            self.jobs
+            or self.moved
+            or self.events
+            or self.commands
+            or self.fleet_changed
+            or self.settings_changed
+            or self.written
+        )
 
 
 Level = Literal["info", "warning", "alert"]

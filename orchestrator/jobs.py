@@ -85,6 +85,9 @@ class Job(msgspec.Struct, frozen=True, kw_only=True):
     """Why it failed, was rejected or requeued last."""
     idempotency_key: str | None = None
     """The submitter's key for this submission (a repeat with it gets this job, not a new one)."""
+    holder_hold_until_s: float | None = None
+    """Queued after its vehicle (``vehicle_id``) was lost: only that vehicle may take it before
+    this Unix time, [s] (``orchestrator/holders.py``)."""
 
     @property
     def final(self) -> bool:

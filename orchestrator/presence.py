@@ -1,7 +1,7 @@
 """Vehicle presence decisions (pure): liveliness, status, telemetry, and the passing of time.
 
 A vehicle is present while its liveliness token is there *and* it speaks: its agent publishes
-its status at least every ``lost_after_s / 4`` (the heartbeat; telemetry counts too). A vehicle
+its status or its telemetry at least every ``lost_after_s / 3`` (the heartbeat). A vehicle
 whose token has been gone for ``lost_after_s``, or that has been silent for ``lost_after_s``
 although its token remains (a frozen process, a token held by someone else), is lost and its job
 goes back to the queue; it is present again with its next status, and a job of its own that is
@@ -19,6 +19,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from bus.messages import Event, VehicleStatus
+from orchestrator import holders
 from orchestrator.core_types import Effects
 from orchestrator.fleet import VehicleView
 from orchestrator.jobs import transition
@@ -63,7 +64,9 @@ def liveliness(book: Book, vehicle_id: str, alive: bool, now_s: float) -> Effect
 
 
 def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
-    """A vehicle's published status."""
+    """A vehicle's published status: that vehicle checked, and jobs assigned if anything changed.
+    Other vehicles are left to ``tick`` (the timer): sweeping the fleet on every heartbeat cost
+    the orchestrator most of a core at 250 vehicles (``benchmarks/bench_heartbeat.py``)."""
     eff = Effects()
     view = book.vehicles.get(status.vehicle_id)
     if view is None:
@@ -74,6 +77,8 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
     view.message = status.message
     changed = _maybe_back(book, eff, view, now_s) or changed
     _reclaim(book, eff, view, status.job_id, now_s)
+    if not view.lost:
+        holders.heard_without(book, eff, view.info.vehicle_id, status.job_id, now_s)
     job = book.active_job_of(status.vehicle_id)
     if job is not None and status.job_id != job.job_id:
         view.mismatch_since_s = view.mismatch_since_s or now_s
@@ -83,7 +88,9 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
     else:
         view.mismatch_since_s = None
     eff.fleet_changed = changed
-    tick_into(book, eff, now_s)
+    check_vehicle(book, eff, view, now_s)
+    if changed or eff.jobs or eff.events:
+        book.assign(eff, now_s)
     return eff
 
 
@@ -111,7 +118,15 @@ def _reclaim(book: Book, eff: Effects, view: VehicleView, job_id: str | None, no
     board = view.info.board_id
     book.put(
         eff,
-        transition(job, "assigned", now_s, board_id=board, assigned_at_s=now_s, error=None),
+        transition(
+            job,
+            "assigned",
+            now_s,
+            board_id=board,
+            assigned_at_s=now_s,
+            error=None,
+            holder_hold_until_s=None,
+        ),
     )
     message = f"{vid} still has {job.label}"
     book.event(eff, now_s, "info", "job_reclaimed", message, vehicle_id=vid, job_id=job.job_id)
@@ -204,25 +219,31 @@ def _why_lost(book: Book, view: VehicleView, now_s: float) -> str | None:
 
 def tick_into(book: Book, eff: Effects, now_s: float) -> None:
     """Lost vehicles give their job back; so do vehicles that do not confirm it; then assign."""
-    for vid, view in book.vehicles.items():
-        why = _why_lost(book, view, now_s)
-        if why is not None:
-            if not view.lost:
-                view.lost, view.reported_job_id = True, None
-                view.message = why
-                eff.fleet_changed = True
-                if view.was_seen:
-                    book.event(
-                        eff, now_s, "alert", "vehicle_lost", f"{vid} is lost: {why}", vehicle_id=vid
-                    )
-            job = book.active_job_of(vid)
-            if job is not None:
-                book.requeue(eff, job, now_s, f"{vid} was lost", lost=True)
-        job = book.active_job_of(vid)
-        if job is None or not view.alive or view.mismatch_since_s is None:
-            continue
-        since = max(view.mismatch_since_s, job.assigned_at_s or 0.0)
-        if now_s - since >= book.config.confirm_grace_s:
-            view.mismatch_since_s = None
-            book.requeue(eff, job, now_s, f"{vid} is not writing it", lost=True)
+    for view in book.vehicles.values():
+        check_vehicle(book, eff, view, now_s)
     book.assign(eff, now_s)
+
+
+def check_vehicle(book: Book, eff: Effects, view: VehicleView, now_s: float) -> None:
+    """One vehicle lost gives its job back; so does one that did not confirm it in time."""
+    vid = view.info.vehicle_id
+    why = _why_lost(book, view, now_s)
+    if why is not None:
+        if not view.lost:
+            view.lost, view.reported_job_id = True, None
+            view.message = why
+            eff.fleet_changed = True
+            if view.was_seen:
+                book.event(
+                    eff, now_s, "alert", "vehicle_lost", f"{vid} is lost: {why}", vehicle_id=vid
+                )
+        job = book.active_job_of(vid)
+        if job is not None:
+            book.requeue(eff, job, now_s, f"{vid} was lost", lost=True, wait_for_holder=True)
+    job = book.active_job_of(vid)
+    if job is None or not view.alive or view.mismatch_since_s is None:
+        return
+    since = max(view.mismatch_since_s, job.assigned_at_s or 0.0)
+    if now_s - since >= book.config.confirm_grace_s:
+        view.mismatch_since_s = None
+        book.requeue(eff, job, now_s, f"{vid} is not writing it", lost=True)

@@ -4,12 +4,14 @@ A report counts only from the vehicle the job was last given to (the service has
 that the report came on that vehicle's own key): ``done`` from any other vehicle is refused
 (``not_assigned``), so no agent can finish another's job; from the last holder it is accepted
 even after a requeue (the character is written) and whoever took the job over is told to stop.
-``started``/``progress`` from the last holder reclaim a job that is back in the queue and not yet
-given to another vehicle (a liveliness flap), otherwise the vehicle is told to stop
-(``not_assigned``); ``failed`` is acknowledged and ignored. A ``failed``
-report with ``retry_after_s`` hands the job back to the queue instead of failing it, and so does a
-``plan_failed`` one while a vehicle of another kind may still write the job (the vehicle's kind
-cannot write it: a width outside the sponge's range...); it then waits for such a vehicle.
+``holding``/``started``/``progress`` from the last holder reclaim a job that is back in the queue
+and not yet given to another vehicle (a liveliness flap; ``orchestrator/holders.py`` keeps it from
+others a while), otherwise the vehicle is told to stop (``not_assigned``); ``holding`` (before
+writing: the vehicle renews its lease, ``vehicle_agent/lease.py``) changes nothing else;
+``failed`` is acknowledged and ignored. A ``failed`` report with ``retry_after_s`` hands the job
+back to the queue instead of failing it, and so does a ``plan_failed`` one while a vehicle of
+another kind may still write the job (the vehicle's kind cannot write it: a width outside the
+sponge's range...); it then waits for such a vehicle.
 """
 
 from __future__ import annotations
@@ -53,6 +55,9 @@ def apply_report(book: Book, rep: AgentReport, eff: Effects, now_s: float) -> Co
         job = book.jobs[job.job_id]
     if rep.event == "failed":
         return _failed(book, job, rep, eff, now_s)
+    if rep.event == "holding":
+        book.vehicles[rep.vehicle_id].mismatch_since_s = None
+        return CommandReply(ok=True, message="still yours")
     return _writing(book, job, rep, eff, now_s)
 
 
@@ -187,6 +192,7 @@ def _reclaim(book: Book, eff: Effects, job: Job, rep: AgentReport, now_s: float)
             board_id=view.info.board_id,
             assigned_at_s=now_s,
             error=None,
+            holder_hold_until_s=None,
         ),
     )
     book.event(

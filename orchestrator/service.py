@@ -4,6 +4,11 @@ Every input (query, status, liveliness change, timer) is handled in the asyncio 
 time: decide (Book) -> store (one SQLite transaction) -> publish / reply / send. A submission is
 therefore committed before its acknowledgement leaves. Zenoh callbacks only push into bridge
 channels or schedule coroutines.
+
+Vehicle statuses are the bulk of the traffic (every agent's heartbeat: 250 vehicles send several
+hundred a second). They are state, not events: only the newest of each vehicle matters, so they
+are merged per vehicle (``STATUS_MERGE_S``) and decided in chunks between which the loop serves
+queries: a report or submission never waits behind a flood of statuses.
 """
 
 from __future__ import annotations
@@ -15,7 +20,7 @@ import logging
 import os
 import time
 import uuid
-from collections.abc import Callable, Coroutine
+from collections.abc import Callable, Coroutine, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -69,6 +74,12 @@ the kiosk's visitors do not)."""
 SNAPSHOT_STROKES_BYTES = 300_000
 """JSON bytes of waiting jobs' strokes a ``snapshot`` reply carries at most (replies stay well
 under ``bus.messages.MAX_PAYLOAD_BYTES``); ``jobs/<id>`` publications always carry them."""
+STATUS_MERGE_S = 0.05
+"""Wall time over which vehicles' statuses are merged, the newest per vehicle kept, [s]: at most
+20 rounds of decisions a second however many vehicles speak (telemetry is merged likewise)."""
+STATUS_CHUNK = 32
+"""Statuses decided between two turns of the event loop: a query waits for one chunk at most
+(about 1 ms), not for every status that arrived before it."""
 SNAPSHOT_WRITTEN_BYTES = 100_000
 """JSON bytes of done jobs' ink pictures a ``snapshot`` reply carries at most, newest first
 (about 25 jobs); strokes and pictures together stay under half the payload limit."""
@@ -84,6 +95,7 @@ def core_config(show: Show) -> CoreConfig:
         ),
         moderation=show.policy.moderation,
         lost_after_s=show.policy.lost_after_s,
+        lost_job_hold_s=show.policy.lost_job_hold_s,
         max_queue=show.policy.max_queue,
         max_attempts=show.policy.max_attempts,
         tracking_error_alert_m=show.policy.tracking_error_alert_m,
@@ -155,11 +167,19 @@ class OrchestratorService:
         self._durations: dict[str, dict[str, float]] = {}
         self.history = history_policy(show)
         self._compaction = CompactionSchedule()
+        self.fleet_changed = False
+        """The fleet snapshot changed since it was last published (every ``TICK_PERIOD_S`` at
+        most: 250 vehicles coming or going were as many 50 kB snapshots, each encoded, sent
+        and recorded)."""
+        self.statuses: LatestByKey[str, VehicleStatus] | None = None
+        """The newest undecided status of each vehicle (made in the loop by :meth:`run`)."""
         log.info("show %s: %d jobs restored", show.show_id, len(stored.jobs))
 
     # --- effects ------------------------------------------------------------------------------
     def apply(self, eff: Effects) -> None:
         """Store, then publish, then send: the order that keeps acknowledged data safe."""
+        if eff.empty:
+            return
         settings: dict[str, Any] = {}
         if eff.settings_changed:
             settings = {
@@ -193,9 +213,13 @@ class OrchestratorService:
         for event in eff.events:
             self._publish(self.keys.events, event)
         if eff.fleet_changed or eff.jobs or eff.moved:
-            self._publish(self.keys.fleet, self.book.snapshot(now, include_final=False))
+            self.fleet_changed = True  # published by the timer: many changes, one snapshot
         for vehicle_id, command in eff.commands:
             self._spawn(self._send(vehicle_id, command))
+
+    def _publish_fleet(self) -> None:
+        self.fleet_changed = False
+        self._publish(self.keys.fleet, self.book.snapshot(self.clock(), include_final=False))
 
     def _publish(self, key: str, message: msgspec.Struct) -> None:
         try:
@@ -364,9 +388,28 @@ class OrchestratorService:
             with contextlib.suppress(ValueError):
                 self.apply(self.book.liveliness(vehicle_id_from_key(key), alive, self.clock()))
 
-    async def _follow_status(self, statuses: FifoChannel[VehicleStatus]) -> None:
-        async for status in statuses:
+    def open_status_intake(self) -> LatestByKey[str, VehicleStatus]:
+        """Where :meth:`receive_status` keeps statuses until decided (call in the loop)."""
+        self.statuses = LatestByKey()
+        return self.statuses
+
+    def receive_status(self, key: str, status: VehicleStatus) -> None:
+        """A decoded status from the bus (Zenoh's thread): kept, the newest of its vehicle, if it
+        came on that vehicle's own key."""
+        if self.statuses is not None and _own_key(key, status.vehicle_id):
+            self.statuses.push(status.vehicle_id, status)
+
+    async def decide_statuses(self, statuses: Iterable[VehicleStatus]) -> None:
+        """Decide statuses one by one, letting the loop serve queries every ``STATUS_CHUNK``."""
+        for count, status in enumerate(statuses, start=1):
             self.apply(self.book.status(status, self.clock()))
+            if count % STATUS_CHUNK == 0:
+                await asyncio.sleep(0)
+
+    async def _follow_status(self, statuses: LatestByKey[str, VehicleStatus]) -> None:
+        while True:
+            await self.decide_statuses((await statuses.take()).values())
+            await asyncio.sleep(STATUS_MERGE_S)
 
     async def _follow_vehicle_events(self, events: RingChannel[tuple[str, Event]]) -> None:
         async for key, event in events:
@@ -391,9 +434,10 @@ class OrchestratorService:
             now = self.clock()
             self.apply(self.book.tick(now))
             self.compact_history(now)
+            if self.fleet_changed or now >= next_fleet:
+                self._publish_fleet()
             if now >= next_fleet:
                 next_fleet = now + self.show.policy.fleet_period_s
-                self._publish(self.keys.fleet, self.book.snapshot(now, include_final=False))
                 if self.recorder is not None:
                     self.recorder.flush()
 
@@ -401,7 +445,7 @@ class OrchestratorService:
     def _declare(self) -> list[Any]:
         keys, s = self.keys, self.session
         presence: FifoChannel[tuple[str, bool]] = FifoChannel()
-        statuses: FifoChannel[VehicleStatus] = FifoChannel()
+        statuses = self.open_status_intake()
         telemetry: LatestByKey[str, Telemetry] = LatestByKey()
         vehicle_events: RingChannel[tuple[str, Event]] = RingChannel(256)
         declared: list[Any] = []
@@ -413,12 +457,7 @@ class OrchestratorService:
             declared.append(watch_liveliness(s, f"{keys.prefix}/**", rec.record_liveliness))
         declared += [
             watch_liveliness(s, keys.vehicles_alive_all, lambda k, a: presence.push((k, a))),
-            subscribe(
-                s,
-                keys.vehicle_status_all,
-                VehicleStatus,
-                lambda k, m: statuses.push(m) if _own_key(k, m.vehicle_id) else None,
-            ),
+            subscribe(s, keys.vehicle_status_all, VehicleStatus, self.receive_status),
             subscribe(
                 s,
                 keys.telemetry_all,
@@ -468,10 +507,13 @@ class OrchestratorService:
         self._stop = stop
         declared = self._declare()
         self.apply(self.book.tick(self.clock()))
+        self._publish_fleet()  # viewers see the fleet at once, not a tick later
         log.info("orchestrator of %s ready", self.show.show_id)
         try:
             await stop.wait()
         finally:
+            if self.fleet_changed:  # a change of the last tick is still told
+                self._publish_fleet()
             for entity in reversed(declared):
                 with contextlib.suppress(Exception):
                     entity.undeclare()

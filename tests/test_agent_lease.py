@@ -20,7 +20,7 @@ LOST_AFTER_S = 1.5
 
 def test_a_stall_of_lost_after_s_voids_the_lease_in_any_phase_a_shorter_one_does_not() -> None:
     lease = JobLease(LOST_AFTER_S)
-    lease.hold("j1", writing=False, now_s=0.0)
+    lease.hold("j1", active=True, writing=False, now_s=0.0)
     lease.tick_done(0.0)
     assert lease.breach(lease.tick(1.4), 1.4) is None  # 1.4 s: the orchestrator may still see it
     lease.tick_done(1.4)
@@ -29,23 +29,41 @@ def test_a_stall_of_lost_after_s_voids_the_lease_in_any_phase_a_shorter_one_does
     assert JobLease(LOST_AFTER_S).breach(10.0, 10.0) is None  # no job: nothing to give up
 
 
-def test_writing_needs_acknowledgements_and_asks_for_one_after_a_third_of_the_lease() -> None:
+def test_writing_needs_a_confirmation_younger_than_the_lease_not_only_a_recent_start() -> None:
     lease = JobLease(LOST_AFTER_S)
-    lease.hold("j1", writing=False, now_s=0.0)  # assigned at 0; transit takes 5 s
-    lease.hold("j1", writing=True, now_s=5.0)  # writing begins: counted from here
-    assert lease.breach(0.0, 5.4) is None and not lease.wants_probe(5.4)
-    assert lease.wants_probe(5.5)
+    lease.hold("j1", active=True, writing=False, now_s=0.0)  # assigned at 0; transit takes 5 s
+    assert lease.breach(0.0, 4.0) is None  # unconfirmed in transit: no ink, nothing to give up
+    lease.hold("j1", active=True, writing=True, now_s=5.0)
+    # the brush would touch 5 s after the last word from the orchestrator: it may have given
+    # the job away meanwhile (the old rule counted from the start of writing and wrote on)
+    assert lease.breach(0.0, 5.0) == "no acknowledgement from the orchestrator for 5.0 s"
+
+
+def test_a_flown_job_asks_for_confirmations_before_and_while_writing() -> None:
+    lease = JobLease(LOST_AFTER_S)
+    lease.hold("j1", active=True, writing=False, now_s=0.0)
+    assert not lease.wants_probe(0.4) and lease.wants_probe(0.5)  # in transit too
+    lease.acknowledged("j1", sent_at_s=4.9)
+    lease.hold("j1", active=True, writing=True, now_s=5.0)
+    assert lease.breach(0.0, 5.0) is None and not lease.wants_probe(5.3)
+    assert lease.wants_probe(5.4)
     lease.acknowledged("j1", sent_at_s=5.5)
     lease.acknowledged("j0", sent_at_s=6.9)  # another job's receipt proves nothing
     assert lease.breach(0.0, 6.9) is None
     assert lease.breach(0.0, 7.0) == "no acknowledgement from the orchestrator for 1.5 s"
-    lease.hold(None, writing=False, now_s=7.0)
+    lease.hold(None, active=False, writing=False, now_s=7.0)
     assert lease.job_id is None and lease.breach(0.0, 99.0) is None
+
+
+def test_a_job_no_longer_flown_asks_nothing() -> None:
+    lease = JobLease(LOST_AFTER_S)
+    lease.hold("j1", active=False, writing=False, now_s=0.0)  # returning, its result on its way
+    assert not lease.wants_probe(10.0)
 
 
 def test_unconfirmed_writing_asks_for_a_confirmation_at_most_once_a_third_of_the_lease() -> None:
     lease = JobLease(LOST_AFTER_S)  # probes every 0.5 s
-    lease.hold("j1", writing=True, now_s=0.0)
+    lease.hold("j1", active=True, writing=True, now_s=0.0)
     assert not lease.probe_due(0.4)
     asked = [t for t in (0.5, 0.6, 0.9, 1.0, 1.2) if lease.probe_due(t)]
     assert asked == [0.5, 1.0]
@@ -55,8 +73,8 @@ def test_unconfirmed_writing_asks_for_a_confirmation_at_most_once_a_third_of_the
 
 def test_a_later_job_starts_with_a_fresh_lease() -> None:
     lease = JobLease(LOST_AFTER_S)
-    lease.hold("j1", writing=True, now_s=0.0)
-    lease.hold("j2", writing=True, now_s=10.0)
+    lease.hold("j1", active=True, writing=True, now_s=0.0)
+    lease.hold("j2", active=True, writing=True, now_s=10.0)
     assert lease.breach(0.0, 11.0) is None and lease.confirmed_at_s == 10.0
 
 

@@ -68,7 +68,11 @@ class FakeOrchestrator:
 
     def events(self) -> list[str]:
         with self._lock:
-            return [r.event for r in self.reports if r.event != "progress"]
+            return [r.event for r in self.reports if r.event not in ("progress", "holding")]
+
+    def holding_reports(self) -> list[AgentReport]:
+        with self._lock:
+            return [r for r in self.reports if r.event == "holding"]
 
     async def command(self, command: VehicleCommand) -> CommandReply:
         if command.command == "assign":
@@ -154,6 +158,8 @@ def test_a_job_is_flown_and_reported_with_telemetry_and_status(
             assert not busy.ok and busy.error is not None and busy.error.code == "busy"
             await wait_for(lambda: "done" in orch.events() and service.runner.state == "idle")
             assert orch.events() == ["started", "done"]
+            # the lease is renewed before writing too: take-off and transit last > 0.5 s
+            assert orch.holding_reports() and orch.reports[0].event == "holding"
             done = orch.reports[-1]
             assert done.metrics == METRICS and done.job_id == "j1"
             states = [s.state for s in orch.statuses]

@@ -109,6 +109,29 @@ def test_latest_by_key_merges_updates() -> None:
     assert replaced == 2
 
 
+def test_latest_by_key_wakes_the_loop_only_for_a_waiting_reader() -> None:
+    async def main() -> tuple[int, dict[int, int], int]:
+        latest: LatestByKey[int, int] = LatestByKey()
+        wakes: list[object] = []
+        call = latest._call
+        latest._call = lambda fn, *args: (wakes.append(fn), call(fn, *args))[1]  # type: ignore[method-assign]
+        # nobody waits: a thousand pushes from Zenoh's threads cost the loop nothing
+        await asyncio.to_thread(lambda: [latest.push(k % 10, k) for k in range(1000)])
+        unwoken = len(wakes)
+        assert len(latest.take_nowait()) == 10
+        # a reader waits: the next push from another thread wakes it, once
+        reader = asyncio.create_task(latest.take())
+        await asyncio.sleep(0.01)
+        await asyncio.to_thread(lambda: [latest.push(k, 100 + k) for k in range(3)])
+        taken = await asyncio.wait_for(reader, 5.0)
+        return unwoken, taken, len(wakes)
+
+    unwoken, taken, woken = asyncio.run(main())
+    assert unwoken == 0
+    assert taken and all(item == 100 + key for key, item in taken.items())
+    assert woken == 1
+
+
 def test_channel_outside_a_loop_needs_an_explicit_loop() -> None:
     with pytest.raises(RuntimeError, match="event loop"):
         FifoChannel()

@@ -292,7 +292,7 @@ def test_the_service_compacts_at_start_and_when_due(tmp_path: Path) -> None:
         service.history = HistoryPolicy(600_000, keep_full_finished=10)
         service.compact_history(1e6)  # at start: one batch, work left
         assert store.job("j50") == compacted(jobs[49]) and store.job("j51") == jobs[50]
-        for tick in range(1, 7):  # the next ticks resume
+        for tick in range(1, 8):  # the next ticks resume
             service.compact_history(1e6 + 0.1 * tick)
         assert store.job("j290") == compacted(jobs[289]) and store.job("j291") == jobs[290]
         assert used_bytes(store._db) <= 600_000

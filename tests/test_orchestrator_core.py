@@ -26,6 +26,7 @@ from bus.messages import (
     SubmitRequest,
     VehicleStatus,
 )
+from orchestrator import holders
 from orchestrator.core import Book, CoreConfig, Effects
 from orchestrator.fleet import VehicleInfo, ready_for_job
 from orchestrator.jobs import (
@@ -125,8 +126,10 @@ def test_lost_vehicle_job_is_requeued_and_finished_by_another() -> None:
     eff = book.tick(3.5)
     assert eff.jobs["j1"].state == "queued" and eff.jobs["j1"].error.code == "vehicle_lost"
     assert any(e.kind == "vehicle_lost" for e in eff.events)
-    assert _assigned(_online(book, "uav2", 4.0)) == [("uav2", "j1")]
-    assert book.jobs["j1"].attempts == 2
+    assert _assigned(_online(book, "uav2", 4.0)) == []  # it waits for uav1 (holders.py)
+    eff = book.tick(3.5 + book.config.lost_job_hold_s)
+    assert _assigned(eff) == [("uav2", "j1")] and book.jobs["j1"].attempts == 2
+    assert [e.kind for e in eff.events if e.level == "warning"] == ["job_taken_over"]
     # the old vehicle's late progress is refused and it is told to stop
     book.liveliness("uav1", True, 4.2)
     reply, eff = book.report(AgentReport(vehicle_id="uav1", job_id="j1", event="progress"), 4.5)
@@ -134,13 +137,97 @@ def test_lost_vehicle_job_is_requeued_and_finished_by_another() -> None:
     assert [(v, c.command) for v, c in eff.commands] == [("uav1", "cancel")]
 
 
+def _writing_then_lost(book: Book) -> None:
+    """uav1 writes j1 and is lost (a router restart: its token gone for 1.5 s); uav2 is idle."""
+    _online(book, "uav1", 0.0)
+    _online(book, "uav2", 0.0)
+    _submit(book, "j1", 0.5)
+    assert book.jobs["j1"].vehicle_id == "uav1"
+    book.report(AgentReport(vehicle_id="uav1", job_id="j1", event="started"), 1.0)
+    book.liveliness("uav1", False, 2.0)
+    book.liveliness("uav2", False, 2.0)
+    book.liveliness("uav2", True, 3.6)
+    book.tick(3.6)
+    assert book.jobs["j1"].state == "queued"
+    eff = book.status(VehicleStatus(vehicle_id="uav2", kind="quadrotor-brush", state="idle"), 3.7)
+    assert _assigned(eff) == [] and book.jobs["j1"].state == "queued"
+
+
+def test_a_lost_vehicle_back_with_its_job_has_it_again_not_a_vehicle_back_first() -> None:
+    book = Book(_config(lost_after_s=1.5), now_s=0.0)
+    _writing_then_lost(book)
+    book.liveliness("uav1", True, 4.0)
+    status = VehicleStatus(vehicle_id="uav1", kind="quadrotor-brush", state="writing", job_id="j1")
+    eff = book.status(status, 4.1)
+    assert [e.kind for e in eff.events if e.kind == "job_reclaimed"] == ["job_reclaimed"]
+    rep = AgentReport(vehicle_id="uav1", job_id="j1", event="done", metrics=METRICS)
+    assert book.report(rep, 5.0)[0].ok
+    job = book.jobs["j1"]
+    assert (job.state, job.vehicle_id, job.attempts) == ("done", "uav1", 1)
+
+
+def test_a_lost_vehicle_whose_done_report_comes_late_wrote_the_job_once() -> None:
+    book = Book(_config(lost_after_s=1.5), now_s=0.0)
+    _writing_then_lost(book)
+    book.tick(8.0)  # uav2 idle all along
+    rep = AgentReport(vehicle_id="uav1", job_id="j1", event="done", metrics=METRICS)
+    assert book.report(rep, 9.0)[0].ok
+    assert (book.jobs["j1"].state, book.jobs["j1"].attempts) == ("done", 1)
+
+
+def test_a_lost_vehicle_back_without_its_job_frees_it_at_once() -> None:
+    book = Book(_config(lost_after_s=1.5), now_s=0.0)
+    _writing_then_lost(book)
+    book.liveliness("uav1", True, 4.0)
+    status = VehicleStatus(vehicle_id="uav1", kind="quadrotor-brush", state="returning")
+    eff = book.status(status, 4.1)  # it gave the job up (its lease ran out)
+    assert "job_released" in [e.kind for e in eff.events]
+    assert _assigned(eff) == [("uav2", "j1")]
+
+
+def test_a_job_its_vehicle_came_back_without_goes_to_it_only_if_no_other_takes_it() -> None:
+    book = Book(_config(lost_after_s=1.5), now_s=0.0)
+    _online(book, "uav1", 0.0)
+    _submit(book, "j1", 0.5)
+    book.liveliness("uav1", False, 1.0)
+    book.tick(2.5)  # lost: j1 waits for it
+    book.liveliness("uav1", True, 3.0)
+    eff = book.status(VehicleStatus(vehicle_id="uav1", kind="quadrotor-brush", state="idle"), 3.0)
+    assert "job_released" in [e.kind for e in eff.events] and _assigned(eff) == []
+    backoff_s = book.config.refuse_backoff_s
+    assert _assigned(book.tick(3.0 + backoff_s)) == [("uav1", "j1")]  # nobody else came
+
+
+def test_a_job_waiting_for_its_lost_vehicle_still_waits_after_a_restart() -> None:
+    book = Book(_config(lost_after_s=1.5), now_s=0.0)
+    _writing_then_lost(book)
+    stored = list(book.jobs.values())
+    book = Book(_config(lost_after_s=1.5), stored, now_s=5.0)
+    assert _assigned(_online(book, "uav2", 5.0)) == []
+    assert book.awaited_by("uav1") is not None
+    assert _assigned(book.tick(3.6 + book.config.lost_job_hold_s)) == [("uav2", "j1")]
+
+
+def test_a_holding_report_confirms_the_job_and_changes_nothing() -> None:
+    book = Book(_config(), now_s=0.0)
+    _online(book, "uav1", 0.0)
+    _submit(book, "j1", 0.5)
+    reply, eff = book.report(AgentReport(vehicle_id="uav1", job_id="j1", event="holding"), 1.0)
+    assert reply.ok and book.jobs["j1"].state == "assigned" and not eff.jobs
+    other = AgentReport(vehicle_id="uav2", job_id="j1", event="holding")
+    assert book.report(other, 1.1)[0].error.code == "not_assigned"
+
+
 def test_job_fails_after_max_attempts_of_lost_vehicles() -> None:
     book = Book(_config(max_attempts=2, lost_after_s=1.0), now_s=0.0)
     _submit(book, "j1", 0.0)
     now = 0.0
-    for _ in range(2):
+    for attempt in (1, 2):
         now += 1.0
-        _online(book, "uav1", now)
+        _online(book, "uav1", now)  # the second time: back without it, it waits a back-off
+        now += book.config.refuse_backoff_s
+        book.tick(now)
+        assert book.jobs["j1"].attempts == attempt
         book.liveliness("uav1", False, now + 0.1)
         book.tick(now + 1.2)
         now += 2.0
@@ -363,6 +450,8 @@ class FleetMachine(RuleBasedStateMachine):
         self.final_seen: dict[str, object] = {}
         self.seen_placing: dict[str, tuple[int, float | None]] = {}
         """What a subscriber of jobs/* knows: queue position and expected start time [s]."""
+        self.holds: dict[str, tuple[str, float]] = {}
+        """Queued job -> the lost vehicle it waits for, and until when [s]."""
 
     def _apply(self, eff: Effects, queued_before: list[str] | None = None) -> None:
         placings = self.book.etas(self.now)
@@ -381,11 +470,27 @@ class FleetMachine(RuleBasedStateMachine):
                 self.agent_job[vid] = None
         for job_id, job in eff.jobs.items():
             assert self.book.jobs[job_id] == job
-        assigned = [c.job for _, c in eff.commands if c.command == "assign" and c.job]
+        hold_s = self.book.config.lost_job_hold_s
+        for e in eff.events:  # requeued for a lost vehicle (and maybe assigned in the same step)
+            if e.kind == "job_requeued" and "waits" in e.message and e.job_id and e.vehicle_id:
+                self.holds[e.job_id] = (e.vehicle_id, self.now + hold_s)
+            elif e.kind == "job_released" and e.job_id:  # its vehicle came back without it
+                self.holds.pop(e.job_id, None)
+        for vid, cmd in eff.commands:  # a job waiting for a lost vehicle is given to nobody
+            if cmd.command == "assign" and cmd.job is not None and cmd.job.job_id in self.holds:
+                holder, until_s = self.holds[cmd.job.job_id]
+                assert self.now >= until_s, (cmd.job.job_id, vid, holder)
+        self.holds = {
+            j.job_id: (j.vehicle_id, j.holder_hold_until_s)
+            for j in self.book.queue()
+            if j.holder_hold_until_s is not None and j.vehicle_id is not None
+        }
         remaining = self.book.queue()
-        for a in assigned:
-            key = self.book.jobs[a.job_id].sort_key
-            assert all(j.sort_key > key for j in remaining), "queue order not respected"
+        for _, cmd in eff.commands:  # in queue order, among the jobs that may be given
+            if cmd.command == "assign" and cmd.job is not None:
+                key = self.book.jobs[cmd.job.job_id].sort_key
+                takes = [j for j in remaining if holders.assignable(j, self.now)]
+                assert all(j.sort_key > key for j in takes), "queue order not respected"
 
     @rule(priority=st.integers(0, 2))
     def submit(self, priority: int) -> None:
@@ -441,7 +546,7 @@ class FleetMachine(RuleBasedStateMachine):
 
     @rule(
         vid=st.sampled_from([v.vehicle_id for v in VEHICLES]),
-        event=st.sampled_from(["started", "progress", "done", "failed"]),
+        event=st.sampled_from(["holding", "started", "progress", "done", "failed"]),
     )
     def report(self, vid: str, event: str) -> None:
         job = self.agent_job[vid]
@@ -500,6 +605,12 @@ class FleetMachine(RuleBasedStateMachine):
         boards = [j.board_id for j in active]
         assert len(vehicles) == len(set(vehicles)) and None not in vehicles
         assert len(boards) == len(set(boards))
+        # the Book's index of active jobs answers as a scan of every job would
+        assert self.book.active_jobs() == sorted(active, key=lambda j: j.seq)
+        for vid in self.book.vehicles:
+            assert self.book.active_job_of(vid) == next(
+                (j for j in active if j.vehicle_id == vid), None
+            )
 
     @invariant()
     def active_jobs_are_on_vehicles_not_yet_lost(self) -> None:
@@ -529,8 +640,23 @@ class FleetMachine(RuleBasedStateMachine):
             return
         closed_boards = self.book.busy_boards() | self.book.dirty_boards  # dirty: fresh sheet first
         for vid, view in self.book.vehicles.items():
-            if self.book.active_job_of(vid) is None and view.info.board_id not in closed_boards:
+            takes = [j for j in self.book.queue() if holders.assignable(j, self.now)]
+            if not takes or self.book.active_job_of(vid) is not None:
+                continue
+            if view.info.board_id not in closed_boards:
                 assert not ready_for_job(view, self.now)
+
+    @invariant()
+    def the_book_knows_which_job_waits_for_which_vehicle(self) -> None:
+        if not hasattr(self, "book"):
+            return
+        for vid in self.book.vehicles:
+            waiting = [
+                j
+                for j in self.book.queue()
+                if j.vehicle_id == vid and j.holder_hold_until_s is not None
+            ]
+            assert self.book.awaited_by(vid) == (waiting[0] if waiting else None)
 
 
 TestFleetMachine = FleetMachine.TestCase

@@ -67,8 +67,8 @@ def test_a_silent_vehicle_is_lost_although_its_token_remains_and_back_when_it_sp
     requeued = book.jobs["j1"]
     assert requeued.state == "queued" and requeued.error is not None
     assert requeued.error.code == "vehicle_lost"
-    eff = book.status(_status("uav1"), 4.1)  # it speaks again (without the job)
-    assert [e.kind for e in eff.events] == ["vehicle_appeared"]
+    eff = book.status(_status("uav1"), 4.1)  # it speaks again (without the job: it gave it up)
+    assert [e.kind for e in eff.events] == ["vehicle_appeared", "job_released"]
     assert not book.vehicles["uav1"].lost
 
 

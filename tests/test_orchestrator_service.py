@@ -230,7 +230,8 @@ def test_malformed_submissions_get_errors_and_the_service_keeps_answering(
 def test_jobs_flow_through_fake_agents_and_survive_vehicle_loss(
     tmp_path: Path, endpoint: str, client: Session
 ) -> None:
-    _, show = make_show(tmp_path, "flow", endpoint, policy={"lost_after_s": 0.3})
+    policy = {"lost_after_s": 0.3, "lost_job_hold_s": 1.0}
+    _, show = make_show(tmp_path, "flow", endpoint, policy=policy)
     keys = ShowKeys(show.show_id)
     settings = BusSettings(router_listen=[], connect=[endpoint])
     with RunningOrchestrator(show), open_session(settings, role="client") as agents:
@@ -251,6 +252,8 @@ def test_jobs_flow_through_fake_agents_and_survive_vehicle_loss(
         assert jobs[first.job_id].state == "done" and jobs[first.job_id].vehicle_id == "uav1"
         done = jobs[second.job_id]
         assert (done.state, done.vehicle_id, done.attempts) == ("done", "uav2", 2)
+        taken = [e for e in _snapshot(client, keys).events if e.kind == "job_taken_over"]
+        assert taken and taken[0].job_id == second.job_id  # after waiting for uav1 (1 s)
         assert done.metrics is not None and done.metrics.iou == 0.8
         vehicles = {v.vehicle_id: v for v in _snapshot(client, keys).vehicles}
         assert vehicles["uav1"].state == "lost" and not vehicles["uav1"].alive

@@ -18,6 +18,7 @@ from typing import Any
 from trust.settings import session_settings
 from vehicle_agent.backends.base import VehicleBackend
 from vehicle_agent.backends.sim import SimBackend, SimVehicle
+from vehicle_agent.backends.sim_round import StepRounds
 from vehicle_agent.job_runner import JobRunner
 from vehicle_agent.pacer import Pacer
 from vehicle_agent.rest import REST_PERIOD_S
@@ -51,20 +52,27 @@ def __getattr__(name: str) -> Any:
 
 
 def make_backend(
-    setup: VehicleSetup, *, seed: int = 0, on_text: Callable[[int, str], None] | None = None
+    setup: VehicleSetup,
+    *,
+    seed: int = 0,
+    on_text: Callable[[int, str], None] | None = None,
+    rounds: StepRounds | None = None,
 ) -> VehicleBackend:
     """The backend the show file names for this vehicle; ``on_text(severity, text)`` hears what
-    an autopilot says (MAVLink STATUSTEXT), e.g. ``EventOutbox.autopilot_text``."""
+    an autopilot says (MAVLink STATUSTEXT), e.g. ``EventOutbox.autopilot_text``. A simulated
+    vehicle of a fleet host (``rounds``) flies in its kind's fleet, stepped with the others."""
     vehicle = setup.show.vehicle(setup.vehicle_id)
     if vehicle.backend == "sim":
+        step_round = None if rounds is None else rounds.round_for(setup.kind, setup.settings)
         sim = SimVehicle(
             vehicle.home_m_enu,
             kind=setup.kind,
             settings=setup.settings,
             seed=seed,
             contact_region=on_board(setup),
+            fleet=None if step_round is None else step_round.fleet,
         )
-        return SimBackend(sim)
+        return SimBackend(sim, step_round)
     mavlink = importlib.import_module("vehicle_agent.backends.mavlink")
     backend: VehicleBackend = mavlink.create_backend(setup, on_text=on_text)
     return backend

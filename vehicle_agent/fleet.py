@@ -10,9 +10,13 @@ to the host against 71 MiB for an agent process (``benchmarks/bench_fleet_host.p
 :class:`vehicle_agent.pacer.SharedTicker` per control rate (one timer steps every awake vehicle
 together) and a small :class:`vehicle_agent.work_pool.PlanPool` of planning workers.
 
-What the host cannot share is the vehicles' physics: a writing vehicle's 100 Hz tick (its
-kind's simulated world and controller, then the runner) costs about 0.6 ms of CPU, so one host,
-one core, keeps about 15 writing vehicles in real time; beyond that they all slow down together
+The vehicles in flight also share their physics: a kind with a
+:class:`vehicles.kind.SimulatedFleet` (the brush quadrotor) keeps them as rows of one simulated
+world and controller, stepped once per shared tick for all of them
+(:class:`vehicle_agent.backends.sim_round.StepRounds`), each flying exactly as it would alone;
+on one vehicle the world and controller cost about 0.2 ms a tick, on fifty together about as
+much in all. What stays per vehicle is its runner and service (reference, safety, trace,
+telemetry, lease). Beyond what one core keeps in real time the vehicles all slow down together
 (no tick is skipped), and past the show's ``lost_after_s`` of unacknowledged writing they give
 their jobs up as any stalled agent would.
 
@@ -32,6 +36,7 @@ from collections.abc import Sequence
 from bus.session import Session, open_session
 from showfile import Show
 from vehicle_agent.agent import make_backend, make_service, vehicle_setup
+from vehicle_agent.backends.sim_round import StepRounds
 from vehicle_agent.pacer import SharedTicker
 from vehicle_agent.service import AgentService, EventOutbox
 from vehicle_agent.setup import VehicleSetup
@@ -86,6 +91,8 @@ class FleetHost:
         scale = next(iter(self.setups.values())).time_scale
         self.pool = PlanPool(show, scale, workers if workers is not None else pool_size())
         self.seed = seed
+        self.rounds = StepRounds()
+        """The simulated fleets of the host's vehicles in flight, one per kind and settings."""
         self.tickers: dict[float, SharedTicker] = {}
         """One shared ticker per wall period in [s] (vehicles of one kind share one)."""
         self.services: dict[str, AgentService] = {}
@@ -144,7 +151,7 @@ class FleetHost:
     def _service(self, setup: VehicleSetup) -> AgentService:
         events = EventOutbox(setup.vehicle_id)
         seed = self.seed + self._numbers[setup.vehicle_id]
-        backend = make_backend(setup, seed=seed, on_text=events.autopilot_text)
+        backend = make_backend(setup, seed=seed, on_text=events.autopilot_text, rounds=self.rounds)
         period_s = backend.control_period_s / setup.time_scale
         ticker = self.tickers.setdefault(period_s, SharedTicker(period_s))
         work = self.pool.for_vehicle(setup.vehicle_id)

@@ -1,17 +1,21 @@
 """The agent's hold on its job (pure; wall time in): may this vehicle still put ink for it?
 
 The orchestrator takes a vehicle as lost when its token is gone, or when it has been silent, for
-``policy.lost_after_s``, and gives its job to another vehicle. The agent cannot see that decision,
-so it fences itself on what it can see:
+``policy.lost_after_s``, and then keeps the job for it a while longer (its result may be on the
+way) before giving it to another vehicle. The agent cannot see those decisions, so it fences
+itself on what it can see:
 
 - a **stall**: nothing of the agent ran for ``lost_after_s`` (the process was frozen, or
   starved): its heartbeats stopped with it, so the orchestrator has taken it as lost and the job
   may be someone else's. Checked before the next tick, before another setpoint is sent. (A
   shorter stall may or may not have cost it the job: the next report's answer, ``not_assigned``,
   says so within a second; a new holder needs far longer to take off and reach its board.)
-- an **unconfirmed write**: while writing, no acknowledgement of a report of this job for
-  ``lost_after_s`` (counted from the last acknowledgement, or from the start of writing). The
-  service asks for one (a ``progress`` report) when a third of that has passed without any;
+- an **unconfirmed write**: the brush may touch only within ``lost_after_s`` of the sending of a
+  report of this job that the orchestrator acknowledged (or of the assignment's arrival). While
+  the job is active and none came for a third of that, the service asks for one (a ``holding``
+  report before writing, ``progress`` while writing), so the confirmation is fresh when writing
+  begins. The orchestrator acknowledged after the report was sent, so from its own last
+  acknowledgement it can tell when this agent stopped writing, whatever happened in between;
 - a **refusal**: the orchestrator answered a report of this job with ``not_assigned``.
 
 A fenced agent lifts the brush, gives the job up and flies home (the orchestrator puts the job
@@ -34,9 +38,12 @@ class JobLease:
     job_id: str | None = None
     """The job held (None: none)."""
     confirmed_at_s: float = -math.inf
-    """When the orchestrator last confirmed the job: its acknowledgement arrived, [s]."""
-    writing_since_s: float | None = None
-    """When this job's writing began (the brush may touch from then on), [s]."""
+    """When the orchestrator last confirmed the job: the sending of a report it acknowledged, or
+    the assignment's arrival, [s]."""
+    active: bool = False
+    """The job is being flown (from preflight to the end of writing): confirmations are asked."""
+    writing: bool = False
+    """The job is being written: the brush may touch."""
     _last_tick_s: float | None = field(default=None, repr=False)
     _next_probe_s: float = field(default=-math.inf, repr=False)
 
@@ -47,17 +54,16 @@ class JobLease:
 
     @property
     def probe_after_s(self) -> float:
-        """Ask for a confirmation when none came for this long in [s] while writing."""
+        """Ask for a confirmation when none came for this long in [s] while active."""
         return self.lost_after_s / 3.0
 
-    def hold(self, job_id: str | None, writing: bool, now_s: float) -> None:
-        """The runner's job and whether it is writing, at this tick."""
+    def hold(self, job_id: str | None, *, active: bool, writing: bool, now_s: float) -> None:
+        """The runner's job, whether it is being flown and whether written, at this tick."""
         if job_id != self.job_id:
-            self.job_id, self.confirmed_at_s, self.writing_since_s = job_id, now_s, None
-        if job_id is None or not writing:
-            self.writing_since_s = None
-        elif self.writing_since_s is None:
-            self.writing_since_s = now_s
+            self.job_id, self.confirmed_at_s = job_id, now_s
+            self._next_probe_s = -math.inf
+        held = job_id is not None
+        self.active, self.writing = held and active, held and writing
 
     def acknowledged(self, job_id: str, sent_at_s: float) -> None:
         """The orchestrator acknowledged a report of ``job_id`` sent at ``sent_at_s``."""
@@ -81,23 +87,18 @@ class JobLease:
             return None
         if gap_s >= self.stall_limit_s:
             return f"this agent stalled for {gap_s:.1f} s"
-        if self.writing_since_s is None:
-            return None
-        since = max(self.confirmed_at_s, self.writing_since_s)
-        if now_s - since >= self.lost_after_s:
-            return f"no acknowledgement from the orchestrator for {now_s - since:.1f} s"
+        unconfirmed_s = now_s - self.confirmed_at_s
+        if self.writing and unconfirmed_s >= self.lost_after_s:
+            return f"no acknowledgement from the orchestrator for {unconfirmed_s:.1f} s"
         return None
 
     def wants_probe(self, now_s: float) -> bool:
-        """While writing: whether to ask for a confirmation now."""
-        if self.writing_since_s is None:
-            return False
-        since = max(self.confirmed_at_s, self.writing_since_s)
-        return now_s - since >= self.probe_after_s
+        """While active: whether to ask for a confirmation now."""
+        return self.active and now_s - self.confirmed_at_s >= self.probe_after_s
 
     def probe_due(self, now_s: float) -> bool:
         """:meth:`wants_probe`, at most once every ``probe_after_s``: True when the service
-        should send a ``progress`` report now to get a confirmation."""
+        should send a report now to get a confirmation."""
         if not self.wants_probe(now_s) or now_s < self._next_probe_s:
             return False
         self._next_probe_s = now_s + self.probe_after_s

@@ -1,7 +1,7 @@
 """The agent's reports to the orchestrator: a FIFO sent to its ``report`` queryable, each retried
-until some reply acknowledges it (``progress`` reports are best effort and superseded by newer
-ones). An acknowledgement renews the job lease; a ``not_assigned`` answer about the running job
-makes the agent give it up."""
+until some reply acknowledges it (``progress`` and ``holding`` reports are best effort and
+superseded by newer ones). An acknowledgement renews the job lease; a ``not_assigned`` answer
+about the running job makes the agent give it up."""
 
 from __future__ import annotations
 
@@ -21,6 +21,8 @@ log = logging.getLogger(__name__)
 
 RETRY_CODES = frozenset({"internal", "unavailable", "busy"})
 """Error replies to a report after which it is sent again (the orchestrator could not take it)."""
+BEST_EFFORT = frozenset({"progress", "holding"})
+"""Reports sent once, and superseded by a newer report of the same job not yet sent."""
 
 
 class ReportOutbox:
@@ -50,7 +52,7 @@ class ReportOutbox:
     def queue(self, report: AgentReport) -> None:
         """Send ``report`` after those queued before it."""
         last = self._reports[-1] if self._reports else None
-        if last is not None and last.event == "progress" and last.job_id == report.job_id:
+        if last is not None and last.event in BEST_EFFORT and last.job_id == report.job_id:
             self._reports.pop()  # a newer report supersedes a progress not yet sent
         self._reports.append(report)
         self._ready.set()
@@ -69,7 +71,7 @@ class ReportOutbox:
             while self._reports:
                 report = self._reports[0]
                 delivered = await self._deliver(session, report)
-                if delivered or report.event == "progress":
+                if delivered or report.event in BEST_EFFORT:
                     if self._reports and self._reports[0] is report:
                         self._reports.popleft()
                 else:

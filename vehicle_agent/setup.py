@@ -7,8 +7,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 from planner.board import BoardFrame
 from showfile import Board, PlanningSettings, Show
 from showfile.checks import footprint
@@ -153,11 +151,18 @@ def safety_limits(
 def on_board(setup: VehicleSetup) -> Callable[[Vec3], bool]:
     """Whether a point lies over (a wall: in front of) this vehicle's board, within its edges."""
     board = setup.show.board(setup.show.vehicle(setup.vehicle_id).board)
-    half = np.asarray(board.size_m) / 2.0
+    half_x_m, half_y_m = (0.5 * float(size) for size in board.size_m)
+    surface = setup.surface
+    ox, oy, oz = surface.origin_m_enu
+    (xx, xy, xz), (yx, yy, yz) = surface.x_axis_enu, surface.y_axis_enu
 
     def inside(point_m_enu: Vec3) -> bool:
-        local = setup.surface.to_surface(np.asarray([point_m_enu]))[0]
-        return bool(np.all(np.abs(local) <= half))
+        # in floats, not numpy: asked at every control tick of a simulated vehicle (~3 us
+        # against ~200 us through Surface.to_surface on a (1, 3) array)
+        dx, dy, dz = point_m_enu[0] - ox, point_m_enu[1] - oy, point_m_enu[2] - oz
+        x_m = dx * xx + dy * xy + dz * xz
+        y_m = dx * yx + dy * yy + dz * yz
+        return abs(x_m) <= half_x_m and abs(y_m) <= half_y_m
 
     return inside
 

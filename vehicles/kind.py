@@ -223,6 +223,28 @@ class SimulatedVehicle(Protocol):
         ...
 
 
+class SimulatedFleet(Protocol):
+    """Live simulated vehicles of one kind and settings stepped together (a fleet host's
+    vehicles in flight): a vehicle's own ``step`` only records its reference, and
+    :meth:`step` flies every vehicle so given one, in one call. Each flies exactly as it would
+    alone (same seed, same numbers)."""
+
+    dt_s: float
+    """Length of one tick in [s]."""
+
+    def vehicle(self, start_m_enu: Vec3, *, seed: int) -> SimulatedVehicle:
+        """A vehicle at rest at ``start_m_enu`` joins the fleet."""
+        ...
+
+    def release(self, vehicle: object) -> None:
+        """``vehicle`` leaves the fleet (landed, stopped); an unknown one is ignored."""
+        ...
+
+    def step(self) -> None:
+        """Advance every vehicle given a reference since the last step by one tick."""
+        ...
+
+
 class VehicleKind(Protocol):
     """One vehicle kind (one room). Implementations: ``vehicles.<room>.KIND``."""
 
@@ -265,6 +287,11 @@ class VehicleKind(Protocol):
     ) -> SimulatedVehicle:
         """A live simulated vehicle at rest at ``start_m_enu`` for the agent's ``sim`` backend
         (which makes one per flight)."""
+        ...
+
+    def simulated_fleet(self, settings: Any) -> SimulatedFleet | None:
+        """Live simulated vehicles stepped together, for a fleet host (a kind whose vehicles
+        cost too much ticked one by one); None: each vehicle is stepped alone."""
         ...
 
     def phases(self, settings: Any) -> JobPhases:

@@ -8,6 +8,12 @@ min-jerk moves, holds the last point when no setpoint comes, and freezes where i
 A kind that is not airborne (``VehicleKind.phases``: a ground writer) has no height to gain or
 lose: its take-off (motors on where it rests) and landing (motors off where it stands) end at
 once. Time is the world's tick count; nothing reads a clock.
+
+In a fleet host the live vehicles come from the kind's :class:`vehicles.kind.SimulatedFleet`
+(``fleet``): a tick is then cut in two, :meth:`SimVehicle.begin_tick` (the reference given)
+and :meth:`SimVehicle.end_tick` (the vehicle read back), and the fleet steps in between, once for
+every vehicle of the host whose tick came in that turn of the event loop
+(:class:`vehicle_agent.backends.sim_round.StepRound`).
 """
 
 from __future__ import annotations
@@ -24,8 +30,9 @@ from vehicle_agent.backends.base import (
     Vec3,
     VehicleSnapshot,
 )
+from vehicle_agent.backends.sim_round import StepRound
 from vehicle_agent.motion import Move, plan_move
-from vehicles.kind import LiveReference, SimulatedVehicle, VehicleKind
+from vehicles.kind import LiveReference, SimulatedFleet, SimulatedVehicle, VehicleKind
 from vehicles.registry import vehicle_kind
 
 DEFAULT_KIND = "quadrotor-brush"
@@ -53,6 +60,7 @@ class SimVehicle:
         vertical_speed_mps: float = 0.5,
         vertical_accel_mps2: float = 0.8,
         contact_region: Callable[[Vec3], bool] | None = None,
+        fleet: SimulatedFleet | None = None,
     ) -> None:
         self.kind = kind if kind is not None else vehicle_kind(DEFAULT_KIND)
         self.settings = settings if settings is not None else self.kind.settings(None, None)
@@ -65,6 +73,8 @@ class SimVehicle:
         self.vertical_accel_mps2 = vertical_accel_mps2
         self.contact_region = contact_region
         """Where the board is: contact only counts with the tip over it (None: everywhere)."""
+        self.fleet = fleet
+        """The fleet its live vehicles join in flight (None: a vehicle of its own each)."""
         self.t_s = 0.0
         self.mode: BackendMode = "idle"
         self._rest_m_enu: Vec3 = home_m_enu
@@ -78,10 +88,11 @@ class SimVehicle:
         """Spin up where it rests and climb straight up to the height of ``hover_m_enu``."""
         if self.mode != "idle":
             raise BackendError(f"cannot take off in mode {self.mode}")
-        start = self._rest_m_enu
-        self._vehicle = self.kind.simulated_vehicle(
-            start, self.settings, seed=self.seed + self._flights
-        )
+        start, seed = self._rest_m_enu, self.seed + self._flights
+        if self.fleet is not None:
+            self._vehicle = self.fleet.vehicle(start, seed=seed)
+        else:
+            self._vehicle = self.kind.simulated_vehicle(start, self.settings, seed=seed)
         self._flights += 1
         if not self.airborne:
             self.mode, self._hold = "hold", Setpoint(position_m_enu=self._position())
@@ -94,7 +105,8 @@ class SimVehicle:
             return
         if not self.airborne:
             self._rest_m_enu = self._position()
-            self._vehicle, self._move, self.mode = None, None, "idle"
+            self._drop_vehicle()
+            self._move, self.mode = None, "idle"
             return
         here = self._hold.position_m_enu
         self._begin_move(here, (here[0], here[1], self.home_m_enu[2]), "landing")
@@ -104,8 +116,17 @@ class SimVehicle:
         vehicle stops on the floor it stands on)."""
         x, y, z = self._position()
         self._rest_m_enu = (x, y, z if not self.airborne else self.home_m_enu[2])
-        self._vehicle = None
+        self._drop_vehicle()
         self.mode = "estop"
+
+    def close(self) -> None:
+        """Leave the fleet, if in flight in one (the agent stops)."""
+        self._drop_vehicle()
+
+    def _drop_vehicle(self) -> None:
+        if self.fleet is not None and self._vehicle is not None:
+            self.fleet.release(self._vehicle)
+        self._vehicle = None
 
     def _begin_move(self, start: Vec3, end: Vec3, mode: BackendMode) -> None:
         self._move = plan_move(
@@ -120,6 +141,13 @@ class SimVehicle:
     # --- the tick ------------------------------------------------------------------------------
     def tick(self, setpoint: Setpoint | None) -> VehicleSnapshot:
         """One control period: the reference from the mode (or ``setpoint``), then the loop."""
+        if self.begin_tick(setpoint) and self.fleet is not None:
+            self.fleet.step()
+        return self.end_tick()
+
+    def begin_tick(self, setpoint: Setpoint | None) -> bool:
+        """The first half of :meth:`tick`: the reference handed to the live vehicle. True when
+        it is in flight in a fleet, to be stepped before :meth:`end_tick`."""
         if setpoint is not None:
             if self.mode not in ("hold", "offboard"):
                 raise BackendError(f"setpoint refused in mode {self.mode}")
@@ -128,8 +156,14 @@ class SimVehicle:
             self.mode = "hold"
             self._hold = Setpoint(position_m_enu=self._hold.position_m_enu)
         reference = self._reference()
-        if reference is not None:
-            self._step(reference)
+        if reference is None:
+            return False
+        self._step(reference)
+        return self.fleet is not None
+
+    def end_tick(self) -> VehicleSnapshot:
+        """The second half of :meth:`tick`: time goes on, a finished move ends, the vehicle
+        now."""
         self.t_s += self.dt_s
         self._finish_move()
         return self.snapshot()
@@ -168,7 +202,7 @@ class SimVehicle:
         else:
             x, y, _ = self._position()
             self._rest_m_enu = (x, y, self.home_m_enu[2])
-            self._vehicle = None
+            self._drop_vehicle()
             self.mode = "idle"
 
     # --- state ---------------------------------------------------------------------------------
@@ -211,4 +245,19 @@ class SimVehicle:
 
 
 class SimBackend(SynchronousBackend[SimVehicle]):
-    """:class:`SimVehicle` behind the async backend protocol."""
+    """:class:`SimVehicle` behind the async backend protocol; with ``step_round`` (a fleet
+    host), a tick in flight waits for the round that steps the vehicle's fleet."""
+
+    def __init__(self, vehicle: SimVehicle, step_round: StepRound | None = None) -> None:
+        super().__init__(vehicle)
+        self.step_round = step_round
+
+    async def tick(self, setpoint: Setpoint | None, now_s: float) -> VehicleSnapshot:
+        if self.step_round is None:
+            return self.vehicle.tick(setpoint)
+        if self.vehicle.begin_tick(setpoint):
+            await self.step_round.stepped()
+        return self.vehicle.end_tick()
+
+    async def close(self) -> None:
+        self.vehicle.close()

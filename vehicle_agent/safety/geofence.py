@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -46,15 +47,25 @@ class Geofence:
         if not all(math.isfinite(v) for v in (x, y, z)):
             return math.inf
         outside_xy = 0.0
+        for x0, y0, ux, uy in self._edges:
+            # positive to the right of the edge (outside, for a counter-clockwise polygon)
+            offset = ux * (y0 - y) - uy * (x0 - x)
+            if offset > outside_xy:
+                outside_xy = offset
+        outside_z = max(self.floor_z_m - z, z - self.ceiling_z_m, 0.0)
+        return math.hypot(outside_xy, outside_z)
+
+    @cached_property
+    def _edges(self) -> tuple[tuple[float, float, float, float], ...]:
+        """Per edge its start and unit direction (x0, y0, ux, uy): built once, since the fence
+        is checked at every control tick."""
         poly = self.polygon_xy_m
+        edges = []
         for i, (x0, y0) in enumerate(poly):
             x1, y1 = poly[(i + 1) % len(poly)]
             length = math.hypot(x1 - x0, y1 - y0)
-            # positive to the right of the edge (outside, for a counter-clockwise polygon)
-            offset = ((x1 - x0) * (y0 - y) - (y1 - y0) * (x0 - x)) / length
-            outside_xy = max(outside_xy, offset)
-        outside_z = max(self.floor_z_m - z, z - self.ceiling_z_m, 0.0)
-        return math.hypot(outside_xy, outside_z)
+            edges.append((x0, y0, (x1 - x0) / length, (y1 - y0) / length))
+        return tuple(edges)
 
     def contains(self, p_m_enu: Sequence[float]) -> bool:
         """Whether a point lies inside (or on) the fence."""

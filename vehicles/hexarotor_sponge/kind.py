@@ -157,6 +157,10 @@ class HexarotorSpongeKind:
         score = self.score(plan, flown, s)
         return report_figure(plan, flown, score, title, s.plan.default_width_m)
 
+    def simulated_fleet(self, settings: Any) -> None:
+        """None: a fleet host steps each vehicle alone (no batched world yet)."""
+        return None
+
     def simulated_vehicle(self, start_m_enu: Vec3, settings: Any, *, seed: int = 0) -> WallVehicle:
         """A live vehicle, tip at ``start_m_enu``, hovering in front of the settings' wall."""
         s = _settings(settings)

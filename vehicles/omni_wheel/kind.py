@@ -86,6 +86,10 @@ class OmniWheel:
 
         return build_report(plan, flown, self.score(plan, flown, settings), title)
 
+    def simulated_fleet(self, settings: Any) -> None:
+        """None: a fleet host steps each vehicle alone (no batched world yet)."""
+        return None
+
     def simulated_vehicle(
         self, start_m_enu: Vec3, settings: OmniSettings, *, seed: int = 0
     ) -> OmniLiveVehicle:

@@ -16,7 +16,8 @@ exactly for the velocity and steps the position with the new velocity (semi-impl
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
 
 import numpy as np
 from numpy.typing import NDArray
@@ -57,6 +58,16 @@ class QuadrotorState:
     """Collective rotor thrust per unit mass, out of ground effect, in [m/s^2], shape (N,)."""
     body_z_enu: FloatArray
     """Unit body z axis (thrust direction) in the world, shape (N, 3)."""
+
+    def take(self, rows: Sequence[int]) -> QuadrotorState:
+        """The state of vehicles ``rows`` (arrays copied)."""
+        index = list(rows)
+        return QuadrotorState(*(getattr(self, f.name)[index] for f in fields(self)))
+
+    @classmethod
+    def stack(cls, parts: Sequence[QuadrotorState]) -> QuadrotorState:
+        """The vehicles of ``parts``, in order, as one state."""
+        return cls(*(np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(cls)))
 
     def copy(self) -> QuadrotorState:
         """A deep copy (arrays copied)."""

@@ -22,7 +22,7 @@ from planner.board import BoardFrame
 from planner.samples import TrajectorySamples
 from vehicles.kind import FlownWriting, JobPhases, StrokeInput, WritingPlan, WritingScore
 from vehicles.quadrotor_brush.control.controller import body_reference
-from vehicles.quadrotor_brush.loop import SimulatedQuadrotor
+from vehicles.quadrotor_brush.loop import QuadrotorFleet, SimulatedQuadrotor
 from vehicles.quadrotor_brush.params import WorldParams
 from vehicles.quadrotor_brush.settings import QuadrotorSettings, quadrotor_settings
 from vehicles.surface import Orientation, Surface, Vec3
@@ -142,6 +142,10 @@ class QuadrotorBrush:
         creates one per flight, at take-off)."""
         flight = settings.flight
         return SimulatedQuadrotor(start_m_enu, flight.world, flight.controller, seed=seed)
+
+    def simulated_fleet(self, settings: QuadrotorSettings) -> QuadrotorFleet:
+        """Live simulated quadrotors of these settings stepped together (a fleet host)."""
+        return QuadrotorFleet(settings.flight.world, settings.flight.controller)
 
 
 _SCORE_FIELDS = ("rmse_pen_down_m", "rmse_m", "max_error_m", "iou")

@@ -2,11 +2,17 @@
 
 One call of :meth:`World.step` advances every vehicle by one control tick under held inner-loop
 commands. Time is the world's own tick count; nothing here reads a clock or performs I/O.
+
+Vehicles can be taken out of a world (:meth:`World.take`) and worlds put together
+(:meth:`World.stack`): a fleet host steps the vehicles that fly at the same time in one world,
+each vehicle flying exactly as it would alone (its own noise streams, its own delay line).
 """
 
 from __future__ import annotations
 
+import copy
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -84,6 +90,39 @@ class World:
         self.mocap_latency_s = latency_steps * params.physics_dt_s
         self._mocap_queue: list[FloatArray] = [p0.copy()] * self._mocap_ticks_back
         self._frame = self._capture_frame()
+
+    def take(self, rows: Sequence[int]) -> World:
+        """A world of vehicles ``rows`` of this one (in that order), each as it stands."""
+        index = list(rows)
+        out = copy.copy(self)
+        out.n_vehicles = len(index)
+        out.state = self.state.take(index)
+        out._wind_noise = self._wind_noise.take(index)
+        out._mocap_noise = self._mocap_noise.take(index)
+        out.gust_mps_enu = self.gust_mps_enu[index]
+        out._mocap_queue = [positions[index] for positions in self._mocap_queue]
+        out._frame = MocapFrame(self._frame.capture_time_s, self._frame.position_m_enu[index])
+        return out
+
+    @classmethod
+    def stack(cls, worlds: Sequence[World]) -> World:
+        """One world of the vehicles of ``worlds`` (same parameters), in order, each as it
+        stands; its clock is the first world's."""
+        first = worlds[0]
+        if any(w.params != first.params for w in worlds):
+            raise SimError("worlds with different parameters", field="params")
+        out = copy.copy(first)
+        out.n_vehicles = sum(w.n_vehicles for w in worlds)
+        out.state = QuadrotorState.stack([w.state for w in worlds])
+        out._wind_noise = NormalBlocks.stack([w._wind_noise for w in worlds])
+        out._mocap_noise = NormalBlocks.stack([w._mocap_noise for w in worlds])
+        out.gust_mps_enu = np.concatenate([w.gust_mps_enu for w in worlds])
+        out._mocap_queue = [
+            np.concatenate(tick) for tick in zip(*(w._mocap_queue for w in worlds), strict=True)
+        ]
+        frames = np.concatenate([w._frame.position_m_enu for w in worlds])
+        out._frame = MocapFrame(first._frame.capture_time_s, frames)
+        return out
 
     @property
     def time_s(self) -> float:

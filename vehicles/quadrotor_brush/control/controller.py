@@ -10,6 +10,8 @@ and the (low-passed) disturbance will demand.
 
 from __future__ import annotations
 
+import copy
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -140,6 +142,9 @@ def _lever_poles(config: ControllerConfig) -> FloatArray:
 class PositionController:
     """Vectorised controller for N vehicles; call :meth:`update` once per control tick."""
 
+    _ROWS = ("integral_m_s", "accel_cmd_mps2_enu", "target_m_enu", "_slow_disturbance")
+    """The arrays with one row per vehicle, besides the estimator's."""
+
     def __init__(
         self,
         config: ControllerConfig,
@@ -164,6 +169,29 @@ class PositionController:
         """Last vehicle position target (reference after tip aiming), shape (N, 3)."""
         self._slow_disturbance = np.zeros_like(p0)
         self._lever_step = 1.0 - np.exp(-dt_s * _lever_poles(config))
+
+    def take(self, rows: Sequence[int]) -> PositionController:
+        """The controller of vehicles ``rows`` (in that order), each as it stands."""
+        index = list(rows)
+        out = copy.copy(self)
+        out.n_vehicles = len(index)
+        out.estimator = self.estimator.take(index)
+        for name in self._ROWS:
+            setattr(out, name, getattr(self, name)[index])
+        return out
+
+    @classmethod
+    def stack(cls, parts: Sequence[PositionController]) -> PositionController:
+        """The controllers of ``parts`` as one, in order (same configuration and tick)."""
+        first = parts[0]
+        if any(p.config != first.config or p.dt_s != first.dt_s for p in parts):
+            raise ControlError("controllers with different configurations", field="config")
+        out = copy.copy(first)
+        out.n_vehicles = sum(p.n_vehicles for p in parts)
+        out.estimator = MocapEstimator.stack([p.estimator for p in parts])
+        for name in cls._ROWS:
+            setattr(out, name, np.concatenate([getattr(p, name) for p in parts]))
+        return out
 
     def update(self, measured_m_enu: FloatArray, reference: ReferenceTick) -> InnerLoopSetpoint:
         """Fuse the mocap frame and return the inner-loop inputs for the coming tick."""

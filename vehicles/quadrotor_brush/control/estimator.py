@@ -10,6 +10,8 @@ the latency to the current tick.
 
 from __future__ import annotations
 
+import copy
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -68,6 +70,9 @@ def steady_state_gain(config: EstimatorConfig, dt_s: float) -> FloatArray:
 class MocapEstimator:
     """Vectorised filter for N vehicles; call :meth:`update` once per control tick."""
 
+    _ROWS = ("_p", "_v", "_d", "_a", "position_m_enu", "velocity_mps_enu")
+    """The arrays with one row per vehicle (the rest is the same for all)."""
+
     def __init__(
         self, config: EstimatorConfig, dt_s: float, initial_position_m_enu: FloatArray
     ) -> None:
@@ -109,3 +114,19 @@ class MocapEstimator:
         acc = self._a + self._d - self._drag * self._v
         self.position_m_enu = self._p + self._v * lat + (0.5 * lat * lat) * acc
         self.velocity_mps_enu = self._v + acc * lat
+
+    def take(self, rows: Sequence[int]) -> MocapEstimator:
+        """The filter of vehicles ``rows`` (in that order), each as it stands."""
+        index = list(rows)
+        out = copy.copy(self)
+        for name in self._ROWS:
+            setattr(out, name, getattr(self, name)[index])
+        return out
+
+    @classmethod
+    def stack(cls, parts: Sequence[MocapEstimator]) -> MocapEstimator:
+        """The filters of ``parts`` (same configuration and tick) as one, in order."""
+        out = copy.copy(parts[0])
+        for name in cls._ROWS:
+            setattr(out, name, np.concatenate([getattr(p, name) for p in parts]))
+        return out

@@ -1,0 +1,68 @@
+"""A job taken back from a lost vehicle waits for that vehicle a while (pure).
+
+Losing a vehicle (its token gone, or silent, for ``lost_after_s``) does not say whether it wrote
+its job. Its lease (``vehicle_agent/lease.py``) let it write until ``lost_after_s`` after the
+sending of the last report this orchestrator acknowledged, and a character finished within that
+can have its ``done`` report held up by a router restart or a Wi-Fi drop; given at once to
+another vehicle, it is written twice. So the job goes back to the queue for its last holder
+alone, for ``CoreConfig.lost_job_hold_s``: back with the job (its status or a report names it),
+the vehicle has it again (``job_reclaimed``); back without it (it gave the job up, or its agent
+restarted), the job is free at once, for another vehicle first (that one takes no job for
+``refuse_backoff_s``). After the hold anyone may take it, with a warning: the old
+holder can no longer be writing it (its lease ran out long before), but if it had finished it,
+the character is written twice.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from orchestrator.core_types import Effects
+from orchestrator.jobs import Job, update
+
+if TYPE_CHECKING:
+    from orchestrator.core import Book
+
+
+def waits_for(job: Job, now_s: float) -> str | None:
+    """The vehicle a queued job still waits for (None: any vehicle may take it)."""
+    until = job.holder_hold_until_s
+    if job.state != "queued" or until is None or now_s >= until:
+        return None
+    return job.vehicle_id
+
+
+def assignable(job: Job, now_s: float) -> bool:
+    """Whether ``job`` may be given to a vehicle now: not while it waits for its last holder
+    (who gets it back only by naming it; back without it, it frees it)."""
+    return waits_for(job, now_s) is None
+
+
+def warn_if_taken_over(book: Book, eff: Effects, job: Job, vehicle_id: str, now_s: float) -> None:
+    """``job``, held for a lost vehicle until lately, now goes to ``vehicle_id``: say so."""
+    holder = job.vehicle_id
+    if job.holder_hold_until_s is None or holder in (None, vehicle_id):
+        return
+    message = (
+        f"{job.label}: {holder} did not come back within {book.config.lost_job_hold_s:.0f} s;"
+        f" {vehicle_id} writes it (twice, if {holder} had finished it)"
+    )
+    book.event(
+        eff, now_s, "warning", "job_taken_over", message, vehicle_id=vehicle_id, job_id=job.job_id
+    )
+
+
+def heard_without(
+    book: Book, eff: Effects, vehicle_id: str, job_id: str | None, now_s: float
+) -> None:
+    """The vehicle spoke, naming ``job_id``: a job waiting for it that it does not name is free."""
+    job = book.awaited_by(vehicle_id)
+    if job is None or job.job_id == job_id or waits_for(job, now_s) is None:
+        return
+    book.put(eff, update(job, now_s, holder_hold_until_s=None))
+    view = book.vehicles[vehicle_id]  # it crashed or gave the job up: another vehicle first
+    view.refused_until_s = max(view.refused_until_s, now_s + book.config.refuse_backoff_s)
+    message = f"{job.label}: {vehicle_id} is back without it; the next vehicle takes it"
+    book.event(
+        eff, now_s, "info", "job_released", message, vehicle_id=vehicle_id, job_id=job.job_id
+    )
