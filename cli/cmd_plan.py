@@ -171,8 +171,8 @@ def _settings(args: argparse.Namespace, base: Any) -> Any:
 def _one_blas_thread() -> None:
     """Ask OpenBLAS for one thread, before numpy loads it (no effect once loaded; a value set in
     the environment wins). A plan's matrices (a few hundred rows) gain nothing from a second
-    thread, while starting it and its spin-waits cost this one-off command about 0.1 s of wall
-    and 0.3 s of CPU on a loaded 2-core machine (benchmarks/bench_cli.py); plans are the same."""
+    thread, while starting it and its spin-waits cost this one-off command 0.07 s of wall and
+    0.28 s of CPU (median of 7 at load 2.3 on 2 cores); plans are the same (tests)."""
     if "numpy" not in sys.modules:
         os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
