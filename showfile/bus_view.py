@@ -2,9 +2,9 @@
 ``security``), read without the show-file models: pydantic and the models' schemas cost a one-off
 ``skyquill status`` about 0.35 s, more than everything else it does (benchmarks/bench_cli.py).
 
-:func:`read_bus_view` checks these sections strictly (exact types, nothing coerced) and ignores
-the others. It returns None for any file it does not vouch for (unreadable, not YAML, a duplicate
-key, a value of another type, a field it does not know): load that one with
+:func:`read_bus_view` checks these strictly (exact types, nothing coerced; of ``vehicles``, the
+ids) and ignores the rest. It returns None for any file it does not vouch for (unreadable, not
+YAML, a duplicate key, a value of another type, a field it does not know): load that one with
 :func:`showfile.load_show`, whose errors name file, line and field. The defaults are those of
 ``showfile/models.py`` and ``showfile/security.py``; tests/test_showfile_bus_view.py keeps the two
 equal on every show in ``shows/`` and fails when a model gains a field this view does not know.
@@ -180,7 +180,7 @@ def read_bus_view(path: str | Path) -> ShowBusView | None:
             security=_security(_mapping(doc.get("security", {}), _SECURITY_FIELDS)),
             source_path=Path(path),
         )
-    except (OSError, UnicodeDecodeError, yaml.YAMLError, _NotVouchedError):
+    except (OSError, UnicodeDecodeError, RecursionError, yaml.YAMLError, _NotVouchedError):
         return None
 
 
@@ -199,7 +199,8 @@ _SECURITY_FIELDS = ("mode", "keys_dir")
 
 
 def _compose(text: str) -> Any:
-    """The YAML document, None when a mapping in it repeats a key (the loader refuses those)."""
+    """The YAML document; not vouched for when empty or when a mapping repeats a key (the loader
+    refuses those)."""
     loader_class = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
     loader = loader_class(text)
     try:
