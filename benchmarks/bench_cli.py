@@ -1,6 +1,7 @@
-"""``skyquill plan --text 永`` wall time, and the indexed glyph store beside the old whole file.
+"""One-off commands' wall time: ``skyquill plan --text 永`` and ``skyquill status``; the indexed
+glyph store beside the old whole file.
 
-    .venv/bin/python benchmarks/bench_cli.py [--runs 5] [--text 永]
+    .venv/bin/python benchmarks/bench_cli.py [--runs 7] [--text 永] [--no-status] [--imports]
 
 Glyphs (in this process, page cache warm for both): the indexed store
 (``planner/glyphs/data/hanzi_medians.bin``; open = header and index, then one record) beside the
@@ -9,24 +10,49 @@ the former encoder, then ``gzip`` + ``json`` decoded as the former loader did on
 "Cold" is the first character in a fresh store, "warm" a further character from the open store;
 every GB2312 level-1 character is looked up.
 
-CLI (fresh interpreters): the wall and CPU time of ``python -m cli.main plan --text 永``, the
-first run ("cold") and the median of the others ("warm"), beside the interpreter alone and the
-imports the planner needs, measured in the same run: ``scipy.optimize`` (no longer imported by
-the plan), ``scipy.sparse`` and ``scipy.linalg`` (still are: PIQP's sparse interface and the
-banded LAPACK solves) and ``planner.pipeline``.
+CLI (fresh interpreters): the wall and CPU time of ``python -m cli.main plan --text 永`` and of
+``python -m cli.main status SHOW`` against a show this script runs (its own router and
+orchestrator, mutual TLS, keys made for it), the first run ("cold") and the median and least of
+the others ("warm"), every case with one OpenBLAS thread (as ``plan`` asks), beside peers
+measured in the same run: the interpreter alone, and the imports each
+command cannot do without (``scipy.sparse`` + ``scipy.linalg``: PIQP's sparse interface and the
+banded LAPACK solves; ``yaml`` + ``zenoh`` + ``msgspec``: the show file, the bus and its
+messages); the ratio is the command's warm wall time to that peer's. Each case runs twice: with
+the environment's bytecode setting (sessions here have ``PYTHONDONTWRITEBYTECODE=1``: every
+project module is compiled on every run) and with bytecode cached (``PYTHONPYCACHEPREFIX`` in a
+temporary folder, written by the first run), as an installed ``skyquill`` has it.
+``--imports`` prints what each command imports, grouped, from ``python -X importtime``.
+
+Figures (2026-11-26, shared 2-core machine at load 2.3-2.6, 9 runs, warm median / least wall):
+plan 0.59 / 0.53 s with bytecode cached, 0.84 / 0.66 s with bytecode not written (the peer
+``import scipy.sparse, scipy.linalg`` 0.40 / 0.34 s); status 0.24 / 0.22 s and 0.22 / 0.17 s
+(peer ``import yaml, zenoh, msgspec`` 0.14 / 0.11 s). Before issue 15's import work, in one
+interleaved run with the former code (11 runs, load 2.4, bytecode not written): plan 1.07 ->
+0.85 s, status 0.84 -> 0.25 s. What the plan still imports, in-process CPU with bytecode cached
+(least of 8): numpy 96 ms; scipy.sparse 176 ms, most of it numpy's lazily loaded submodules
+(f2py, testing, ma, random) pulled in by SciPy's vendored array-api-compat cloning numpy's
+namespace (PIQP's sparse interface imports scipy.sparse whatever we do); scipy.linalg 57 ms (the
+banded Cholesky of the closed-form fit); planner 33 ms, vehicles 39 ms (the brush's settings
+import its flight module, which holds the closed loop), the plan itself 51 ms.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import gzip
 import json
 import os
+import socket
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
+
+import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -92,9 +118,8 @@ def bench_glyphs(text: str, repeats: int) -> None:
     print(f"  GB2312 level 1: {len(level1) - len(missing)}/{len(level1)} resolve")
 
 
-def _run(argv: list[str]) -> tuple[float, float]:
+def _run(argv: list[str], env: dict[str, str]) -> tuple[float, float]:
     """Wall and CPU (user + sys) seconds of one child run from the repository root."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
     before = os.times()
     t0 = time.perf_counter()
     subprocess.run(argv, cwd=ROOT, env=env, check=True, stdout=subprocess.DEVNULL)
@@ -106,36 +131,160 @@ def _run(argv: list[str]) -> tuple[float, float]:
     return wall, cpu
 
 
-def bench_cli(text: str, runs: int) -> None:
+def _envs(cache_dir: Path) -> dict[str, dict[str, str]]:
+    """The environment as it is, and with bytecode cached in ``cache_dir``; one OpenBLAS thread
+    for every case, as ``skyquill plan`` asks itself, so that its peers pay no more for it."""
+    as_is = {**os.environ, "PYTHONPATH": str(ROOT), "OPENBLAS_NUM_THREADS": "1"}
+    cached = {k: v for k, v in as_is.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    cached["PYTHONPYCACHEPREFIX"] = str(cache_dir)
+    bytecode = "not written" if os.environ.get("PYTHONDONTWRITEBYTECODE") else "as usual"
+    return {f"environment (bytecode {bytecode})": as_is, "bytecode cached": cached}
+
+
+def bench_commands(cases: dict[str, list[str]], peer: str, runs: int) -> None:
+    """Each case in both environments: cold, warm median (wall / CPU) and the peer ratio."""
+    with tempfile.TemporaryDirectory(prefix="bench_cli_pyc_") as cache_dir:
+        for env_label, env in _envs(Path(cache_dir)).items():
+            if "PYTHONPYCACHEPREFIX" in env:
+                for argv in cases.values():  # writes the cache; not counted
+                    _run(argv, env)
+            print(f"  {env_label}, {runs} runs each (wall / CPU user+sys; warm: median, min):")
+            warm_walls = {}
+            for label, argv in cases.items():
+                results = [_run(argv, env) for _ in range(runs)]
+                cold, warm = results[0], results[1:] or results
+                warm_walls[label] = statistics.median(w for w, _ in warm)
+                warm_cpu = statistics.median(c for _, c in warm)
+                least = min(warm)
+                print(
+                    f"    {label:40s} cold {cold[0]:5.2f} / {cold[1]:5.2f} s"
+                    f"   warm {warm_walls[label]:5.2f} / {warm_cpu:5.2f} s,"
+                    f" min {least[0]:5.2f} / {least[1]:5.2f} s"
+                )
+            command = next(iter(cases))
+            ratio = warm_walls[command] / warm_walls[peer]
+            print(f"    ratio {command} / {peer}: {ratio:.2f}")
+    print(f"  load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+
+
+def plan_cases(text: str) -> dict[str, list[str]]:
     py = sys.executable
-    cases = {
+    return {
         f"skyquill plan --text {text}": [py, "-m", "cli.main", "plan", "--text", text],
         "peer: python -c pass": [py, "-c", "pass"],
         "peer: import numpy": [py, "-c", "import numpy"],
-        "peer: import scipy.optimize": [py, "-c", "import scipy.optimize"],
         "peer: import scipy.sparse, .linalg": [py, "-c", "import scipy.sparse, scipy.linalg"],
         "peer: import planner.pipeline": [py, "-c", "import planner.pipeline"],
     }
-    print(f"CLI, fresh interpreters, {runs} runs each (wall / CPU user+sys):")
-    for label, argv in cases.items():
-        results = [_run(argv) for _ in range(runs)]
-        cold, warm = results[0], results[1:] or results
-        warm_wall = statistics.median(w for w, _ in warm)
-        warm_cpu = statistics.median(c for _, c in warm)
-        print(
-            f"  {label:34s} cold {cold[0]:5.2f} / {cold[1]:5.2f} s"
-            f"   warm {warm_wall:5.2f} / {warm_cpu:5.2f} s"
-        )
-    print(f"  load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+
+
+def status_cases(show: Path) -> dict[str, list[str]]:
+    py = sys.executable
+    return {
+        "skyquill status (mTLS, orchestrator up)": [py, "-m", "cli.main", "status", str(show)],
+        "peer: python -c pass": [py, "-c", "pass"],
+        "peer: import yaml, zenoh, msgspec": [py, "-c", "import yaml, zenoh, msgspec"],
+    }
+
+
+def _free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+@contextlib.contextmanager
+def running_show(folder: Path) -> Iterator[Path]:
+    """A one-vehicle show (solo.yaml's fleet) with its router and orchestrator running, on a
+    free port, keys and state in ``folder``; stopped on exit."""
+    doc = yaml.safe_load((ROOT / "shows" / "solo.yaml").read_text(encoding="utf-8"))
+    endpoint = f"tcp/127.0.0.1:{_free_port()}"
+    doc.update(
+        show_id="clibench",
+        zenoh={"router_listen": [endpoint], "connect": [endpoint]},
+        security={"mode": "mtls", "keys_dir": str(folder / "keys")},
+        storage={"database": str(folder / "show.sqlite3"), "recordings_dir": str(folder / "rec")},
+    )
+    show = folder / "show.yaml"
+    show.write_text(yaml.safe_dump(doc), encoding="utf-8")
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    cli = [sys.executable, "-m", "cli.main"]
+    subprocess.run([*cli, "keys", str(show)], cwd=ROOT, env=env, check=True, capture_output=True)
+    services = []
+    try:
+        for command in ("router", "orchestrator"):
+            with (folder / f"{command}.log").open("w") as log:  # the child keeps its own copy
+                services.append(
+                    subprocess.Popen([*cli, command, str(show)], cwd=ROOT, env=env, stderr=log)
+                )
+        status = [*cli, "status", str(show), "--timeout", "1"]
+        deadline = time.monotonic() + 60.0
+        while subprocess.run(status, cwd=ROOT, env=env, capture_output=True).returncode != 0:
+            if time.monotonic() > deadline:
+                raise RuntimeError(f"the show did not answer in 60 s (logs in {folder})")
+            time.sleep(0.5)
+        yield show
+    finally:
+        for service in reversed(services):
+            service.terminate()
+            try:
+                service.wait(timeout=10.0)
+            except subprocess.TimeoutExpired:
+                service.kill()
+                service.wait()
+
+
+def _import_groups(argv: list[str]) -> list[tuple[str, float]]:
+    """Self import time in [s] of ``argv``'s modules, by package (scipy and numpy by
+    subpackage), from one run with ``-X importtime``."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    run = subprocess.run(
+        [argv[0], "-X", "importtime", *argv[1:]], cwd=ROOT, env=env, capture_output=True, text=True
+    )
+    groups: dict[str, float] = {}
+    for line in run.stderr.splitlines():
+        if not line.startswith("import time:") or "self [us]" in line:
+            continue
+        self_us, _, name = (part.strip() for part in line.removeprefix("import time:").split("|"))
+        parts = name.split(".")
+        key = ".".join(parts[:2]) if parts[0] in ("numpy", "scipy") else parts[0]
+        groups[key] = groups.get(key, 0.0) + int(self_us) * 1e-6
+    return sorted(groups.items(), key=lambda item: -item[1])
+
+
+def print_imports(label: str, argv: list[str], top: int = 14) -> None:
+    groups = _import_groups(argv)
+    total = sum(seconds for _, seconds in groups)
+    print(f"  {label}: imports {total * 1e3:.0f} ms (self time, -X importtime), largest:")
+    for name, seconds in groups[:top]:
+        print(f"    {name:28s} {seconds * 1e3:6.1f} ms")
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--runs", type=int, default=5, help="CLI runs per case (5)")
+    parser.add_argument("--runs", type=int, default=7, help="CLI runs per case (7)")
     parser.add_argument("--text", default="永", help="text to plan (永)")
+    parser.add_argument("--no-status", action="store_true", help="skip skyquill status")
+    parser.add_argument("--imports", action="store_true", help="print each command's imports")
     args = parser.parse_args()
+    runs = max(2, args.runs)
     bench_glyphs(args.text, repeats=5)
-    bench_cli(args.text, max(1, args.runs))
+    plan = plan_cases(args.text)
+    print("CLI plan, fresh interpreters:")
+    bench_commands(plan, "peer: import scipy.sparse, .linalg", runs)
+    if args.imports:
+        print_imports(next(iter(plan)), next(iter(plan.values())))
+    if args.no_status:
+        return 0
+    with (
+        tempfile.TemporaryDirectory(prefix="bench_cli_show_") as folder,
+        running_show(Path(folder)) as show,
+    ):
+        status = status_cases(show)
+        print("CLI status, fresh interpreters:")
+        bench_commands(status, "peer: import yaml, zenoh, msgspec", runs)
+        if args.imports:
+            print_imports(next(iter(status)), next(iter(status.values())))
     return 0
 
 

@@ -14,19 +14,21 @@ Clients call :func:`query` / :func:`aquery` (all replies, decoded) or :func:`que
 
 from __future__ import annotations
 
-import asyncio
 import contextlib
 import logging
 import re
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
-from typing import Any, Generic, TypeVar, overload
+from typing import TYPE_CHECKING, Any, Generic, TypeVar, overload
 
 import msgspec
 import zenoh
 
 from bus.messages import ErrorInfo, MessageError, Request, decode, encode
 from bus.session import BusError
+
+if TYPE_CHECKING:  # imported where used: a blocking client (skyquill status) needs no event loop
+    import asyncio
 
 M = TypeVar("M", bound=msgspec.Struct)
 R = TypeVar("R", bound=msgspec.Struct)
@@ -158,6 +160,8 @@ async def aquery(
     timeout_s: float = DEFAULT_TIMEOUT_S,
 ) -> list[QueryReply[M]]:
     """:func:`query` without blocking the event loop (replies collected on Zenoh's thread)."""
+    import asyncio
+
     loop = asyncio.get_running_loop()
     done: asyncio.Future[list[QueryReply[M]]] = loop.create_future()
     replies: list[QueryReply[M]] = []
@@ -340,6 +344,8 @@ def serve_async(
 
     Requests are decoded on Zenoh's thread; valid ones are scheduled on the loop in arrival order.
     """
+    import asyncio
+
     target_loop = loop or asyncio.get_running_loop()
 
     async def run(query: zenoh.Query, request: Any) -> None:

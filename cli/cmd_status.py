@@ -1,4 +1,10 @@
-"""``skyquill status SHOW.yaml [--json]``: jobs and vehicles as the orchestrator sees them."""
+"""``skyquill status SHOW.yaml [--json]``: jobs and vehicles as the orchestrator sees them.
+
+A one-off command, kept light: it reads only the bus part of the show file
+(:mod:`showfile.bus_view`; the full loader judges a file that view does not vouch for) and asks
+the orchestrator itself rather than through :mod:`orchestrator.client`, which imports the show
+models: neither pydantic nor numpy is loaded (tests/test_cli_imports.py).
+"""
 
 from __future__ import annotations
 
@@ -6,6 +12,11 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from bus.messages import ShowSnapshot
+    from showfile.bus_view import ShowBus
 
 NAME = "status"
 HELP = "Show the jobs and vehicles of a running show (--json for programs)."
@@ -21,16 +32,43 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for a reply")
 
 
+def _show_bus(path: Path) -> ShowBus:
+    """The bus part of the show file; the full loader's verdict when the light view gives none
+    (ShowError naming file, line and field)."""
+    from showfile.bus_view import read_bus_view
+
+    view = read_bus_view(path)
+    if view is not None:
+        return view
+    from showfile import load_show
+
+    return load_show(path)
+
+
+def _snapshot(path: Path, timeout_s: float) -> ShowSnapshot:
+    """The orchestrator's current view (as :func:`orchestrator.client.snapshot` asks it)."""
+    from bus.keys import ShowKeys
+    from bus.messages import ShowSnapshot
+    from bus.rpc import query_one
+    from bus.session import open_session
+    from trust.settings import session_settings
+
+    show = _show_bus(path)
+    with open_session(session_settings(show, "operator"), role="client") as session:
+        return query_one(
+            session, ShowKeys(show.show_id).snapshot, None, ShowSnapshot, timeout_s=timeout_s
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     import msgspec
 
     from bus.rpc import NoReplyError, RemoteError
     from bus.session import SessionOpenError
-    from orchestrator.client import snapshot
-    from showfile import ShowError, load_show
+    from showfile.errors import ShowError
 
     try:
-        snap = snapshot(load_show(args.show), timeout_s=args.timeout)
+        snap = _snapshot(args.show, args.timeout)
     except (ShowError, SessionOpenError, NoReplyError, RemoteError) as exc:
         print(f"skyquill status: {exc}", file=sys.stderr)
         return 2

@@ -30,7 +30,6 @@ from planner.fit_qp import QpFitter, QpLimits
 from planner.minjerk import EndState, FitProblem, SplineFit, fit_closed_form
 from planner.options import PlanOptions
 from planner.polyline_timing import polyline_durations_s
-from planner.retime import SegmentCost, descend_analytic, descend_numerical
 from planner.timescale import Allocation, LimitSearch, stationary_time_penalty, stretch_nominal
 from planner.waypoints import KIND_DENSE, KIND_HOP, KIND_TURNING, WritingPath
 
@@ -135,6 +134,9 @@ def resegment(
 def _resegment_paper(
     problem: FitProblem, options: PlanOptions, fitter: QpFitter | None
 ) -> tuple[FitProblem, SplineFit, dict[str, float]]:
+    # imported here: the default pace never runs the paper's method (nor its L-BFGS)
+    from planner.retime import SegmentCost, descend_analytic, descend_numerical
+
     fixed = options.total_time_s is not None
     rho = 0.0 if fixed else _time_penalty(problem, options)
     descend = descend_analytic if options.resegment_method == "analytic" else descend_numerical

@@ -16,11 +16,8 @@ import pydantic
 import yaml
 
 from showfile.checks import Loc, cross_check
+from showfile.errors import ShowError
 from showfile.models import Show
-
-
-class ShowError(Exception):
-    """Root of the show-file errors."""
 
 
 @dataclass(frozen=True)

@@ -7,17 +7,22 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict
 
-ServiceRole = Literal["router", "orchestrator", "kiosk", "operator"]
-"""Identities of the processes ``skyquill up`` runs, besides one agent per vehicle."""
+from showfile.roles import (
+    CLIENT_ROLES,
+    RESERVED_IDS,
+    SERVICE_ROLES,
+    ClientRole,
+    ServiceRole,
+)
 
-ClientRole = Literal["operator", "watcher", "submitter"]
-"""Roles an operator hands to outside clients (``skyquill keys SHOW --client NAME --role R``)."""
-
-SERVICE_ROLES: tuple[ServiceRole, ...] = ("router", "orchestrator", "kiosk", "operator")
-CLIENT_ROLES: tuple[ClientRole, ...] = ("operator", "watcher", "submitter")
-
-RESERVED_IDS = frozenset({*SERVICE_ROLES, *CLIENT_ROLES, "ca", "clients"})
-"""Names no vehicle may take: they are certificate common names of roles, or key folders."""
+__all__ = [
+    "CLIENT_ROLES",
+    "RESERVED_IDS",
+    "SERVICE_ROLES",
+    "ClientRole",
+    "SecuritySettings",
+    "ServiceRole",
+]
 
 
 class SecuritySettings(BaseModel):

@@ -25,6 +25,8 @@ from bus.messages import (
     SubmitRequest,
     Telemetry,
     VehicleCommand,
+    _depth_scanned,
+    _depth_vectorised,
     decode,
     encode,
     nesting_depth,
@@ -148,6 +150,15 @@ def test_nesting_depth_matches_the_parsed_structure(value: Any) -> None:
     expected = depth(value)
     if raw.count(b"[") + raw.count(b"{") > MAX_DEPTH:  # below that the scan is skipped
         assert nesting_depth(raw) == expected
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.binary(max_size=80) | st.lists(st.sampled_from(list(b'[]{}"\\a')), max_size=80).map(bytes)
+)
+def test_depth_without_numpy_is_the_vectorised_depth(raw: bytes) -> None:
+    """Small texts are scanned with bytes and regex operations, large ones by numpy: the same."""
+    assert _depth_scanned(raw) == _depth_vectorised(raw)
 
 
 @pytest.mark.parametrize(

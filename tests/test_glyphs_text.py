@@ -141,3 +141,14 @@ def test_other_hershey_font() -> None:
 def test_has_glyph() -> None:
     assert has_glyph("a") and has_glyph(" ") and has_glyph("马") and has_glyph("\u3000")
     assert not has_glyph("☃") and not has_glyph("\n") and not has_glyph("ab") and not has_glyph("")
+
+
+def test_hershey_fonts_and_chinese_store_share_no_character() -> None:
+    """text_glyph looks a character up in the Chinese store first; that only gives the result of
+    the Hershey font first because no built-in font has a character of the store (or U+3000)."""
+    from planner.glyphs.hershey import _font, hershey_font_names
+
+    chinese = hanzi_characters() | {"\u3000"}
+    for name in hershey_font_names():
+        glyphs, _ = _font(name)
+        assert not chinese & set(glyphs), name

@@ -17,8 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from showfile import Show
-from showfile.models import ZenohHost
+from showfile.bus_view import HostBus, ShowBus
 
 GROUND_ROUTER = "router"
 """Identity of the ground station's router (and of the only router of a one-machine show)."""
@@ -40,21 +39,21 @@ class Endpoints:
     """Where its host's router reaches the ground router (none on the ground station)."""
 
 
-def _where(show: Show) -> str:
+def _where(show: ShowBus) -> str:
     return str(show.source_path) if show.source_path else f"show {show.show_id}"
 
 
-def ground_host(show: Show) -> str | None:
+def ground_host(show: ShowBus) -> str | None:
     """Name of the ground station (None: a one-machine show)."""
     return next((name for name, host in show.zenoh.hosts.items() if host.services), None)
 
 
-def router_identity(host_name: str, host: ZenohHost) -> str:
+def router_identity(host_name: str, host: HostBus) -> str:
     """Certificate common name of the router of ``host``."""
     return GROUND_ROUTER if host.services else f"{GROUND_ROUTER}@{host_name}"
 
 
-def companion_routers(show: Show) -> dict[str, tuple[str, ...]]:
+def companion_routers(show: ShowBus) -> dict[str, tuple[str, ...]]:
     """Each companion router's identity and the vehicles it carries."""
     return {
         router_identity(name, host): host.vehicles
@@ -63,7 +62,7 @@ def companion_routers(show: Show) -> dict[str, tuple[str, ...]]:
     }
 
 
-def check_hosts(show: Show) -> None:
+def check_hosts(show: ShowBus) -> None:
     """Raise :class:`HostError` unless every vehicle runs on exactly one host (when hosts are
     given) and every vehicle a host names is in the fleet."""
     if not show.zenoh.hosts:
@@ -84,7 +83,7 @@ def check_hosts(show: Show) -> None:
         )
 
 
-def host_named(show: Show, host_name: str) -> ZenohHost:
+def host_named(show: ShowBus, host_name: str) -> HostBus:
     """The host ``host_name`` of the show (HostError naming the known ones otherwise)."""
     hosts = show.zenoh.hosts
     if host_name not in hosts:
@@ -93,7 +92,7 @@ def host_named(show: Show, host_name: str) -> ZenohHost:
     return hosts[host_name]
 
 
-def host_of(show: Show, identity: str) -> str | None:
+def host_of(show: ShowBus, identity: str) -> str | None:
     """The host ``identity`` runs on: its vehicle's, its router's, else the ground station."""
     for name, host in show.zenoh.hosts.items():
         if identity in host.vehicles or identity == router_identity(name, host):
@@ -101,7 +100,7 @@ def host_of(show: Show, identity: str) -> str | None:
     return ground_host(show)
 
 
-def endpoints(show: Show, identity: str) -> Endpoints:
+def endpoints(show: ShowBus, identity: str) -> Endpoints:
     """The endpoints of ``identity``'s session: its host's, or the show's on one machine."""
     name = host_of(show, identity)
     if name is None:
@@ -111,7 +110,7 @@ def endpoints(show: Show, identity: str) -> Endpoints:
     return Endpoints(host.router_listen, host.local_connect, host.router_connect)
 
 
-def all_endpoints(show: Show) -> list[str]:
+def all_endpoints(show: ShowBus) -> list[str]:
     """Every endpoint the show names (for the routers' certificates)."""
     z = show.zenoh
     found = [*z.router_listen, *z.connect, *z.router_connect]

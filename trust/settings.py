@@ -13,8 +13,8 @@ from pathlib import Path
 from typing import Any
 
 from bus.session import BusSettings
-from showfile import Show
-from showfile.security import SERVICE_ROLES
+from showfile.bus_view import ShowBus
+from showfile.roles import SERVICE_ROLES
 from trust.acl import access_control
 from trust.files import IdentityFiles, KeysError, identity_files
 from trust.hosts import GROUND_ROUTER, all_endpoints, companion_routers, endpoints
@@ -31,7 +31,7 @@ def _host(endpoint: str) -> str | None:
     return host.strip("[]") or None
 
 
-def show_hosts(show: Show) -> list[str]:
+def show_hosts(show: ShowBus) -> list[str]:
     """Host names and addresses the routers are reached at, for their certificates."""
     named = [_host(e) for e in all_endpoints(show)]
     hosts = [h for h in named if h and h not in ("0.0.0.0", "::")]
@@ -43,12 +43,12 @@ def as_tls(endpoints: Sequence[str]) -> tuple[str, ...]:
     return tuple("tls/" + e[4:] if e.startswith("tcp/") else e for e in endpoints)
 
 
-def identities(show: Show) -> list[str]:
+def identities(show: ShowBus) -> list[str]:
     """Every identity a show runs: the services, one per vehicle, one per companion router."""
     return [*SERVICE_ROLES, *(v.id for v in show.vehicles), *companion_routers(show)]
 
 
-def ensure_show_keys(show: Show) -> list[str]:
+def ensure_show_keys(show: ShowBus) -> list[str]:
     """Create the show CA and any missing or stale identity; returns the identities (re)issued."""
     if show.security.mode == "none":
         return []
@@ -64,7 +64,7 @@ def ensure_show_keys(show: Show) -> list[str]:
     return issued
 
 
-def check_keys(show: Show, wanted: Sequence[str]) -> None:
+def check_keys(show: ShowBus, wanted: Sequence[str]) -> None:
     """Raise :class:`KeysError` unless every identity in ``wanted`` has valid files: a companion
     host never makes keys (it has no CA key); they are copied from the ground station."""
     if show.security.mode == "none":
@@ -101,7 +101,7 @@ def is_router(identity: str) -> bool:
     return identity == GROUND_ROUTER or identity.startswith(f"{GROUND_ROUTER}@")
 
 
-def secured(show: Show, files: IdentityFiles, *, router: bool) -> BusSettings:
+def secured(show: ShowBus, files: IdentityFiles, *, router: bool) -> BusSettings:
     """The show's bus settings for the identity in ``files``."""
     for path in (files.cert, files.key, files.ca):
         if not path.exists():
@@ -125,7 +125,7 @@ def secured(show: Show, files: IdentityFiles, *, router: bool) -> BusSettings:
     )
 
 
-def plain(show: Show, identity: str) -> Any:
+def plain(show: ShowBus, identity: str) -> Any:
     """Settings of ``security: none``: the show's own, or its host's endpoints."""
     if not show.zenoh.hosts:
         return show.zenoh
@@ -142,7 +142,7 @@ def plain(show: Show, identity: str) -> Any:
     )
 
 
-def session_settings(show: Show, identity: str) -> Any:
+def session_settings(show: ShowBus, identity: str) -> Any:
     """Settings for ``open_session`` of the process that is ``identity`` in ``show``."""
     if show.security.mode == "none":
         if show.show_id not in _warned:
@@ -158,7 +158,7 @@ def session_settings(show: Show, identity: str) -> Any:
     return secured(show, files, router=is_router(identity))
 
 
-def client_session_settings(show: Show, client_dir: Path) -> BusSettings:
+def client_session_settings(show: ShowBus, client_dir: Path) -> BusSettings:
     """Settings for an outside client holding the folder ``skyquill keys --client`` made (its
     certificate's common name is its role)."""
     folder = Path(client_dir)

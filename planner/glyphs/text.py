@@ -1,4 +1,9 @@
-"""Typed text in: one line of Latin (Hershey) and Chinese (Make Me a Hanzi) characters."""
+"""Typed text in: one line of Latin (Hershey) and Chinese (Make Me a Hanzi) characters.
+
+A character is looked up in the Chinese store before the Hershey font: no built-in Hershey font
+shares a character with the store or has U+3000 (tests/test_glyphs_text.py), so the order does
+not change the result, and a Chinese text never loads a Hershey font (about 40 ms).
+"""
 
 from __future__ import annotations
 
@@ -19,7 +24,7 @@ def has_glyph(char: str, *, latin_font: str = DEFAULT_LATIN_FONT) -> bool:
     """True when :func:`text_glyph` accepts ``char`` (a single character; spaces count)."""
     if len(char) != 1:
         return False
-    return char == IDEOGRAPHIC_SPACE or has_latin(char, latin_font) or has_hanzi(char)
+    return char == IDEOGRAPHIC_SPACE or has_hanzi(char) or has_latin(char, latin_font)
 
 
 def text_glyph(text: str, *, latin_font: str = DEFAULT_LATIN_FONT) -> Glyph:
@@ -34,15 +39,16 @@ def text_glyph(text: str, *, latin_font: str = DEFAULT_LATIN_FONT) -> Glyph:
     pen_x_em = 0.0
     used_latin = used_hanzi = False
     for index, char in enumerate(text):
-        if has_latin(char, latin_font):
-            latin = latin_char(char, latin_font)
-            char_strokes, advance_em = latin.strokes, latin.advance_em
-            used_latin = used_latin or bool(char_strokes)
-        elif char == IDEOGRAPHIC_SPACE:
+        char_strokes: tuple[FloatArray, ...]
+        if char == IDEOGRAPHIC_SPACE:
             char_strokes, advance_em = (), 1.0
         elif has_hanzi(char):
             char_strokes, advance_em = hanzi_strokes_em(char), 1.0
             used_hanzi = True
+        elif has_latin(char, latin_font):
+            latin = latin_char(char, latin_font)
+            char_strokes, advance_em = latin.strokes, latin.advance_em
+            used_latin = used_latin or bool(char_strokes)
         else:
             raise PlannerError(
                 f"no glyph for character {char!r} (U+{ord(char):04X}) at index {index} of {text!r}",
