@@ -77,27 +77,37 @@ iterations at mu 0.1; a monotone barrier from 1e-2 with a first Hessian perturba
 
 @lru_cache(maxsize=64)
 def period_solver(
-    n: int, thrust_rows: bool, params: HexarotorParams, weights: tuple[float, ...]
+    n: int,
+    thrust_rows: bool,
+    params: HexarotorParams,
+    weights: tuple[float, ...],
+    weight_dh: float,
 ) -> tuple[ca.Function, threading.Lock]:
     """IPOPT on the NLP of ``n`` RK4 steps (:func:`_period_nlp`, options
     :data:`IPOPT_OPTIONS`), and the lock that keeps one solve (and its stats) at a time on it.
 
-    ``weights``: the cost weights ``(v, u, du, force, time)`` of the planner's limits.
+    ``weights``: the cost weights ``(v, u, du, force, time)`` of the planner's limits;
+    ``weight_dh``: the cost per [s^2] of a time step's change from the step before.
     """
     options: dict[str, Any] = {"print_time": False, "record_time": True, "ipopt": IPOPT_OPTIONS}
-    nlp = _period_nlp(n, thrust_rows, params, weights)
+    nlp = _period_nlp(n, thrust_rows, params, weights, weight_dh)
     return ca.nlpsol(f"period_{n}", "ipopt", nlp, options), threading.Lock()
 
 
 def _period_nlp(
-    n: int, thrust_rows: bool, params: HexarotorParams, weights: tuple[float, ...]
+    n: int,
+    thrust_rows: bool,
+    params: HexarotorParams,
+    weights: tuple[float, ...],
+    weight_dh: float,
 ) -> dict[str, Any]:
     """The NLP of ``n`` RK4 steps in SX (derivatives exact and evaluated without CasADi's MX
     overhead).
 
     Variables: ``[x_0, u_0, h_0, ..., x_{n-1}, u_{n-1}, h_{n-1}, x_n]``; parameter: the wanted
     force at nodes ``0..n-1``; constraints per step: the RK4 defect (7), ``|a|^2`` (1), rotor
-    thrusts (6, only with ``thrust_rows``) and ``|v|^2`` (1).
+    thrusts (6, only with ``thrust_rows``) and ``|v|^2`` (1). The cost adds ``weight_dh`` times
+    the squared change of each time step from the one before.
     """
     stage = _stage_function(thrust_rows, params, weights)
     w = ca.SX.sym("w", NODE * n + STATE)
@@ -117,6 +127,8 @@ def _period_nlp(
             force_ref[k],
         )
         cost += stage_cost
+        if k > 0:
+            cost += weight_dh * (w[at + NODE - 1] - w[at - 1]) ** 2
         constraints += [defect, path]
     return {"x": w, "p": force_ref, "f": cost, "g": ca.vertcat(*constraints)}
 
