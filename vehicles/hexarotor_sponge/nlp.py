@@ -27,10 +27,8 @@ from numpy.typing import NDArray
 from planner.errors import InfeasibleTrajectoryError
 from vehicles.hexarotor_sponge.contact_model import contact_direction
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
+from vehicles.hexarotor_sponge.period_nlp import ACTION, NODE, STATE
 from vehicles.hexarotor_sponge.solver_cache import (
-    ACTION,
-    NODE,
-    STATE,
     period_solver,
     spread_steps,
     step_count,
