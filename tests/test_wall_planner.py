@@ -220,16 +220,16 @@ def test_time_steps_change_smoothly_and_save_iterations() -> None:
 
 @pytest.mark.parametrize("thrust_rows", [False, True])
 def test_period_nlp_derivatives_are_the_horizons_own(thrust_rows: bool) -> None:
-    """The Jacobian and Hessian scattered from one step's derivatives equal CasADi's
-    derivatives of the whole horizon's cost and constraints (at a random point, with the
-    first step's hover force and the time-step change cost between steps)."""
+    """The gradient, Jacobian and Hessian scattered from one step's derivatives equal
+    CasADi's derivatives of the whole horizon's cost and constraints (at a random point, with
+    the first step's hover force and the time-step change cost between steps)."""
     n = 5
     weights = nlp.cost_weights(Limits())
     problem, derivatives = period_nlp.period_nlp(n, thrust_rows, PARAMS, weights, 10.0)
     w, p, f, g = problem["x"], problem["p"], problem["f"], problem["g"]
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.numel())
     hessian = ca.triu(ca.hessian(lam_f * f + ca.dot(lam_g, g), w)[0])
-    own = ca.Function("own", [w, p, lam_f, lam_g], [ca.jacobian(g, w), hessian])
+    own = ca.Function("own", [w, p, lam_f, lam_g], [ca.gradient(f, w), ca.jacobian(g, w), hessian])
     rng = np.random.default_rng(1)
     point = (
         rng.standard_normal(w.numel()),
@@ -237,9 +237,11 @@ def test_period_nlp_derivatives_are_the_horizons_own(thrust_rows: bool) -> None:
         1.7,
         rng.standard_normal(g.numel()),
     )
-    jac_own, hess_own = (np.asarray(ca.densify(m)) for m in own(*point))
+    grad_own, jac_own, hess_own = (np.asarray(ca.densify(m)) for m in own(*point))
+    grad = np.asarray(ca.densify(derivatives["grad_f"](*point[:2])[1]))
     jac = np.asarray(ca.densify(derivatives["jac_g"](*point[:2])[1]))
     hess = np.asarray(ca.densify(derivatives["hess_lag"](*point)))
+    assert grad == pytest.approx(grad_own, abs=1e-9)
     assert jac == pytest.approx(jac_own, abs=1e-9)
     assert hess == pytest.approx(hess_own, abs=1e-9)
     assert np.abs(hess_own).max() > 1.0
