@@ -30,7 +30,7 @@ from vehicles.hexarotor_sponge.nlp import (
     steps_per_segment,
 )
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
-from vehicles.hexarotor_sponge.solver_cache import stage_cost
+from vehicles.hexarotor_sponge.period_nlp import stage_cost
 from vehicles.hexarotor_sponge.waypoints import Period
 
 FloatArray = NDArray[np.float64]

@@ -44,6 +44,14 @@ class HexarotorParams:
     """Damping of the pen's slide in [N s/m] (the sponge)."""
     pen_travel_m: float = 0.03
     """Longest slide of the pen into its holder in [m]."""
+    sponge_impedance_touch: float = 0.5
+    """MuJoCo's constraint impedance of the sponge's contact where it just touches the wall
+    (``solimp`` dmin of its geom, rising to 0.95 at 1 mm; MuJoCo mixes it with the wall's
+    0.9): the sponge gives more at first touch. With 0.9 on both the sliding 30 g sponge
+    chatters at 20 Hz on the 2 ms physics step (+-0.5 N; letter I without wind or noise: 0.31 N
+    of the 0.33 N force RMSE), an artefact of the step: it shrinks as the step does (0.15 N at
+    1 ms, 0.09 N at 0.5 ms). With 0.5 the chatter is gone (3 N at 20 cm/s: 0.40 -> 0.0002 N
+    after a 0.1 s average) and the tip presses 0.5 mm into the wall instead of 0.8 mm."""
     wall_friction: float = 0.4
     """Coulomb friction coefficient of pen on wall (measured in the paper)."""
     pen: PenCurve = field(default_factory=PenCurve)

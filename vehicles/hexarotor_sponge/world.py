@@ -144,7 +144,8 @@ def build_mjcf(params: HexarotorParams, surface: Surface, dt_s: float) -> str:
                  springref="{springref}" damping="{params.pen_damping_nspm}"/>
           <inertial pos="-0.02 0 0" mass="{params.pen_mass_kg}" diaginertia="1e-5 1e-5 1e-5"/>
           <geom name="sponge" type="mesh" mesh="cone" contype="2" conaffinity="1"
-                friction="{mu} 0.005 0.0001" mass="0"/>
+                friction="{mu} 0.005 0.0001" mass="0"
+                solimp="{params.sponge_impedance_touch} 0.95 0.001"/>
         </body>
       </body>
     </body>
