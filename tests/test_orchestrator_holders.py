@@ -6,7 +6,13 @@ from __future__ import annotations
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bus.messages import AgentReport, JobMetrics, SubmitRequest, VehicleStatus
+from bus.messages import (
+    AgentReport,
+    JobMetrics,
+    SubmitRequest,
+    VehicleStateName,
+    VehicleStatus,
+)
 from orchestrator.core import Book, CoreConfig, Effects
 from orchestrator.fleet import VehicleInfo
 
@@ -27,7 +33,7 @@ def _submit(book: Book, job_id: str, now: float) -> None:
 
 
 def _say(book: Book, vid: str, now: float, job_id: str | None = None) -> Effects:
-    state = "writing" if job_id else "idle"
+    state: VehicleStateName = "writing" if job_id else "idle"
     return book.status(
         VehicleStatus(vehicle_id=vid, kind="quadrotor-brush", state=state, job_id=job_id), now
     )
@@ -123,7 +129,8 @@ def test_a_holding_report_confirms_the_job_and_changes_nothing() -> None:
     reply, eff = book.report(AgentReport(vehicle_id="uav1", job_id="j1", event="holding"), 1.0)
     assert reply.ok and book.jobs["j1"].state == "assigned" and not eff.jobs
     other = AgentReport(vehicle_id="uav2", job_id="j1", event="holding")
-    assert book.report(other, 1.1)[0].error.code == "not_assigned"
+    refused = book.report(other, 1.1)[0].error
+    assert refused is not None and refused.code == "not_assigned"
 
 
 @settings(max_examples=200, deadline=None)
@@ -169,7 +176,7 @@ def test_an_outage_never_gives_a_lost_vehicles_job_away_within_the_hold(
         if step % 5 == 0:  # heartbeats
             for vid in (v for v, here in present.items() if here):
                 active = book.active_job_of(vid)
-                job_id = says["uav1"] if vid == "uav1" else active and active.job_id
+                job_id = says["uav1"] if vid == "uav1" else active.job_id if active else None
                 effs.append(_say(book, vid, now, job_id))
         for eff in effs:
             if ("uav2", "j1") in _assigned(eff):
