@@ -2,8 +2,8 @@
 
 A one-off command, kept light: it reads only the bus part of the show file
 (:mod:`showfile.bus_view`; the full loader judges a file that view does not vouch for) and asks
-the orchestrator itself rather than through :mod:`orchestrator.client`, which imports the show
-models: neither pydantic nor numpy is loaded (tests/test_cli_imports.py).
+through :mod:`orchestrator.client`: neither pydantic nor numpy is loaded
+(tests/test_cli_imports.py).
 """
 
 from __future__ import annotations
@@ -46,18 +46,10 @@ def _show_bus(path: Path) -> ShowBus:
 
 
 def _snapshot(path: Path, timeout_s: float) -> ShowSnapshot:
-    """The orchestrator's current view (as :func:`orchestrator.client.snapshot` asks it)."""
-    from bus.keys import ShowKeys
-    from bus.messages import ShowSnapshot
-    from bus.rpc import query_one
-    from bus.session import open_session
-    from trust.settings import session_settings
+    """The orchestrator's current view."""
+    from orchestrator.client import snapshot
 
-    show = _show_bus(path)
-    with open_session(session_settings(show, "operator"), role="client") as session:
-        return query_one(
-            session, ShowKeys(show.show_id).snapshot, None, ShowSnapshot, timeout_s=timeout_s
-        )
+    return snapshot(_show_bus(path), timeout_s=timeout_s)
 
 
 def run(args: argparse.Namespace) -> int:

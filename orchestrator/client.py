@@ -1,7 +1,9 @@
 """Blocking client calls to a show's orchestrator, for the command line (and scripts).
 
 Each call opens a Zenoh client session to the show's router endpoints as the show's
-``operator`` identity, asks, and closes it.
+``operator`` identity, asks, and closes it. It needs only the bus part of a show
+(:class:`showfile.bus_view.ShowBus`: a loaded show, or the light view one-off commands read), so
+importing this module loads neither pydantic nor numpy.
 Errors: :class:`bus.rpc.NoReplyError` (no orchestrator answered), :class:`bus.rpc.RemoteError`
 (it answered with an error), :class:`bus.session.SessionOpenError` (no router).
 """
@@ -20,14 +22,14 @@ from bus.messages import (
 )
 from bus.rpc import query_one
 from bus.session import open_session
-from showfile import Show
+from showfile.bus_view import ShowBus
 from trust.settings import session_settings
 
 DEFAULT_TIMEOUT_S = 5.0
 
 
 def submit(
-    show: Show,
+    show: ShowBus,
     *,
     text: str | None = None,
     strokes: dict[str, Any] | None = None,
@@ -44,7 +46,7 @@ def submit(
 
 
 def command(
-    show: Show, operator_command: OperatorCommand, *, timeout_s: float = DEFAULT_TIMEOUT_S
+    show: ShowBus, operator_command: OperatorCommand, *, timeout_s: float = DEFAULT_TIMEOUT_S
 ) -> CommandReply:
     """Send an operator command; the reply says what happened."""
     with open_session(session_settings(show, "operator"), role="client") as session:
@@ -57,7 +59,7 @@ def command(
         )
 
 
-def snapshot(show: Show, *, timeout_s: float = DEFAULT_TIMEOUT_S) -> ShowSnapshot:
+def snapshot(show: ShowBus, *, timeout_s: float = DEFAULT_TIMEOUT_S) -> ShowSnapshot:
     """The orchestrator's current view: every job (latest finished ones too) and vehicle."""
     with open_session(session_settings(show, "operator"), role="client") as session:
         return query_one(

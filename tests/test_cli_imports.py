@@ -90,7 +90,7 @@ def test_status_imports_neither_numpy_nor_pydantic(tmp_path: Path) -> None:
         "multicast_scouting: false", "multicast_scouting: false\n  open_timeout_s: 0"
     )
     show.write_text(text, encoding="utf-8")
-    unwanted = ("numpy", "pydantic", "showfile.models", "orchestrator", "asyncio")
+    unwanted = ("numpy", "pydantic", "showfile.models", "orchestrator.core", "asyncio")
     code = (
         "import contextlib, io, json, sys\n"
         "from cli.main import main\n"
