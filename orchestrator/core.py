@@ -22,17 +22,15 @@ from bus.messages import (
     CommandReply,
     ErrorInfo,
     Event,
-    JobAssignment,
     ShowSnapshot,
     SubmitReply,
     SubmitRequest,
-    VehicleCommand,
     VehicleStatus,
 )
-from orchestrator import holders, positions, presence, reports
+from orchestrator import assignment, positions, presence, reports
 from orchestrator.core_types import CoreConfig, Effects, Level
 from orchestrator.finished import MAX_FINAL_JOBS, FinishedJobs
-from orchestrator.fleet import VehicleView, queue_etas, ready_for_job
+from orchestrator.fleet import VehicleView, queue_etas
 from orchestrator.jobs import WAITING_STATES, Job, to_state, transition, update
 from orchestrator.kinds import KindMatch
 from orchestrator.operator import apply_operator
@@ -121,6 +119,10 @@ class Book:
         """The queued job that was taken back from this lost vehicle and may wait for it."""
         job_id = self._awaited.get(vehicle_id)
         return None if job_id is None else self.jobs[job_id]
+
+    def vehicles_with_jobs(self) -> set[str]:
+        """Ids of the vehicles holding an active job."""
+        return set(self._active)
 
     def active_jobs(self) -> list[Job]:
         """Assigned and writing jobs, in submission order."""
@@ -395,90 +397,16 @@ class Book:
             self.put(eff, update(job, now_s, estimate_s=first))
         return self.settle(eff, now_s)
 
-    # --- assignment ---------------------------------------------------------------------------
+    # --- assignment (orchestrator/assignment.py) -----------------------------------------------
     def assign(self, eff: Effects, now_s: float) -> None:
         """Give queued jobs, in order, to ready vehicles whose board is free."""
-        if self.queue_paused:
-            return
-        queue = self.queue()
-        if not queue:
-            return
-        busy_boards = self.busy_boards()
-        busy_vehicles = set(self._active)
-        for view in self.vehicles.values():
-            if not queue:
-                break
-            vid = view.info.vehicle_id
-            if vid in busy_vehicles or view.info.board_id in busy_boards:
-                continue
-            if view.info.board_id in self.dirty_boards:
-                continue
-            if not ready_for_job(view, now_s):
-                continue
-            job = next(
-                (j for j in queue if self.kinds.may_take(j, vid) and holders.assignable(j, now_s)),
-                None,
-            )
-            if job is None:
-                continue
-            queue.remove(job)
-            holders.warn_if_taken_over(self, eff, job, vid, now_s)
-            job = self.put(
-                eff,
-                transition(
-                    job,
-                    "assigned",
-                    now_s,
-                    vehicle_id=vid,
-                    board_id=view.info.board_id,
-                    assigned_at_s=now_s,
-                    attempts=job.attempts + 1,
-                    progress=0.0,
-                    error=None,
-                    holder_hold_until_s=None,
-                ),
-            )
-            busy_boards.add(view.info.board_id)
-            view.mismatch_since_s = None
-            assignment = JobAssignment(
-                job_id=job.job_id, text=job.text, strokes=job.strokes, attempt=job.attempts
-            )
-            eff.commands.append((vid, VehicleCommand(command="assign", job=assignment)))
-            self.event(
-                eff,
-                now_s,
-                "info",
-                "job_assigned",
-                f"{job.label} -> {vid} (attempt {job.attempts})",
-                vehicle_id=vid,
-                job_id=job.job_id,
-            )
-            eff.fleet_changed = True
+        assignment.assign(self, eff, now_s)
 
     def assignment_result(
         self, vehicle_id: str, job_id: str, reply: CommandReply | None, now_s: float
     ) -> Effects:
         """The agent's answer to an assign command (None: no answer)."""
-        eff = Effects()
-        if reply is not None and reply.ok:
-            return eff
-        view = self.vehicles.get(vehicle_id)
-        if view is not None:
-            view.refused_until_s = now_s + self.config.refuse_backoff_s
-        job = self.jobs.get(job_id)
-        if job is not None and job.state == "assigned" and job.vehicle_id == vehicle_id:
-            why = reply.message if reply is not None else "no answer"
-            if reply is not None and reply.error is not None:
-                why = reply.error.message
-            self.requeue(
-                eff,
-                update(job, now_s, attempts=job.attempts - 1),
-                now_s,
-                f"{vehicle_id} did not take the job: {why}",
-                lost=False,
-            )
-        self.assign(eff, now_s)
-        return self.settle(eff, now_s)
+        return self.settle(assignment.answered(self, vehicle_id, job_id, reply, now_s), now_s)
 
     # --- vehicles and reports (orchestrator/presence.py, orchestrator/reports.py) ----------------
     def liveliness(self, vehicle_id: str, alive: bool, now_s: float) -> Effects:
