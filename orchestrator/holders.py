@@ -18,7 +18,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from orchestrator.core_types import Effects
-from orchestrator.jobs import Job, update
+from orchestrator.jobs import Job, transition, update
 
 if TYPE_CHECKING:
     from orchestrator.core import Book
@@ -66,3 +66,31 @@ def heard_without(
     book.event(
         eff, now_s, "info", "job_released", message, vehicle_id=vehicle_id, job_id=job.job_id
     )
+
+
+def reclaim(book: Book, eff: Effects, job: Job, vehicle_id: str, now_s: float) -> bool:
+    """``vehicle_id`` named ``job`` (a status or a report): if the job is back in the queue with
+    it as the last holder and nobody else has it, the vehicle has it again; True if so."""
+    view = book.vehicles.get(vehicle_id)
+    if job.state != "queued" or job.vehicle_id != vehicle_id or view is None:
+        return False  # only the last holder, only while nobody else has it
+    if not view.alive or view.held or book.active_job_of(vehicle_id) is not None:
+        return False  # held: the operator took the job away (sent before the agent knew)
+    if view.info.board_id in book.busy_boards():
+        return False
+    reclaimed = transition(
+        job,
+        "assigned",
+        now_s,
+        board_id=view.info.board_id,
+        assigned_at_s=now_s,
+        error=None,
+        holder_hold_until_s=None,
+    )
+    book.put(eff, reclaimed)
+    message = f"{vehicle_id} still has {job.label}"
+    book.event(
+        eff, now_s, "info", "job_reclaimed", message, vehicle_id=vehicle_id, job_id=job.job_id
+    )
+    eff.fleet_changed = True
+    return True

@@ -22,7 +22,6 @@ from bus.messages import Event, VehicleStatus
 from orchestrator import holders
 from orchestrator.core_types import Effects
 from orchestrator.fleet import VehicleView
-from orchestrator.jobs import transition
 
 RELAY_BURST = 10.0
 """Events of one vehicle relayed at once before the rate limit applies."""
@@ -76,8 +75,10 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
     view.status_at_s = view.last_seen_s = view.heard_at_s = now_s
     view.message = status.message
     changed = _maybe_back(book, eff, view, now_s) or changed
-    _reclaim(book, eff, view, status.job_id, now_s)
-    if not view.lost:
+    if not view.lost:  # back from a loss with the job it had: writing it, or written
+        named = book.jobs.get(status.job_id) if status.job_id is not None else None
+        if named is not None:
+            holders.reclaim(book, eff, named, view.info.vehicle_id, now_s)
         holders.heard_without(book, eff, view.info.vehicle_id, status.job_id, now_s)
     job = book.active_job_of(status.vehicle_id)
     if job is not None and status.job_id != job.job_id:
@@ -101,36 +102,6 @@ def _restarted_since(view: VehicleView, assigned_at_s: float | None) -> bool:
         and assigned_at_s is not None
         and view.token_at_s > assigned_at_s
     )
-
-
-def _reclaim(book: Book, eff: Effects, view: VehicleView, job_id: str | None, now_s: float) -> None:
-    """A vehicle back from a loss (e.g. the router restarted) that still holds the job it had:
-    writing it, or written with the report on its way. Queued again meanwhile and not given to
-    anyone else, the job is its own again, rather than written a second time elsewhere."""
-    vid = view.info.vehicle_id
-    job = book.jobs.get(job_id) if job_id is not None else None
-    if job is None or job.state != "queued" or job.vehicle_id != vid:
-        return  # only the last holder, only while nobody else has it
-    if view.lost or not view.alive or view.held or book.active_job_of(vid) is not None:
-        return  # held: the operator took the job away (a status sent before the agent knew)
-    if view.info.board_id in book.busy_boards():
-        return
-    board = view.info.board_id
-    book.put(
-        eff,
-        transition(
-            job,
-            "assigned",
-            now_s,
-            board_id=board,
-            assigned_at_s=now_s,
-            error=None,
-            holder_hold_until_s=None,
-        ),
-    )
-    message = f"{vid} still has {job.label}"
-    book.event(eff, now_s, "info", "job_reclaimed", message, vehicle_id=vid, job_id=job.job_id)
-    eff.fleet_changed = True
 
 
 def telemetry(

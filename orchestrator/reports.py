@@ -19,6 +19,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from bus.messages import AgentReport, CommandReply, ErrorInfo, VehicleCommand
+from orchestrator import holders
 from orchestrator.core_types import Effects
 from orchestrator.jobs import Job, transition, update
 from orchestrator.written import split_written
@@ -50,7 +51,7 @@ def apply_report(book: Book, rep: AgentReport, eff: Effects, now_s: float) -> Co
     if owner != rep.vehicle_id:
         if rep.event == "failed":
             return CommandReply(ok=True, message="ignored: the job is not yours any more")
-        if not _reclaim(book, eff, job, rep, now_s):
+        if not holders.reclaim(book, eff, job, rep.vehicle_id, now_s):
             return _not_assigned(job, rep, eff)
         job = book.jobs[job.job_id]
     if rep.event == "failed":
@@ -173,35 +174,3 @@ def _writing(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float)
     )
     book.put(eff, writing)
     return CommandReply(ok=True, message=f"{rep.event} recorded")
-
-
-def _reclaim(book: Book, eff: Effects, job: Job, rep: AgentReport, now_s: float) -> bool:
-    """A vehicle still writing a job that was requeued (e.g. after a liveliness flap)."""
-    view = book.vehicles.get(rep.vehicle_id)
-    if job.state != "queued" or view is None or not view.alive or view.held:
-        return False  # held: the operator took the job away
-    if book.active_job_of(rep.vehicle_id) is not None or view.info.board_id in book.busy_boards():
-        return False
-    book.put(
-        eff,
-        transition(
-            job,
-            "assigned",
-            now_s,
-            vehicle_id=rep.vehicle_id,
-            board_id=view.info.board_id,
-            assigned_at_s=now_s,
-            error=None,
-            holder_hold_until_s=None,
-        ),
-    )
-    book.event(
-        eff,
-        now_s,
-        "info",
-        "job_reclaimed",
-        f"{rep.vehicle_id} still writes {job.label}",
-        vehicle_id=rep.vehicle_id,
-        job_id=job.job_id,
-    )
-    return True
