@@ -21,7 +21,6 @@ import os
 import time
 import uuid
 from collections.abc import Callable, Coroutine, Iterable
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -48,10 +47,11 @@ from bus.rpc import NoReplyError, RemoteError, aquery_one, serve_async
 from bus.session import Session
 from orchestrator.compaction import CompactionSchedule, HistoryPolicy
 from orchestrator.core import MAX_FINAL_JOBS, Book, CoreConfig, Effects
+from orchestrator.estimates import DurationEstimates
 from orchestrator.fleet import EtaModel, VehicleInfo
 from orchestrator.jobs import to_state
 from orchestrator.store import JobStore, StoreError
-from orchestrator.submissions import SubmissionError, planned_durations_s, validate_submission
+from orchestrator.submissions import SubmissionError, validate_submission
 from orchestrator.written import attach_written, with_written
 from showfile import Show
 from showfile.checks import cannot_write
@@ -62,15 +62,6 @@ TICK_PERIOD_S = 0.1
 """Wall time between timer decisions (loss detection, confirmation, assignment), [s]."""
 VEHICLE_COMMAND_TIMEOUT_S = 2.0
 """How long an agent has to answer a command, [s]."""
-MAX_PENDING_PLANS = 64
-"""Planner runs for ETAs waiting at most (one worker, about 25-100 ms each); beyond, submissions
-keep their rough estimate. 64 gives every submission of a burst its planned duration (the ETA
-figures of ``bench_show.py --eta`` need it; 4 left most of a 16-character burst on rough
-estimates); the planning caches it fills are bounded (``CACHED_DURATIONS``, the glyph and
-planner LRU caches), so the orchestrator's memory stays within the bus fuzz's bound."""
-CACHED_DURATIONS = 256
-"""Texts whose planned durations are kept for their next submission (a show's corpus repeats;
-the kiosk's visitors do not)."""
 SNAPSHOT_STROKES_BYTES = 300_000
 """JSON bytes of waiting jobs' strokes a ``snapshot`` reply carries at most (replies stay well
 under ``bus.messages.MAX_PAYLOAD_BYTES``); ``jobs/<id>`` publications always carry them."""
@@ -158,13 +149,12 @@ class OrchestratorService:
             held_vehicles=stored.held_vehicles,
             dirty_boards=stored.dirty_boards,
         )
-        self._planner = ThreadPoolExecutor(max_workers=1, thread_name_prefix="eta-planner")
+        self.estimates = DurationEstimates(show)
+        """Planned durations for queue ETAs (``orchestrator/estimates.py``)."""
         self._tasks: set[asyncio.Task[Any]] = set()
-        self._plans_pending = 0
         self._stop: asyncio.Event | None = None
         self.fatal: BaseException | None = None
         """Set when the database failed; :meth:`run` raises it after stopping."""
-        self._durations: dict[str, dict[str, float]] = {}
         self.history = history_policy(show)
         self._compaction = CompactionSchedule()
         self.fleet_changed = False
@@ -314,13 +304,6 @@ class OrchestratorService:
         self._record(self.keys.submit + "#reply", reply)
         return reply
 
-    def remember_durations(self, cache_key: str, durations: dict[str, float]) -> None:
-        """Keep a text's planned durations for its next submission; the oldest text is
-        forgotten past ``CACHED_DURATIONS`` (visitors type without end)."""
-        self._durations[cache_key] = durations
-        if len(self._durations) > CACHED_DURATIONS:
-            del self._durations[next(iter(self._durations))]
-
     def _forgotten_submission(self, request: SubmitRequest) -> SubmitReply | None:
         """The reply to a repeated idempotency key whose job finished long ago (the Book forgot
         it; the database still has it), or None."""
@@ -332,26 +315,9 @@ class OrchestratorService:
 
     async def _refine_estimate(self, job_id: str, glyph: Any, cache_key: str | None) -> None:
         """Replace the rough estimate by the planner's duration (best effort, bounded work)."""
-        durations = self._durations.get(cache_key) if cache_key else None
-        if durations is None:
-            if self._plans_pending >= MAX_PENDING_PLANS:
-                return  # a burst of submissions: keep the rough estimates
-            self._plans_pending += 1
-            loop = asyncio.get_running_loop()
-            try:
-                durations = await loop.run_in_executor(
-                    self._planner, planned_durations_s, glyph, self.show
-                )
-            except Exception:
-                log.exception("planning %s for its ETA failed", job_id)
-                return
-            finally:
-                self._plans_pending -= 1
-            if not durations:
-                return
-            if cache_key:
-                self.remember_durations(cache_key, durations)
-        self.apply(self.book.set_estimate(job_id, durations, self.clock()))
+        durations = await self.estimates.planned(job_id, glyph, cache_key)
+        if durations:
+            self.apply(self.book.set_estimate(job_id, durations, self.clock()))
 
     async def on_command(self, command: OperatorCommand) -> CommandReply:
         self._record(self.keys.command + "#request", command)
@@ -520,6 +486,6 @@ class OrchestratorService:
             for task in list(self._tasks):
                 task.cancel()
             await asyncio.gather(*self._tasks, return_exceptions=True)
-            self._planner.shutdown(wait=False, cancel_futures=True)
+            self.estimates.shutdown()
         if self.fatal is not None:
             raise self.fatal

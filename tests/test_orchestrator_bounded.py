@@ -14,9 +14,10 @@ import msgspec
 
 from bus.messages import OperatorCommand, SubmitRequest
 from orchestrator.core import MAX_FINAL_JOBS, Book
+from orchestrator.estimates import CACHED_DURATIONS
 from orchestrator.finished import FinishedJobs
 from orchestrator.jobs import Job, transition
-from orchestrator.service import CACHED_DURATIONS, OrchestratorService, core_config
+from orchestrator.service import OrchestratorService, core_config
 from orchestrator.store import JobStore
 from showfile import load_show
 
@@ -94,9 +95,9 @@ def test_planned_durations_are_kept_for_the_latest_texts_only(tmp_path: Path) ->
     with JobStore(tmp_path / "s.sqlite3") as store:
         service = OrchestratorService(SHOW, session=_NoSession(), store=store)  # type: ignore[arg-type]
         for k in range(CACHED_DURATIONS + 10):
-            service.remember_durations(f"text:{k}", {"quadrotor-brush": 10.0 + k})
-        assert len(service._durations) == CACHED_DURATIONS
-        assert "text:9" not in service._durations and "text:10" in service._durations
+            service.estimates.remember(f"text:{k}", {"quadrotor-brush": 10.0 + k})
+        assert len(service.estimates.cached) == CACHED_DURATIONS
+        assert "text:9" not in service.estimates.cached and "text:10" in service.estimates.cached
 
 
 class _NoSession:
