@@ -7,7 +7,7 @@ agent (vehicles/<id>/command, vehicles/<id>/assign): valid-looking requests with
 (unknown fields, wrong types, missing fields, huge and non-finite numbers, overlong strings, deep
 nesting, invalid UTF-8, out-of-range stroke coordinates), byte-level damage, random bytes and a
 few oversized payloads. Every message must be answered (a malformed one with an error), no
-process may crash, the orchestrator's RSS must stay within 10 % after a warm-up (see WARM_UP),
+process may crash, the orchestrator's memory may not grow past a warm-up (see WARM_UP),
 the services must answer normal requests afterwards, and the show must be unchanged. Each key is
 queried as the identity the show's access control lets reach it (operator, the vehicle, the
 orchestrator).
@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import re
+import statistics
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -141,7 +142,15 @@ WARM_UP = 5000
 messages: Zenoh maps another 16 MB shared-memory segment and starts one more thread, which glibc
 gives its own malloc arena (its Python heap is flat from the start: tracemalloc +0.8 % from
 2,000 to 30,000 messages). Hence private memory, at most two malloc arenas in the children
-(``MALLOC_ARENA_MAX``), and a baseline after the warm-up: growth past it is a leak."""
+(``MALLOC_ARENA_MAX``), and a baseline after the warm-up: growth past it is a leak.
+
+glibc's default mmap threshold follows the largest block freed (up to 32 MB), so after the first
+heavy payloads their buffers come from the heap and private memory steps by 3-12 MB up and down
+with whichever batch holds them (a CI run failed on a +14 % step near the end, flat after it).
+A fixed threshold (``MALLOC_MMAP_THRESHOLD_``, ``MALLOC_TRIM_THRESHOLD_``) hands such buffers back
+on release: the series is then flat within 1 %. Growth is the median of the last third of the
+samples against the first third: an orchestrator that keeps every request's bytes grows 15 %,
+one that keeps 200 bytes of each 1-2 % (within what this can tell)."""
 
 
 def malformed(target: Target, payload: bytes | None) -> bool | None:
@@ -247,6 +256,8 @@ def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveShow]:
     path, show = derived_show(SOLO, out)
     with pytest.MonkeyPatch.context() as patch:  # children inherit it (see WARM_UP)
         patch.setenv("MALLOC_ARENA_MAX", "2")
+        patch.setenv("MALLOC_MMAP_THRESHOLD_", "65536")
+        patch.setenv("MALLOC_TRIM_THRESHOLD_", "131072")
         run = ShowRun(path, show, log_dir=out / "logs", say=lambda _: None)
     with run, ExitStack() as stack:
         sessions = {
@@ -340,7 +351,9 @@ def test_every_fuzzed_request_is_answered_and_the_show_survives(live: LiveShow) 
     )
     assert not failures, f"{len(failures)} bad answers, e.g. {failures[:5]}"
     assert codes <= documented_codes(), codes - documented_codes()
-    assert max(rss) <= 1.10 * rss[0], f"orchestrator memory grew: {rss}"
+    third = len(rss) // 3
+    early, late = statistics.median(rss[:third]), statistics.median(rss[-third:])
+    assert late <= 1.05 * early, f"orchestrator memory grew {late / early - 1:.1%}: {rss}"
     for name in ("orchestrator", f"agent {run.show.vehicles[0].id}"):
         assert run.supervisor.restarts(name) == 0, f"{name} restarted"
     assert run.supervisor.pid("orchestrator") == orchestrator_pid
