@@ -193,6 +193,7 @@ def main() -> None:
     loop_rtf, physics_rtf = realtime_factor(first_plan)
     table = _table(rows)
     _print_table(table, len(glyphs), seeds)
+    _print_wins(rows)
     _print_planning(timing)
     for v, peak, iou in sweep:
         print(f"speed sweep: limit {v * 100:.0f} cm/s, peak {peak * 100:.1f} cm/s, IoU {iou:.3f}")
@@ -255,6 +256,20 @@ def _print_table(table: Table, glyphs: int, seeds: int) -> None:
         )
 
 
+def _print_wins(rows: dict[str, list[dict[str, float]]]) -> None:
+    """Runs (glyph and seed) in which ours beat each baseline, per metric: Table I's claim,
+    run by run rather than on the means."""
+    for name in ("control baseline", "planning baseline"):
+        counts = []
+        for m in METRICS:
+            better = [
+                (o[m] > b[m]) if m == "iou" else (o[m] < b[m])
+                for o, b in zip(rows["ours"], rows[name], strict=True)
+            ]
+            counts.append(f"{m} {sum(better)}/{len(better)}")
+        print(f"ours better than the {name}, runs: " + ", ".join(counts))
+
+
 def _print_planning(timing: dict[str, list[Timing]]) -> None:
     """Planning time per letter of each planner, and the cached one's speed-up on the peer."""
     for name, ts in timing.items():
@@ -283,7 +298,7 @@ def _report(plan: WritingPlan, glyph: str, path: Path) -> None:
 
 
 def _cell(value: tuple[float, float], scale: float) -> str:
-    return f"{value[0] * scale:>10.2f} +-{value[1] * scale:4.2f}"
+    return f"{value[0] * scale:>10.3f} +-{value[1] * scale:5.3f}"
 
 
 def _figure(table, sweep, plan, path: Path) -> None:  # type: ignore[no-untyped-def]
