@@ -88,6 +88,7 @@ import asyncio
 import collections
 import itertools
 import json
+import operator
 import os
 import signal
 import statistics
@@ -98,6 +99,7 @@ import threading
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -165,7 +167,11 @@ async def record_figures(host: object, path: Path) -> None:
                     awake += 1
                     ran += tick - last[0]
                     due += (now_s - wall_s) / service.clock.wall_period_s
-                    starts = [s for s in service.tick_starts_s if s > wall_s]
+                    starts = list(
+                        itertools.takewhile(
+                            partial(operator.lt, wall_s), reversed(service.tick_starts_s)
+                        )
+                    )[::-1]  # the last second's, newest first: not a scan of the history
                     jitter += [abs(b - a - PERIOD_S) * 1e3 for a, b in itertools.pairwise(starts)]
                 line = {
                     "t": now_s,
@@ -466,6 +472,9 @@ def wait_final(
             continue
         for job in jobs:
             if job.job_id in job_ids and job.state in ("done", "failed", "cancelled", "rejected"):
+                if job.job_id not in final and job.state != "done":
+                    why = job.error.message if job.error is not None else "no reason given"
+                    print(f"    job {job.job_id} {job.state} after {job.attempts} attempts: {why}")
                 final[job.job_id] = job.state
         time.sleep(1.0)
     return final

@@ -240,8 +240,15 @@ class Book:
         previous = self.jobs.get(job.job_id)
         self._index(previous, job)
         eff.jobs[job.job_id] = job
+        eff.progressed.discard(job.job_id)
         self.kinds.forget(job)
         self._forget(self.finished.changed(previous, job))
+        return job
+
+    def put_progress(self, eff: Effects, job: Job) -> Job:
+        """:meth:`put` a job whose only change is its progress (published, not stored)."""
+        self.put(eff, job)
+        eff.progressed.add(job.job_id)
         return job
 
     def _forget(self, job_ids: Iterable[str]) -> None:

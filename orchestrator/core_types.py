@@ -60,6 +60,9 @@ class Effects:
     written: dict[str, WrittenInk] = field(default_factory=dict)
     """Job id -> the ink picture of a job just done (kept out of ``jobs``): store it with the
     job, and send it on that job's ``jobs/<id>`` publication."""
+    progressed: set[str] = field(default_factory=set)
+    """Jobs in ``jobs`` whose only change is their progress: published, not stored (replaceable
+    data, see ``store.py``; a restart shows the progress of their last stored change)."""
 
     @property
     def empty(self) -> bool:

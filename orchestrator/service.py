@@ -179,7 +179,8 @@ class OrchestratorService:
                 "dirty_boards": self.book.dirty_boards,
             }
         try:
-            self.store.save(eff.jobs.values(), eff.events, written=eff.written, **settings)
+            changed = [job for job_id, job in eff.jobs.items() if job_id not in eff.progressed]
+            self.store.save(changed, eff.events, written=eff.written, **settings)
         except Exception as exc:
             # Memory and disk may now disagree: stop, and let the supervisor restart us from
             # the database (crash-only). The caller's query gets an ``internal`` error.

@@ -35,6 +35,7 @@ from bus.session import BusSettings, Session, free_tcp_endpoint, open_session
 from cli.main import main as skyquill
 from orchestrator.app import serve_show
 from orchestrator.jobs import Job
+from orchestrator.service import OrchestratorService
 from orchestrator.store import JobStore
 from showfile import SecuritySettings, Show, dump_show, load_show
 
@@ -445,3 +446,51 @@ def test_cli_submit_status_approve(tmp_path: Path, endpoint: str) -> None:
         assert all("state" in v for v in data["vehicles"])
     with JobStore(show.database_path) as store:
         assert store.load().queue_paused
+
+
+def test_progress_reaches_viewers_but_not_the_database(
+    tmp_path: Path, endpoint: str, client: Session
+) -> None:
+    """Progress comes twice a second from every writer: an fsynced commit each took 5-1,500 ms
+    of the orchestrator's loop on a busy disk (50 writers: reports unanswered past the agents'
+    lease). The changes around it are stored. (The service's decisions without its timers: a
+    queue-ETA plan finishing late would store the job, progress and all.)"""
+    _, show = make_show(tmp_path, "progress", endpoint)
+    keys = ShowKeys(show.show_id)
+    seen: list[JobState] = []
+
+    async def decide(store: JobStore, bus: Session) -> None:
+        service = OrchestratorService(show, bus, store, clock=lambda: 100.0)
+        book = service.book
+        service.apply(book.liveliness("uav1", True, 100.0))
+        status = VehicleStatus(vehicle_id="uav1", kind="quadrotor-brush", state="idle")
+        service.apply(book.status(status, 100.0))
+        request = SubmitRequest(text="L")
+        reply, eff = book.submit("j1", request, label="L", estimate_s=20.0, now_s=100.0)
+        service.apply(eff)  # assigned to uav1 (nobody answers: not waited for)
+        assert reply.ok and book.jobs["j1"].vehicle_id == "uav1"
+
+        def report(**kw: Any) -> None:
+            answer, eff = book.report(AgentReport(vehicle_id="uav1", job_id="j1", **kw), 101.0)
+            assert answer.ok
+            service.apply(eff)
+
+        def stored() -> Job:
+            return next(j for j in store.load().jobs if j.job_id == "j1")
+
+        report(event="started", planned_duration_s=12.0)
+        report(event="progress", progress=0.5)
+        assert (stored().state, stored().progress) == ("writing", 0.0)
+        report(event="progress", progress=0.6, planned_duration_s=14.0)  # a change
+        assert (stored().planned_duration_s, stored().progress) == (14.0, 0.6)
+        for task in list(service._tasks):
+            task.cancel()
+
+    watch = subscribe(client, keys.jobs_all, JobState, lambda _, m: seen.append(m))
+    with (
+        JobStore(show.database_path) as store,
+        open_session(BusSettings(router_listen=[], connect=[endpoint]), role="client") as bus,
+    ):
+        asyncio.run(decide(store, bus))
+    eventually(lambda: [m.progress for m in seen][-3:] == [0.0, 0.5, 0.6], "progress published")
+    watch.undeclare()
