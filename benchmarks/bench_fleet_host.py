@@ -77,6 +77,16 @@ Measured on the shared 2-core machine under ``nice -n 15`` (others' load average
   p50 0.064 s, p95 0.33 s (max 1.03 s; the `skyquill status` command 1.78 s in that load);
   50/50 done; hosts 218 MiB idle, 346 MiB writing (+ 4 planning workers 640 MiB); tick jitter
   p50 4.9 ms, p99 109 ms; stop 3.5 s, nothing SIGKILLed.
+- The same case in four runs the next day (load 1-9 from the show itself): 50, 50, 47 and
+  32 of 50 done, the others failed after 3 attempts: agents gave 22-46 jobs up, "no
+  acknowledgement from the orchestrator for 1.5 s" (the lease), in bursts. The orchestrator's
+  loop stalled 0.4-1.8 s in fsynced SQLite commits, one per progress report (100 a second).
+  Progress no longer stored: 50/50 and 50/50, 9 and 21 give-ups; factor 0.59 / 0.57 on 1.0 core,
+  orchestrator 0.55-0.59 cores. What still stalls it are the commits of real changes (a burst
+  of give-ups makes a burst of them). Tried and dropped: Zenoh callbacks on Zenoh's own threads
+  (``indirect=False``) for queries, or for every subscriber and queryable: 26, 41, 40 and 11 of
+  50 done (its I/O threads then wait for the interpreter lock), though a query's own thread
+  start cost the fleet host's loop 2-3 ms.
 
 ``--profile PATH`` writes a cProfile of each fleet host to ``PATH.<host number>``.
 """
