@@ -447,7 +447,8 @@ def window_figures(case: Case, stats: list[Path], started: float, ended: float) 
         case.jitter_ms += figures["jitter_ms"]
         case.lag_ms += figures["lag_ms"]
     case.rtf = ran / due if due > 0 else float("nan")
-    case.awake = statistics.mean(awake) if awake else 0.0
+    # one line a second from each host: the mean of a host's count, times the hosts
+    case.awake = statistics.mean(awake) * len(stats) if awake else 0.0
 
 
 def wait_writing(session: object, keys: ShowKeys, job_ids: list[str], timeout_s: float) -> None:
