@@ -45,7 +45,7 @@ class Gains:
     """Normal impedance damping K_e,d in [N s/m]. In contact the vehicle (3.5 kg) rides on the
     pen's spring (400 N/m): a 1.7 Hz mode that stroke events ring. At 15 N s/m (damping ratio
     0.36 with the sponge's) that ringing, not sensor noise, was the force error (0.09 N RMS in a
-    calm world as in wind, 1-3 Hz); 30 (0.53) takes a fifth off it; 40 rings less but lags."""
+    calm world as in wind, 1-3 Hz); 30 (0.53) takes a fifth off it, 40 less (bench_wall scan)."""
     kfp: float = 1.0
     """Force error proportional gain K_f,p (dimensionless). 1.0 against 0.4: force RMSE 0.080
     -> 0.063 N over four bench glyphs, the path unchanged; the loop leans on its estimate, so
