@@ -239,16 +239,13 @@ class Book:
     def put(self, eff: Effects, job: Job) -> Job:
         previous = self.jobs.get(job.job_id)
         self._index(previous, job)
+        if not _progress_only(previous, job):
+            eff.progressed.discard(job.job_id)
+        elif job.job_id not in eff.jobs:  # else: on top of a change of this decision, stored
+            eff.progressed.add(job.job_id)
         eff.jobs[job.job_id] = job
-        eff.progressed.discard(job.job_id)
         self.kinds.forget(job)
         self._forget(self.finished.changed(previous, job))
-        return job
-
-    def put_progress(self, eff: Effects, job: Job) -> Job:
-        """:meth:`put` a job whose only change is its progress (published, not stored)."""
-        self.put(eff, job)
-        eff.progressed.add(job.job_id)
         return job
 
     def _forget(self, job_ids: Iterable[str]) -> None:
@@ -460,3 +457,12 @@ class Book:
     def vehicle_ids(self, vehicle_id: str | None) -> Sequence[str]:
         """One vehicle (validated by the caller) or all."""
         return [vehicle_id] if vehicle_id is not None else list(self.vehicles)
+
+
+def _progress_only(previous: Job | None, job: Job) -> bool:
+    """Whether ``job`` differs from ``previous`` in its progress (and time of update) alone:
+    published, not stored (``Effects.progressed``)."""
+    if previous is None or previous.progress == job.progress:
+        return False
+    same = msgspec.structs.replace(previous, progress=job.progress, updated_at_s=job.updated_at_s)
+    return same == job

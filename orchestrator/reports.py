@@ -172,8 +172,5 @@ def _writing(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float)
         planned_duration_s=rep.planned_duration_s or job.planned_duration_s,
         progress=max(job.progress, min(1.0, rep.progress)),
     )
-    if job.state == "writing" and writing.planned_duration_s == job.planned_duration_s:
-        book.put_progress(eff, writing)  # twice a second per writer: not worth an fsync each
-    else:
-        book.put(eff, writing)
+    book.put(eff, writing)  # progress alone (twice a second per writer) is not stored
     return CommandReply(ok=True, message=f"{rep.event} recorded")
