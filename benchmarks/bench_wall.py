@@ -37,9 +37,8 @@ from wall_opti_peer import solve_period_opti
 
 from planner.glyphs.layout import fit_to_area
 from planner.glyphs.text import text_glyph
-from vehicles.hexarotor_sponge import KIND
 from vehicles.hexarotor_sponge.flight import FlySettings, fly_plan, start_base
-from vehicles.hexarotor_sponge.kind import WallSettings, with_default_widths
+from vehicles.hexarotor_sponge.kind import KIND, WallSettings, with_default_widths
 from vehicles.hexarotor_sponge.nlp import Limits, solve_period
 from vehicles.hexarotor_sponge.plan import (
     PlanSettings,

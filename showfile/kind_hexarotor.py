@@ -1,12 +1,19 @@
 """Settings of a ``hexarotor-sponge`` vehicle (the Flying Calligrapher) as a show file states them.
 
 The show's ``hexarotor`` section; ``vehicles.hexarotor_sponge.kind.settings_from``
-turns one into the kind's typed settings. SI units; widths and lengths in metres.
+turns one into the kind's typed settings. SI units; widths and lengths in metres. The defaults
+are the kind's own, ``vehicles.hexarotor_sponge.defaults`` (plain constants: importing them loads
+neither CasADi nor MuJoCo), so a show left at its defaults builds exactly the settings of
+``skyquill fly --kind hexarotor-sponge`` (tests/test_wall_kind.py).
 """
 
 from __future__ import annotations
 
+import math
+
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from vehicles.hexarotor_sponge import defaults
 
 
 class _Model(BaseModel):
@@ -16,19 +23,19 @@ class _Model(BaseModel):
 class PenSettings(_Model):
     """The sponge pen's calibration (paper Fig. 4c) and spring."""
 
-    width_coefficients_m: tuple[float, ...] = (2.0e-3, 3.2e-3, -0.2e-3)
+    width_coefficients_m: tuple[float, ...] = defaults.PEN_WIDTH_COEFFICIENTS_M
     """Line width [m] as a polynomial of normal force [N], lowest order first."""
-    force_min_n: float = Field(default=1.0, gt=0.0)
+    force_min_n: float = Field(default=defaults.PEN_FORCE_MIN_N, gt=0.0)
     """Lowest calibrated normal force in [N]."""
-    force_max_n: float = Field(default=6.0, gt=0.0)
+    force_max_n: float = Field(default=defaults.PEN_FORCE_MAX_N, gt=0.0)
     """Highest calibrated normal force in [N]."""
-    stiffness_npm: float = Field(default=400.0, gt=0.0)
+    stiffness_npm: float = Field(default=defaults.PEN_STIFFNESS_NPM, gt=0.0)
     """Spring stiffness in [N/m]."""
-    preload_n: float = Field(default=0.5, ge=0.0)
+    preload_n: float = Field(default=defaults.PEN_PRELOAD_N, ge=0.0)
     """Spring preload in [N]."""
-    default_width_m: float = Field(default=9e-3, gt=0.0)
+    default_width_m: float = Field(default=defaults.DEFAULT_WIDTH_M, gt=0.0)
     """Width in [m] where a stroke carries none and no profile applies."""
-    clamp_widths: bool = False
+    clamp_widths: bool = defaults.CLAMP_WIDTHS
     """Clamp wanted widths outside the pen's range (counted in the plan's report) instead of
     refusing the job."""
 
@@ -42,21 +49,22 @@ class PenSettings(_Model):
 class HexarotorKindSettings(_Model):
     """A fully-actuated hexarotor with a one-link arm writing on a wall."""
 
-    rotor_tilt_deg: float = Field(default=29.8, ge=0.0, lt=60.0)
-    """Tilt of each rotor about its arm, alternating sign, in [deg]."""
-    thrust_max_n: float = Field(default=14.0, gt=0.0)
+    rotor_tilt_deg: float = Field(default=math.degrees(defaults.ROTOR_TILT_RAD), ge=0.0, lt=60.0)
+    """Tilt of each rotor about its arm, alternating sign, in [deg] (default: the kind's 0.52 rad,
+    29.79 deg)."""
+    thrust_max_n: float = Field(default=defaults.THRUST_MAX_N, gt=0.0)
     """Largest thrust of one rotor in [N]."""
-    arm_length_m: float = Field(default=0.40, gt=0.0, le=2.0)
+    arm_length_m: float = Field(default=defaults.ARM_LENGTH_M, gt=0.0, le=2.0)
     """From the F/T sensor to the pen tip in [m]."""
-    wall_friction: float = Field(default=0.4, ge=0.0, le=2.0)
+    wall_friction: float = Field(default=defaults.WALL_FRICTION, ge=0.0, le=2.0)
     """Coulomb friction coefficient of pen on wall."""
-    v_max_mps: float = Field(default=0.20, gt=0.0)
+    v_max_mps: float = Field(default=defaults.V_MAX_MPS, gt=0.0)
     """Largest writing speed in [m/s] (paper: 20 cm/s)."""
-    a_max_mps2: float = Field(default=0.20, gt=0.0)
+    a_max_mps2: float = Field(default=defaults.A_MAX_MPS2, gt=0.0)
     """Largest acceleration in [m/s^2] (paper: 20 cm/s^2)."""
-    force_rate_max_nps: float = Field(default=2.0, gt=0.0)
+    force_rate_max_nps: float = Field(default=defaults.FORCE_RATE_MAX_NPS, gt=0.0)
     """Largest change of the normal force in [N/s] (paper: 2 N/s)."""
-    reach_m: float = Field(default=1.5, gt=0.0)
+    reach_m: float = Field(default=defaults.REACH_M, gt=0.0)
     """Farthest a stroke point may lie from the centre of the wall's writing area, in [m] (a
     writing area whose corners lie farther is refused by the show file)."""
     pen: PenSettings = PenSettings()

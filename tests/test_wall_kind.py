@@ -2,17 +2,19 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from planner.samples import TrajectorySamples
-from vehicles.hexarotor_sponge import KIND
-from vehicles.hexarotor_sponge.kind import WallSettings, with_default_widths
+from vehicles.hexarotor_sponge.kind import KIND, WallSettings, with_default_widths
 from vehicles.hexarotor_sponge.metrics import reference_base_m_enu
 from vehicles.hexarotor_sponge.params import HexarotorParams
 from vehicles.kind import FlownWriting, StrokeInput, WritingPlan
 from vehicles.surface import Surface
 
+SHOWS = Path(__file__).resolve().parent.parent / "shows"
 SURFACE = Surface.of("vertical", (0.0, 3.0, 2.0), 0.0)
 WIDTH_M = 10e-3
 
@@ -139,6 +141,58 @@ def test_show_settings_become_the_kinds_settings() -> None:
         PenSettings(force_min_n=3.0, force_max_n=2.0)
     with pytest.raises(ValidationError, match="extra"):
         HexarotorKindSettings.model_validate({"v_max": 1.0})
+
+
+def test_one_set_of_defaults_for_shows_and_fly() -> None:
+    """A show whose ``hexarotor`` section is left at its defaults, or missing, builds exactly
+    the settings ``skyquill fly --kind hexarotor-sponge`` plans and flies with (no show): each
+    figure both state comes from ``vehicles.hexarotor_sponge.defaults``."""
+    from showfile import load_show
+    from showfile.kind_hexarotor import HexarotorKindSettings
+    from vehicles.hexarotor_sponge import defaults
+    from vehicles.hexarotor_sponge.kind import settings_from
+
+    fly = KIND.settings(None, None)
+    assert fly == WallSettings()
+    built = settings_from(HexarotorKindSettings())
+    pairs = {
+        "rotor_tilt_deg -> params.rotor_tilt_rad": (
+            built.plan.params.rotor_tilt_rad,
+            fly.plan.params.rotor_tilt_rad,
+        ),
+        "thrust_max_n": (built.plan.params.thrust_max_n, fly.plan.params.thrust_max_n),
+        "arm_length_m": (built.plan.params.arm_length_m, fly.plan.params.arm_length_m),
+        "wall_friction": (built.plan.params.wall_friction, fly.plan.params.wall_friction),
+        "v_max_mps": (built.plan.limits.v_max_mps, fly.plan.limits.v_max_mps),
+        "a_max_mps2": (built.plan.limits.a_max_mps2, fly.plan.limits.a_max_mps2),
+        "force_rate_max_nps": (
+            built.plan.limits.force_rate_max_nps,
+            fly.plan.limits.force_rate_max_nps,
+        ),
+        "reach_m": (built.plan.reach_m, fly.plan.reach_m),
+        "pen.width_coefficients_m": (
+            built.plan.params.pen.coefficients_m,
+            fly.plan.params.pen.coefficients_m,
+        ),
+        "pen.force_min_n": (built.plan.params.pen.force_min_n, fly.plan.params.pen.force_min_n),
+        "pen.force_max_n": (built.plan.params.pen.force_max_n, fly.plan.params.pen.force_max_n),
+        "pen.stiffness_npm": (
+            built.plan.params.pen_stiffness_npm,
+            fly.plan.params.pen_stiffness_npm,
+        ),
+        "pen.preload_n": (built.plan.params.pen_preload_n, fly.plan.params.pen_preload_n),
+        "pen.default_width_m": (built.plan.default_width_m, fly.plan.default_width_m),
+        "pen.clamp_widths": (built.plan.clamp_widths, fly.plan.clamp_widths),
+    }
+    assert {name: pair for name, pair in pairs.items() if pair[0] != pair[1]} == {}
+    assert built == fly  # and everything else, the flight's vehicle included
+    assert fly.plan.params.rotor_tilt_rad == defaults.ROTOR_TILT_RAD
+    # a show file with a wall writer and no ``hexarotor`` section: the same, on its wall
+    show = load_show(SHOWS / "flying-calligrapher.yaml").model_copy(update={"hexarotor": None})
+    vehicle = show.vehicles[0]
+    on_wall = KIND.settings(show, vehicle.id)
+    assert on_wall.surface is not None
+    assert (on_wall.plan, on_wall.fly) == (fly.plan, fly.fly)
 
 
 def test_report_draws_images_force_and_width() -> None:

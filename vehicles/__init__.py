@@ -10,7 +10,7 @@ from __future__ import annotations
 ROOMS: dict[str, str] = {
     "quadrotor-brush": "vehicles.quadrotor_brush.kind",
     "omni-wheel": "vehicles.omni_wheel.kind",
-    "hexarotor-sponge": "vehicles.hexarotor_sponge",
+    "hexarotor-sponge": "vehicles.hexarotor_sponge.kind",
 }
 """Kind name (as in show files) -> the module whose ``KIND`` implements it."""
 

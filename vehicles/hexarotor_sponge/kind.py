@@ -212,3 +212,7 @@ def _settings(settings: Any) -> WallSettings:
     if not isinstance(settings, WallSettings):
         raise TypeError(f"hexarotor-sponge expects WallSettings, got {type(settings).__name__}")
     return settings
+
+
+KIND = HexarotorSpongeKind()
+"""The kind as the registry sees it."""

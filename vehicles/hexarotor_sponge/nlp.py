@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from planner.errors import InfeasibleTrajectoryError
+from vehicles.hexarotor_sponge import defaults
 from vehicles.hexarotor_sponge.contact_model import contact_direction
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
 from vehicles.hexarotor_sponge.period_nlp import ACTION, NODE, STATE
@@ -43,11 +44,11 @@ FloatArray = NDArray[np.float64]
 class Limits:
     """Planner limits and weights (paper's defaults)."""
 
-    v_max_mps: float = 0.20
+    v_max_mps: float = defaults.V_MAX_MPS
     """Largest speed of the writing point in [m/s]."""
-    a_max_mps2: float = 0.20
+    a_max_mps2: float = defaults.A_MAX_MPS2
     """Largest acceleration in [m/s^2]."""
-    force_rate_max_nps: float = 2.0
+    force_rate_max_nps: float = defaults.FORCE_RATE_MAX_NPS
     """Largest |dF/dt| in [N/s]."""
     h_init_s: float = 0.15
     """Time step in [s] the steps are allocated at and IPOPT starts from (paper: 0.1 s; its

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from vehicles.hexarotor_sponge import defaults
 from vehicles.hexarotor_sponge.pen import PenCurve
 
 GRAVITY_MPS2 = 9.81
@@ -25,20 +26,20 @@ class HexarotorParams:
     """Mass of the sliding sponge cone in [kg]."""
     rotor_radius_m: float = 0.28
     """Distance of each rotor from the body centre in [m]."""
-    rotor_tilt_rad: float = 0.52
-    """Tilt of each rotor about its arm, alternating sign (about 30 deg): what makes the body
-    fully actuated."""
-    thrust_max_n: float = 14.0
+    rotor_tilt_rad: float = defaults.ROTOR_TILT_RAD
+    """Tilt of each rotor about its arm, alternating sign, in [rad] (29.79 deg; the paper's
+    about 30 deg): what makes the body fully actuated."""
+    thrust_max_n: float = defaults.THRUST_MAX_N
     """Largest thrust of one rotor in [N] (smallest is 0)."""
     drag_torque_m: float = 0.016
     """Rotor drag torque per thrust in [N m / N] (alternating spin directions)."""
     arm_base_m_body: tuple[float, float, float] = (0.12, 0.0, 0.0)
     """F/T sensor (arm root) in the body frame in [m]."""
-    arm_length_m: float = 0.40
+    arm_length_m: float = defaults.ARM_LENGTH_M
     """From the F/T sensor to the pen tip (spring at its stop) in [m], along body x."""
-    pen_stiffness_npm: float = 400.0
+    pen_stiffness_npm: float = defaults.PEN_STIFFNESS_NPM
     """Pen spring stiffness in [N/m]."""
-    pen_preload_n: float = 0.5
+    pen_preload_n: float = defaults.PEN_PRELOAD_N
     """Spring preload in [N]: below it the pen does not slide back."""
     pen_damping_nspm: float = 10.0
     """Damping of the pen's slide in [N s/m] (the sponge)."""
@@ -52,7 +53,7 @@ class HexarotorParams:
     of the 0.33 N force RMSE), an artefact of the step: it shrinks as the step does (0.15 N at
     1 ms, 0.09 N at 0.5 ms). With 0.5 the chatter is gone (3 N at 20 cm/s: 0.40 -> 0.0002 N
     after a 0.1 s average) and the tip presses 0.5 mm into the wall instead of 0.8 mm."""
-    wall_friction: float = 0.4
+    wall_friction: float = defaults.WALL_FRICTION
     """Coulomb friction coefficient of pen on wall (measured in the paper)."""
     pen: PenCurve = field(default_factory=PenCurve)
     """Force -> line width calibration."""

@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from planner.errors import PlannerError
+from vehicles.hexarotor_sponge import defaults
 
 FloatArray = NDArray[np.float64]
 
@@ -22,11 +23,11 @@ FloatArray = NDArray[np.float64]
 class PenCurve:
     """Line width as a polynomial of normal force, valid on ``[force_min_n, force_max_n]``."""
 
-    coefficients_m: tuple[float, ...] = (2.0e-3, 3.2e-3, -0.2e-3)
+    coefficients_m: tuple[float, ...] = defaults.PEN_WIDTH_COEFFICIENTS_M
     """Polynomial coefficients, lowest order first: width [m] = sum c_k F^k with F in [N]."""
-    force_min_n: float = 1.0
+    force_min_n: float = defaults.PEN_FORCE_MIN_N
     """Lowest calibrated normal force in [N] (below it the sponge leaves no reliable line)."""
-    force_max_n: float = 6.0
+    force_max_n: float = defaults.PEN_FORCE_MAX_N
     """Highest calibrated normal force in [N]."""
 
     def __post_init__(self) -> None:

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from planner.errors import InfeasibleTrajectoryError, PlannerError
 from planner.samples import TrajectorySamples
+from vehicles.hexarotor_sponge import defaults
 from vehicles.hexarotor_sponge.allocation import Allocator
 from vehicles.hexarotor_sponge.nlp import Limits, PeriodSolution, solve_period
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
@@ -34,16 +35,16 @@ class PlanSettings:
     """The vehicle."""
     limits: Limits = field(default_factory=Limits)
     """Speed, acceleration and force-rate limits, solver weights."""
-    default_width_m: float = 9e-3
+    default_width_m: float = defaults.DEFAULT_WIDTH_M
     """Line width in [m] of strokes that carry none."""
-    clamp_widths: bool = False
+    clamp_widths: bool = defaults.CLAMP_WIDTHS
     """Clamp widths outside the pen's range (counted in the feasibility report) instead of
     refusing them."""
     standoff_m: float = 0.03
     """Distance in [m] from the wall of the free-flight waypoints."""
     control_dt_s: float = 0.01
     """Sample period of the reference in [s]."""
-    reach_m: float = 1.5
+    reach_m: float = defaults.REACH_M
     """Largest distance in [m] of a stroke point from the writing area's centre."""
 
 
