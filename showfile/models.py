@@ -216,8 +216,9 @@ class Board(_Model):
 
 
 VehicleKind = Literal["quadrotor-brush", "hexarotor-sponge", "omni-wheel"]
-"""Vehicle kinds (ARCHITECTURE.md): brush quadrotor over a horizontal board (Airshow), fully
-actuated hexarotor with a sponge pen on a wall, omnidirectional wheeled vehicle on the floor."""
+"""Vehicle kinds (README.md, "Where things are": ``vehicles/``, a room each): brush quadrotor over
+a horizontal board (Airshow), fully actuated hexarotor with a sponge pen on a wall,
+omnidirectional wheeled vehicle on the floor."""
 
 KIND_ORIENTATION: dict[str, str] = {
     "quadrotor-brush": "horizontal",

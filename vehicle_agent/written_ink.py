@@ -4,7 +4,8 @@ The brush tip's sweep (its footprint width while in contact) is painted on a fin
 board frame, then reduced to at most ``max_side_px`` pixels a side: a coarse pixel is ink when at
 least ``min_coverage`` of it is. The result is the wire type :class:`bus.messages.WrittenInk`
 (1 bit a pixel, a few kB), which the kiosk draws beside the target. It is a picture, not a score:
-the IoU of :mod:`vehicle_agent.metrics` is measured on a 2 mm grid.
+a job's IoU is its kind's (:meth:`vehicles.kind.VehicleKind.score`), measured on the kind's own
+grid (2 mm for the brush quadrotor, 1 mm for the sponge, 4 mm for the floor marker).
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ FloatArray = NDArray[np.float64]
 
 
 class LiveReferenceLike(Protocol):
-    """The agent's per-tick reference (``vehicles.kind.LiveReference`` once the seam lands)."""
+    """What the agent gives each tick (``vehicles.kind.LiveReference`` has these fields)."""
 
     @property
     def position_m_enu(self) -> Vec3: ...
