@@ -20,13 +20,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from vehicles.hexarotor_sponge.contact_model import hover_control_n, rk4_step, rotor_thrusts
+from vehicles.hexarotor_sponge.diagnosis import Iterate, infeasible_error
 from vehicles.hexarotor_sponge.nlp import (
     Limits,
     PeriodSolution,
     cost_weights,
     linear_states,
     period_solution,
-    raise_infeasible,
     steps_per_segment,
 )
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
@@ -88,7 +88,7 @@ def solve_period_opti(period: Period, params: HexarotorParams, limits: Limits) -
     us = np.asarray(values(var.u)).reshape(4, n)
     hs = np.asarray(values(var.h)).reshape(n)
     if not bool(stats.get("success", False)):
-        raise_infeasible(period, status, xs, hs, limits)
+        raise infeasible_error(period, nodes, status, Iterate(xs, us, hs), params, limits)
     timing = (solve_s, float(stats.get("t_wall_total", solve_s)))
     return period_solution(xs, us, hs, status, int(stats.get("iter_count", -1)), timing, params)
 

@@ -40,9 +40,10 @@ class PlannerError(ValueError):
 class InfeasibleTrajectoryError(PlannerError):
     """A requested trajectory would violate a vehicle limit.
 
-    Attributes name the limit (``"a_max"``, ``"v_max"``, ``"thrust"``, ``"body_rate"`` or
-    ``"fit_error"``), the axis (``"x"``, ``"y"``, ``"z"`` or ``None`` for a norm), the time ``t_s``
-    in [s] where it is worst, the reached ``value`` and the ``bound`` in SI units.
+    Attributes name the limit (``"a_max"``, ``"v_max"``, ``"thrust"``, ``"body_rate"``,
+    ``"fit_error"``, ``"force_rate"`` or ``"h_max"``, the time step bound), the axis (``"x"``,
+    ``"y"``, ``"z"`` or ``None`` for a norm), the time ``t_s`` in [s] where it is worst, the
+    reached ``value`` and the ``bound`` in SI units.
     """
 
     def __init__(

@@ -41,6 +41,16 @@ def contact_direction(v_mps: FloatArray, mu: float) -> FloatArray:
     return np.column_stack([friction, np.ones(len(speed))])
 
 
+def acceleration_mps2(
+    v_mps: FloatArray, force_n: FloatArray, control_n: FloatArray, params: HexarotorParams
+) -> FloatArray:
+    """:func:`point_rate`'s acceleration in numpy: (N, 3) in [m/s^2] at (N, 3) velocities,
+    (N,) normal forces in [N] and (N, 3) control forces in [N]."""
+    contact = force_n[:, None] * contact_direction(v_mps, params.wall_friction)
+    gravity = np.array([0.0, -GRAVITY_MPS2, 0.0])
+    return np.asarray((control_n + contact) / params.mass_kg + gravity)
+
+
 def rotor_thrusts(x: Any, u: Any, params: HexarotorParams) -> Any:
     """Rotor thrusts for the wrench that applies ``f_a`` and cancels the gravity moment of the
     offset centre of mass and the contact force's moment (allocation about the body origin)."""

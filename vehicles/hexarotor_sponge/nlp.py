@@ -12,7 +12,7 @@ the torque that cancels the friction force's moment about the centre of mass.
 
 This module fits one period to the NLP: its step counts, bounds, start, thrust screening and
 result; the model is in ``contact_model``, the built solvers and step-count ladder in
-``solver_cache``.
+``solver_cache``, the error of a period without a trajectory in ``diagnosis``.
 """
 
 from __future__ import annotations
@@ -24,9 +24,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.errors import InfeasibleTrajectoryError
 from vehicles.hexarotor_sponge import defaults
-from vehicles.hexarotor_sponge.contact_model import contact_direction
+from vehicles.hexarotor_sponge.contact_model import acceleration_mps2, contact_direction
+from vehicles.hexarotor_sponge.diagnosis import Iterate, infeasible_error
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
 from vehicles.hexarotor_sponge.period_nlp import ACTION, NODE, STATE
 from vehicles.hexarotor_sponge.solver_cache import (
@@ -143,7 +143,7 @@ def solve_period(period: Period, params: HexarotorParams, limits: Limits) -> Per
     solve_s = time.perf_counter() - started
     status = str(stats.get("return_status", "unknown"))
     if not bool(stats.get("success", False)):
-        raise_infeasible(period, status, xs, hs, limits)
+        raise infeasible_error(period, nodes, status, Iterate(xs, us, hs), params, limits)
     return period_solution(xs, us, hs, status, iterations, (solve_s, ipopt_s), params)
 
 
@@ -270,32 +270,6 @@ def _unpack(w: FloatArray, n: int) -> tuple[FloatArray, FloatArray, FloatArray]:
     return full[:, :STATE].T.copy(), full[:n, STATE : STATE + ACTION].T.copy(), full[:n, -1].copy()
 
 
-def raise_infeasible(
-    period: Period, status: str, xs: FloatArray, hs: FloatArray, limits: Limits
-) -> None:
-    """A :class:`InfeasibleTrajectoryError` naming the period and the limit most exceeded."""
-    t = np.concatenate([[0.0], np.cumsum(hs)])
-    speed = np.linalg.norm(xs[3:6], axis=0)
-    rate = np.abs(np.diff(xs[6])) / np.maximum(hs, 1e-9)
-    ratios = {
-        "v_max": (speed, limits.v_max_mps, t),
-        "force_rate": (rate, limits.force_rate_max_nps, t[:-1]),
-    }
-    name, (vals, bound, times) = max(
-        ratios.items(), key=lambda kv: float(kv[1][0].max()) / kv[1][1]
-    )
-    i = int(np.argmax(vals))
-    raise InfeasibleTrajectoryError(
-        f"{period.label}: IPOPT found no trajectory ({status}); worst limit {name}: "
-        f"{float(vals[i]):.3g} against {bound:.3g}",
-        limit=name,
-        axis=None,
-        t_s=float(times[i]),
-        value=float(vals[i]),
-        bound=bound,
-    )
-
-
 def period_solution(
     xs: FloatArray,
     us: FloatArray,
@@ -311,10 +285,7 @@ def period_solution(
     t = np.concatenate([[0.0], np.cumsum(hs)])
     v = xs[3:6].T
     force = xs[6]
-    contact = contact_direction(v[:-1], params.wall_friction)
-    gravity = np.array([0.0, -GRAVITY_MPS2, 0.0])
-    acc = (us[0:3].T + force[:-1, None] * contact) / params.mass_kg + gravity
-    acc = np.vstack([acc, np.zeros(3)])
+    acc = np.vstack([acceleration_mps2(v[:-1], force[:-1], us[0:3].T, params), np.zeros(3)])
     return PeriodSolution(
         t,
         xs[0:3].T.copy(),

@@ -38,8 +38,19 @@ class Period:
     """(M, 3) waypoints ``(x, y, s)`` in [m], wall coordinates."""
     force_n: FloatArray
     """(M,) normal force in [N] at each waypoint."""
-    label: str
-    """Which part of the job, for error messages (``stroke 2``, ``flight to stroke 3``)."""
+    stroke_index: int
+    """The stroke it flies to, writes or leaves (the last stroke for the final flight away)."""
+    part: str
+    """What it does for that stroke, for error messages after ``stroke k:``: ``flight to it``,
+    ``writing it`` or ``leaving it``."""
+
+    @property
+    def label(self) -> str:
+        """Which part of the job, for the plan's report (``flight to stroke 3``, ``stroke 2``,
+        ``leave``)."""
+        if self.part == "flight to it":
+            return f"flight to stroke {self.stroke_index}"
+        return f"stroke {self.stroke_index}" if self.contact else "leave"
 
 
 def simplify(points: FloatArray, tolerance: float) -> NDArray[np.intp]:
@@ -94,16 +105,18 @@ def periods_of(
         lift = np.array([0.0, 0.0, standoff_m])
         flight = [here] if here[2] > 0.0 else [here, here + lift]
         flight += [first + lift, first]
-        periods.append(_period(False, np.array(flight), None, f"flight to stroke {k}"))
+        periods.append(_period(False, np.array(flight), None, k, "flight to it"))
         pts = np.vstack([first, on_wall, last])
         f = np.concatenate([[0.0], force[idx], [0.0]])
-        periods.append(_period(True, pts, f, f"stroke {k}"))
+        periods.append(_period(True, pts, f, k, "writing it"))
         here = last
     away = here + np.array([0.0, 0.0, standoff_m])
-    periods.append(_period(False, np.array([here, away]), None, "leave"))
+    periods.append(_period(False, np.array([here, away]), None, len(strokes) - 1, "leaving it"))
     return periods
 
 
-def _period(contact: bool, points: FloatArray, force: FloatArray | None, label: str) -> Period:
+def _period(
+    contact: bool, points: FloatArray, force: FloatArray | None, stroke_index: int, part: str
+) -> Period:
     f = np.zeros(points.shape[0]) if force is None else force
-    return Period(contact, np.asarray(points, dtype=np.float64), np.asarray(f), label)
+    return Period(contact, np.asarray(points, dtype=np.float64), np.asarray(f), stroke_index, part)
