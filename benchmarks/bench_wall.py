@@ -37,8 +37,9 @@ from wall_opti_peer import solve_period_opti
 
 from planner.glyphs.layout import fit_to_area
 from planner.glyphs.text import text_glyph
-from vehicles.hexarotor_sponge.flight import FlySettings, fly_plan, start_base
+from vehicles.hexarotor_sponge.flight import fly_plan
 from vehicles.hexarotor_sponge.kind import KIND, WallSettings, with_default_widths
+from vehicles.hexarotor_sponge.loop import FlySettings, base_for_tip
 from vehicles.hexarotor_sponge.nlp import Limits, solve_period
 from vehicles.hexarotor_sponge.plan import (
     PlanSettings,
@@ -172,9 +173,8 @@ def realtime_factor(plan) -> tuple[float, float]:  # type: ignore[no-untyped-def
     t0 = time.perf_counter()
     fly_plan(plan, settings, seed=0)
     loop = (plan.duration_s + settings.settle_s) / (time.perf_counter() - t0)
-    world = WallWorld(
-        settings.params, SURFACE, base_m_enu=start_base(plan, settings.params), noise=settings.noise
-    )
+    base = base_for_tip(plan.samples.position_m_enu[0], SURFACE, settings.params)
+    world = WallWorld(settings.params, SURFACE, base_m_enu=base, noise=settings.noise)
     hover = np.full(6, 5.0)
     t0 = time.perf_counter()
     for _ in range(1000):

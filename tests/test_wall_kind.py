@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from planner.samples import TrajectorySamples
+from vehicles.hexarotor_sponge.flight import fly_plan
 from vehicles.hexarotor_sponge.kind import KIND, WallSettings, with_default_widths
+from vehicles.hexarotor_sponge.loop import FlySettings
 from vehicles.hexarotor_sponge.metrics import reference_base_m_enu
 from vehicles.hexarotor_sponge.params import HexarotorParams
-from vehicles.kind import FlownWriting, StrokeInput, WritingPlan
+from vehicles.kind import FlownWriting, LiveReference, StrokeInput, WritingPlan
 from vehicles.surface import Surface
 
 SHOWS = Path(__file__).resolve().parent.parent / "shows"
@@ -206,3 +209,36 @@ def test_report_draws_images_force_and_width() -> None:
         "normal force [N]",
         "line width [mm]",
     ]
+
+
+def test_the_live_vehicle_and_the_batch_flight_are_one_closed_loop() -> None:
+    plan = _line_plan()
+    settings = WallSettings(fly=replace(FlySettings(), settle_s=0.0), surface=SURFACE)
+    batch = fly_plan(plan, settings.fly, seed=3)
+    s = plan.samples
+    start = (
+        float(s.position_m_enu[0, 0]),
+        float(s.position_m_enu[0, 1]),
+        float(s.position_m_enu[0, 2]),
+    )
+    live = KIND.simulated_vehicle(start, settings, seed=3)
+    tips, forces = [], []
+    for k in range(s.t_s.size):
+        assert plan.force_n is not None
+        live.step(
+            LiveReference(
+                tuple(s.position_m_enu[k]),
+                tuple(s.velocity_mps_enu[k]),
+                tuple(s.acceleration_mps2_enu[k]),
+                bool(s.pen_down[k]),
+                float(plan.force_n[k]),
+            )
+        )
+        state = live.state()
+        tips.append(state.pen_tip_m_enu)
+        forces.append(state.force_n)
+    np.testing.assert_array_equal(np.asarray(tips), batch.writing_point_m_enu)
+    np.testing.assert_array_equal(np.asarray(forces), batch.force_n)
+    assert (
+        batch.force_n is not None and batch.force_n.max() > 1.0
+    )  # it pressed on the wall: not two vehicles in free air

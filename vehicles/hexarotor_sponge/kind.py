@@ -12,8 +12,9 @@ from numpy.typing import NDArray
 
 from planner.samples import TrajectorySamples
 from showfile.kind_hexarotor import HexarotorKindSettings
-from vehicles.hexarotor_sponge.flight import FlySettings, fly_plan
+from vehicles.hexarotor_sponge.flight import fly_plan
 from vehicles.hexarotor_sponge.live import WallVehicle
+from vehicles.hexarotor_sponge.loop import FlySettings
 from vehicles.hexarotor_sponge.metrics import score_writing
 from vehicles.hexarotor_sponge.nlp import Limits
 from vehicles.hexarotor_sponge.params import HexarotorParams
@@ -166,7 +167,10 @@ class HexarotorSpongeKind:
         s = _settings(settings)
         if s.surface is None:
             raise ValueError("hexarotor-sponge: a live vehicle needs settings.surface (its wall)")
-        return WallVehicle(np.asarray(start_m_enu, dtype=np.float64), s.surface, s.fly, seed=seed)
+        start = np.asarray(start_m_enu, dtype=np.float64)
+        return WallVehicle(
+            start, s.surface, s.fly, default_width_m=s.plan.default_width_m, seed=seed
+        )
 
 
 def aligned(plan: WritingPlan, flown: FlownWriting) -> tuple[WritingPlan, FlownWriting]:

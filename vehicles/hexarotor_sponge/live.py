@@ -1,5 +1,5 @@
-"""A live simulated hexarotor for the agent's ``sim`` backend: the MuJoCo world under the hybrid
-controller, one control period per ``step``."""
+"""A live simulated hexarotor for the agent's ``sim`` backend: the one closed loop of ``loop.py``,
+one control period per ``step`` of the agent's reference."""
 
 from __future__ import annotations
 
@@ -9,9 +9,8 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from vehicles.hexarotor_sponge.controller import HybridController, Reference
-from vehicles.hexarotor_sponge.flight import FlySettings
-from vehicles.hexarotor_sponge.world import WallWorld, facing_rotation
+from vehicles.hexarotor_sponge.controller import Reference
+from vehicles.hexarotor_sponge.loop import FlySettings, WallLoop
 from vehicles.surface import Surface, Vec3
 
 FloatArray = NDArray[np.float64]
@@ -55,49 +54,44 @@ def _vec(v: FloatArray) -> Vec3:
 
 
 class WallVehicle:
-    """World and controller in one closed loop, stepped by the agent."""
+    """The closed loop stepped by the agent; a pen-down reference without a force asks for the
+    force of a ``default_width_m`` line."""
 
     def __init__(
-        self, start_m_enu: FloatArray, surface: Surface, settings: FlySettings, *, seed: int = 0
+        self,
+        start_m_enu: FloatArray,
+        surface: Surface,
+        settings: FlySettings,
+        *,
+        default_width_m: float,
+        seed: int = 0,
     ) -> None:
-        params = settings.params
-        base = start_m_enu - facing_rotation(surface) @ np.asarray(params.tip_m_body)
-        self.world = WallWorld(
-            params,
-            surface,
-            base_m_enu=base,
-            noise=settings.noise,
-            seed=seed,
-            control_dt_s=settings.control_dt_s,
-        )
-        self.controller = HybridController(
-            params, surface, dt_s=self.world.control_dt_s, contact_model=settings.contact_model
-        )
-        self.dt_s = self.world.control_dt_s
-        self.default_force_n = float(params.pen.force_n(np.array([9e-3]))[0])
-        self.pen = params.pen
+        self.loop = WallLoop(start_m_enu, surface, settings, seed=seed)
+        self.dt_s = self.loop.dt_s
+        self.pen = settings.params.pen
+        self.default_force_n = float(self.pen.force_n(np.array([default_width_m]))[0])
 
     def step(self, reference: LiveReferenceLike) -> None:
-        """Track ``reference`` for one tick (pen down without a force: the 9 mm line's force)."""
+        """Track ``reference`` for one tick."""
         force = reference.force_n
         if force is None:
             force = self.default_force_n if reference.pen_down else 0.0
-        ref = Reference(
-            np.asarray(reference.position_m_enu, dtype=np.float64),
-            np.asarray(reference.velocity_mps_enu, dtype=np.float64),
-            np.asarray(reference.acceleration_mps2_enu, dtype=np.float64),
-            float(force),
+        self.loop.track(
+            Reference(
+                np.asarray(reference.position_m_enu, dtype=np.float64),
+                np.asarray(reference.velocity_mps_enu, dtype=np.float64),
+                np.asarray(reference.acceleration_mps2_enu, dtype=np.float64),
+                float(force),
+            )
         )
-        out = self.controller.update(self.world.measure(), ref)
-        self.world.step(out.allocation.thrust_n)
 
     def state(self) -> WallLiveState:
         """True state now."""
-        truth = self.world.truth()
+        truth = self.loop.truth()
         width = float(self.pen.width_m(np.array([truth.contact_force_n]))[0])
         return WallLiveState(
             position_m_enu=_vec(truth.tip_m_enu),
-            velocity_mps_enu=_vec(self.world.data.qvel[0:3]),
+            velocity_mps_enu=_vec(self.loop.world.data.qvel[0:3]),
             pen_tip_m_enu=_vec(truth.tip_m_enu),
             pen_contact=truth.contact_force_n > 0.0,
             pen_width_m=width,
