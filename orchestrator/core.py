@@ -32,7 +32,7 @@ from orchestrator.core_types import CoreConfig, Effects, Level
 from orchestrator.finished import MAX_FINAL_JOBS, FinishedJobs
 from orchestrator.fleet import VehicleView, queue_etas
 from orchestrator.jobs import WAITING_STATES, Job, to_state, transition, update
-from orchestrator.kinds import KindMatch
+from orchestrator.kinds import KindMatch, KindPlans
 from orchestrator.operator import apply_operator
 
 __all__ = ["MAX_FINAL_JOBS", "Book", "CoreConfig", "Effects", "Level"]
@@ -389,16 +389,21 @@ class Book:
             ok=True, job_id=job_id, state=job.state, queue_position=position, eta_s=eta
         )
 
-    def set_estimate(self, job_id: str, by_kind: Mapping[str, float], now_s: float) -> Effects:
-        """Better duration estimates in [s] of a job from each kind's planner, by vehicle kind:
-        the job's own is the first vehicle's kind's (the shortest if that kind cannot plan it),
-        and the ETAs use the kind of the vehicle that would take it."""
+    def set_estimate(self, job_id: str, plans: KindPlans, now_s: float) -> Effects:
+        """What each kind's planner made of a job: its duration in [s] by vehicle kind (the
+        job's own estimate is the first vehicle's kind's, the shortest if that kind cannot plan
+        it; the ETAs use the kind of the vehicle that would take it), and the kinds that cannot
+        plan it, which are then not sent it while another kind may write it."""
         eff = Effects()
         job = self.jobs.get(job_id)
-        if job is not None and not job.final and by_kind:
-            first = by_kind.get(self.config.vehicles[0].kind, min(by_kind.values()))
-            self.kinds.estimates[job_id] = dict(by_kind)
-            self.put(eff, update(job, now_s, estimate_s=first))
+        if job is not None and not job.final:
+            if plans.refused:
+                self.kinds.refuse_kinds(job_id, plans.refused, self.config.vehicles)
+            by_kind = plans.durations_s
+            if by_kind:
+                first = by_kind.get(self.config.vehicles[0].kind, min(by_kind.values()))
+                self.kinds.estimates[job_id] = dict(by_kind)
+                self.put(eff, update(job, now_s, estimate_s=first))
         return self.settle(eff, now_s)
 
     # --- assignment (orchestrator/assignment.py) -----------------------------------------------

@@ -1,19 +1,31 @@
 """Which vehicle kind may take a job, and how long it would write it (pure, in memory).
 
-A kind whose planner refused a job (``plan_failed``) never gets it again; while a vehicle of
-another kind may still write it, the job waits for one. Planned durations differ between kinds
-(a ground writer's metres-tall character against a brush's), so each kind's is kept for the ETAs
-while the job waits. Neither outlives the orchestrator: after a restart a refusing kind may be
-tried once more and ETAs fall back on the job's own estimate.
+A kind whose planner refused a job (``plan_failed``, or the orchestrator's own planning of the
+job for its ETA) never gets it again; while a vehicle of another kind may still write it, the job
+waits for one. Planned durations differ between kinds (a ground writer's metres-tall character
+against a brush's), so each kind's is kept for the ETAs while the job waits. Neither outlives the
+orchestrator: after a restart a refusing kind may be tried once more and ETAs fall back on the
+job's own estimate.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from orchestrator.fleet import VehicleInfo, writing_s
 from orchestrator.jobs import Job
+
+
+@dataclass(frozen=True)
+class KindPlans:
+    """A glyph planned by the first vehicle of each kind of a show
+    (``orchestrator.submissions.planned_durations_s``)."""
+
+    durations_s: dict[str, float]
+    """Planned duration in [s] by kind (a job takes as long as the kind that writes it)."""
+    refused: frozenset[str] = frozenset()
+    """Kinds whose planner refused the glyph."""
 
 
 @dataclass
@@ -41,7 +53,17 @@ class KindMatch:
         kind that has not refused it may still write it."""
         refused = self.refused.setdefault(job_id, set())
         refused.add(self.kinds[vehicle_id])
-        return any(v.kind not in refused and v.cannot_write is None for v in vehicles)
+        return _writable(refused, vehicles)
+
+    def refuse_kinds(
+        self, job_id: str, kinds: Iterable[str], vehicles: Sequence[VehicleInfo]
+    ) -> None:
+        """Record kinds whose planner refused the job before any of them was sent it (the ETA
+        planning), as long as a vehicle of another kind may still write it; otherwise leave the
+        job to its vehicle, whose refusal fails it with the planner's reason."""
+        refused = self.refused.get(job_id, set()) | set(kinds)
+        if _writable(refused, vehicles):
+            self.refused[job_id] = refused
 
     def forget(self, job: Job) -> None:
         """Drop what is no longer needed: estimates once it writes, everything once final."""
@@ -49,3 +71,8 @@ class KindMatch:
             self.refused.pop(job.job_id, None)
         if job.final or job.state == "writing":
             self.estimates.pop(job.job_id, None)
+
+
+def _writable(refused: set[str], vehicles: Iterable[VehicleInfo]) -> bool:
+    """A vehicle of a kind not in ``refused`` may write the job."""
+    return any(v.kind not in refused and v.cannot_write is None for v in vehicles)

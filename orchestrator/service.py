@@ -316,9 +316,9 @@ class OrchestratorService:
 
     async def _refine_estimate(self, job_id: str, glyph: Any, cache_key: str | None) -> None:
         """Replace the rough estimate by the planner's duration (best effort, bounded work)."""
-        durations = await self.estimates.planned(job_id, glyph, cache_key)
-        if durations:
-            self.apply(self.book.set_estimate(job_id, durations, self.clock()))
+        plans = await self.estimates.planned(job_id, glyph, cache_key)
+        if plans.durations_s or plans.refused:
+            self.apply(self.book.set_estimate(job_id, plans, self.clock()))
 
     async def on_command(self, command: OperatorCommand) -> CommandReply:
         self._record(self.keys.command + "#request", command)

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bus.messages import ErrorInfo, SubmitRequest
+from orchestrator.kinds import KindPlans
 from planner.errors import PlannerError
 from planner.glyphs import Glyph, parse_strokes_json, text_glyph
 from showfile import Show
@@ -136,17 +137,19 @@ def rough_duration_s(glyph: Glyph, show: Show) -> float:
     return length_m / speed + PEN_UP_OVERHEAD_S * len(fitted.strokes)
 
 
-def planned_durations_s(glyph: Glyph, show: Show) -> dict[str, float]:
-    """Duration in [s] of the real plan of the first vehicle of each kind of the show, by kind
-    (a job takes as long as the kind that writes it); kinds that cannot plan it are left out."""
+def planned_durations_s(glyph: Glyph, show: Show) -> KindPlans:
+    """The real plan of the first vehicle of each kind of the show: durations, and the kinds
+    that cannot plan it."""
     durations: dict[str, float] = {}
+    refused: set[str] = set()
     for vehicle in show.vehicles:
-        if vehicle.kind in durations:
+        if vehicle.kind in durations or vehicle.kind in refused:
             continue
         try:
             duration = float(plan_job(show, vehicle.id, glyph).plan.duration_s)
         except PlannerError:
+            refused.add(vehicle.kind)
             continue
         if math.isfinite(duration):
             durations[vehicle.kind] = duration
-    return durations
+    return KindPlans(durations, frozenset(refused))

@@ -17,6 +17,7 @@ from orchestrator.core import MAX_FINAL_JOBS, Book
 from orchestrator.estimates import CACHED_DURATIONS
 from orchestrator.finished import FinishedJobs
 from orchestrator.jobs import Job, transition
+from orchestrator.kinds import KindPlans
 from orchestrator.service import OrchestratorService, core_config
 from orchestrator.store import JobStore
 from showfile import load_show
@@ -95,7 +96,7 @@ def test_planned_durations_are_kept_for_the_latest_texts_only(tmp_path: Path) ->
     with JobStore(tmp_path / "s.sqlite3") as store:
         service = OrchestratorService(SHOW, session=_NoSession(), store=store)  # type: ignore[arg-type]
         for k in range(CACHED_DURATIONS + 10):
-            service.estimates.remember(f"text:{k}", {"quadrotor-brush": 10.0 + k})
+            service.estimates.remember(f"text:{k}", KindPlans({"quadrotor-brush": 10.0 + k}))
         assert len(service.estimates.cached) == CACHED_DURATIONS
         assert "text:9" not in service.estimates.cached and "text:10" in service.estimates.cached
 

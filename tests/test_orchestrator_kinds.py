@@ -4,12 +4,18 @@ reach its board gets no job at all, and the ETAs follow the same rule."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from bus.messages import AgentReport, ErrorInfo, SubmitRequest, VehicleStatus
 from orchestrator.core import Book, CoreConfig, Effects
 from orchestrator.fleet import EtaModel, VehicleInfo, queue_etas
+from orchestrator.kinds import KindPlans
 from orchestrator.service import core_config
-from showfile import parse_show
+from orchestrator.submissions import planned_durations_s
+from planner.glyphs import parse_strokes_json
+from showfile import load_show, parse_show
 
+SHOWS = Path(__file__).resolve().parents[1] / "shows"
 WALL = VehicleInfo("hex1", "hexarotor-sponge", "wall")
 QUAD = VehicleInfo("uav1", "quadrotor-brush", "b1")
 WIDTH_ERROR = ErrorInfo(code="plan_failed", message="stroke 0: width 30 mm outside 5-14 mm")
@@ -71,6 +77,35 @@ def test_a_job_every_kind_refused_fails_with_the_planner_reason() -> None:
     assert "j1" not in book.kinds.refused
 
 
+def test_a_kind_whose_planner_refused_the_job_for_its_eta_is_never_sent_it() -> None:
+    book = Book(CoreConfig(show_id="t", vehicles=(WALL, QUAD)), now_s=0.0)
+    _submit(book, "j1", 0.0)  # nobody online yet
+    book.set_estimate("j1", KindPlans({"quadrotor-brush": 12.0}, frozenset({WALL.kind})), 0.5)
+    assert book.jobs["j1"].estimate_s == 12.0
+    assert _assigned(_online(book, WALL, 1.0)) + _assigned(book.tick(1.1)) == []
+    assert _assigned(_online(book, QUAD, 2.0)) + _assigned(book.tick(2.1)) == [("uav1", "j1")]
+
+
+def test_a_job_every_kind_refused_for_its_eta_is_left_to_a_vehicle_to_fail_with_the_reason() -> (
+    None
+):
+    book = Book(CoreConfig(show_id="t", vehicles=(WALL, QUAD)), now_s=0.0)
+    _submit(book, "j1", 0.0)
+    book.set_estimate("j1", KindPlans({}, frozenset({WALL.kind, QUAD.kind})), 0.5)
+    assert "j1" not in book.kinds.refused
+    assert _assigned(_online(book, WALL, 1.0)) + _assigned(book.tick(1.1)) == [("hex1", "j1")]
+
+
+def test_the_eta_planning_names_the_kinds_that_cannot_plan_a_glyph() -> None:
+    show = load_show(SHOWS / "mixed.yaml")
+    wide = [{"x": 0.0, "y": 0.0, "w": 0.03}, {"x": 0.3, "y": 0.0, "w": 0.03}]  # 30 mm: no pen
+    plans = planned_durations_s(
+        parse_strokes_json({"units": "m", "y_axis": "up", "strokes": [wide]}), show
+    )
+    assert plans.refused == {"hexarotor-sponge"}
+    assert "quadrotor-brush" in plans.durations_s and "hexarotor-sponge" not in plans.durations_s
+
+
 GROUND = """\
 show_id: t
 omni_wheel:
@@ -104,7 +139,7 @@ def test_etas_take_the_duration_of_the_kind_that_would_write_each_job() -> None:
     book = Book(CoreConfig(show_id="t", vehicles=(QUAD, ground)), now_s=0.0)
     for job_id in ("j1", "j2", "j3"):
         _submit(book, job_id, 0.0)  # rough estimate 20 s each
-        book.set_estimate(job_id, {"quadrotor-brush": 10.0, "omni-wheel": 60.0}, 0.0)
+        book.set_estimate(job_id, KindPlans({"quadrotor-brush": 10.0, "omni-wheel": 60.0}), 0.0)
     assert book.jobs["j1"].estimate_s == 10.0  # the first vehicle's kind
     model = EtaModel(before_write_s=11.0, after_write_s=9.0)
     usable = {"uav1": "b1", "ground1": "plaza"}
