@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from showfile import load_show
 from showfile.checks import footprint
 from vehicle_agent.safety import Geofence, GeofenceError, vehicle_fence
-from vehicle_agent.safety.geofence import convex_hull
+from vehicle_agent.safety.geofence import FenceWatch, convex_hull
 
 BOARD = [(-0.7, -0.7), (0.7, -0.7), (0.7, 0.7), (-0.7, 0.7)]
 HOME = (0.0, -1.2, 0.0)
@@ -47,6 +47,44 @@ def test_first_outside_finds_the_first_sample_that_leaves() -> None:
 def test_vectorised_and_scalar_checks_agree(x: float, y: float, z: float) -> None:
     f = fence()
     assert (f.first_outside(np.array([[x, y, z]])) is None) == f.contains((x, y, z))
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    start=st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(-1, 3)),
+    steps=st.lists(
+        st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3), st.floats(-0.2, 0.2)),
+        min_size=1,
+        max_size=60,
+    ),
+)
+def test_a_watch_along_a_flight_judges_every_point_as_the_fence_does(
+    start: tuple[float, float, float], steps: list[tuple[float, float, float]]
+) -> None:
+    f = fence()
+    watch = FenceWatch(f)
+    p = np.array(start)
+    for step in steps:  # in and out of the fence, across its edges, by small and large moves
+        p = p + np.array(step)
+        assert watch.distance_outside_m(p) == f.distance_outside_m(p)
+    assert watch.distance_outside_m((math.nan, 0.0, 1.0)) == math.inf
+
+
+def test_a_watch_reads_the_edges_again_only_near_them() -> None:
+    f = fence()
+    watch = FenceWatch(f)
+    reads = 0
+    edge_offset_m = f.edge_offset_m
+
+    def counted(x_m: float, y_m: float) -> float:
+        nonlocal reads
+        reads += 1
+        return edge_offset_m(x_m, y_m)
+
+    object.__setattr__(f, "edge_offset_m", counted)
+    for k in range(200):  # 1 cm per tick over the board's middle
+        assert watch.distance_outside_m((-0.5 + 0.005 * k, 0.0, 1.0)) == 0.0
+    assert reads < 10  # a fresh check at every tick: 200 (two reads each)
 
 
 def test_hull_is_counter_clockwise_and_drops_inner_points() -> None:

@@ -51,7 +51,6 @@ from vehicle_agent.runner_io import (
     TickActions,
     done_report,
     refuse,
-    sample_at,
     takeoff_refused_report,
 )
 from vehicle_agent.runner_job import RunningJob
@@ -66,7 +65,6 @@ __all__ = [
     "RunnerConfig",
     "TickActions",
     "done_report",
-    "sample_at",
 ]
 
 

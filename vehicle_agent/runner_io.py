@@ -219,32 +219,6 @@ def telemetry_message(
     )
 
 
-def sample_at(
-    samples: TrajectorySamples, t_s: float, force_n: NDArray[np.float64] | None = None
-) -> Setpoint:
-    """The reference at ``t_s`` in [s], linearly interpolated between samples (clamped), with
-    the wanted contact force of ``force_n`` (per sample, in [N]) when given."""
-    i = samples.index_at(t_s)
-    j = min(i + 1, samples.t_s.shape[0] - 1)
-    span = float(samples.t_s[j] - samples.t_s[i])
-    w = 0.0 if span <= 0.0 else min(max((t_s - float(samples.t_s[i])) / span, 0.0), 1.0)
-
-    keep = 1.0 - w
-
-    def lerp(values: np.ndarray) -> Vec3:
-        # in floats: rows of three as numpy arrays cost ~5x more, at every control tick
-        (a0, a1, a2), (b0, b1, b2) = values[i].tolist(), values[j].tolist()
-        return (keep * a0 + w * b0, keep * a1 + w * b1, keep * a2 + w * b2)
-
-    return Setpoint(
-        position_m_enu=lerp(samples.position_m_enu),
-        velocity_mps_enu=lerp(samples.velocity_mps_enu),
-        acceleration_mps2_enu=lerp(samples.acceleration_mps2_enu),
-        pen_down=bool(samples.pen_down[i] if w < 0.5 else samples.pen_down[j]),
-        force_n=None if force_n is None else float((1.0 - w) * force_n[i] + w * force_n[j]),
-    )
-
-
 def takeoff_refused_report(
     vehicle_id: str, job_id: str, reason: str, retry_after_s: float
 ) -> AgentReport:

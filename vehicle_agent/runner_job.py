@@ -7,7 +7,8 @@ from typing import Literal
 
 from bus.messages import AgentReport, ErrorInfo, JobAssignment
 from vehicle_agent.backends.base import Setpoint, VehicleSnapshot
-from vehicle_agent.runner_io import PreparedJob, sample_at
+from vehicle_agent.reference_track import ReferenceTrack
+from vehicle_agent.runner_io import PreparedJob
 from vehicle_agent.trace import FlownTrace, TraceRecorder
 
 ReportEvent = Literal["started", "progress", "done", "failed"]
@@ -35,6 +36,10 @@ class RunningJob:
     """The plan's sample at this tick: set by :meth:`setpoint`, recorded by :meth:`record`."""
     approaches: int = 0
     """Approaches to the start of the plan flown so far (settling)."""
+    _tracks: tuple[ReferenceTrack, ReferenceTrack | None] | None = field(
+        default=None, init=False, repr=False
+    )
+    """The plan's reference and the commanded one (None: the same), made at the first tick."""
 
     @property
     def job_id(self) -> str:
@@ -49,13 +54,19 @@ class RunningJob:
         """What to command at agent time ``now_s`` while writing (the body reference when the
         plan has one; the pen state is the plan's)."""
         assert self.prepared is not None and self.started_s is not None
-        prepared = self.prepared
+        if self._tracks is None:
+            prepared = self.prepared
+            commands = prepared.command_samples
+            self._tracks = (
+                ReferenceTrack(prepared.samples, prepared.force_n),
+                None if commands is None else ReferenceTrack(commands),
+            )
+        planned_track, command_track = self._tracks
         t_rel_s = now_s - self.started_s
-        self.planned_now = sample_at(prepared.samples, t_rel_s, prepared.force_n)
-        if prepared.command_samples is None:
-            return self.planned_now
-        commanded = sample_at(prepared.command_samples, t_rel_s)
-        planned = self.planned_now
+        self.planned_now = planned = planned_track.at(t_rel_s)
+        if command_track is None:
+            return planned
+        commanded = command_track.at(t_rel_s)
         return replace(commanded, pen_down=planned.pen_down, force_n=planned.force_n)
 
     def record(self, snap: VehicleSnapshot, now_s: float) -> bool:

@@ -46,14 +46,21 @@ class Geofence:
         x, y, z = float(p_m_enu[0]), float(p_m_enu[1]), float(p_m_enu[2])
         if not all(math.isfinite(v) for v in (x, y, z)):
             return math.inf
-        outside_xy = 0.0
-        for x0, y0, ux, uy in self._edges:
-            # positive to the right of the edge (outside, for a counter-clockwise polygon)
-            offset = ux * (y0 - y) - uy * (x0 - x)
-            if offset > outside_xy:
-                outside_xy = offset
+        outside_xy = max(self.edge_offset_m(x, y), 0.0)
         outside_z = max(self.floor_z_m - z, z - self.ceiling_z_m, 0.0)
         return math.hypot(outside_xy, outside_z)
+
+    def edge_offset_m(self, x_m: float, y_m: float) -> float:
+        """The largest signed distance in [m] of a plan-view point beyond the lines of the
+        polygon's edges: positive outside (a bound from above of its distance to the polygon),
+        minus its distance to the nearest edge inside."""
+        worst = -math.inf
+        for x0, y0, ux, uy in self._edges:
+            # positive to the right of the edge (outside, for a counter-clockwise polygon)
+            offset = ux * (y0 - y_m) - uy * (x0 - x_m)
+            if offset > worst:
+                worst = offset
+        return worst
 
     @cached_property
     def _edges(self) -> tuple[tuple[float, float, float, float], ...]:
@@ -150,3 +157,27 @@ def vehicle_fence(
     if ceiling <= floor:
         raise GeofenceError(f"fence ceiling {ceiling:.2f} m is not above its floor {floor:.2f} m")
     return Geofence(hull, floor, ceiling)
+
+
+class FenceWatch:
+    """One vehicle's fence along its flight, checked every control tick. A point nearer the last
+    point found inside than that point's clearance (its distance to the nearest edge) is inside
+    too, the fence being convex: the edges are read again only as the vehicle nears them or
+    leaves the disc (a vehicle writing over its board, every few hundred ticks)."""
+
+    def __init__(self, fence: Geofence) -> None:
+        self.fence = fence
+        self._x_m, self._y_m, self._clearance_sq_m2 = 0.0, 0.0, -1.0
+
+    def distance_outside_m(self, p_m_enu: Sequence[float]) -> float:
+        """As :meth:`Geofence.distance_outside_m` (the same value, 0 inside)."""
+        fence = self.fence
+        x, y, z = float(p_m_enu[0]), float(p_m_enu[1]), float(p_m_enu[2])
+        dx, dy = x - self._x_m, y - self._y_m
+        if dx * dx + dy * dy < self._clearance_sq_m2 and fence.floor_z_m <= z <= fence.ceiling_z_m:
+            return 0.0  # NaN fails both tests: it is judged below
+        outside_m = fence.distance_outside_m((x, y, z))
+        if outside_m == 0.0:
+            clearance_m = -fence.edge_offset_m(x, y)
+            self._x_m, self._y_m, self._clearance_sq_m2 = x, y, clearance_m * clearance_m
+        return outside_m

@@ -14,6 +14,7 @@ from typing import Literal
 import numpy as np
 
 from vehicle_agent.backends.base import Setpoint, Vec3, VehicleSnapshot
+from vehicle_agent.safety.geofence import FenceWatch
 from vehicle_agent.safety.limits import SafetyLimits
 from vehicles.deviation import DeviationMonitor
 
@@ -47,6 +48,7 @@ class SafetyGuard:
         self.monitor = DeviationMonitor(limits.deviation)
         self.last_error_m = 0.0
         """Tracking error in [m] seen at the last tracked tick."""
+        self._watch = None if limits.fence is None else FenceWatch(limits.fence)
 
     def check(
         self, phase: str, snapshot: VehicleSnapshot, reference: Setpoint | None, now_s: float
@@ -54,9 +56,9 @@ class SafetyGuard:
         """Judge one tick: ``reference`` is the setpoint the vehicle was tracking in the period
         that ended at ``snapshot``. A breach is reported once; call :meth:`reset` to re-arm."""
         position = snapshot.position_m_enu
-        fence = self.limits.fence
-        if fence is not None and phase not in FENCED_EXEMPT and not snapshot.on_ground:
-            outside_m = fence.distance_outside_m(position)
+        watch = self._watch
+        if watch is not None and phase not in FENCED_EXEMPT and not snapshot.on_ground:
+            outside_m = watch.distance_outside_m(position)
             if outside_m > 0.0:
                 where = ", ".join(f"{v:.2f}" for v in position)
                 message = f"outside its geofence by {outside_m:.2f} m at ({where}) m"
