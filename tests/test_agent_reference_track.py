@@ -39,6 +39,11 @@ def test_the_reference_is_the_plan_interpolated_and_clamped(
         ):
             want = [np.interp(t_s, t, values[:, k]) for k in range(3)]
             np.testing.assert_allclose(getattr(got, name), want, rtol=1e-12, atol=1e-12)
+        assert track.motion_at(t_s) == (
+            got.position_m_enu,
+            got.velocity_mps_enu,
+            got.acceleration_mps2_enu,
+        )
         assert got.force_n is not None
         np.testing.assert_allclose(got.force_n, np.interp(t_s, t, force), rtol=1e-12)
         nearest = int(np.argmin(np.abs(t - t_s)))  # the pen is the nearest sample's

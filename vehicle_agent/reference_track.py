@@ -33,31 +33,43 @@ class ReferenceTrack:
 
     def at(self, t_s: float) -> Setpoint:
         """The reference at ``t_s`` in [s] from the plan's start, linearly interpolated between
-        samples (clamped at both ends)."""
+        samples (clamped at both ends); the pen is the nearer sample's."""
+        i, j, w = self._bracket(t_s)
+        position, velocity, acceleration = self._motion(i, j, w)
+        force = self._force_n
+        return Setpoint(
+            position_m_enu=position,
+            velocity_mps_enu=velocity,
+            acceleration_mps2_enu=acceleration,
+            pen_down=bool(self._pen_down[i] if w < 0.5 else self._pen_down[j]),
+            force_n=None if force is None else (1.0 - w) * force[i] + w * force[j],
+        )
+
+    def motion_at(self, t_s: float) -> tuple[Vec3, Vec3, Vec3]:
+        """Position in [m], velocity in [m/s] and acceleration in [m/s^2] at ``t_s`` (as
+        :meth:`at`, without the pen)."""
+        return self._motion(*self._bracket(t_s))
+
+    def _bracket(self, t_s: float) -> tuple[int, int, float]:
+        """The samples around ``t_s`` and the weight of the later one."""
         times, last = self._t_s, self._last
         i = min(max(bisect_right(times, t_s) - 1, 0), last)
         j = min(i + 1, last)
         t_i = times[i]
         span = times[j] - t_i
-        w = 0.0 if span <= 0.0 else min(max((t_s - t_i) / span, 0.0), 1.0)
-        keep = 1.0 - w
+        return i, j, 0.0 if span <= 0.0 else min(max((t_s - t_i) / span, 0.0), 1.0)
+
+    def _motion(self, i: int, j: int, w: float) -> tuple[Vec3, Vec3, Vec3]:
+        keep, a, b = 1.0 - w, 3 * i, 3 * j
 
         def lerp(flat: memoryview) -> Vec3:
-            a, b = 3 * i, 3 * j
             return (
                 keep * flat[a] + w * flat[b],
                 keep * flat[a + 1] + w * flat[b + 1],
                 keep * flat[a + 2] + w * flat[b + 2],
             )
 
-        force = self._force_n
-        return Setpoint(
-            position_m_enu=lerp(self._position),
-            velocity_mps_enu=lerp(self._velocity),
-            acceleration_mps2_enu=lerp(self._acceleration),
-            pen_down=bool(self._pen_down[i] if w < 0.5 else self._pen_down[j]),
-            force_n=None if force is None else keep * force[i] + w * force[j],
-        )
+        return lerp(self._position), lerp(self._velocity), lerp(self._acceleration)
 
 
 def _floats(values: NDArray[np.float64]) -> memoryview:

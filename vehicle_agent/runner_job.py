@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Literal
 
 from bus.messages import AgentReport, ErrorInfo, JobAssignment
@@ -66,8 +66,8 @@ class RunningJob:
         self.planned_now = planned = planned_track.at(t_rel_s)
         if command_track is None:
             return planned
-        commanded = command_track.at(t_rel_s)
-        return replace(commanded, pen_down=planned.pen_down, force_n=planned.force_n)
+        position, velocity, acceleration = command_track.motion_at(t_rel_s)
+        return Setpoint(position, velocity, acceleration, planned.pen_down, planned.force_n)
 
     def record(self, snap: VehicleSnapshot, now_s: float) -> bool:
         """Record this tick; True once the plan is written to its end."""
