@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -11,6 +12,7 @@ from pydantic import ValidationError
 from showfile.kind_omni import OmniWheelSettings, StepSettings
 from vehicles.omni_wheel.route import FloorArea, RouteError, check_route
 from vehicles.omni_wheel.settings import omni_settings
+from vehicles.omni_wheel.writing import DEFAULT_SETTINGS
 
 SHOW = Path(__file__).resolve().parents[1] / "shows" / "ground-writers.yaml"
 
@@ -26,6 +28,16 @@ def test_draft_show_section_gives_a_terrain_the_writers_can_cross() -> None:
         board = boards[vehicle["board"]]
         area = FloorArea(board["id"], tuple(board["center_m_enu"]), 0.5 * max(board["size_m"]))
         check_route(tuple(vehicle["home_m_enu"]), area, settings.terrain)
+
+
+def test_a_default_section_is_the_rooms_defaults_but_for_the_rubber_rollers() -> None:
+    """One set of defaults (skyquill fly --kind omni-wheel without a show, and a show's section
+    left at its defaults), but one deliberate difference: a show's rollers are rubber (1.0),
+    the room's are Table 1's (0.3, which cannot climb a 50 mm step)."""
+    geometry = DEFAULT_SETTINGS.geometry
+    ratio = geometry.friction_dynamic / geometry.friction_static
+    rubber = replace(geometry, friction_static=1.0, friction_dynamic=1.0 * ratio)
+    assert omni_settings(OmniWheelSettings()) == replace(DEFAULT_SETTINGS, geometry=rubber)
 
 
 def test_a_terrace_too_high_is_refused_by_name() -> None:

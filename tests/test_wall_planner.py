@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 
 import casadi as ca
 import numpy as np
@@ -124,6 +125,9 @@ def test_force_beyond_the_rotors_names_the_thrust_limit() -> None:
     with pytest.raises(InfeasibleTrajectoryError, match=r"stroke 0: pressing 6\.00 N") as info:
         plan_writing(strokes, SURFACE, weak)
     assert info.value.limit == "thrust"
+    assert re.search(r"needs a rotor thrust of (\d+\.\d\d) N, beyond the rotors' 0\.\.6\.60 N",
+                     str(info.value))  # fmt: skip
+    assert info.value.value is not None and info.value.value > 6.6
 
 
 @pytest.mark.slow

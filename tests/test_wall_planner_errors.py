@@ -3,6 +3,7 @@ it out, by how much, and the stroke; or plainly that no limit is to blame."""
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -137,3 +138,11 @@ def test_least_time_within_speed_and_acceleration() -> None:
     assert cruise_by == "within v_max 0.2 m/s"
     # At the ramp's length both expressions agree.
     assert least_time_s(0.1, 1, 0.2, 0.2)[0] == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("name", ["v_max_mps", "a_max_mps2", "force_rate_max_nps", "h_max_s"])
+@pytest.mark.parametrize("value", [0.0, -1.0, math.nan])
+def test_a_limit_that_is_not_positive_is_refused_by_name(name: str, value: float) -> None:
+    with pytest.raises(PlannerError, match=f"planner limit {name} must be positive") as err:
+        Limits(**{name: value})
+    assert err.value.field == name

@@ -17,6 +17,7 @@ result; the model is in ``contact_model``, the built solvers and step-count ladd
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -24,6 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from planner.errors import PlannerError
 from vehicles.hexarotor_sponge import defaults
 from vehicles.hexarotor_sponge.contact_model import acceleration_mps2, contact_direction
 from vehicles.hexarotor_sponge.diagnosis import Iterate, infeasible_error
@@ -76,6 +78,14 @@ class Limits:
     takes the six bench glyphs from 1148 iterations to 618 (0.75 -> 0.38 s CPU per letter,
     median, solvers built), their durations within 0.3 % and steps within 0.03 s of their
     neighbours."""
+
+    def __post_init__(self) -> None:
+        for name in ("v_max_mps", "a_max_mps2", "force_rate_max_nps", "h_init_s", "h_max_s"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise PlannerError(
+                    f"planner limit {name} must be positive, not {value}", field=name
+                )
 
 
 @dataclass(frozen=True)

@@ -91,15 +91,20 @@ def _check_static_thrust(force_n: float, stroke_index: int, params: HexarotorPar
     torque = -np.cross(params.com_m_body, weight_body) - np.cross(params.tip_m_body, contact_body)
     out = alloc.allocate(np.concatenate([force_body, torque]))
     if out.saturated:
-        need = float(np.max(alloc.inverse @ np.concatenate([force_body, torque])))
+        thrusts = alloc.inverse @ np.concatenate([force_body, torque])
+        need, least = float(np.max(thrusts)), float(np.min(thrusts))
+        if need > params.thrust_max_n:
+            why, value, bound = f"a rotor thrust of {need:.2f} N", need, params.thrust_max_n
+        else:  # a rotor would have to pull
+            why, value, bound = f"a rotor to pull {-least:.2f} N (rotors only push)", least, 0.0
         raise InfeasibleTrajectoryError(
-            f"pressing {force_n:.2f} N while hovering needs a rotor thrust of {need:.1f} N, "
-            f"beyond the rotors' {params.thrust_max_n:.1f} N",
+            f"pressing {force_n:.2f} N while hovering needs {why}, beyond the rotors' "
+            f"0..{params.thrust_max_n:.2f} N",
             limit="thrust",
             axis=None,
             t_s=0.0,
-            value=need,
-            bound=params.thrust_max_n,
+            value=value,
+            bound=bound,
             stroke_index=stroke_index,
         )
 
