@@ -5,12 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-import numpy as np
-
 from kiosk.limits import SubmissionLimits
 from kiosk.wording import board_numbers
 from planner.pipeline import BoardFrame, PlanOptions
-from showfile.kind_hexarotor import PenSettings
 from showfile.planning import plan_options
 from vehicles.registry import vehicle_kind
 
@@ -69,18 +66,6 @@ class KioskSettings:
     defaults."""
 
 
-def pen_width_range_m(kind: str, pen: PenSettings | None = None) -> tuple[float, float] | None:
-    """The line widths in [m] a kind's pen can draw, or None if it draws one width: the
-    hexarotor's sponge from its pen calibration (``pen``, the show file's defaults when None:
-    width at the lowest and highest calibrated force, as the kind's ``PenCurve`` reads it)."""
-    if kind != "hexarotor-sponge":
-        return None
-    pen = pen or PenSettings()
-    coefficients = np.asarray(pen.width_coefficients_m)
-    low, high = np.polynomial.polynomial.polyval([pen.force_min_n, pen.force_max_n], coefficients)
-    return float(low), float(high)
-
-
 def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
     """Kiosk settings from a loaded show (``showfile.Show``); ``port`` overrides the file's.
 
@@ -101,8 +86,13 @@ def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
     plan = replace(plan, clearance_m=max(planning.clearance_m, 1e-3))
     width_m, height_m = board.writing_area_m
     writer = next((v for v in show.vehicles if v.board == board.id), None)
-    kind = "quadrotor-brush" if writer is None else writer.kind
-    hexarotor = getattr(show, "hexarotor", None)  # the show file's wall-writer section, if any
+    kind = BRUSH_KIND if writer is None else writer.kind
+    preview_settings = (
+        None if writer is None or kind == BRUSH_KIND else kind_settings(show, writer.id, kind)
+    )
+    widths_m = (
+        None if preview_settings is None else vehicle_kind(kind).width_range_m(preview_settings)
+    )
     return KioskSettings(
         show_id=show.show_id,
         host=kiosk.host,
@@ -120,10 +110,8 @@ def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
             [b.id for b in show.boards],
         ),
         preview_kind=kind,
-        width_range_m=pen_width_range_m(kind, None if hexarotor is None else hexarotor.pen),
-        preview_kind_settings=(
-            None if writer is None or kind == BRUSH_KIND else kind_settings(show, writer.id, kind)
-        ),
+        width_range_m=widths_m,
+        preview_kind_settings=preview_settings,
     )
 
 

@@ -25,14 +25,17 @@ def wall_kiosk() -> Iterator[str]:
     """A kiosk (no show around it) whose previews are planned for the wall hexarotor: its URL."""
     from bus.session import loopback_settings
     from kiosk.service import serving
-    from kiosk.settings import KioskSettings, pen_width_range_m
+    from kiosk.settings import KioskSettings
+    from vehicles.registry import vehicle_kind
+
+    wall = vehicle_kind("hexarotor-sponge")
 
     settings = KioskSettings(
         show_id="kiosk-widths",
         port=0,
         writing_area_m=(0.5, 0.5),
         preview_kind="hexarotor-sponge",
-        width_range_m=pen_width_range_m("hexarotor-sponge"),
+        width_range_m=wall.width_range_m(wall.settings(None, None)),
     )
     with serving(settings, loopback_settings(), role="peer") as server:
         yield server.url

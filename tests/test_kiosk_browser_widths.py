@@ -16,7 +16,7 @@ from typing import Any
 import pytest
 from test_kiosk_browser import CHROMIUM, SHOTS_DIR, UI_WAIT_MS, browser
 
-from kiosk.settings import pen_width_range_m
+from vehicles.registry import vehicle_kind
 
 pytestmark = [
     pytest.mark.browser,
@@ -90,7 +90,8 @@ def test_pressing_harder_draws_wider_in_the_preview(browser: Any, wall_kiosk: st
     (body,) = sent
     (stroke,) = body["strokes"]["strokes"]
     widths = [p["w"] for p in stroke]
-    low, high = pen_width_range_m(WALL) or (0.0, 0.0)
+    wall = vehicle_kind(WALL)
+    low, high = wall.width_range_m(wall.settings(None, None)) or (0.0, 0.0)
     assert all(low - 1e-9 <= w <= high + 1e-9 for w in widths)
     assert widths[-1] - widths[0] > 0.7 * (high - low)  # from the pressure, not constant
     assert all(b >= a - 1e-9 for a, b in itertools.pairwise(widths))

@@ -14,9 +14,10 @@ from typing import Any
 import numpy as np
 import pytest
 
-from kiosk.settings import KioskSettings, pen_width_range_m, settings_from_show
+from kiosk.settings import KioskSettings, settings_from_show
 from showfile import load_show
 from vehicles.hexarotor_sponge.pen import PenCurve
+from vehicles.registry import vehicle_kind
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(240)]
 
@@ -53,12 +54,15 @@ def pen_down_widths(preview: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     return down[:, 0], down[:, 1]
 
 
-def test_the_kiosks_pen_range_is_the_hexarotor_pens() -> None:
-    low, high = pen_width_range_m(WALL) or (0.0, 0.0)
+def test_each_kind_says_the_widths_it_draws() -> None:
+    wall = vehicle_kind(WALL)
+    low, high = wall.width_range_m(wall.settings(None, None))
     pen = PenCurve()
     assert (low, high) == pytest.approx((pen.width_min_m, pen.width_max_m), abs=1e-9)
     assert (low, high) == pytest.approx((0.005, 0.014))
-    assert pen_width_range_m("quadrotor-brush") is None
+    for one_width in ("quadrotor-brush", "omni-wheel"):
+        kind = vehicle_kind(one_width)
+        assert kind.width_range_m(kind.settings(None, None)) is None
 
 
 def test_a_show_previews_for_the_kind_on_its_first_board() -> None:
@@ -71,7 +75,7 @@ def test_a_show_previews_for_the_kind_on_its_first_board() -> None:
     ]
     wall = settings_from_show(show.model_copy(update={"vehicles": vehicles}))
     assert wall.preview_kind == WALL
-    assert wall.width_range_m == pen_width_range_m(WALL)
+    assert wall.width_range_m == pytest.approx((0.005, 0.014))  # the show file's pen
     assert type(wall.preview_kind_settings).__name__ == "WallSettings"  # the vehicle's own
     assert settings_from_show(show).preview_kind_settings is None  # the brush: ``plan``
 

@@ -298,6 +298,11 @@ class VehicleKind(Protocol):
         """How the live agent moves this kind between its home and its writing."""
         ...
 
+    def width_range_m(self, settings: Any) -> tuple[float, float] | None:
+        """The narrowest and widest line in [m] the kind draws with ``settings`` (a kiosk lets
+        visitors draw widths within it), or None where it draws one width."""
+        ...
+
     def autopilot_world(self, settings: Any) -> Any | None:
         """What a vehicle of this kind flown behind an autopilot (the MAVLink backend) takes from
         its simulated world to follow a pen it cannot sense (the brush quadrotor: its

@@ -120,6 +120,11 @@ class HexarotorSpongeKind:
         """No autopilot flies this kind yet: the sim backend only."""
         return None
 
+    def width_range_m(self, settings: Any) -> tuple[float, float]:
+        """The sponge's lines at its lowest and highest calibrated force."""
+        pen = _settings(settings).plan.params.pen
+        return pen.width_min_m, pen.width_max_m
+
     def phases(self, settings: Any) -> JobPhases:
         """Takes off, flies level with the top of its writing area, then down to the first
         free-flight waypoint in front of the wall at its writing limits; the plan makes and

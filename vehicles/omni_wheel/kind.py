@@ -48,6 +48,10 @@ class OmniWheel:
         """No autopilot flies this kind yet: the sim backend only."""
         return None
 
+    def width_range_m(self, settings: OmniSettings) -> None:
+        """None: the marker draws one width."""
+        return None
+
     def phases(self, settings: OmniSettings) -> JobPhases:
         """Rests on the floor; drives to its area with the marker up, sideways first, then
         along x over the steps, within its planned speed and acceleration."""

@@ -49,6 +49,10 @@ class QuadrotorBrush:
         """Takes off, flies above its board at the show's write height plus clearance, lands."""
         return JobPhases(airborne=True, cruise="above_surface")
 
+    def width_range_m(self, settings: QuadrotorSettings) -> None:
+        """None: the brush's width follows its height, not the visitor's line."""
+        return None
+
     def autopilot_world(self, settings: QuadrotorSettings) -> WorldParams:
         """The brush, board height and mocap of its simulated world (for the MAVLink backend)."""
         return settings.flight.world
