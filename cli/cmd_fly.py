@@ -139,10 +139,10 @@ def run(args: argparse.Namespace) -> int:
         }
         return run_kind(args, {k: getattr(args, k) != v for k, v in brush_only.items()})
     from planner.errors import PlannerError
-    from vehicle_agent.safety import WritingBounds, writing_verdict
     from vehicles.jobs import plan_glyph
     from vehicles.registry import vehicle_kind
     from vehicles.surface import Surface
+    from vehicles.verdict import WritingBounds, writing_verdict
 
     kind = vehicle_kind(QUADROTOR)
     try:
@@ -202,7 +202,7 @@ def _write_report(
     args: argparse.Namespace, kind: Any, job: Any, flown: Any, settings: Any, doc: dict[str, Any]
 ) -> None:
     """``metrics.json`` and ``report.png`` into ``--report``."""
-    from vehicle_agent.job_picture import save_png
+    from vehicles.picture import save_png
 
     out = Path(args.report)
     out.mkdir(parents=True, exist_ok=True)

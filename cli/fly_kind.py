@@ -24,10 +24,10 @@ def run_kind(args: argparse.Namespace, brush_options_set: dict[str, bool]) -> in
     quadrotor's own options and whether each was given."""
     from cli.cmd_fly import glyph_of
     from planner.errors import PlannerError
-    from vehicle_agent.safety import WritingBounds, writing_verdict
     from vehicles.jobs import plan_glyph
     from vehicles.registry import vehicle_kind
     from vehicles.surface import Surface
+    from vehicles.verdict import WritingBounds, writing_verdict
 
     given = [name for name, is_set in brush_options_set.items() if is_set]
     if given:
@@ -76,7 +76,7 @@ def run_kind(args: argparse.Namespace, brush_options_set: dict[str, bool]) -> in
     summary = ("rmse_pen_down_m", "rmse_m", "max_error_m", "iou", "sim_time_s", "wall_time_s")
     print(json.dumps({k: doc[k] for k in summary}))
     if args.report:
-        from vehicle_agent.job_picture import save_png
+        from vehicles.picture import save_png
 
         out = Path(args.report)
         out.mkdir(parents=True, exist_ok=True)

@@ -14,13 +14,14 @@ from bus.messages import JobAssignment, JobMetrics
 from planner.errors import PlannerError
 from planner.glyphs import Glyph, parse_strokes_json, text_glyph
 from vehicle_agent.job_files import COMPACT_PICTURE_DPI, JobFilesPolicy, compact_arrays, prune
-from vehicle_agent.job_picture import PICTURE_NAME, PictureWorker, save_png
+from vehicle_agent.job_picture import PICTURE_NAME, PictureWorker
 from vehicle_agent.job_runner import PreparedJob
 from vehicle_agent.setup import VehicleSetup
 from vehicle_agent.trace import FlownTrace
 from vehicle_agent.written_ink import written_ink_of_trace
 from vehicles.jobs import plan_job
 from vehicles.kind import FlownWriting, WritingPlan
+from vehicles.picture import save_png
 
 
 def job_glyph(assignment: JobAssignment) -> Glyph:

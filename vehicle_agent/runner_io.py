@@ -20,8 +20,9 @@ from bus.messages import (
 )
 from planner.samples import TrajectorySamples
 from vehicle_agent.backends.base import Setpoint, Vec3, VehicleSnapshot
-from vehicle_agent.safety.limits import SafetyLimits, WritingBounds, writing_verdict
+from vehicle_agent.safety.limits import SafetyLimits
 from vehicle_agent.trace import FlownTrace
+from vehicles.verdict import WritingBounds, writing_verdict
 
 ACTIVE_PHASES = ("preflight", "climb", "wait_plan", "transit", "settle", "write")
 """Phases in which a job is running (an interruption lifts the brush and abandons it)."""

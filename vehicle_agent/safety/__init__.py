@@ -1,8 +1,9 @@
 """Pure safety checks of one vehicle: tracking deviation, geofence, writing bounds (no I/O)."""
 
 from vehicle_agent.safety.geofence import Geofence, GeofenceError, vehicle_fence
-from vehicle_agent.safety.limits import SafetyLimits, WritingBounds, writing_verdict
+from vehicle_agent.safety.limits import SafetyLimits
 from vehicles.deviation import DeviationLimit, DeviationMonitor, DeviationTrip
+from vehicles.verdict import WritingBounds, writing_verdict
 
 __all__ = [
     "DeviationLimit",
