@@ -61,7 +61,7 @@ class DurationEstimates:
             return NOT_PLANNED
         finally:
             self._pending -= 1
-        if cache_key and (plans.durations_s or plans.refused):
+        if cache_key and plans.known:
             self.remember(cache_key, plans)
         return plans
 

@@ -27,6 +27,11 @@ class KindPlans:
     refused: frozenset[str] = frozenset()
     """Kinds whose planner refused the glyph."""
 
+    @property
+    def known(self) -> bool:
+        """Some kind planned or refused it (else: not planned, the rough estimate stays)."""
+        return bool(self.durations_s or self.refused)
+
 
 @dataclass
 class KindMatch:

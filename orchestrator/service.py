@@ -317,7 +317,7 @@ class OrchestratorService:
     async def _refine_estimate(self, job_id: str, glyph: Any, cache_key: str | None) -> None:
         """Replace the rough estimate by the planner's duration (best effort, bounded work)."""
         plans = await self.estimates.planned(job_id, glyph, cache_key)
-        if plans.durations_s or plans.refused:
+        if plans.known:
             self.apply(self.book.set_estimate(job_id, plans, self.clock()))
 
     async def on_command(self, command: OperatorCommand) -> CommandReply:

@@ -89,10 +89,9 @@ def _check_static_thrust(force_n: float, stroke_index: int, params: HexarotorPar
     weight_body = np.array([0.0, 0.0, -params.mass_kg * GRAVITY_MPS2])
     contact_body = np.array([-force_n, 0.0, -friction])
     torque = -np.cross(params.com_m_body, weight_body) - np.cross(params.tip_m_body, contact_body)
-    out = alloc.allocate(np.concatenate([force_body, torque]))
-    if out.saturated:
-        thrusts = alloc.inverse @ np.concatenate([force_body, torque])
-        need, least = float(np.max(thrusts)), float(np.min(thrusts))
+    thrusts = alloc.inverse @ np.concatenate([force_body, torque])  # the exact allocation
+    need, least = float(np.max(thrusts)), float(np.min(thrusts))
+    if need > params.thrust_max_n or least < 0.0:
         if need > params.thrust_max_n:
             why, value, bound = f"a rotor thrust of {need:.2f} N", need, params.thrust_max_n
         else:  # a rotor would have to pull
