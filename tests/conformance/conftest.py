@@ -1,13 +1,16 @@
 """The ``autopilot`` fixture: every conformance test runs against each autopilot.
 
 - ``mavsim-ardupilot``, ``mavsim-px4``: the project's MAVLink simulator, started here in-process
-  (real time, UDP on loopback, position estimate ready at once);
+  (UDP on loopback, position estimate ready at once), at ``MAVSIM_TIME_SCALE`` times real time:
+  the ground station counts the vehicle's own seconds (``clock``), so every wait, rate and timeout
+  of a test means the same seconds to the vehicle as at real time;
 - ``sitl-ardupilot``, ``sitl-px4`` (marked ``sitl``): ArduCopter SITL and PX4 SITL from
   ``tests/conformance/sitl_targets.py`` (``start_sitl(kind)``), which skips with its reason when
   the binaries are not configured; without that module they are skipped too.
 
 The fixture yields an object with ``kind`` (``ardupilot``/``px4``), ``url`` (a pymavlink connection
-string), ``system_id`` and ``close()``; each test gets a fresh vehicle, on the ground, disarmed.
+string), ``system_id``, ``clock()`` (the vehicle's time in [s]) and ``close()``; each test gets a
+fresh vehicle, on the ground, disarmed.
 """
 
 from __future__ import annotations
@@ -27,6 +30,8 @@ from mavsim.server import MavsimServer
 
 SITL_TARGETS = Path(__file__).with_name("sitl_targets.py")
 MAVSIM_SYSTEM_ID = 7
+MAVSIM_TIME_SCALE = 4.0
+"""Vehicle seconds per wall second for mavsim: the suite's 38 flights took 220 s at real time."""
 
 
 @dataclass
@@ -48,6 +53,11 @@ class MavsimTarget:
     def system_id(self) -> int:
         return self.server.endpoints[0].config.system_id
 
+    def clock(self) -> float:
+        """The vehicle's time in [s] (mavsim's, which slows down rather than jump when the
+        machine falls behind)."""
+        return self.server.vehicle_time_s()
+
     def close(self) -> None:
         if self.server is not None:
             self.server.stop()
@@ -56,7 +66,7 @@ class MavsimTarget:
 def start_mavsim(kind: str) -> MavsimTarget:
     config = VehicleConfig(vehicle_id=f"mavsim-{kind}", system_id=MAVSIM_SYSTEM_ID, port=0,
                            autopilot=kind, position_source_delay_s=0.0)  # type: ignore[arg-type]  # fmt: skip
-    return MavsimTarget(kind, MavsimServer([config], time_scale=1.0).start())
+    return MavsimTarget(kind, MavsimServer([config], time_scale=MAVSIM_TIME_SCALE).start())
 
 
 def _sitl_targets() -> ModuleType | None:

@@ -2,6 +2,8 @@
 
 Single-threaded: :meth:`Gcs.pump` reads what the autopilot says for a while, sends our heartbeat
 once a second and, while a setpoint stream is set (:attr:`Gcs.stream`), one setpoint per period.
+Every duration is in the autopilot's own seconds (``clock``: the wall clock for SITL, the
+simulator's time for mavsim run faster than real time).
 Positions are the autopilot's LOCAL_NED (x north, y east, z down) in [m].
 """
 
@@ -42,8 +44,18 @@ class Seen:
 class Gcs:
     """One link to the autopilot under test."""
 
-    def __init__(self, url: str, system_id: int, kind: str, *, mav_type: int = mav.MAV_TYPE_GCS):
+    def __init__(
+        self,
+        url: str,
+        system_id: int,
+        kind: str,
+        *,
+        clock: Callable[[], float] = time.monotonic,
+        mav_type: int = mav.MAV_TYPE_GCS,
+    ):
         self.kind = kind
+        self.clock = clock
+        """The autopilot's time in [s]: what every duration here is counted in."""
         self.system_id = system_id
         self.component_id = 1
         self.mav_type = mav_type
@@ -57,7 +69,7 @@ class Gcs:
         self.silent = False
         """True: send nothing at all (a lost link)."""
         self.log: list[tuple[float, float, float, float, float]] | None = None
-        """When a list: every LOCAL_POSITION_NED as (monotonic time [s], x, y, z, vx)."""
+        """When a list: every LOCAL_POSITION_NED as (``clock`` time [s], x, y, z, vx)."""
         self._last_heartbeat = -math.inf
         self._last_setpoint = -math.inf
 
@@ -67,9 +79,9 @@ class Gcs:
     # --- the loop --------------------------------------------------------------------------------
     def pump(self, seconds: float, until: Callable[[Seen], bool] | None = None) -> bool:
         """Listen (and send heartbeats and the stream) for ``seconds`` or until ``until``."""
-        end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            now = time.monotonic()
+        end = self.clock() + seconds
+        while self.clock() < end:
+            now = self.clock()
             if not self.silent and now - self._last_heartbeat >= 1.0:
                 self._last_heartbeat = now
                 self.conn.mav.heartbeat_send(self.mav_type, mav.MAV_AUTOPILOT_INVALID, 0, 0, 4)
@@ -97,7 +109,7 @@ class Gcs:
         elif kind == "LOCAL_POSITION_NED":
             seen.position = m
             if self.log is not None:
-                self.log.append((time.monotonic(), float(m.x), float(m.y), float(m.z), float(m.vx)))
+                self.log.append((self.clock(), float(m.x), float(m.y), float(m.z), float(m.vx)))
         elif kind == "ATTITUDE":
             seen.attitude = m
         elif kind == "EXTENDED_SYS_STATE":
@@ -147,10 +159,10 @@ class Gcs:
 
     def arm(self, *, retry_s: float = 0.0) -> int:
         """Arm; with ``retry_s`` keep trying while the vehicle is not ready (SITL's EKF)."""
-        end = time.monotonic() + retry_s
+        end = self.clock() + retry_s
         while True:
             result = self.command(mav.MAV_CMD_COMPONENT_ARM_DISARM, 1)
-            if result == mav.MAV_RESULT_ACCEPTED or time.monotonic() >= end:
+            if result == mav.MAV_RESULT_ACCEPTED or self.clock() >= end:
                 return result
             self.pump(1.0)
 
@@ -177,7 +189,7 @@ class Gcs:
     def send_target(self, mask: int, p: Vec3 = (0.0, 0.0, 0.0), v: Vec3 = (0.0, 0.0, 0.0),
                     yaw: float = 0.0) -> None:  # fmt: skip
         """SET_POSITION_TARGET_LOCAL_NED with ``mask``."""
-        stamp = int(time.monotonic() * 1000) & 0xFFFFFFFF
+        stamp = int(time.monotonic() * 1000) & 0xFFFFFFFF  # this machine's, as a companion's
         self.conn.mav.set_position_target_local_ned_send(
             stamp, self.system_id, self.component_id, mav.MAV_FRAME_LOCAL_NED, mask,
             *p, *v, 0.0, 0.0, 0.0, yaw, 0.0,

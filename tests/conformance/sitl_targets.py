@@ -19,6 +19,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
@@ -61,6 +62,10 @@ class AutopilotTarget:
     """The SITL process (leader of its own process group)."""
     run_dir: Path | None = None
     """Its working directory (eeprom, logs, ``console.log``); removed by :meth:`close`."""
+
+    def clock(self) -> float:
+        """The autopilot's time in [s]: SITL runs at the wall clock's pace."""
+        return time.monotonic()
 
     def close(self) -> None:
         """Stop the process and its children; safe to call twice."""

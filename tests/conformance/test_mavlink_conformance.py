@@ -9,7 +9,6 @@ answer it expects of which.
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Iterator
 from typing import Any
 
@@ -31,7 +30,7 @@ TIMEOUT_PARAM = {"ardupilot": "GUID_TIMEOUT", "px4": "COM_OF_LOSS_T"}
 
 @pytest.fixture
 def gcs(autopilot: Any) -> Iterator[Gcs]:
-    link = Gcs(autopilot.url, autopilot.system_id, autopilot.kind)
+    link = Gcs(autopilot.url, autopilot.system_id, autopilot.kind, clock=autopilot.clock)
     try:
         link.connect()
         yield link
@@ -66,7 +65,9 @@ def test_arming_in_land_is_refused_with_a_reason_to_a_ground_station(gcs: Gcs) -
 def test_px4_sends_statustext_only_to_links_with_a_ground_station(
     autopilot: Any, mav_type: int, px4_texts: bool
 ) -> None:
-    link = Gcs(autopilot.url, autopilot.system_id, autopilot.kind, mav_type=mav_type)
+    link = Gcs(
+        autopilot.url, autopilot.system_id, autopilot.kind, clock=autopilot.clock, mav_type=mav_type
+    )
     try:
         link.connect()
         link.pump(3.0)  # a ground station heard before (a readiness probe) is forgotten in 2.5 s
@@ -235,7 +236,7 @@ def test_a_one_metre_position_step_has_the_autopilots_shape(gcs: Gcs) -> None:
     x, y, z = gcs.here()
     yaw = gcs.yaw_rad()
     gcs.log = []
-    t0 = time.monotonic()
+    t0 = gcs.clock()
     gcs.stream = lambda g: g.send_target(0x09F8, (x + 1.0, y, z), yaw=yaw)
     gcs.pump(7.0)
     rows = [(t - t0, px - x) for t, px, _py, _pz, _vx in gcs.log]
