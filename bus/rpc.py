@@ -159,21 +159,24 @@ async def aquery(
     *,
     timeout_s: float = DEFAULT_TIMEOUT_S,
 ) -> list[QueryReply[M]]:
-    """:func:`query` without blocking the event loop (replies collected on Zenoh's thread)."""
+    """:func:`query` without blocking the event loop.
+
+    The replies are only kept on Zenoh's own thread (``indirect=False``: Zenoh's default starts a
+    Python thread for every query's callbacks, which cost the caller's thread 251 against 123 us
+    a query on loopback, twice the process's CPU, and a thread hand-off under load) and decoded
+    on the event loop once the query is over. Safe because both callbacks only append and
+    schedule, and Zenoh's calls release the interpreter lock while they wait."""
     import asyncio
 
     loop = asyncio.get_running_loop()
     done: asyncio.Future[list[QueryReply[M]]] = loop.create_future()
-    replies: list[QueryReply[M]] = []
+    received: list[zenoh.Reply] = []
 
-    def on_reply(reply: zenoh.Reply) -> None:
-        replies.append(_decode_reply(reply, reply_type))
+    def finish() -> None:
+        if not done.done():
+            done.set_result([_decode_reply(reply, reply_type) for reply in received])
 
     def on_done() -> None:
-        def finish() -> None:
-            if not done.done():
-                done.set_result(list(replies))
-
         with contextlib.suppress(RuntimeError):  # loop closed: nobody waits any more
             loop.call_soon_threadsafe(finish)
 
@@ -181,7 +184,8 @@ async def aquery(
     kwargs: dict[str, Any] = {"timeout": timeout_s}
     if payload is not None:
         kwargs.update(payload=payload, encoding=JSON)
-    session.get(key_expr, zenoh.handlers.Callback(on_reply, on_done), **kwargs)
+    handler = zenoh.handlers.Callback(received.append, on_done, indirect=False)
+    session.get(key_expr, handler, **kwargs)
     return await done
 
 
