@@ -48,8 +48,8 @@ from vehicles.omni_wheel.climb import (
     climb,
     configuration_of,
 )
-from vehicles.omni_wheel.model import Terrain
 from vehicles.omni_wheel.sim import OmniWorld
+from vehicles.omni_wheel.terrain import Terrain
 from vehicles.omni_wheel.wheel_control import proposed_references
 from vehicles.omni_wheel.writing import (
     DEFAULT_SETTINGS,

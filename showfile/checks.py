@@ -1,18 +1,20 @@
 """Cross-checks of a show that one field alone cannot express (pure).
 
 Each problem is returned with the path of the field at fault (``("vehicles", 2, "board")``) so the
-loader can name the file line.
+loader can name the file line. What is a kind's own (the surface it writes on, whether an
+autopilot flies it, how far it reaches) is asked of its room's record, ``vehicles.ROOMS``, and of
+the room's light show checks.
 """
 
 from __future__ import annotations
 
+import importlib
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from typing import cast
 
-from showfile.kind_hexarotor import HexarotorKindSettings
-from showfile.models import AUTOPILOT_KINDS, KIND_ORIENTATION, Board, Show, Vehicle
+from showfile.models import Board, Show, Vehicle
 from vehicles import ROOMS
-from vehicles.omni_wheel.check_route import FloorArea, RouteError, check_route, terrain_of
 
 Loc = tuple[str | int, ...]
 Problem = tuple[Loc, str]
@@ -94,15 +96,8 @@ def cross_check(show: Show) -> list[Problem]:
                     (("boards", i, "center_m_enu"), f"overlaps board {show.boards[j].id!r}")
                 )
     board_ids = {b.id: b for b in show.boards}
-    for i, vehicle in enumerate(show.vehicles):
-        if vehicle.kind not in ROOMS:
-            problems.append(
-                (
-                    ("vehicles", i, "kind"),
-                    f"no vehicle kind {vehicle.kind!r} is built yet; the kinds are: "
-                    + ", ".join(sorted(ROOMS)),
-                )
-            )
+    for i, vehicle in enumerate(show.vehicles):  # every kind has a room (Vehicle.kind)
+        surface = ROOMS[vehicle.kind].orientation
         target = board_ids.get(vehicle.board)
         if target is None:
             problems.append(
@@ -111,11 +106,11 @@ def cross_check(show: Show) -> list[Problem]:
                     f"unknown board {vehicle.board!r}; boards: {sorted(board_ids)}",
                 )
             )
-        elif KIND_ORIENTATION[vehicle.kind] != target.orientation:
+        elif surface != target.orientation:
             problems.append(
                 (
                     ("vehicles", i, "board"),
-                    f"a {vehicle.kind} writes on a {KIND_ORIENTATION[vehicle.kind]} board, "
+                    f"a {vehicle.kind} writes on a {surface} board, "
                     f"but board {target.id!r} is {target.orientation}",
                 )
             )
@@ -144,12 +139,13 @@ def _mavlink_problems(show: Show) -> list[Problem]:
     mavlink = [i for i, v in enumerate(show.vehicles) if v.backend == "mavlink"]
     for i in mavlink:
         kind = show.vehicles[i].kind
-        if kind not in AUTOPILOT_KINDS:
+        if not ROOMS[kind].autopilot:
+            autopilot_kinds = sorted(name for name, room in ROOMS.items() if room.autopilot)
             problems.append(
                 (
                     ("vehicles", i, "backend"),
                     f"a {kind} cannot fly behind an autopilot yet: use backend: sim "
-                    f"(autopilot kinds: {', '.join(sorted(AUTOPILOT_KINDS))})",
+                    f"(autopilot kinds: {', '.join(autopilot_kinds)})",
                 )
             )
         rate_hz = show.vehicles[i].mavlink_setpoint_rate_hz
@@ -165,52 +161,35 @@ def _mavlink_problems(show: Show) -> list[Problem]:
     return problems
 
 
-def reach_problem(show: Show, vehicle: Vehicle) -> str | None:
-    """Why ``vehicle`` cannot reach its board from its home (a floor area behind a step higher
-    than a ground writer climbs, off the terrain, straddling a step, at the wrong height, too
-    far; a wall whose writing area reaches beyond the hexarotor's ``reach_m``), in one line
-    naming the area; None when it can."""
-    board = show.board(vehicle.board)
-    if board.orientation == "vertical":
-        return _wall_reach_problem(show, vehicle, board)
-    if board.orientation != "floor":
+BoardCheck = Callable[[Show, Vehicle, Board], str | None]
+"""A room's ``board_problem(show, vehicle, board)`` (``Room.show_checks``): why the vehicle cannot
+write on its board, in one line, or None."""
+
+
+def _board_check(kind: str) -> BoardCheck | None:
+    """The light show check of ``kind``'s room, imported on first use; None when it has none."""
+    module = ROOMS[kind].show_checks
+    if module is None:
         return None
-    section = show.omni_wheel
-    if section is None:
-        terrain = terrain_of((), 20.0)
-    else:
-        terrain = terrain_of(
-            ((s.x_m, s.height_m) for s in section.steps), section.terrain_half_width_m
-        )
-    area = FloorArea(board.id, board.center_m_enu, 0.5 * max(board.size_m))
-    try:
-        check_route(vehicle.home_m_enu, area, terrain)
-    except RouteError as exc:
-        return f"{vehicle.id} cannot write there: {exc}"
-    return None
+    return cast(BoardCheck, importlib.import_module(module).board_problem)
+
+
+def reach_problem(show: Show, vehicle: Vehicle) -> str | None:
+    """Why ``vehicle`` cannot reach its board from its home or write all of it, asked of its
+    kind's room (a floor area behind a step higher than a ground writer climbs, off the terrain,
+    straddling a step, at the wrong height, too far; a wall whose writing area reaches beyond the
+    hexarotor's ``reach_m``), in one line naming the board; None when it can."""
+    check = _board_check(vehicle.kind)
+    return None if check is None else check(show, vehicle, show.board(vehicle.board))
 
 
 def cannot_write(show: Show, vehicle: Vehicle) -> str | None:
     """Why ``vehicle`` can write no job of ``show``, in one line (its kind does not write on its
     board's surface, or it cannot reach the board: :func:`reach_problem`); None when it can."""
     board = show.board(vehicle.board)
-    surface = KIND_ORIENTATION[vehicle.kind]
+    surface = ROOMS[vehicle.kind].orientation
     if surface != board.orientation:
         return (
             f"a {vehicle.kind} writes on a {surface} board, not on {board.orientation} {board.id!r}"
         )
     return reach_problem(show, vehicle)
-
-
-def _wall_reach_problem(show: Show, vehicle: Vehicle, board: Board) -> str | None:
-    """A wall whose writing area (less the margin) has corners beyond the writer's reach."""
-    reach_m = (show.hexarotor or HexarotorKindSettings()).reach_m
-    margin_m = show.planning.margin_m
-    half = [max(0.0, size / 2 - margin_m) for size in board.writing_area_m]
-    corner_m = math.hypot(*half)
-    if corner_m <= reach_m:
-        return None
-    return (
-        f"{vehicle.id} cannot write there: the corners of wall {board.id!r}'s writing area are "
-        f"{corner_m:.2f} m from its centre, beyond the reach {reach_m} m (hexarotor.reach_m)"
-    )

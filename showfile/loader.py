@@ -141,7 +141,11 @@ def _pydantic_problems(
             message = f"required field {loc[-1]!r} is missing" if loc else message
         elif error["type"] == "extra_forbidden":
             message = "unknown field"
-        elif "input" in error and not isinstance(error["input"], dict | list):
+        elif (
+            "input" in error
+            and not isinstance(error["input"], dict | list)
+            and repr(error["input"]) not in message  # an unknown kind's message names it
+        ):
             message = f"{message} (got {error['input']!r})"
         line = _line_of(root, loc[:-1] if error["type"] == "missing" else loc)
         problems.append(ShowProblem(file, line, format_loc(loc), message))

@@ -9,15 +9,24 @@ from __future__ import annotations
 import math
 import re
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    ConfigDict,
+    Field,
+    field_validator,
+    model_validator,
+)
 from pydantic.networks import IPvAnyNetwork
+from pydantic_core import PydanticCustomError
 
-from showfile.kind_hexarotor import HexarotorKindSettings
-from showfile.kind_omni import OmniWheelSettings
 from showfile.safety import SafetySettings
 from showfile.security import RESERVED_IDS, SecuritySettings
+from vehicles import ROOMS, UnknownKindError
+from vehicles.hexarotor_sponge.show_section import HexarotorKindSettings
+from vehicles.omni_wheel.show_section import OmniWheelSettings
 
 Vec3 = tuple[float, float, float]
 Size2 = tuple[float, float]
@@ -215,21 +224,22 @@ class Board(_Model):
         return self
 
 
-VehicleKind = Literal["quadrotor-brush", "hexarotor-sponge", "omni-wheel"]
-"""Vehicle kinds (README.md, "Where things are": ``vehicles/``, a room each): brush quadrotor over
-a horizontal board (Airshow), fully actuated hexarotor with a sponge pen on a wall,
-omnidirectional wheeled vehicle on the floor."""
+def _known_kind(name: str) -> str:
+    if name not in ROOMS:
+        # the registry's own message, without pydantic's "Value error, " in front
+        raise PydanticCustomError(
+            "unknown_kind", "{reason}", {"reason": str(UnknownKindError(name))}
+        )
+    return name
 
-KIND_ORIENTATION: dict[str, str] = {
-    "quadrotor-brush": "horizontal",
-    "hexarotor-sponge": "vertical",
-    "omni-wheel": "floor",
-}
-"""The board orientation each vehicle kind writes on."""
 
-AUTOPILOT_KINDS: frozenset[str] = frozenset({"quadrotor-brush"})
-"""Kinds a MAVLink autopilot can fly (``backend: mavlink``); the others fly in the sim backend
-only (held equal to ``VehicleKind.autopilot_world`` by tests/test_showfile_load.py)."""
+def _list_kinds(schema: dict[str, Any]) -> None:
+    schema["enum"] = sorted(ROOMS)
+
+
+KindName = Annotated[str, AfterValidator(_known_kind), Field(json_schema_extra=_list_kinds)]
+"""The name of a vehicle kind that has a room (``vehicles.ROOMS``; README.md, "Where things are":
+``vehicles/``); any other is refused naming the kinds. The JSON schema lists them."""
 
 
 class Limits(_Model):
@@ -309,8 +319,8 @@ class Vehicle(_Model):
         return value
 
     """Vehicle identifier (also in its Zenoh keys)."""
-    kind: VehicleKind = "quadrotor-brush"
-    """What kind of vehicle it is."""
+    kind: KindName = Field(default="quadrotor-brush", validate_default=True)
+    """What kind of vehicle it is: one of the kinds that have a room (``vehicles.ROOMS``)."""
     backend: Literal["sim", "mavlink"] = "sim"
     """``sim``: the in-process simulator; ``mavlink``: an autopilot at ``mavlink_url``."""
     board: Identifier
@@ -391,6 +401,8 @@ class Show(_Model):
     """``skyquill up`` runs the simulated vehicles of each host in this many fleet host processes
     (``skyquill fleet``, vehicles split evenly in show order); 0: one agent process each. Real
     vehicles always get an agent of their own."""
+    # The kinds' own sections, one per room that has one (``Room.section``; the models live in the
+    # rooms, ``vehicles/<room>/show_section.py``; tests/test_showfile_kinds.py holds the two equal).
     hexarotor: HexarotorKindSettings | None = None
     """The ``hexarotor-sponge`` wall writers (vehicle, pen, writing limits); None: defaults."""
     omni_wheel: OmniWheelSettings | None = None

@@ -9,9 +9,9 @@ import pytest
 import yaml
 from pydantic import ValidationError
 
-from showfile.kind_omni import OmniWheelSettings, StepSettings
 from vehicles.omni_wheel.route import FloorArea, RouteError, check_route
 from vehicles.omni_wheel.settings import omni_settings
+from vehicles.omni_wheel.show_section import OmniWheelSettings, StepSettings
 from vehicles.omni_wheel.writing import DEFAULT_SETTINGS
 
 SHOW = Path(__file__).resolve().parents[1] / "shows" / "ground-writers.yaml"

@@ -10,8 +10,8 @@ import pytest
 
 from vehicles.omni_wheel.climb import STEP_EDGE_X_M, climb
 from vehicles.omni_wheel.geometry import OmniGeometry
-from vehicles.omni_wheel.model import Terrain
 from vehicles.omni_wheel.sim import OmniWorld
+from vehicles.omni_wheel.terrain import Terrain
 from vehicles.omni_wheel.wheel_control import BodyConfiguration, proposed_references
 
 GEO = OmniGeometry()

@@ -11,7 +11,6 @@ import pytest
 
 from showfile import ShowFileError, dump_show, load_show, parse_show
 from showfile.checks import footprint, polygons_overlap
-from showfile.models import AUTOPILOT_KINDS
 from vehicles import ROOMS
 from vehicles.registry import vehicle_kind
 
@@ -276,7 +275,7 @@ def test_only_kinds_with_an_autopilot_world_may_fly_behind_mavlink() -> None:
     for name in ROOMS:
         kind = vehicle_kind(name)
         has_world = kind.autopilot_world(kind.settings(None, None)) is not None
-        assert has_world == (name in AUTOPILOT_KINDS), name
+        assert has_world == ROOMS[name].autopilot, name
     text = (SHOWS / "flying-calligrapher.yaml").read_text(encoding="utf-8")
     mavlink = "backend: mavlink, mavlink_url: 'udp:127.0.0.1:14561'"
     err = _problem(text.replace("backend: sim", mavlink))

@@ -129,8 +129,8 @@ def test_live_vehicle_hovers_at_its_start() -> None:
 def test_show_settings_become_the_kinds_settings() -> None:
     from pydantic import ValidationError
 
-    from showfile.kind_hexarotor import HexarotorKindSettings, PenSettings
     from vehicles.hexarotor_sponge.kind import settings_from
+    from vehicles.hexarotor_sponge.show_section import HexarotorKindSettings, PenSettings
 
     model = HexarotorKindSettings(
         v_max_mps=0.33, rotor_tilt_deg=30.0, pen=PenSettings(preload_n=0.8)
@@ -151,9 +151,9 @@ def test_one_set_of_defaults_for_shows_and_fly() -> None:
     the settings ``skyquill fly --kind hexarotor-sponge`` plans and flies with (no show): each
     figure both state comes from ``vehicles.hexarotor_sponge.defaults``."""
     from showfile import load_show
-    from showfile.kind_hexarotor import HexarotorKindSettings
     from vehicles.hexarotor_sponge import defaults
     from vehicles.hexarotor_sponge.kind import settings_from
+    from vehicles.hexarotor_sponge.show_section import HexarotorKindSettings
 
     fly = KIND.settings(None, None)
     assert fly == WallSettings()

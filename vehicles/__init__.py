@@ -1,18 +1,61 @@
 """Vehicle kinds: one room each (``vehicles/<kind>/``) behind :class:`vehicles.kind.VehicleKind`.
 
-The registry maps a show file's ``kind`` to its room, imported only when first asked for (a room
-may pull in MuJoCo or CasADi) by :func:`vehicles.registry.vehicle_kind`. This module imports
-nothing, so the show file can name the kinds without the console or trust seeing the planner.
+:data:`ROOMS` is the one registry of the kinds: per kind a :class:`Room` record of plain data,
+what the show file and the registry know of the kind without importing its room. The kind object
+itself (``KIND``, which may pull in MuJoCo or CasADi) is imported only when first asked for, by
+:func:`vehicles.registry.vehicle_kind`. This module imports nothing, so the show file can name
+the kinds, and check a vehicle against its kind, without the console or trust seeing the planner.
 """
 
 from __future__ import annotations
 
-ROOMS: dict[str, str] = {
-    "quadrotor-brush": "vehicles.quadrotor_brush.kind",
-    "omni-wheel": "vehicles.omni_wheel.kind",
-    "hexarotor-sponge": "vehicles.hexarotor_sponge.kind",
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from vehicles.surface import Orientation
+
+
+@dataclass(frozen=True)
+class Room:
+    """What is known of a vehicle kind without importing its room (plain data).
+
+    The kind object is the truth at run time; tests hold its ``orientation`` and
+    ``autopilot_world`` to this record (tests/test_showfile_kinds.py)."""
+
+    kind_module: str
+    """The module whose ``KIND`` implements the kind (imported on first use)."""
+    orientation: Orientation
+    """The surface it writes on: a board's ``orientation`` in a show file."""
+    autopilot: bool = False
+    """A MAVLink autopilot can fly it (``backend: mavlink``); False: the sim backend only."""
+    section: str | None = None
+    """Key of the kind's own section of a show file (a ``showfile.models.Show`` field typed by a
+    model of the room's ``show_section`` module); None: the kind has none."""
+    show_checks: str | None = None
+    """A light module of the room (pydantic and plain Python only: the show file loads it) whose
+    ``board_problem(show, vehicle, board) -> str | None`` says in one line why a vehicle of the
+    kind cannot write on its board (beyond its reach, behind a step); None: no check of its own."""
+
+
+ROOMS: dict[str, Room] = {
+    "quadrotor-brush": Room(
+        kind_module="vehicles.quadrotor_brush.kind", orientation="horizontal", autopilot=True
+    ),
+    "omni-wheel": Room(
+        kind_module="vehicles.omni_wheel.kind",
+        orientation="floor",
+        section="omni_wheel",
+        show_checks="vehicles.omni_wheel.show_section",
+    ),
+    "hexarotor-sponge": Room(
+        kind_module="vehicles.hexarotor_sponge.kind",
+        orientation="vertical",
+        section="hexarotor",
+        show_checks="vehicles.hexarotor_sponge.show_section",
+    ),
 }
-"""Kind name (as in show files) -> the module whose ``KIND`` implements it."""
+"""Kind name (as in show files) -> its room's record."""
 
 
 class UnknownKindError(LookupError):

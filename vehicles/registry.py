@@ -10,8 +10,8 @@ from vehicles.kind import VehicleKind
 
 def vehicle_kind(name: str) -> VehicleKind:
     """The kind called ``name`` (its room imported on first use); UnknownKindError if none."""
-    module = ROOMS.get(name)
-    if module is None:
+    room = ROOMS.get(name)
+    if room is None:
         raise UnknownKindError(name)
-    kind: VehicleKind = importlib.import_module(module).KIND
+    kind: VehicleKind = importlib.import_module(room.kind_module).KIND
     return kind

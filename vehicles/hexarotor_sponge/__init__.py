@@ -1,13 +1,14 @@
 """The Flying Calligrapher's room (Guo et al. 2024): a fully-actuated hexarotor with a one-link arm
 writes on a vertical wall with a sponge pen whose line width follows the contact force.
 
-``defaults`` the default figures (plain constants; the show file's ``hexarotor`` section defaults
-to them too); ``params`` the vehicle; ``pen`` force <-> width; ``allocation`` wrench -> six tilted
-rotor thrusts; ``world`` MuJoCo; ``waypoints``/``nlp``/``plan`` contact-aware motion-force
-planning (eq. 7), ``contact_model`` its contact and rotor model, ``solver_cache`` its built IPOPT
-solvers, ``diagnosis`` the limit that rules out a period IPOPT finds no trajectory for;
-``controller`` hybrid motion-force control (section V); ``flight`` the batch closed loop, ``live``
-the agent's one; ``metrics``/``report`` Table I's figures; ``kind`` the interface, and the kind
-object ``vehicles.hexarotor_sponge.kind.KIND``. Importing this package imports nothing else (the
-show file reads ``defaults`` without loading CasADi or MuJoCo).
+``defaults`` the default figures (plain constants); ``show_section`` the show file's ``hexarotor``
+section (defaulting to them) and the wall's reach check; ``params`` the vehicle; ``pen`` force
+<-> width; ``allocation`` wrench -> six tilted rotor thrusts; ``world`` MuJoCo;
+``waypoints``/``nlp``/``plan`` contact-aware motion-force planning (eq. 7), ``contact_model`` its
+contact and rotor model, ``solver_cache`` its built IPOPT solvers, ``diagnosis`` the limit that
+rules out a period IPOPT finds no trajectory for; ``controller`` hybrid motion-force control
+(section V); ``flight`` the batch closed loop, ``live`` the agent's one; ``metrics``/``report``
+Table I's figures; ``kind`` the interface, and the kind object
+``vehicles.hexarotor_sponge.kind.KIND``. Importing this package imports nothing else (the show
+file reads ``show_section`` and ``defaults`` without loading CasADi or MuJoCo).
 """

@@ -2,9 +2,10 @@
 the kind's own settings (:class:`~vehicles.hexarotor_sponge.params.HexarotorParams`,
 :class:`~vehicles.hexarotor_sponge.pen.PenCurve`, :class:`~vehicles.hexarotor_sponge.nlp.Limits`,
 :class:`~vehicles.hexarotor_sponge.plan.PlanSettings`) and a show file's ``hexarotor`` section
-(``showfile.kind_hexarotor``, which cannot import the CasADi/MuJoCo modules) both default to
-these, so a show left at its defaults and ``skyquill fly --kind hexarotor-sponge`` plan and fly
-the same vehicle (held by tests/test_wall_kind.py::test_one_set_of_defaults_for_shows_and_fly)."""
+(``vehicles.hexarotor_sponge.show_section``, which the show file loads: it cannot import the
+CasADi/MuJoCo modules) both default to these, so a show left at its defaults and ``skyquill fly
+--kind hexarotor-sponge`` plan and fly the same vehicle
+(held by tests/test_wall_kind.py::test_one_set_of_defaults_for_shows_and_fly)."""
 
 from __future__ import annotations
 

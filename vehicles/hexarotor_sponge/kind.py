@@ -11,7 +11,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from planner.samples import TrajectorySamples
-from showfile.kind_hexarotor import HexarotorKindSettings
 from vehicles.hexarotor_sponge.flight import fly_plan
 from vehicles.hexarotor_sponge.live import WallVehicle
 from vehicles.hexarotor_sponge.loop import FlySettings
@@ -21,6 +20,7 @@ from vehicles.hexarotor_sponge.params import HexarotorParams
 from vehicles.hexarotor_sponge.pen import PenCurve
 from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing
 from vehicles.hexarotor_sponge.report import report_figure
+from vehicles.hexarotor_sponge.show_section import HexarotorKindSettings
 from vehicles.hexarotor_sponge.widths import default_width_profile, with_profile_knots
 from vehicles.kind import FlownWriting, JobPhases, StrokeInput, WritingPlan, WritingScore
 from vehicles.surface import Orientation, Surface, Vec3

@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from vehicles.omni_wheel.model import Step, Terrain
+from vehicles.omni_wheel.terrain import Step, Terrain
 
 MAX_STEP_HEIGHT_M = 0.05
 """Highest step in [m] the writer is allowed to cross (climbed with margin in MuJoCo with rubber

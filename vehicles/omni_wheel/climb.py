@@ -20,8 +20,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from vehicles.omni_wheel.geometry import WHEEL_GROUP, OmniGeometry
-from vehicles.omni_wheel.model import Step, Terrain
 from vehicles.omni_wheel.sim import OmniWorld, Sensed, TrueState
+from vehicles.omni_wheel.terrain import Step, Terrain
 from vehicles.omni_wheel.wheel_control import (
     BodyConfiguration,
     proposed_references,

@@ -11,17 +11,17 @@ coefficient while the roller slides (``sim``).
 Angles are in radians (MJCF's default is degrees: joint ranges would be read as such).
 
 Terrain: a floor plane and, for each step, a box whose top is the height of the floor beyond the
-step edge (steps lie across x, the direction of travel).
+step edge (steps lie across x, the direction of travel: ``vehicles.omni_wheel.terrain``).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from vehicles.omni_wheel.geometry import FRONT_PART, WHEEL_NAMES, OmniGeometry
+from vehicles.omni_wheel.terrain import Terrain
 
 ROLLER_RADIUS_M = 0.016
 """Radius in [m] of a free roller (capsule)."""
@@ -33,36 +33,6 @@ MOTOR_TORQUE_MAX_NM = 3.0
 """Largest torque in [N m] a wheel motor gives (its gearbox output)."""
 PHYSICS_TIMESTEP_S = 0.001
 """MuJoCo time step in [s]."""
-
-
-@dataclass(frozen=True)
-class Step:
-    """A step across the direction of travel: the floor is ``height_m`` high from ``x_m`` on."""
-
-    x_m: float
-    """World x in [m] of the step edge."""
-    height_m: float
-    """Height in [m] of the floor beyond the edge (until the next step)."""
-
-
-@dataclass(frozen=True)
-class Terrain:
-    """Flat floor at z = 0 with steps across x (none: flat)."""
-
-    steps: tuple[Step, ...] = ()
-    """Steps in increasing x."""
-    half_width_m: float = 20.0
-    """Half width in [m] of the steps along y."""
-    length_m: float = 40.0
-    """Length in [m] of the last raised part along x."""
-
-    def height_at_m(self, x_m: float) -> float:
-        """Floor height in [m] at world x."""
-        h = 0.0
-        for step in self.steps:
-            if x_m >= step.x_m:
-                h = step.height_m
-        return h
 
 
 def _f(values: tuple[float, ...] | np.ndarray) -> str:

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from showfile.kind_omni import OmniWheelSettings
-from vehicles.omni_wheel.model import Step, Terrain
+from vehicles.omni_wheel.show_section import OmniWheelSettings
+from vehicles.omni_wheel.terrain import Step, Terrain
 from vehicles.omni_wheel.writing import DEFAULT_SETTINGS, OmniSettings
 
 _DYNAMIC_OVER_STATIC = (

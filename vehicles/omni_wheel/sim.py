@@ -21,7 +21,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from vehicles.omni_wheel.geometry import WHEEL_NAMES, OmniGeometry
-from vehicles.omni_wheel.model import MOTOR_TORQUE_MAX_NM, Terrain, build_mjcf, vehicle_prefix
+from vehicles.omni_wheel.model import MOTOR_TORQUE_MAX_NM, build_mjcf, vehicle_prefix
+from vehicles.omni_wheel.terrain import Terrain
 
 FloatArray = NDArray[np.float64]
 

@@ -32,8 +32,8 @@ from sim.ink import InkCanvas, RasterSpec, iou
 from vehicles.kind import FlownWriting, StrokeInput, WritingPlan, WritingScore
 from vehicles.omni_wheel.climb import configuration_of, wheel_ratios
 from vehicles.omni_wheel.geometry import OmniGeometry
-from vehicles.omni_wheel.model import Terrain
 from vehicles.omni_wheel.sim import OmniWorld
+from vehicles.omni_wheel.terrain import Terrain
 from vehicles.omni_wheel.wheel_control import proposed_references
 from vehicles.surface import Surface
 

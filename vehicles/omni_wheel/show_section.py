@@ -1,17 +1,26 @@
-"""Show-file settings of the ``omni-wheel`` ground writers (the show's ``omni_wheel`` section).
+"""The ``omni-wheel`` room's part of a show file: its ``omni_wheel`` section (the ground writers'
+vehicle, writing limits and the terrain of the floor areas: steps across world x between them)
+and what a show may not ask of it (a floor area the vehicle cannot reach or write on).
 
-The vehicle, its writing limits and the terrain of the floor areas (steps across world x
-between them). ``vehicles.omni_wheel.settings`` turns it
-into the room's typed settings; ``vehicles.omni_wheel.route.check_route`` refuses a floor area
-the vehicle cannot reach. SI units, world ENU.
+``vehicles.omni_wheel.settings`` turns the section into the room's typed settings;
+:func:`board_problem` asks ``vehicles.omni_wheel.check_route``. SI units, world ENU. Light:
+pydantic and plain Python only (the show file loads this module; MuJoCo and numpy stay out), and
+no import of the show file (``showfile.models`` imports this).
 """
 
 from __future__ import annotations
 
+from typing import Protocol
+
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from vehicles.omni_wheel.check_route import FloorArea, RouteError, check_route, terrain_of
 
 
 class _Model(BaseModel):
+    """Frozen, strict and documented like every model of a show file (``showfile.models``; held
+    equal by tests/test_showfile_kinds.py)."""
+
     model_config = ConfigDict(frozen=True, extra="forbid", use_attribute_docstrings=True)
 
 
@@ -58,3 +67,43 @@ class OmniWheelSettings(_Model):
         if xs != sorted(xs) or len(set(xs)) != len(xs):
             raise ValueError("steps must be in strictly increasing x_m")
         return self
+
+
+class _Show(Protocol):
+    """The parts of a show (``showfile.models.Show``) the check reads."""
+
+    @property
+    def omni_wheel(self) -> OmniWheelSettings | None: ...
+
+
+class _Vehicle(Protocol):
+    @property
+    def id(self) -> str: ...
+
+    @property
+    def home_m_enu(self) -> tuple[float, float, float]: ...
+
+
+class _Board(Protocol):
+    @property
+    def id(self) -> str: ...
+
+    @property
+    def center_m_enu(self) -> tuple[float, float, float]: ...
+
+    @property
+    def size_m(self) -> tuple[float, float]: ...
+
+
+def board_problem(show: _Show, vehicle: _Vehicle, board: _Board) -> str | None:
+    """Why ``vehicle`` cannot reach its floor area ``board`` from its home or write there (behind
+    a step higher than it climbs, off the terrain, straddling a step, at the wrong height, too
+    far), in one line naming the area; None when it can."""
+    section = show.omni_wheel or OmniWheelSettings()
+    terrain = terrain_of(((s.x_m, s.height_m) for s in section.steps), section.terrain_half_width_m)
+    area = FloorArea(board.id, board.center_m_enu, 0.5 * max(board.size_m))
+    try:
+        check_route(vehicle.home_m_enu, area, terrain)
+    except RouteError as exc:
+        return f"{vehicle.id} cannot write there: {exc}"
+    return None

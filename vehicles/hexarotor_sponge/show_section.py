@@ -1,15 +1,19 @@
-"""Settings of a ``hexarotor-sponge`` vehicle (the Flying Calligrapher) as a show file states them.
+"""The ``hexarotor-sponge`` room's part of a show file: its ``hexarotor`` section (the Flying
+Calligrapher's vehicle, pen and writing limits) and what a show may not ask of it (a wall beyond
+its reach).
 
-The show's ``hexarotor`` section; ``vehicles.hexarotor_sponge.kind.settings_from``
-turns one into the kind's typed settings. SI units; widths and lengths in metres. The defaults
-are the kind's own, ``vehicles.hexarotor_sponge.defaults`` (plain constants: importing them loads
-neither CasADi nor MuJoCo), so a show left at its defaults builds exactly the settings of
-``skyquill fly --kind hexarotor-sponge`` (tests/test_wall_kind.py).
+``vehicles.hexarotor_sponge.kind.settings_from`` turns the section into the kind's typed settings.
+SI units; widths and lengths in metres. The defaults are the kind's own,
+``vehicles.hexarotor_sponge.defaults``, so a show left at its defaults builds exactly the settings
+of ``skyquill fly --kind hexarotor-sponge`` (tests/test_wall_kind.py). Light: pydantic and the
+defaults only (the show file loads this module; CasADi and MuJoCo stay out), and no import of the
+show file (``showfile.models`` imports this).
 """
 
 from __future__ import annotations
 
 import math
+from typing import Protocol
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
@@ -17,6 +21,9 @@ from vehicles.hexarotor_sponge import defaults
 
 
 class _Model(BaseModel):
+    """Frozen, strict and documented like every model of a show file (``showfile.models``; held
+    equal by tests/test_showfile_kinds.py)."""
+
     model_config = ConfigDict(frozen=True, extra="forbid", use_attribute_docstrings=True)
 
 
@@ -69,3 +76,46 @@ class HexarotorKindSettings(_Model):
     writing area whose corners lie farther is refused by the show file)."""
     pen: PenSettings = PenSettings()
     """The sponge pen."""
+
+
+class _Planning(Protocol):
+    @property
+    def margin_m(self) -> float: ...
+
+
+class _Show(Protocol):
+    """The parts of a show (``showfile.models.Show``) the check reads."""
+
+    @property
+    def hexarotor(self) -> HexarotorKindSettings | None: ...
+
+    @property
+    def planning(self) -> _Planning: ...
+
+
+class _Vehicle(Protocol):
+    @property
+    def id(self) -> str: ...
+
+
+class _Board(Protocol):
+    @property
+    def id(self) -> str: ...
+
+    @property
+    def writing_area_m(self) -> tuple[float, float]: ...
+
+
+def board_problem(show: _Show, vehicle: _Vehicle, board: _Board) -> str | None:
+    """Why ``vehicle`` cannot write on its wall ``board``, in one line: corners of the writing
+    area (less the show's margin) beyond the section's ``reach_m``; None when it can."""
+    reach_m = (show.hexarotor or HexarotorKindSettings()).reach_m
+    margin_m = show.planning.margin_m
+    half = [max(0.0, size / 2 - margin_m) for size in board.writing_area_m]
+    corner_m = math.hypot(*half)
+    if corner_m <= reach_m:
+        return None
+    return (
+        f"{vehicle.id} cannot write there: the corners of wall {board.id!r}'s writing area are "
+        f"{corner_m:.2f} m from its centre, beyond the reach {reach_m} m (hexarotor.reach_m)"
+    )
