@@ -1,16 +1,18 @@
 """What the vehicle will write: the glyph laid out on the writing area and planned.
 
-Plans through the one job-planning function (:func:`vehicles.jobs.plan_glyph`) for the kind
-writing on the show's first board (the brush quadrotor with the kiosk's planner options, or the
-hexarotor with its pen); returns plain JSON for the page: turning points and the planned path in
-the writing area's own frame (metres, origin at the centre, y up), with the planned line width at
-each point where the kind writes with a width.
+Plans through the one job-planning function (:func:`vehicles.jobs.plan_glyph`) for every kind of
+the show as the orchestrator plans for it (:attr:`kiosk.settings.KioskSettings.preview_kinds`):
+the preview is the plan of the first kind (in board order) whose planner accepts the
+submission, which is refused only when every kind's planner refuses it, for the first kind's
+reason. Returns plain JSON for the page: turning points and the planned path in the writing
+area's own frame (metres, origin at the centre, y up), with the planned line width at each point
+where the kind writes with a width, and which kinds can write it (the others' one-line reasons,
+as text).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -18,18 +20,16 @@ import numpy as np
 from kiosk import wording
 from kiosk.errors import RejectedError
 from kiosk.limits import Submission
-from kiosk.settings import BRUSH_KIND, KioskSettings
+from kiosk.settings import KioskSettings
 from planner.errors import PlannerError
 from planner.glyphs import Glyph, parse_strokes_json, text_glyph
 from planner.glyphs.layout import MIN_INK_FRACTION, ink_fraction
-from vehicles.jobs import JobPlan, plan_glyph
-from vehicles.registry import vehicle_kind
-from vehicles.surface import Surface
+from vehicles.jobs import JobPlan, JobSetup
 
 PATH_POINTS_MAX = 800
 """Most points of the path sent to the page (decimated from the planner's samples)."""
-PATH_RATE_HZ = 100.0
-"""Rate at which the planned trajectory is sampled before decimation, [Hz]."""
+REASON_CHARS_MAX = 200
+"""Longest refusal reason of a kind given to the page, in characters."""
 
 
 def glyph_of(submission: Submission) -> Glyph:
@@ -53,23 +53,12 @@ def glyph_of(submission: Submission) -> Glyph:
 
 def plan_preview(submission: Submission, settings: KioskSettings) -> dict[str, Any]:
     """Turning points, path and duration of the submission as the vehicle will write it."""
-    width_m, height_m = settings.writing_area_m
     glyph = glyph_of(submission)
     fraction = ink_fraction(glyph)
     if fraction is not None and fraction < MIN_INK_FRACTION:
         raise RejectedError("too_small", wording.TOO_SMALL, status=422)
-    try:
-        job = _plan(glyph, settings)
-    except PlannerError as exc:
-        if exc.field == "w":
-            raise RejectedError(
-                "bad_width",
-                wording.BAD_WIDTH,
-                status=422,
-                stroke_index=exc.stroke_index,
-                point_index=exc.point_index,
-            ) from None
-        raise RejectedError("unplannable", wording.UNPLANNABLE, status=422) from None
+    kinds = settings.kinds()
+    setup, job, refusals = _plan_kinds(glyph, kinds)
     planned, fitted = job.plan, job.glyph
     if planned.duration_s > settings.max_flight_s:
         message = wording.TOO_LONG_FLIGHT.format(
@@ -92,35 +81,62 @@ def plan_preview(submission: Submission, settings: KioskSettings) -> dict[str, A
         for point, w in zip(path, planned.width_m[keep], strict=True):
             point.append(round(float(w), 5))
     turning = [np.round(tp, 4).tolist() for tp in planned.turning_points_m]
+    width_range_m = setup.kind.width_range_m(setup.settings)
     return {
         "label": submission.label,
-        "writing_area_m": [width_m, height_m],
+        "writing_area_m": list(setup.writing_area_m),
         "stroke_count": len(fitted.strokes),
         "turning_points": turning,
         "turning_point_count": sum(len(tp) for tp in turning),
         "path": path,
         "duration_s": round(planned.duration_s, 2),
-        "kind": settings.preview_kind,
+        "kind": setup.kind.name,
         "widths": planned.width_m is not None,
-        "width_range_m": settings.width_range_m and list(settings.width_range_m),
+        "width_range_m": width_range_m and list(width_range_m),
         "widths_clamped": int(planned.feasibility.get("widths_clamped", 0)),
+        "kinds": [k.kind.name for k in kinds if k.kind.name not in refusals],
+        "kinds_refused": {name: _one_line(exc) for name, exc in refusals.items()},
     }
 
 
-def _plan(glyph: Glyph, settings: KioskSettings) -> JobPlan:
-    """The job as a vehicle of the preview's kind would plan it, on the writing area's own
-    frame."""
-    kind = vehicle_kind(settings.preview_kind)
-    kind_settings = settings.preview_kind_settings or kind.settings(None, None)
-    if kind.name == BRUSH_KIND:
-        kind_settings = replace(
-            kind_settings, plan=replace(settings.plan, sample_rate_hz=PATH_RATE_HZ)
+def _plan_kinds(
+    glyph: Glyph, kinds: tuple[JobSetup, ...]
+) -> tuple[JobSetup, JobPlan, dict[str, PlannerError]]:
+    """The first kind whose planner accepts ``glyph`` and its plan, and the refusal of each
+    kind that cannot plan it, by kind; RejectedError for the first kind's reason when every
+    kind refuses."""
+    chosen: tuple[JobSetup, JobPlan] | None = None
+    refusals: dict[str, PlannerError] = {}
+    for setup in kinds:
+        try:
+            job = setup.plan(glyph)
+        except PlannerError as exc:
+            refusals[setup.kind.name] = exc
+            continue
+        if chosen is None:
+            chosen = (setup, job)
+    if chosen is None:
+        raise _rejection(next(iter(refusals.values())))
+    return chosen[0], chosen[1], refusals
+
+
+def _rejection(exc: PlannerError) -> RejectedError:
+    """What the page is told when no kind can plan the submission, from a kind's refusal."""
+    if exc.field == "w":
+        return RejectedError(
+            "bad_width",
+            wording.BAD_WIDTH,
+            status=422,
+            stroke_index=exc.stroke_index,
+            point_index=exc.point_index,
         )
-    board = settings.plan.board
-    surface = Surface.of(kind.orientation, board.center_m_enu, board.yaw_rad)
-    return plan_glyph(
-        kind, kind_settings, surface, glyph, settings.writing_area_m, settings.margin_m
-    )
+    return RejectedError("unplannable", wording.UNPLANNABLE, status=422)
+
+
+def _one_line(exc: PlannerError) -> str:
+    """A kind's refusal in one line of at most ``REASON_CHARS_MAX`` characters (plain text)."""
+    line = " ".join(str(exc).split())
+    return line if len(line) <= REASON_CHARS_MAX else line[: REASON_CHARS_MAX - 1] + "…"
 
 
 def make_previewer(settings: KioskSettings) -> Callable[[Submission], dict[str, Any]]:

@@ -2,17 +2,18 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 from kiosk.limits import SubmissionLimits
 from kiosk.wording import board_numbers
-from planner.pipeline import BoardFrame, PlanOptions
-from showfile.planning import plan_options
+from vehicles.jobs import JobSetup, job_setup, kind_writers
 from vehicles.registry import vehicle_kind
+from vehicles.surface import Surface
 
-BRUSH_KIND = "quadrotor-brush"
-"""The kind whose planner options the kiosk's settings carry (:attr:`KioskSettings.plan`)."""
+PATH_RATE_HZ = 100.0
+"""Rate at which a preview's planned trajectory is sampled before decimation, [Hz] (the show's
+``planning.sample_rate_hz`` for the preview: the page gets a few hundred points)."""
 
 
 @dataclass(frozen=True)
@@ -35,11 +36,11 @@ class KioskSettings:
     """Reverse proxies (addresses or networks) whose ``X-Forwarded-For`` names the client; none
     by default, so the header is ignored."""
     writing_area_m: tuple[float, float] = (1.2, 1.2)
-    """Width and height of the writing area the preview fits the glyph into, in [m]."""
+    """Width and height in [m] of the first board's writing area (the page's), and of the area
+    a preview without :attr:`preview_kinds` is planned on."""
     margin_m: float = 0.05
-    """Free border kept inside the writing area, in [m]."""
-    plan: PlanOptions = field(default_factory=PlanOptions)
-    """Planner options of the preview (the board is the writing area's own frame)."""
+    """Free border in [m] kept inside the writing area by a preview without
+    :attr:`preview_kinds`."""
     submit_timeout_s: float = 5.0
     """How long to wait for the orchestrator's answer to a submission, in [s]."""
     secure_cookie: bool = False
@@ -56,22 +57,35 @@ class KioskSettings:
     stale_after_s: float = 2.0
     """The status is stale when the orchestrator's 1 Hz fleet snapshot is older than this, [s]."""
     preview_kind: str = "quadrotor-brush"
-    """The vehicle kind the preview plans for: the kind writing on the first board."""
+    """The first kind in board order (the first of :attr:`preview_kinds`); without
+    :attr:`preview_kinds`, the one kind the preview plans for, with its default settings
+    (``VehicleKind.settings(None, None)``) on :attr:`writing_area_m`."""
     width_range_m: tuple[float, float] | None = None
-    """Narrowest and widest line in [m] of the preview kind's pen, for kinds that write with a
-    width (the drawing pad then sends a width per point); None for a brush of fixed width."""
-    preview_kind_settings: Any = None
-    """The preview kind's settings (``VehicleKind.settings``) for the first board's vehicle, for
-    kinds other than the brush (whose planner options are :attr:`plan`); None: the kind's
-    defaults."""
+    """Narrowest and widest line in [m] a visitor may draw: the span of the pens of the kinds
+    that write with a width (the drawing pad then sends a width per point); None where every
+    kind writes one width."""
+    preview_kinds: tuple[JobSetup, ...] = ()
+    """Each kind of the show as the orchestrator plans for it (``vehicles.jobs``: the settings,
+    board and margin of the vehicle standing for the kind), in the order of their first board,
+    sampled at :data:`PATH_RATE_HZ`; the preview shows the first whose planner accepts the
+    submission. Empty: :attr:`preview_kind` alone."""
+
+    def kinds(self) -> tuple[JobSetup, ...]:
+        """The kinds the preview plans for, first choice first."""
+        if self.preview_kinds:
+            return self.preview_kinds
+        kind = vehicle_kind(self.preview_kind)
+        area = Surface.of(kind.orientation, (0.0, 0.0, 0.0), 0.0)
+        settings = kind.settings(None, None)
+        return (JobSetup(kind, settings, area, self.writing_area_m, self.margin_m),)
 
 
 def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
     """Kiosk settings from a loaded show (``showfile.Show``); ``port`` overrides the file's.
 
-    The preview is planned on the first board's writing area for the kind of the vehicles on it,
-    with the show's limits and planning settings (every vehicle re-plans its job on its own
-    board).
+    The preview plans for every kind of the show as the orchestrator does (each kind's first
+    vehicle in board order, its settings, its board; ``vehicles.jobs``), only sampled at
+    :data:`PATH_RATE_HZ`.
     """
     kiosk, board, planning = show.kiosk, show.boards[0], show.planning
     limits = SubmissionLimits(
@@ -81,18 +95,13 @@ def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
         max_text_chars=kiosk.max_text_chars,
         blocklist=tuple(kiosk.blocklist),
     )
-    frame = BoardFrame(center_m_enu=(0.0, 0.0, 0.0))
-    plan = plan_options(planning, show.limits, frame)
-    plan = replace(plan, clearance_m=max(planning.clearance_m, 1e-3))
+    # every kind reads its settings from the show as for its vehicles; the preview's sample
+    # rate goes the same way, through the planning section (the brush samples its plan at it)
+    sampled = show.model_copy(
+        update={"planning": planning.model_copy(update={"sample_rate_hz": PATH_RATE_HZ})}
+    )
+    kinds = tuple(job_setup(sampled, vehicle_id) for vehicle_id in kind_writers(show).values())
     width_m, height_m = board.writing_area_m
-    writer = next((v for v in show.vehicles if v.board == board.id), None)
-    kind = BRUSH_KIND if writer is None else writer.kind
-    preview_settings = (
-        None if writer is None or kind == BRUSH_KIND else kind_settings(show, writer.id, kind)
-    )
-    widths_m = (
-        None if preview_settings is None else vehicle_kind(kind).width_range_m(preview_settings)
-    )
     return KioskSettings(
         show_id=show.show_id,
         host=kiosk.host,
@@ -101,20 +110,24 @@ def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
         rate_limit_per_minute=kiosk.rate_limit_per_minute,
         trusted_proxies=tuple(str(network) for network in kiosk.trusted_proxies),
         writing_area_m=(float(width_m), float(height_m)),
-        margin_m=min(planning.margin_m, 0.45 * min(width_m, height_m)),
-        plan=plan,
+        margin_m=planning.margin_m,
         max_flight_s=kiosk.max_flight_s,
         idle_reset_s=kiosk.idle_reset_s,
         places=board_numbers(
             {vehicle.id: vehicle.board for vehicle in show.vehicles},
             [b.id for b in show.boards],
         ),
-        preview_kind=kind,
-        width_range_m=widths_m,
-        preview_kind_settings=preview_settings,
+        preview_kind=kinds[0].kind.name if kinds else KioskSettings.preview_kind,
+        width_range_m=width_span_m(kinds),
+        preview_kinds=kinds,
     )
 
 
-def kind_settings(show: Any, vehicle_id: str, kind: str) -> Any:
-    """The settings ``kind`` gives ``vehicle_id`` of ``show`` (its pen, its limits)."""
-    return vehicle_kind(kind).settings(show, vehicle_id)
+def width_span_m(kinds: tuple[JobSetup, ...]) -> tuple[float, float] | None:
+    """The widths in [m] the kinds that write with a width draw, from the narrowest to the
+    widest (the union of their ranges, as the one interval the drawing pad takes); None where
+    every kind writes one width."""
+    ranges = [r for k in kinds if (r := k.kind.width_range_m(k.settings)) is not None]
+    if not ranges:
+        return None
+    return min(low for low, _ in ranges), max(high for _, high in ranges)

@@ -18,7 +18,7 @@ from orchestrator.kinds import KindPlans
 from planner.errors import PlannerError
 from planner.glyphs import Glyph, parse_strokes_json, text_glyph
 from showfile import Show
-from vehicles.jobs import lay_out, plan_job
+from vehicles.jobs import kind_writers, lay_out, plan_job
 
 MAX_CLIENT_ID_CHARS = 100
 PRIORITY_RANGE = (-10, 10)
@@ -138,18 +138,17 @@ def rough_duration_s(glyph: Glyph, show: Show) -> float:
 
 
 def planned_durations_s(glyph: Glyph, show: Show) -> KindPlans:
-    """The real plan of the first vehicle of each kind of the show: durations, and the kinds
-    that cannot plan it."""
+    """The real plan of the vehicle that stands for each kind of the show
+    (``vehicles.jobs.kind_writers``, as in the kiosk's preview): durations, and the kinds that
+    cannot plan it."""
     durations: dict[str, float] = {}
     refused: set[str] = set()
-    for vehicle in show.vehicles:
-        if vehicle.kind in durations or vehicle.kind in refused:
-            continue
+    for kind, vehicle_id in kind_writers(show).items():
         try:
-            duration = float(plan_job(show, vehicle.id, glyph).plan.duration_s)
+            duration = float(plan_job(show, vehicle_id, glyph).plan.duration_s)
         except PlannerError:
-            refused.add(vehicle.kind)
+            refused.add(kind)
             continue
         if math.isfinite(duration):
-            durations[vehicle.kind] = duration
+            durations[kind] = duration
     return KindPlans(durations, frozenset(refused))

@@ -67,8 +67,9 @@ def test_each_kind_says_the_widths_it_draws() -> None:
 
 def test_a_show_previews_for_the_kind_on_its_first_board() -> None:
     show = load_show(Path(__file__).resolve().parents[1] / "shows" / "solo.yaml")
-    assert settings_from_show(show).preview_kind == "quadrotor-brush"
-    assert settings_from_show(show).width_range_m is None
+    brush = settings_from_show(show)
+    assert brush.preview_kind == "quadrotor-brush"
+    assert brush.width_range_m is None
     first = show.boards[0].id
     vehicles = [
         v.model_copy(update={"kind": WALL}) if v.board == first else v for v in show.vehicles
@@ -76,8 +77,9 @@ def test_a_show_previews_for_the_kind_on_its_first_board() -> None:
     wall = settings_from_show(show.model_copy(update={"vehicles": vehicles}))
     assert wall.preview_kind == WALL
     assert wall.width_range_m == pytest.approx((0.005, 0.014))  # the show file's pen
-    assert type(wall.preview_kind_settings).__name__ == "WallSettings"  # the vehicle's own
-    assert settings_from_show(show).preview_kind_settings is None  # the brush: ``plan``
+    # each kind's settings are its vehicle's own, the brush's like any other kind's
+    assert type(wall.preview_kinds[0].settings).__name__ == "WallSettings"
+    assert type(brush.preview_kinds[0].settings).__name__ == "QuadrotorSettings"
 
 
 def test_config_gives_the_pen_range(wall_kiosk: str) -> None:

@@ -2,9 +2,11 @@
 
 Used by the agent, the orchestrator's estimates, the kiosk preview, ``skyquill plan`` and
 ``skyquill fly``, so every one of them plans a job the way the vehicle will write it.
-:func:`plan_job` plans for a vehicle of a show; :func:`plan_glyph` is the same pipeline for a
-kind, its settings and a writing area given directly (the kiosk's preview area, the CLI without a
-show file).
+:func:`plan_job` plans for a vehicle of a show (:func:`job_setup`: what it plans with);
+:func:`plan_glyph` is the same pipeline for a kind, its settings and a writing area given
+directly (the CLI without a show file). Where a glyph is planned once per kind of a show (the
+orchestrator's ETAs and refusals, the kiosk's preview), :func:`kind_writers` says which vehicle
+stands for each kind.
 """
 
 from __future__ import annotations
@@ -63,18 +65,58 @@ def plan_glyph(
     return JobPlan(fitted, kind.plan(strokes, surface, settings))
 
 
-def plan_job(show: Show, vehicle_id: str, glyph: Glyph) -> JobPlan:
-    """Plan ``glyph`` for vehicle ``vehicle_id`` of ``show`` on its board: its kind, its
-    settings (limits, planning section, controller), the board's writing area and the show's
-    margin (KeyError naming the known ids if absent; PlannerError if it cannot be written)."""
+@dataclass(frozen=True)
+class JobSetup:
+    """What a vehicle of a show plans a job with, besides the glyph (:func:`plan_glyph`'s
+    other arguments)."""
+
+    kind: VehicleKind
+    """The vehicle's kind."""
+    settings: Any
+    """The kind's settings of the vehicle (``VehicleKind.settings``)."""
+    surface: Surface
+    """The vehicle's board."""
+    writing_area_m: tuple[float, float]
+    """Width and height in [m] of the board's writing area."""
+    margin_m: float
+    """Free border in [m] kept inside the writing area (the show's)."""
+
+    def plan(self, glyph: Glyph) -> JobPlan:
+        """Lay ``glyph`` out and plan it (raises PlannerError if it cannot be written)."""
+        return plan_glyph(
+            self.kind, self.settings, self.surface, glyph, self.writing_area_m, self.margin_m
+        )
+
+
+def job_setup(show: Show, vehicle_id: str) -> JobSetup:
+    """How vehicle ``vehicle_id`` of ``show`` plans a job: its kind, its settings (limits,
+    planning section, controller), its board's surface and writing area and the show's margin
+    (KeyError naming the known ids if absent)."""
     vehicle = show.vehicle(vehicle_id)
     board = show.board(vehicle.board)
     kind = vehicle_kind(vehicle.kind)
-    return plan_glyph(
+    return JobSetup(
         kind,
         kind.settings(show, vehicle_id),
         board_surface(board),
-        glyph,
         board.writing_area_m,
         show.planning.margin_m,
     )
+
+
+def plan_job(show: Show, vehicle_id: str, glyph: Glyph) -> JobPlan:
+    """Plan ``glyph`` for vehicle ``vehicle_id`` of ``show`` on its board (:func:`job_setup`;
+    KeyError naming the known ids if absent; PlannerError if it cannot be written)."""
+    return job_setup(show, vehicle_id).plan(glyph)
+
+
+def kind_writers(show: Show) -> dict[str, str]:
+    """Kind -> the vehicle that stands for it where a glyph is planned once per kind: the first
+    vehicle of each kind in board order (the boards as listed, a board's vehicles as listed), so
+    the kinds come in the order of their first board."""
+    writers: dict[str, str] = {}
+    for board in show.boards:
+        for vehicle in show.vehicles:
+            if vehicle.board == board.id:
+                writers.setdefault(vehicle.kind, vehicle.id)
+    return writers
