@@ -1,13 +1,12 @@
 """What the vehicle will write: the glyph laid out on the writing area and planned.
 
-Plans through the one job-planning function (:func:`vehicles.jobs.plan_glyph`) for every kind of
-the show as the orchestrator plans for it (:attr:`kiosk.settings.KioskSettings.preview_kinds`):
-the preview is the plan of the first kind (in board order) whose planner accepts the
-submission, which is refused only when every kind's planner refuses it, for the first kind's
+Plans through the one job-planning function (:func:`vehicles.jobs.plan_glyph`) for the kinds of
+the show as the orchestrator plans for them (:attr:`kiosk.settings.KioskSettings.preview_kinds`),
+in board order until one accepts: the preview is the plan of the first kind whose planner accepts
+the submission, which is refused only when every kind's planner refuses it, for the first kind's
 reason. Returns plain JSON for the page: turning points and the planned path in the writing
 area's own frame (metres, origin at the centre, y up), with the planned line width at each point
-where the kind writes with a width, and which kinds can write it (the others' one-line reasons,
-as text).
+where the kind writes with a width, and the one-line reasons of the kinds tried before (text).
 """
 
 from __future__ import annotations
@@ -57,8 +56,7 @@ def plan_preview(submission: Submission, settings: KioskSettings) -> dict[str, A
     fraction = ink_fraction(glyph)
     if fraction is not None and fraction < MIN_INK_FRACTION:
         raise RejectedError("too_small", wording.TOO_SMALL, status=422)
-    kinds = settings.kinds()
-    setup, job, refusals = _plan_kinds(glyph, kinds)
+    setup, job, refusals = _plan_kinds(glyph, settings.kinds())
     planned, fitted = job.plan, job.glyph
     if planned.duration_s > settings.max_flight_s:
         message = wording.TOO_LONG_FLIGHT.format(
@@ -94,7 +92,6 @@ def plan_preview(submission: Submission, settings: KioskSettings) -> dict[str, A
         "widths": planned.width_m is not None,
         "width_range_m": width_range_m and list(width_range_m),
         "widths_clamped": int(planned.feasibility.get("widths_clamped", 0)),
-        "kinds": [k.kind.name for k in kinds if k.kind.name not in refusals],
         "kinds_refused": {name: _one_line(exc) for name, exc in refusals.items()},
     }
 
@@ -102,22 +99,16 @@ def plan_preview(submission: Submission, settings: KioskSettings) -> dict[str, A
 def _plan_kinds(
     glyph: Glyph, kinds: tuple[JobSetup, ...]
 ) -> tuple[JobSetup, JobPlan, dict[str, PlannerError]]:
-    """The first kind whose planner accepts ``glyph`` and its plan, and the refusal of each
-    kind that cannot plan it, by kind; RejectedError for the first kind's reason when every
-    kind refuses."""
-    chosen: tuple[JobSetup, JobPlan] | None = None
+    """The first kind whose planner accepts ``glyph``, its plan, and the refusals of the kinds
+    tried before it (the kinds after it are not planned: a preview waits for one plan, not for
+    every kind's); RejectedError for the first kind's reason when every kind refuses."""
     refusals: dict[str, PlannerError] = {}
     for setup in kinds:
         try:
-            job = setup.plan(glyph)
+            return setup, setup.plan(glyph), refusals
         except PlannerError as exc:
             refusals[setup.kind.name] = exc
-            continue
-        if chosen is None:
-            chosen = (setup, job)
-    if chosen is None:
-        raise _rejection(next(iter(refusals.values())))
-    return chosen[0], chosen[1], refusals
+    raise _rejection(next(iter(refusals.values())))
 
 
 def _rejection(exc: PlannerError) -> RejectedError:
