@@ -1,4 +1,7 @@
-"""``skyquill plan``: strokes file or text -> checked minimum-jerk trajectory (TRAJ.json, plot)."""
+"""``skyquill plan``: strokes file or text -> checked minimum-jerk trajectory (TRAJ.json, plot).
+
+``--kind`` plans for another vehicle kind through its room (:mod:`cli.plan_kind`); the options
+marked [brush] are the brush quadrotor's own and refused for another kind."""
 
 from __future__ import annotations
 
@@ -7,6 +10,7 @@ import json
 import math
 import os
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -16,17 +20,48 @@ from planner.limits import VehicleLimits
 NAME = "plan"
 HELP = "Plan a flyable minimum-jerk writing trajectory for a strokes file or text."
 
+QUADROTOR = "quadrotor-brush"
+"""The Airshow brush quadrotor: the kind whose limits and planner the options below set."""
 _PROG = "skyquill plan"
 
 
+class _BrushOption(argparse.Action):
+    """An option of the brush quadrotor only: stored as ``store`` does (``nargs=0``: as
+    ``store_const``), and its flag added to ``args.brush_options_given``, so that another kind
+    refuses it even when its value is the default (which ``--help`` shows and the brush reads)."""
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: str | Sequence[Any] | None,
+        option_string: str | None = None,
+    ) -> None:
+        setattr(namespace, self.dest, self.const if self.nargs == 0 else values)
+        namespace.brush_options_given = (*namespace.brush_options_given, option_string)
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The input and output files, then the writing area, vehicle limits and planner groups
-    (in this order in ``--help``)."""
+    """The kind, the input and output files, then the writing area, vehicle limits and planner
+    groups (in this order in ``--help``)."""
+    from vehicles import kind_names
+
+    parser.add_argument(
+        "--kind",
+        choices=kind_names(),
+        default=QUADROTOR,
+        help=f"vehicle kind ({QUADROTOR}); the options marked [brush] are its own",
+    )
+    parser.set_defaults(brush_options_given=())
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--strokes", metavar="FILE", help="strokes JSON (docs/formats.md)")
     source.add_argument("--text", metavar="TEXT", help="Latin (Hershey) or Chinese text")
-    parser.add_argument("--out", metavar="TRAJ.json", help="write the trajectory here")
-    parser.add_argument("--plot", metavar="PLOT.png", help="write a figure of the plan here")
+    parser.add_argument(
+        "--out", metavar="TRAJ.json", help="write the trajectory here (another kind: PLAN.json)"
+    )
+    parser.add_argument(
+        "--plot", metavar="PLOT.png", help="write a figure of the plan here (quadrotor-brush)"
+    )
     _add_board_arguments(parser)
     _add_limit_arguments(parser)
     _add_planner_arguments(parser)
@@ -48,47 +83,61 @@ def _add_board_arguments(parser: argparse.ArgumentParser) -> None:
         type=float,
         nargs=3,
         metavar=("E", "N", "U"),
-        default=(0.0, 0.0, 0.0),
-        help="board surface centre, world ENU [m]",
+        help="board surface centre, world ENU [m] (0 0 0; a wall's centre 1.5 m up)",
     )
     board.add_argument("--board-yaw-deg", type=float, default=0.0, help="board yaw [deg]")
     board.add_argument(
         "--write-height",
         type=float,
         default=defaults.WRITE_HEIGHT_M,
-        help=f"reference height above the board while writing [m] ({defaults.WRITE_HEIGHT_M})",
+        action=_BrushOption,
+        help="[brush] reference height above the board while writing [m]"
+        f" ({defaults.WRITE_HEIGHT_M})",
     )
     board.add_argument(
         "--clearance",
         type=float,
         default=defaults.CLEARANCE_M,
-        help=f"extra height with the pen up [m] ({defaults.CLEARANCE_M})",
+        action=_BrushOption,
+        help=f"[brush] extra height with the pen up [m] ({defaults.CLEARANCE_M})",
     )
 
 
 def _add_limit_arguments(parser: argparse.ArgumentParser) -> None:
     """The vehicle's limits, each defaulting to a show file's default (:class:`VehicleLimits`)."""
     d = VehicleLimits()
-    lim = parser.add_argument_group("vehicle limits (a show file's defaults)")
+    lim = parser.add_argument_group("vehicle limits [brush] (a show file's defaults)")
     lim.add_argument(
         "--a-max",
         type=float,
         nargs="+",
         metavar="A",
+        action=_BrushOption,
         help="max |acceleration| [m/s^2]: one value, or x y z"
         f" ({' '.join(str(a) for a in d.a_max_mps2)})",
     )
     lim.add_argument(
-        "--v-max", type=float, default=d.v_max_mps, help=f"max speed [m/s] ({d.v_max_mps})"
+        "--v-max",
+        type=float,
+        default=d.v_max_mps,
+        action=_BrushOption,
+        help=f"max speed [m/s] ({d.v_max_mps})",
     )
     lim.add_argument(
-        "--mass", type=float, default=d.mass_kg, help=f"vehicle mass [kg] ({d.mass_kg})"
+        "--mass",
+        type=float,
+        default=d.mass_kg,
+        action=_BrushOption,
+        help=f"vehicle mass [kg] ({d.mass_kg})",
     )
-    lim.add_argument("--thrust-max", type=float, help="max thrust [N] (2 x weight)")
+    lim.add_argument(
+        "--thrust-max", type=float, action=_BrushOption, help="max thrust [N] (2 x weight)"
+    )
     lim.add_argument(
         "--body-rate-max",
         type=float,
         default=d.body_rate_max_radps,
+        action=_BrushOption,
         help=f"max body-rate bound of eq. 15 [rad/s] ({d.body_rate_max_radps})",
     )
 
@@ -96,24 +145,66 @@ def _add_limit_arguments(parser: argparse.ArgumentParser) -> None:
 def _add_planner_arguments(parser: argparse.ArgumentParser) -> None:
     """The trajectory planner's options: total time, QP solver, method, re-segmentation, split
     threshold and the sample rate of the written trajectory."""
-    opt = parser.add_argument_group("planner")
-    opt.add_argument("--total-time", type=float, help="fixed total time [s] (default: free)")
-    opt.add_argument("--solver", choices=("piqp", "clarabel", "osqp"), default="piqp")
-    opt.add_argument("--method", choices=("qp", "closed-form"), default="qp")
-    opt.add_argument("--no-resegment", action="store_true", help="keep the initial times")
-    opt.add_argument("--resegment-method", choices=("analytic", "numerical"), default="analytic")
+    opt = parser.add_argument_group("planner [brush]")
+    opt.add_argument(
+        "--total-time", type=float, action=_BrushOption, help="fixed total time [s] (default: free)"
+    )
+    opt.add_argument(
+        "--solver", choices=("piqp", "clarabel", "osqp"), default="piqp", action=_BrushOption
+    )
+    opt.add_argument("--method", choices=("qp", "closed-form"), default="qp", action=_BrushOption)
+    opt.add_argument(
+        "--no-resegment",
+        nargs=0,
+        const=True,
+        default=False,
+        action=_BrushOption,
+        help="keep the initial times",
+    )
+    opt.add_argument(
+        "--resegment-method",
+        choices=("analytic", "numerical"),
+        default="analytic",
+        action=_BrushOption,
+    )
     opt.add_argument(
         "--split-threshold",
         type=float,
         default=defaults.SPLIT_THRESHOLD_M,
+        action=_BrushOption,
         help=f"split-and-merge threshold [m] ({defaults.SPLIT_THRESHOLD_M})",
     )
     opt.add_argument(
-        "--rate", type=float, default=defaults.SAMPLE_RATE_HZ, help="sample rate of TRAJ.json [Hz]"
+        "--rate",
+        type=float,
+        default=defaults.SAMPLE_RATE_HZ,
+        action=_BrushOption,
+        help="sample rate of TRAJ.json [Hz]",
     )
 
 
-def _error(source: str, exc: Exception) -> int:
+def source_of(args: argparse.Namespace) -> str:
+    """What errors name as the input: the strokes file, or ``<text>``."""
+    return str(args.strokes) if args.strokes is not None else "<text>"
+
+
+def read_glyph(args: argparse.Namespace) -> Any:
+    """The glyph of ``--strokes`` or ``--text``: ValueError ``cannot read: ...`` for a file that
+    cannot be read, PlannerError naming the stroke and point of a bad one."""
+    from planner.glyphs import parse_strokes_json, text_glyph
+
+    if args.strokes is None:
+        return text_glyph(args.text)
+    try:
+        text = Path(args.strokes).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ValueError(f"cannot read: {exc}") from None
+    return parse_strokes_json(text, source_name=args.strokes)
+
+
+def print_error(source: str, exc: Exception) -> int:
+    """One line on stderr naming ``source`` and, for a PlannerError, its stroke and point or
+    its field; the exit status 2."""
     from planner.errors import PlannerError
 
     where = [source]
@@ -179,31 +270,26 @@ def _one_blas_thread() -> None:
 
 def run(args: argparse.Namespace) -> int:
     _one_blas_thread()
+    if args.kind != QUADROTOR:
+        from cli.plan_kind import run_kind
+
+        return run_kind(args)
     from planner.errors import PlannerError
-    from planner.glyphs import parse_strokes_json, text_glyph
     from planner.trajectory import PlannedTrajectory
     from vehicles.jobs import plan_glyph
     from vehicles.registry import vehicle_kind
     from vehicles.surface import Surface
 
-    source = args.strokes if args.strokes is not None else "<text>"
-    kind = vehicle_kind("quadrotor-brush")
+    source = source_of(args)
+    kind = vehicle_kind(QUADROTOR)
     try:
-        if args.strokes is not None:
-            try:
-                text = Path(args.strokes).read_text(encoding="utf-8")
-            except (OSError, UnicodeDecodeError) as exc:
-                return _error(source, ValueError(f"cannot read: {exc}"))
-            glyph = parse_strokes_json(text, source_name=args.strokes)
-        else:
-            glyph = text_glyph(args.text)
+        glyph = read_glyph(args)
         settings = _settings(args, kind.settings(None, None))
-        surface = Surface.of(
-            "horizontal", tuple(args.board_center), math.radians(args.board_yaw_deg)
-        )
+        centre = tuple(args.board_center or (0.0, 0.0, 0.0))
+        surface = Surface.of("horizontal", centre, math.radians(args.board_yaw_deg))
         job = plan_glyph(kind, settings, surface, glyph, (args.width, args.height), args.margin)
     except (PlannerError, ValueError) as exc:
-        return _error(source, exc)
+        return print_error(source, exc)
     traj = job.plan.detail
     if not isinstance(traj, PlannedTrajectory):
         raise TypeError(f"the {kind.name} plan holds no planner trajectory")
