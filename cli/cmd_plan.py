@@ -293,14 +293,23 @@ def run(args: argparse.Namespace) -> int:
     traj = job.plan.detail
     if not isinstance(traj, PlannedTrajectory):
         raise TypeError(f"the {kind.name} plan holds no planner trajectory")
-    if args.out:
-        Path(args.out).write_text(json.dumps(traj.to_json_dict(args.rate)), encoding="utf-8")
-    if args.plot:
-        from planner.plots import plot_trajectory
+    try:
+        if args.out:
+            Path(args.out).write_text(json.dumps(traj.to_json_dict(args.rate)), encoding="utf-8")
+        if args.plot:
+            from planner.plots import plot_trajectory
 
-        plot_trajectory(traj, job.glyph.strokes).savefig(args.plot, dpi=100)
+            plot_trajectory(traj, job.glyph.strokes).savefig(args.plot, dpi=100)
+    except OSError as exc:
+        return cannot_write(exc)
     _summary(traj)
     return 0
+
+
+def cannot_write(exc: OSError) -> int:
+    """An output file that cannot be written, in one line (exit status 2)."""
+    print(f"{_PROG}: error: cannot write {exc.filename}: {exc.strerror or exc}", file=sys.stderr)
+    return 2
 
 
 def _summary(traj: Any) -> None:

@@ -26,7 +26,7 @@ PLAN_FORMAT = "skyquill.plan/1"
 
 def run_kind(args: argparse.Namespace) -> int:
     """Plan ``args.kind`` and report it (``args`` as ``skyquill plan`` parses them)."""
-    from cli.cmd_plan import QUADROTOR, print_error, read_glyph, source_of
+    from cli.cmd_plan import QUADROTOR, cannot_write, print_error, read_glyph, source_of
     from cli.fly_kind import WALL_CENTRE_HEIGHT_M
     from planner.errors import PlannerError
     from vehicles.jobs import plan_glyph
@@ -54,7 +54,10 @@ def run_kind(args: argparse.Namespace) -> int:
         return print_error(source, exc)
     if args.out:
         doc = plan_json_dict(kind.name, job.plan)
-        Path(args.out).write_text(json.dumps(doc, default=_plain), encoding="utf-8")
+        try:
+            Path(args.out).write_text(json.dumps(doc, default=_plain), encoding="utf-8")
+        except OSError as exc:
+            return cannot_write(exc)
     print(f"{kind.name}: duration {job.plan.duration_s:.2f} s, {len(job.plan.strokes)} strokes")
     for line in feasibility_lines(job.plan.feasibility):
         print(line)

@@ -154,3 +154,13 @@ def test_planning_another_kind_loads_neither_the_agent_nor_plotting() -> None:
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
                          text=True, check=True)  # fmt: skip
     assert json.loads(out.stdout.strip().splitlines()[-1]) == []
+
+
+@pytest.mark.parametrize("kind", ["quadrotor-brush", "omni-wheel"])
+def test_an_output_that_cannot_be_written_is_one_line(
+    kind: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "no-such-dir" / "plan.json"
+    assert main(["plan", "--kind", kind, "--text", "L", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"skyquill plan: error: cannot write {out}: No such file or directory"
