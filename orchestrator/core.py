@@ -134,6 +134,8 @@ class Book:
     def etas(self, now_s: float) -> dict[str, tuple[int, float | None]]:
         """Queue position (1 = next) and ETA in [s] of every queued job."""
         queue = self.queue()
+        if not queue:
+            return {}
         usable = {
             vid: v.info.board_id
             for vid, v in self.vehicles.items()

@@ -44,6 +44,16 @@ def test_a_recording_is_cut_into_parts_each_readable_on_its_own(tmp_path: Path) 
     assert max(channels_per_part) < 400  # each part's index holds only its own jobs
 
 
+def test_only_json_payloads_are_recorded_the_others_counted(tmp_path: Path) -> None:
+    recorder = McapRecorder(tmp_path / "mixed.mcap", KEYS)
+    payloads = [b'{"a": 1}', b"not json", b'{"a": ', b"\xff\xfe", b"NaN", b"", b"[1, 2]"]
+    for k, payload in enumerate(payloads):
+        recorder.record(KEYS.job(f"j{k}"), payload)
+    recorder.close()
+    assert (recorder.messages, recorder.skipped) == (2, 5)
+    assert _messages(tmp_path / "mixed.mcap") == [KEYS.job("j0"), KEYS.job("j6")]
+
+
 def _recording(directory: Path, name: str, size: int, age_s: float) -> Path:
     path = directory / name
     path.write_bytes(b"x" * size)
