@@ -185,9 +185,9 @@ async def aquery(
     # host's samples); running the callbacks on Zenoh's own threads instead (indirect=False) made
     # those threads wait for the interpreter lock: in bench_fleet_host (250 vehicles, 50 writing)
     # vehicles were lost and jobs failed (48/50 and 32/50 done against 50/50). Keep it indirect.
-    # Issuing the gets from one helper thread spared the event loop the thread start (tick
-    # real-time factor 0.97 and 0.86 against 0.65-0.84) but one of its 100 jobs failed
-    # unconfirmed (none of 150 here): not taken either (stop 25's note).
+    # Issuing the gets from one helper thread instead spared the event loop the thread start but
+    # was no better: tick real-time factor 0.97/0.86/0.69/0.62 and 1/0/6/13 of 50 jobs failed,
+    # against 0.65-0.84 and 0-9 failed with this call, alternating in the same hours.
     session.get(key_expr, zenoh.handlers.Callback(on_reply, on_done), **kwargs)
     return await done
 
