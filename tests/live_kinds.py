@@ -14,7 +14,7 @@ from vehicle_agent.job_runner import JobRunner
 from vehicle_agent.jobs import job_metrics, prepare_job
 from vehicle_agent.runner_io import PreparedJob, result_report
 from vehicle_agent.setup import VehicleSetup, on_board, vehicle_setup
-from vehicle_agent.trace import FlownTrace
+from vehicle_agent.trace import JobTrace
 
 
 @dataclass
@@ -29,7 +29,7 @@ class LiveRun:
     prepared: dict[str, PreparedJob] = field(default_factory=dict)
     reports: list[AgentReport] = field(default_factory=list)
     telemetry: list[Telemetry] = field(default_factory=list)
-    finished: list[FlownTrace] = field(default_factory=list)
+    finished: list[JobTrace] = field(default_factory=list)
     phases: list[str] = field(default_factory=list)
     ticks: int = 0
 

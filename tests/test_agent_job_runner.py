@@ -15,7 +15,7 @@ from vehicle_agent.backends.base import Vec3
 from vehicle_agent.backends.kinematic import KinematicVehicle
 from vehicle_agent.job_runner import JobRunner, PreparedJob, RunnerConfig
 from vehicle_agent.motion import PEAK_ACCEL_FACTOR, PEAK_SPEED_FACTOR, plan_move
-from vehicle_agent.trace import FlownTrace
+from vehicle_agent.trace import JobTrace
 
 DT = 0.01
 HOME: Vec3 = (0.0, -1.2, 0.0)
@@ -62,7 +62,7 @@ class Run:
     ticks: int = 0
     reports: list[AgentReport] = field(default_factory=list)
     telemetry: list[Telemetry] = field(default_factory=list)
-    finished: list[FlownTrace] = field(default_factory=list)
+    finished: list[JobTrace] = field(default_factory=list)
     states: list[str] = field(default_factory=list)
     positions: list[Vec3] = field(default_factory=list)
     samples: TrajectorySamples = field(default_factory=line_samples)
@@ -126,9 +126,13 @@ def test_a_job_goes_through_every_state_and_flies_the_plan_exactly() -> None:
     progress = [r.progress for r in run.reports if r.event == "progress"]
     assert progress == sorted(progress) and 0.4 < progress[0] < 0.6  # 1 s of 2 s
     (trace,) = run.finished
-    assert trace.t_s.shape[0] == pytest.approx(201, abs=1)
-    np.testing.assert_allclose(trace.position_m_enu[1:], trace.reference_m_enu[:-1], atol=1e-12)
-    assert trace.pen_down.sum() == (run.samples.pen_down).sum()
+    flown = trace.flown  # no pen known: the writing point is the vehicle's position
+    assert not trace.pen_known and flown.base_m_enu is None
+    assert flown.t_s.shape[0] == pytest.approx(201, abs=1)
+    np.testing.assert_allclose(
+        flown.writing_point_m_enu[1:], flown.reference_m_enu[:-1], atol=1e-12
+    )
+    assert flown.pen_down.sum() == (run.samples.pen_down).sum()
     assert run.vehicle.position_m_enu == pytest.approx(HOME, abs=1e-6)
     assert run.commands == ["takeoff", "land"]
 

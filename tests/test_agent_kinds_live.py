@@ -48,10 +48,11 @@ def test_the_wall_hexarotor_writes_with_its_planned_force_and_reports_its_figure
     assert {"rmse_ee_m", "force_rmse_n", "width_rmse_m"} <= set(metrics.extra)
     assert metrics.extra["force_rmse_n"] < 0.6, metrics.extra  # batch flight: 0.31-0.38 N
     (trace,) = run.finished
-    assert trace.force_n is not None and trace.pen_contact is not None
+    flown, contact = trace.flown, trace.flown.extra.get("pen_contact")
+    assert trace.pen_known and flown.force_n is not None and contact is not None
     planned = run.prepared["j1"].force_n
-    assert planned is not None and 0.9 * planned.max() < trace.force_n.max() < 1.2 * planned.max()
-    assert not trace.pen_contact[0] and trace.pen_contact.any()  # contact made by the plan
+    assert planned is not None and 0.9 * planned.max() < flown.force_n.max() < 1.2 * planned.max()
+    assert not contact[0] and contact.any()  # contact made by the plan
     forces = [t.force_n for t in run.telemetry if t.state == "writing"]
     assert max(f or 0.0 for f in forces) > 1.0
     assert all(t.force_n in (None, 0.0) for t in run.telemetry if t.state == "taking_off")
@@ -85,7 +86,8 @@ def test_a_ground_writer_climbs_to_its_terrace_writes_and_drives_home() -> None:
     assert metrics is not None and metrics.iou is not None and metrics.iou >= 0.6
     assert metrics.rmse_pen_down_m <= 0.02 and metrics.written is not None
     (trace,) = run.finished
-    assert np.allclose(trace.position_m_enu[:, 2], 0.05, atol=0.01)  # written on the terrace
+    base = trace.flown.base_m_enu
+    assert base is not None and np.allclose(base[:, 2], 0.05, atol=0.01)  # on the terrace
     home = np.asarray(run.show.vehicle("ground2").home_m_enu)
     assert np.linalg.norm(np.asarray(run.vehicle.snapshot().position_m_enu) - home) < 0.05
     assert all(t.position_m_enu[2] < 0.06 for t in run.telemetry)  # never "took off"

@@ -28,7 +28,7 @@ from vehicle_agent.backends.base import BackendError, CommandRefusedError, Vec3
 from vehicle_agent.backends.kinematic import KinematicBackend
 from vehicle_agent.job_runner import JobRunner, PreparedJob
 from vehicle_agent.service import AgentService, EventOutbox, ServiceSettings
-from vehicle_agent.trace import FlownTrace
+from vehicle_agent.trace import JobTrace
 from vehicle_agent.work import ThreadJobWork
 
 SHOW = "agenttest"
@@ -94,7 +94,7 @@ def prepare(assignment: JobAssignment) -> PreparedJob:
     return PreparedJob(assignment.job_id, line_samples(2.0))
 
 
-def measure(prepared: PreparedJob, trace: FlownTrace) -> JobMetrics:
+def measure(prepared: PreparedJob, trace: JobTrace) -> JobMetrics:
     return METRICS
 
 

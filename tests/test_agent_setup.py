@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from job_traces import recorded_trace
 
 from bus.messages import JobAssignment
 from planner.errors import PlannerError
@@ -20,7 +21,6 @@ from vehicle_agent.agent import (
     write_job_report,
 )
 from vehicle_agent.job_picture import PictureWorker
-from vehicle_agent.trace import FlownTrace
 
 SHOWS = Path(__file__).resolve().parent.parent / "shows"
 
@@ -78,7 +78,7 @@ def test_metrics_of_a_perfectly_flown_job(airshow_uav3) -> None:  # type: ignore
     s = prepared.samples
     tip = s.position_m_enu - np.array([0.0, 0.0, 0.25])  # hanging straight down onto the board
     width = np.where(s.pen_down, 0.02, 0.0)
-    trace = FlownTrace(
+    trace = recorded_trace(
         "j1",
         1,
         s.t_s,
@@ -96,7 +96,7 @@ def test_metrics_of_a_perfectly_flown_job(airshow_uav3) -> None:  # type: ignore
     assert metrics.iou == pytest.approx(1.0)
     assert metrics.duration_s == pytest.approx(s.duration_s)
     shifted = tip + np.array([0.01, 0.0, 0.0])
-    moved = FlownTrace(
+    moved = recorded_trace(
         "j1",
         1,
         s.t_s,
@@ -122,7 +122,7 @@ def test_a_flown_job_is_recorded_next_to_the_database(tmp_path: Path, detail: st
     setup = vehicle_setup(show.model_copy(update={"storage": storage}), "uav1")
     prepared = prepare_job(setup, JobAssignment(job_id="j1", text="一"))
     s = prepared.samples
-    trace = FlownTrace(
+    trace = recorded_trace(
         "j1", 2, s.t_s, s.position_m_enu, s.velocity_mps_enu, s.position_m_enu, s.pen_down, None
     )
     metrics = job_metrics(setup, prepared, trace)
@@ -138,15 +138,17 @@ def test_a_flown_job_is_recorded_next_to_the_database(tmp_path: Path, detail: st
         else:  # the reference rides with the flight, at the same rate
             assert not (out / "TRAJ.json").exists()
             np.testing.assert_array_equal(flight["reference_t_s"], flight["t_s"])
-        assert "pen_contact" not in flight
+        assert "pen_contact" not in flight and not flight["pen_known"]
         if detail == "full":
-            np.testing.assert_array_equal(flight["position_m_enu"], s.position_m_enu)
+            np.testing.assert_array_equal(flight["writing_point_m_enu"], s.position_m_enu)
         else:  # 20 Hz in float32: a 100 Hz flight in a fifth of the ticks, within 0.1 mm
             kept = flight["t_s"]
             assert kept[0] == s.t_s[0] and kept[-1] == pytest.approx(s.t_s[-1])
             assert np.all(np.diff(kept)[:-1] >= 0.05 - 1e-9) and len(kept) <= len(s.t_s) // 5 + 2
             where = np.searchsorted(s.t_s, kept - 1e-9)
-            np.testing.assert_allclose(flight["position_m_enu"], s.position_m_enu[where], atol=1e-4)
+            np.testing.assert_allclose(
+                flight["writing_point_m_enu"], s.position_m_enu[where], atol=1e-4
+            )
 
 
 def test_a_flown_job_gets_a_report_picture_and_none_without_brush_data(tmp_path: Path) -> None:
@@ -156,12 +158,12 @@ def test_a_flown_job_gets_a_report_picture_and_none_without_brush_data(tmp_path:
     tip = s.position_m_enu - np.array([0.0, 0.0, 0.25])
     width = np.where(s.pen_down, 0.02, 0.0)
     args = ("j1", 1, s.t_s, s.position_m_enu, s.velocity_mps_enu, s.position_m_enu, s.pen_down)
-    trace = FlownTrace(*args, s.pen_down.copy(), tip, width)
+    trace = recorded_trace(*args, s.pen_down.copy(), tip, width)
     path = write_job_picture(setup, prepared, trace, tmp_path)
     assert path == tmp_path / "report.png"
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert [p.name for p in tmp_path.iterdir()] == ["report.png"]  # no partial file left
-    assert write_job_picture(setup, prepared, FlownTrace(*args, None), tmp_path / "x") is None
+    assert write_job_picture(setup, prepared, recorded_trace(*args, None), tmp_path / "x") is None
 
 
 def test_the_picture_worker_skips_while_busy_and_survives_a_failing_drawing() -> None:

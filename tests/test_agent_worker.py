@@ -13,12 +13,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from job_traces import recorded_trace
 
 from bus.messages import JobAssignment
 from bus.rpc import error_info_from_exception
 from cli.showrun import derived_show
 from vehicle_agent.job_runner import PreparedJob
-from vehicle_agent.trace import FlownTrace
+from vehicle_agent.trace import JobTrace
 from vehicle_agent.work import JobWorkError
 from vehicle_agent.worker_client import ProcessJobWork
 from vehicle_agent.worker_protocol import SealedContext
@@ -27,14 +28,14 @@ ROOT = Path(__file__).resolve().parent.parent
 AIRSHOW = ROOT / "shows" / "airshow-2014.yaml"
 
 
-def flown_as_planned(prepared: PreparedJob, board_z_m: float) -> FlownTrace:
+def flown_as_planned(prepared: PreparedJob, board_z_m: float) -> JobTrace:
     """A trace that followed the plan exactly, the brush tip on the board while writing."""
     s = prepared.samples
     tip = s.position_m_enu.copy()
     tip[:, 2] = board_z_m
     width = np.where(s.pen_down, 0.02, 0.0)
     ref = s.position_m_enu
-    return FlownTrace(
+    return recorded_trace(
         prepared.job_id, 1, s.t_s, ref, s.velocity_mps_enu, ref, s.pen_down, s.pen_down, tip, width
     )
 

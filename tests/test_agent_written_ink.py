@@ -8,12 +8,13 @@ from pathlib import Path
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from job_traces import recorded_trace
 
 from bus.messages import JobAssignment, WrittenInk, decode, encode
 from planner.board import BoardFrame
 from showfile import load_show
 from vehicle_agent.agent import job_metrics, prepare_job, vehicle_setup
-from vehicle_agent.trace import FlownTrace
+from vehicle_agent.trace import JobTrace
 from vehicle_agent.written_ink import (
     MAX_SIDE_PX,
     ink_extent_m,
@@ -106,10 +107,10 @@ def test_a_dot_is_inked_where_it_was_pressed(x: float, y: float, width: float) -
     assert np.all(np.hypot(rows - centre[0], cols - centre[1]) <= reach + 1)
 
 
-def trace_with_tip(tip_m_enu: np.ndarray | None) -> FlownTrace:
+def trace_with_tip(tip_m_enu: np.ndarray | None) -> JobTrace:
     n = 100
     zeros = np.zeros((n, 3))
-    return FlownTrace(
+    return recorded_trace(
         job_id="j", attempt=1, t_s=np.linspace(0, 1, n), position_m_enu=zeros,
         velocity_mps_enu=zeros, reference_m_enu=zeros, pen_down=np.ones(n, bool),
         pen_contact=np.ones(n, bool), pen_tip_m_enu=tip_m_enu,
@@ -135,11 +136,12 @@ def test_the_agents_metrics_carry_the_picture_of_the_flown_job() -> None:
     tip = s.position_m_enu - np.array([0.0, 0.0, 0.25])  # hanging straight down onto the board
     width = np.where(s.pen_down, 0.02, 0.0)
     args = ("j1", 1, s.t_s, s.position_m_enu, s.velocity_mps_enu, s.position_m_enu, s.pen_down)
-    metrics = job_metrics(setup, prepared, FlownTrace(*args, s.pen_down.copy(), tip, width))
+    metrics = job_metrics(setup, prepared, recorded_trace(*args, s.pen_down.copy(), tip, width))
     ink = metrics.written
     assert ink is not None and decode(encode(metrics), type(metrics)) == metrics
     pixels = ink_pixels(ink)
     on_board = setup.board_frame.to_board(s.position_m_enu[s.pen_down])
     assert all(pixels[pixel_of(ink, x, y)] for x, y in on_board)  # the whole path is inked
     assert not pixels[pixel_of(ink, *(-on_board.mean(axis=0)))]  # and not the mirrored spot
-    assert job_metrics(setup, prepared, FlownTrace(*args, None)).written is None  # no brush data
+    no_brush = recorded_trace(*args, None)
+    assert job_metrics(setup, prepared, no_brush).written is None  # no brush data

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pytest
+from job_traces import recorded_trace
 
 from bus.messages import AgentReport, JobAssignment, JobMetrics, VehicleCommand
 from planner.samples import TrajectorySamples
@@ -21,7 +22,7 @@ from vehicle_agent.backends.kinematic import KinematicVehicle
 from vehicle_agent.job_runner import JobRunner, PreparedJob, RunnerConfig
 from vehicle_agent.runner_io import RunnerEvent, result_report
 from vehicle_agent.safety import DeviationLimit, SafetyLimits, WritingBounds, vehicle_fence
-from vehicle_agent.trace import FlownTrace
+from vehicle_agent.trace import JobTrace
 
 DT = 0.01
 HOME: Vec3 = (0.0, -1.2, 0.0)
@@ -82,7 +83,7 @@ class Run:
     commands: list[str] = field(default_factory=list)
     phases: list[str] = field(default_factory=list)
     contact: list[tuple[float, bool]] = field(default_factory=list)
-    finished: list[FlownTrace] = field(default_factory=list)
+    finished: list[JobTrace] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         config = RunnerConfig(vehicle_id="uav1", kind="quadrotor-brush", board_id="b1",
@@ -284,8 +285,8 @@ def test_mode_changes_and_faults_become_events() -> None:
 
 
 def test_done_only_within_the_writing_bounds() -> None:
-    flown = FlownTrace("j1", 1, np.array([0.0, 1.0]), np.zeros((2, 3)), np.zeros((2, 3)),
-                       np.zeros((2, 3)), np.array([True, True]), None)  # fmt: skip
+    flown = recorded_trace("j1", 1, np.array([0.0, 1.0]), np.zeros((2, 3)), np.zeros((2, 3)),
+                           np.zeros((2, 3)), np.array([True, True]), None)  # fmt: skip
     bounds = WritingBounds(rmse_pen_down_max_m=0.05, iou_min=0.3)
 
     def metrics(rmse: float, iou: float | None) -> JobMetrics:

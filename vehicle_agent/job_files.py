@@ -4,7 +4,8 @@ Each flown job leaves ``<database dir>/jobs/<job>-<vehicle>-<attempt>/``: ``metr
 planned reference, what was flown and ``report.png``. ``compact`` (the default) keeps a job
 under about 100 kB: the reference and the flight at ``COMPACT_RATE_HZ`` in float32 in one
 compressed ``flight.npz``, a small picture; ``full`` keeps every tick (``TRAJ.json`` beside) and a
-full-size picture, for engineers tuning a vehicle.
+full-size picture, for engineers tuning a vehicle. ``flight.npz`` holds the job's trace in the
+kinds' format under its field names (``vehicle_agent.jobs.flight_arrays``).
 
 Every agent prunes only its own vehicle's directories (agents of one show may share the folder,
 and on several hosts each has its own), oldest first, down to its share of the show's budget and

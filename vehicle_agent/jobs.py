@@ -4,6 +4,7 @@ through the vehicle's kind, the metrics of what was flown, the job's files and p
 from __future__ import annotations
 
 import json
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -17,10 +18,10 @@ from vehicle_agent.job_files import COMPACT_PICTURE_DPI, JobFilesPolicy, compact
 from vehicle_agent.job_picture import PICTURE_NAME, PictureWorker
 from vehicle_agent.job_runner import PreparedJob
 from vehicle_agent.setup import VehicleSetup
-from vehicle_agent.trace import FlownTrace
+from vehicle_agent.trace import JobTrace
 from vehicle_agent.written_ink import written_ink_of_trace
 from vehicles.jobs import plan_job
-from vehicles.kind import FlownWriting, WritingPlan
+from vehicles.kind import WritingPlan
 from vehicles.picture import save_png
 
 
@@ -55,30 +56,13 @@ def writing_plan(prepared: PreparedJob) -> WritingPlan:
     return prepared.context
 
 
-def flown_writing(trace: FlownTrace) -> FlownWriting | None:
-    """The trace in the kinds' one trace format (None when the backend does not know its pen)."""
-    tip, width, contact = trace.pen_tip_m_enu, trace.pen_width_m, trace.pen_contact
-    if tip is None or width is None or contact is None:
-        return None
-    return FlownWriting(
-        t_s=trace.t_s,
-        reference_m_enu=trace.reference_m_enu,
-        writing_point_m_enu=tip,
-        pen_down=trace.pen_down,
-        ink_width_m=np.where(contact, width, 0.0),
-        base_m_enu=trace.position_m_enu,
-        force_n=trace.force_n,
-        extra={"velocity_mps_enu": trace.velocity_mps_enu, "tip_m_enu": tip},
-    )
-
-
-def job_metrics(setup: VehicleSetup, prepared: PreparedJob, trace: FlownTrace) -> JobMetrics:
+def job_metrics(setup: VehicleSetup, prepared: PreparedJob, trace: JobTrace) -> JobMetrics:
     """The kind's metrics of the flown job (writing-point errors, ink IoU); for a backend that
     does not know its pen, errors of the vehicle reference point and no IoU."""
-    flown = flown_writing(trace)
-    if flown is None:
-        error = np.linalg.norm(trace.position_m_enu - trace.reference_m_enu, axis=1)
-        down = trace.pen_down
+    flown = trace.flown
+    if not trace.pen_known:
+        error = np.linalg.norm(flown.writing_point_m_enu - flown.reference_m_enu, axis=1)
+        down = flown.pen_down
         return JobMetrics(
             rmse_pen_down_m=float(np.sqrt(np.mean(error[down] ** 2))) if down.any() else 0.0,
             rmse_m=float(np.sqrt(np.mean(error**2))) if error.size else 0.0,
@@ -98,19 +82,19 @@ def job_metrics(setup: VehicleSetup, prepared: PreparedJob, trace: FlownTrace) -
     )
 
 
-def job_report_dir(setup: VehicleSetup, trace: FlownTrace) -> Path:
+def job_report_dir(setup: VehicleSetup, trace: JobTrace) -> Path:
     """Where a flown job's files go: ``<database dir>/jobs/<job>-<vehicle>-<attempt>/``."""
     name = f"{trace.job_id}-{setup.vehicle_id}-{trace.attempt}"
     return setup.show.database_path.parent / "jobs" / name
 
 
 def write_job_report(
-    setup: VehicleSetup, prepared: PreparedJob, trace: FlownTrace, metrics: JobMetrics | None
+    setup: VehicleSetup, prepared: PreparedJob, trace: JobTrace, metrics: JobMetrics | None
 ) -> Path:
     """Write ``metrics.json``, the planned reference (``TRAJ.json``) and ``flight.npz`` (what
-    was flown, every tick) of a job; compact (the show's ``storage.job_files``): ``flight.npz``
-    alone holds both at 20 Hz in float32, the reference as ``reference_*``; returns the
-    directory."""
+    was flown, every tick: :func:`flight_arrays`) of a job; compact (the show's
+    ``storage.job_files``): ``flight.npz`` alone holds both at 20 Hz in float32, the reference
+    as ``reference_*``; returns the directory."""
     compact = JobFilesPolicy.of(setup.show).compact
     out = job_report_dir(setup, trace)
     out.mkdir(parents=True, exist_ok=True)
@@ -122,9 +106,7 @@ def write_job_report(
         "metrics": None if metrics is None else msgspec.to_builtins(metrics),
     }
     (out / "metrics.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
-    arrays: dict[str, Any] = {
-        name: value for name, value in vars(trace).items() if isinstance(value, np.ndarray)
-    }
+    arrays = flight_arrays(trace)
     if compact:
         plan = prepared.samples  # its velocity and acceleration: in full detail only
         reference = {
@@ -132,7 +114,7 @@ def write_job_report(
             "position_m_enu": plan.position_m_enu,
             "pen_down": plan.pen_down,
         }
-        arrays = compact_arrays(arrays, trace.t_s) | compact_arrays(
+        arrays = compact_arrays(arrays, trace.flown.t_s) | compact_arrays(
             reference, prepared.samples.t_s, prefix="reference_"
         )
     else:
@@ -142,16 +124,32 @@ def write_job_report(
     return out
 
 
+def flight_arrays(trace: JobTrace) -> dict[str, Any]:
+    """What ``flight.npz`` holds of a flown job: the arrays of its
+    :class:`vehicles.kind.FlownWriting` under their field names (``t_s``, ``reference_m_enu``,
+    ``writing_point_m_enu``, ``pen_down``, ``ink_width_m``, and ``base_m_enu``, ``force_n``
+    where known), its ``extra`` entries under theirs (``velocity_mps_enu``, ``pen_contact``
+    where known) and ``pen_known`` (a 0-d bool, :attr:`JobTrace.pen_known`)."""
+    flown = trace.flown
+    arrays: dict[str, Any] = {}
+    for f in fields(flown):
+        value = getattr(flown, f.name)
+        if isinstance(value, np.ndarray):
+            arrays[f.name] = value
+    if clash := arrays.keys() & flown.extra.keys():
+        raise ValueError(f"extra entries {sorted(clash)} shadow the trace's own arrays")
+    return arrays | dict(flown.extra) | {"pen_known": np.asarray(trace.pen_known)}
+
+
 def write_job_picture(
-    setup: VehicleSetup, prepared: PreparedJob, trace: FlownTrace, out: Path
+    setup: VehicleSetup, prepared: PreparedJob, trace: JobTrace, out: Path
 ) -> Path | None:
     """Draw ``report.png`` of a flown job into ``out`` (slow: seconds); None for a backend that
     does not know its pen (nothing to draw the writing from)."""
-    flown = flown_writing(trace)
-    if flown is None:
+    if not trace.pen_known:
         return None
     title = f"job {trace.job_id} on {setup.vehicle_id}, attempt {trace.attempt}"
-    figure = setup.kind.report(writing_plan(prepared), flown, setup.settings, title)
+    figure = setup.kind.report(writing_plan(prepared), trace.flown, setup.settings, title)
     path = out / PICTURE_NAME
     compact = JobFilesPolicy.of(setup.show).compact
     save_png(figure, path, dpi=COMPACT_PICTURE_DPI if compact else None)
@@ -162,7 +160,7 @@ def archive_job(
     setup: VehicleSetup,
     pictures: PictureWorker,
     prepared: PreparedJob,
-    trace: FlownTrace,
+    trace: JobTrace,
     metrics: JobMetrics | None,
 ) -> Path:
     """:func:`write_job_report`, then ``report.png`` drawn by ``pictures`` in the background;

@@ -21,7 +21,7 @@ from bus.messages import (
 from planner.samples import TrajectorySamples
 from vehicle_agent.backends.base import Setpoint, Vec3, VehicleSnapshot
 from vehicle_agent.safety.limits import SafetyLimits
-from vehicle_agent.trace import FlownTrace
+from vehicle_agent.trace import JobTrace
 from vehicles.verdict import WritingBounds, writing_verdict
 
 ACTIVE_PHASES = ("preflight", "climb", "wait_plan", "transit", "settle", "write")
@@ -136,13 +136,13 @@ class TickActions:
     """Reports for the orchestrator, in order (started/failed must be retried until acked)."""
     telemetry: Telemetry | None = None
     """A telemetry message to publish now."""
-    finished: FlownTrace | None = None
+    finished: JobTrace | None = None
     """A job just flown to its end: compute its metrics and report it (:func:`result_report`)."""
     events: tuple[RunnerEvent, ...] = ()
     """Events for the show's log (aborts, faults, autopilot mode changes), oldest first."""
 
 
-def done_report(vehicle_id: str, trace: FlownTrace, metrics: JobMetrics | None) -> AgentReport:
+def done_report(vehicle_id: str, trace: JobTrace, metrics: JobMetrics | None) -> AgentReport:
     """The ``done`` report of a flown job with its metrics."""
     return AgentReport(
         vehicle_id=vehicle_id,
@@ -155,7 +155,7 @@ def done_report(vehicle_id: str, trace: FlownTrace, metrics: JobMetrics | None) 
 
 
 def result_report(
-    vehicle_id: str, trace: FlownTrace, metrics: JobMetrics | None, bounds: WritingBounds
+    vehicle_id: str, trace: JobTrace, metrics: JobMetrics | None, bounds: WritingBounds
 ) -> AgentReport:
     """``done`` when the written job met ``bounds``; ``failed`` with code ``writing_bounds`` (the
     metrics attached) when it did not, or ``unmeasured`` when it could not be measured."""

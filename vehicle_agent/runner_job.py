@@ -9,7 +9,7 @@ from bus.messages import AgentReport, ErrorInfo, JobAssignment
 from vehicle_agent.backends.base import Setpoint, VehicleSnapshot
 from vehicle_agent.reference_track import ReferenceTrack
 from vehicle_agent.runner_io import PreparedJob
-from vehicle_agent.trace import FlownTrace, TraceRecorder
+from vehicle_agent.trace import JobTrace, TraceRecorder
 
 ReportEvent = Literal["started", "progress", "done", "failed"]
 
@@ -79,7 +79,7 @@ class RunningJob:
         self.progress = min(t_rel / duration, 1.0) if duration > 0 else 1.0
         return t_rel >= duration
 
-    def finish(self) -> FlownTrace:
+    def finish(self) -> JobTrace:
         """The flown trace of the whole job."""
         return self.recorder.finish(self.job_id, self.assignment.attempt)
 

@@ -21,7 +21,7 @@ from vehicle_agent.runner_io import (
 )
 from vehicle_agent.runner_job import RunningJob
 from vehicle_agent.safety.guard import SafetyGuard
-from vehicle_agent.trace import FlownTrace
+from vehicle_agent.trace import JobTrace
 
 Level = Literal["info", "warning", "alert"]
 ABORT_LIFT_M = 0.1
@@ -282,7 +282,7 @@ class RunnerPhases:
 
     def _write_tick(
         self, snap: VehicleSnapshot, now_s: float, setpoint: Setpoint
-    ) -> FlownTrace | None:
+    ) -> JobTrace | None:
         job = self._job
         assert job is not None
         written = job.record(snap, now_s)

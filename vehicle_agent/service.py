@@ -66,7 +66,7 @@ from vehicle_agent.reports import ReportOutbox
 from vehicle_agent.rest import at_rest
 from vehicle_agent.runner_io import ACTIVE_PHASES, result_report
 from vehicle_agent.service_settings import ServiceSettings
-from vehicle_agent.trace import FlownTrace
+from vehicle_agent.trace import JobTrace
 from vehicle_agent.work import JobWork
 
 __all__ = ["AgentService", "EventOutbox", "ServiceSettings", "run_until_signalled"]
@@ -360,7 +360,7 @@ class AgentService:
         self._prepared = {assignment.job_id: prepared}
         self.runner.plan_ready(prepared)
 
-    async def _finish(self, trace: FlownTrace) -> None:
+    async def _finish(self, trace: JobTrace) -> None:
         """Measure the flown job, record it, then report it: a job reported done has its
         record on disk (its picture may still be drawn)."""
         prepared = self._prepared[trace.job_id]

@@ -1,53 +1,57 @@
-"""What a vehicle actually flew while writing one job, sampled once per control period."""
+"""What a vehicle actually flew while writing one job, sampled once per control period, in the
+kinds' one trace format (:class:`vehicles.kind.FlownWriting`)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from vehicle_agent.backends.base import Setpoint, VehicleSnapshot
+from vehicles.kind import FlownWriting
 
 FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
+
+VELOCITY = "velocity_mps_enu"
+"""``FlownWriting.extra`` entry: (K, 3) measured velocity in [m/s], ENU."""
+PEN_CONTACT = "pen_contact"
+"""``FlownWriting.extra`` entry, where the backend reports it: (K,) bool, the pen touched."""
 
 
 @dataclass(frozen=True)
-class FlownTrace:
-    """The flown and the reference trajectory of one job, aligned in time."""
+class JobTrace:
+    """One job as flown by this vehicle: the kinds' trace and which assignment it was."""
 
     job_id: str
     """The job written."""
     attempt: int
     """Which assignment of the job this was (1 is the first)."""
-    t_s: FloatArray
-    """(N,) time in [s] since writing started."""
-    position_m_enu: FloatArray
-    """(N, 3) measured position in [m], ENU."""
-    velocity_mps_enu: FloatArray
-    """(N, 3) measured velocity in [m/s], ENU."""
-    reference_m_enu: FloatArray
-    """(N, 3) reference position in [m], ENU, at the same instants."""
-    pen_down: BoolArray
-    """(N,) True where the reference meant the brush to touch the board."""
-    pen_contact: BoolArray | None
-    """(N,) True where the backend saw the brush touch the board, when it knows."""
-    pen_tip_m_enu: FloatArray | None = None
-    """(N, 3) brush tip in [m], ENU, when the backend knows."""
-    pen_width_m: FloatArray | None = None
-    """(N,) painted stroke width in [m] (0 without contact), when the backend knows."""
-    force_n: FloatArray | None = None
-    """(N,) measured normal contact force in [N], for kinds that sense it."""
+    flown: FlownWriting
+    """What was flown, one row per control tick: the reference the agent gave, the pen tip
+    (``writing_point_m_enu``) and the vehicle reference point (``base_m_enu``), the ink laid,
+    the measured force where sensed; ``extra`` holds :data:`VELOCITY` and, where the backend
+    reports it, :data:`PEN_CONTACT`."""
+    pen_known: bool
+    """The backend reported its pen (tip, ink width and contact) at every tick. False (an
+    autopilot without a brush model): ``flown.writing_point_m_enu`` is the vehicle reference
+    point, ``base_m_enu`` None and ``ink_width_m`` zeros; nothing to score the ink by."""
 
     @property
     def duration_s(self) -> float:
         """Time in [s] from the first to the last sample."""
-        return float(self.t_s[-1] - self.t_s[0]) if self.t_s.size else 0.0
+        t_s = self.flown.t_s
+        return float(t_s[-1] - t_s[0]) if t_s.size else 0.0
 
 
 class TraceRecorder:
-    """Collects one sample per control period; :meth:`finish` turns them into a trace."""
+    """Collects one sample per control period; :meth:`finish` turns them into a trace.
+
+    ``add`` runs every tick of every vehicle of a fleet host: it only appends what the snapshot
+    and the setpoint hold (plain tuples and numbers); the arrays are built once, in ``finish``.
+    """
 
     def __init__(self) -> None:
         self._t: list[float] = []
@@ -75,24 +79,39 @@ class TraceRecorder:
         self._width.append(snapshot.pen_width_m)
         self._force.append(snapshot.force_n)
 
-    def finish(self, job_id: str, attempt: int) -> FlownTrace:
-        """The recorded samples as arrays."""
-        known = bool(self._contact) and all(c is not None for c in self._contact)
-        tips_known = bool(self._tip) and all(p is not None for p in self._tip)
-        widths_known = bool(self._width) and all(w is not None for w in self._width)
-        forces_known = bool(self._force) and all(f is not None for f in self._force)
-        return FlownTrace(
-            job_id=job_id,
-            attempt=attempt,
+    def finish(self, job_id: str, attempt: int) -> JobTrace:
+        """The recorded samples as the job's :class:`JobTrace`."""
+        contact_known = _known(self._contact)
+        pen_known = contact_known and _known(self._tip) and _known(self._width)
+        position = _vectors(self._p)
+        extra: dict[str, NDArray[Any]] = {VELOCITY: _vectors(self._v)}
+        if contact_known:
+            extra[PEN_CONTACT] = np.asarray(self._contact, dtype=np.bool_)
+        if pen_known:
+            writing_point = _vectors(self._tip)
+            width = np.asarray(self._width, dtype=np.float64)
+            ink_width = np.where(extra[PEN_CONTACT], width, 0.0)
+            base: FloatArray | None = position
+        else:
+            writing_point, ink_width, base = position, np.zeros(len(self._t)), None
+        flown = FlownWriting(
             t_s=np.asarray(self._t, dtype=np.float64),
-            position_m_enu=np.asarray(self._p, dtype=np.float64).reshape(-1, 3),
-            velocity_mps_enu=np.asarray(self._v, dtype=np.float64).reshape(-1, 3),
-            reference_m_enu=np.asarray(self._r, dtype=np.float64).reshape(-1, 3),
+            reference_m_enu=_vectors(self._r),
+            writing_point_m_enu=writing_point,
             pen_down=np.asarray(self._pen, dtype=np.bool_),
-            pen_contact=np.asarray(self._contact, dtype=np.bool_) if known else None,
-            pen_tip_m_enu=(
-                np.asarray(self._tip, dtype=np.float64).reshape(-1, 3) if tips_known else None
-            ),
-            pen_width_m=np.asarray(self._width, dtype=np.float64) if widths_known else None,
-            force_n=np.asarray(self._force, dtype=np.float64) if forces_known else None,
+            ink_width_m=ink_width,
+            base_m_enu=base,
+            force_n=np.asarray(self._force, dtype=np.float64) if _known(self._force) else None,
+            extra=extra,
         )
+        return JobTrace(job_id, attempt, flown, pen_known)
+
+
+def _known(values: Sequence[object]) -> bool:
+    """Every sample is known (and there is one)."""
+    return bool(values) and all(v is not None for v in values)
+
+
+def _vectors(values: Sequence[object]) -> FloatArray:
+    """(N, 3) float array of ``values``."""
+    return np.asarray(values, dtype=np.float64).reshape(-1, 3)

@@ -17,13 +17,13 @@ from typing import Protocol
 
 from bus.messages import ErrorInfo, JobAssignment, JobMetrics
 from vehicle_agent.job_runner import PreparedJob
-from vehicle_agent.trace import FlownTrace
+from vehicle_agent.trace import JobTrace
 
 Prepare = Callable[[JobAssignment], PreparedJob]
 """Lays a job out on the board and plans it (may raise)."""
-Measure = Callable[[PreparedJob, FlownTrace], JobMetrics]
+Measure = Callable[[PreparedJob, JobTrace], JobMetrics]
 """Metrics of a flown job."""
-Archive = Callable[[PreparedJob, FlownTrace, JobMetrics | None], object]
+Archive = Callable[[PreparedJob, JobTrace, JobMetrics | None], object]
 """Keeps a record of a flown job, e.g. files on disk (may raise); returns where."""
 
 
@@ -46,12 +46,12 @@ class JobWork(Protocol):
         """The job laid out and planned."""
         ...
 
-    async def measure(self, prepared: PreparedJob, trace: FlownTrace) -> JobMetrics:
+    async def measure(self, prepared: PreparedJob, trace: JobTrace) -> JobMetrics:
         """Metrics of the flown job."""
         ...
 
     async def archive(
-        self, prepared: PreparedJob, trace: FlownTrace, metrics: JobMetrics | None
+        self, prepared: PreparedJob, trace: JobTrace, metrics: JobMetrics | None
     ) -> object:
         """Record the flown job (None: nothing recorded); returns where."""
         ...
@@ -72,11 +72,11 @@ class ThreadJobWork:
     async def prepare(self, assignment: JobAssignment) -> PreparedJob:
         return await asyncio.to_thread(self._prepare, assignment)
 
-    async def measure(self, prepared: PreparedJob, trace: FlownTrace) -> JobMetrics:
+    async def measure(self, prepared: PreparedJob, trace: JobTrace) -> JobMetrics:
         return await asyncio.to_thread(self._measure, prepared, trace)
 
     async def archive(
-        self, prepared: PreparedJob, trace: FlownTrace, metrics: JobMetrics | None
+        self, prepared: PreparedJob, trace: JobTrace, metrics: JobMetrics | None
     ) -> object:
         if self._archive is None:
             return None

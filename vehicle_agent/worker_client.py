@@ -22,7 +22,7 @@ from typing import Any
 from bus.messages import ErrorInfo, JobAssignment, JobMetrics
 from showfile import Show
 from vehicle_agent.job_runner import PreparedJob
-from vehicle_agent.trace import FlownTrace
+from vehicle_agent.trace import JobTrace
 from vehicle_agent.work import JobWorkError
 from vehicle_agent.worker_protocol import FrameError, body_length, frame, unframe
 
@@ -47,14 +47,14 @@ class RemoteJobWork:
             raise worker_failed(self.vehicle_id, f"answered prepare with a {_name(prepared)}")
         return prepared
 
-    async def measure(self, prepared: PreparedJob, trace: FlownTrace) -> JobMetrics:
+    async def measure(self, prepared: PreparedJob, trace: JobTrace) -> JobMetrics:
         metrics = await self._call(("measure", prepared, trace))
         if not isinstance(metrics, JobMetrics):
             raise worker_failed(self.vehicle_id, f"answered measure with a {_name(metrics)}")
         return metrics
 
     async def archive(
-        self, prepared: PreparedJob, trace: FlownTrace, metrics: JobMetrics | None
+        self, prepared: PreparedJob, trace: JobTrace, metrics: JobMetrics | None
     ) -> object:
         return await self._call(("archive", prepared, trace, metrics))
 

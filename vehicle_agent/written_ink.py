@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from bus.messages import MAX_INK_PX, WrittenInk
 from sim.ink import InkCanvas, RasterSpec
-from vehicle_agent.trace import FlownTrace
+from vehicle_agent.trace import JobTrace
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -88,17 +88,19 @@ def written_ink(
 
 
 def written_ink_of_trace(
-    trace: FlownTrace,
+    trace: JobTrace,
     to_board: Callable[[FloatArray], FloatArray],
     writing_area_m: tuple[float, float],
 ) -> WrittenInk | None:
     """The ink of a flown job (None when the backend does not report its brush tip, width and
     contact). ``to_board``: world ENU points (n, 3) -> board-frame points (n, 2) in [m], e.g.
-    ``BoardFrame.to_board``."""
-    tip, width, contact = trace.pen_tip_m_enu, trace.pen_width_m, trace.pen_contact
-    if tip is None or width is None or contact is None or tip.shape[0] == 0:
+    ``BoardFrame.to_board``. The ink laid (``ink_width_m``, 0 without contact) says where the
+    brush painted: a touching sample of no width paints nothing (:meth:`InkCanvas.paint_path`)."""
+    flown = trace.flown
+    if not trace.pen_known or flown.t_s.shape[0] == 0:
         return None
-    return written_ink(to_board(tip), width, contact, writing_area_m)
+    width = flown.ink_width_m
+    return written_ink(to_board(flown.writing_point_m_enu), width, width > 0.0, writing_area_m)
 
 
 def ink_pixels(ink: WrittenInk) -> BoolArray:

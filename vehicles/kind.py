@@ -97,8 +97,9 @@ class FlownWriting:
     """(K, 3) true vehicle base position in [m], ENU, where it differs from the writing point."""
     force_n: FloatArray | None = None
     """(K,) measured normal contact force in [N], for kinds that control force."""
-    extra: Mapping[str, FloatArray] = field(default_factory=dict)
-    """Kind-specific logs (thrusts, wheel slips...), each (K, ...)."""
+    extra: Mapping[str, NDArray[Any]] = field(default_factory=dict)
+    """Kind-specific logs (thrusts, wheel slips...), each (K, ...), named with their units;
+    floats but for flags (the live agent's ``pen_contact``, bool)."""
     abort_reason: str | None = None
     """Why the run ended early (a deviation abort), None when flown to its end."""
 
