@@ -49,6 +49,7 @@ from vehicles.quadrotor_brush.control.controller import DEFAULT_CONFIG, PAPER_CO
 from vehicles.quadrotor_brush.flight import FlightConfig, fly  # noqa: E402
 from vehicles.quadrotor_brush.metrics import flight_metrics  # noqa: E402
 from vehicles.quadrotor_brush.params import WorldParams  # noqa: E402
+from vehicles.quadrotor_brush.trace import flown_of  # noqa: E402
 from vehicles.registry import vehicle_kind  # noqa: E402
 from vehicles.surface import Surface  # noqa: E402
 
@@ -105,7 +106,7 @@ def fly_corpus(
         )
         log = fly([planned[c] for c in chars], dataclasses.replace(config, world=world), seed=seed)
         for i, char in enumerate(chars):
-            m = flight_metrics(log, i)
+            m = flight_metrics(flown_of(log, i), world.brush)
             scores.append((char, m.rmse_pen_down_m, m.iou))
     return scores
 

@@ -12,8 +12,9 @@ from sim.params import MocapParams, WindParams
 from sim.reference import writing_reference
 from vehicles.quadrotor_brush.control.controller import DEFAULT_CONFIG, PAPER_CONFIG
 from vehicles.quadrotor_brush.flight import Flight, FlightConfig, FlightLog, fly
-from vehicles.quadrotor_brush.metrics import flight_metrics, writing_point_error
+from vehicles.quadrotor_brush.metrics import flight_metrics
 from vehicles.quadrotor_brush.params import WorldParams
+from vehicles.quadrotor_brush.trace import flown_of
 
 QUIET = WorldParams(mocap=MocapParams(noise_std_m=0.0))
 
@@ -61,9 +62,9 @@ def test_steady_wind_leaves_no_steady_error(config: object, duration_s: float) -
     assert np.dot(tilt, [0.6, -0.4]) < 0.0  # leaning into the wind
     if config is PAPER_CONFIG:  # the body holds; its brush, leaning, writes downwind
         assert np.max(np.abs(log.position_m_enu[-1, 0] - target)) < 2e-4
-        assert np.dot(writing_point_error(log)[-1, 0, :2], [0.6, -0.4]) > 0.005
+        assert np.dot(log.writing_point_error()[-1, 0, :2], [0.6, -0.4]) > 0.005
     else:  # the brush holds; the body stands upwind of it
-        assert np.max(np.abs(writing_point_error(log)[-1, 0])) < 2e-4
+        assert np.max(np.abs(log.writing_point_error()[-1, 0])) < 2e-4
 
 
 def test_thrust_limit_holds_on_an_impossible_climb() -> None:
@@ -90,8 +91,9 @@ def test_default_controller_writes_a_circle_in_wind() -> None:
     config = windy()
     paper = dataclasses.replace(config, controller=PAPER_CONFIG)
     ref = samples(**WRITE)
-    shipped = flight_metrics(fly([ref], config, seed=2))
-    published = flight_metrics(fly([ref], paper, seed=2))
+    brush = config.world.brush
+    shipped = flight_metrics(flown_of(fly([ref], config, seed=2)), brush)
+    published = flight_metrics(flown_of(fly([ref], paper, seed=2)), brush)
     assert shipped.rmse_pen_down_m < 0.005
     assert shipped.iou > 0.8
     assert shipped.rmse_pen_down_z_m < 0.002

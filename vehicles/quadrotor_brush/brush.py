@@ -18,6 +18,8 @@ from vehicles.quadrotor_brush.params import BrushParams
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
+_UP = np.array([0.0, 0.0, 1.0])
+
 
 @dataclass(frozen=True)
 class BrushState:
@@ -33,6 +35,14 @@ class BrushState:
     """Whether the tip touches the board, shape (N,)."""
     bottomed: BoolArray
     """Whether the press exceeds the bearing travel (the stop would hit), shape (N,)."""
+
+
+def writing_point(position_m_enu: FloatArray, body_z_enu: FloatArray, lever_m: float) -> FloatArray:
+    """The writing point in [m] of vehicles at ``position_m_enu`` with axis ``body_z_enu`` (any
+    shape (..., 3)): one ``lever_m`` (reference point to tip at nominal press) down the brush
+    axis, ``p - lever * (n - e_z)``; level, the vehicle reference point itself."""
+    point: FloatArray = position_m_enu - lever_m * (body_z_enu - _UP)
+    return point
 
 
 def brush_state(

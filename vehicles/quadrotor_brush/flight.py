@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from planner.samples import TrajectorySamples
 from vehicles.deviation import DeviationLimit, DeviationMonitor, DeviationTrip
-from vehicles.quadrotor_brush.brush import BrushState, brush_state
+from vehicles.quadrotor_brush.brush import BrushState, brush_state, writing_point
 from vehicles.quadrotor_brush.control.controller import (
     DEFAULT_CONFIG,
     ControllerConfig,
@@ -136,6 +136,13 @@ class FlightLog:
     """Board surface height [m]."""
     abort_reason: str | None = None
     """Why the flight ended early (a deviation abort), None when it was flown to its end."""
+
+    def writing_point_error(self) -> FloatArray:
+        """Writing-point error per tick and vehicle, shape (K, N, 3), [m]
+        (:func:`vehicles.quadrotor_brush.brush.writing_point`)."""
+        point = writing_point(self.position_m_enu, self.body_z_enu, self.brush_lever_m)
+        error: FloatArray = point - self.reference_position_m_enu
+        return error
 
     @property
     def n_vehicles(self) -> int:

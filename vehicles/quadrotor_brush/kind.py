@@ -108,10 +108,8 @@ class QuadrotorBrush:
     ) -> WritingScore:
         """Writing-point errors and ink IoU (Phang 2015 Fig. 12, Guo 2024 section VII)."""
         from vehicles.quadrotor_brush.metrics import flight_metrics
-        from vehicles.quadrotor_brush.trace import log_of
 
-        log = log_of(flown, plan.samples, settings.flight.world.brush, plan.surface.origin_m_enu[2])
-        m = flight_metrics(log, pixel_m=settings.ink_pixel_m)
+        m = flight_metrics(flown, settings.flight.world.brush, pixel_m=settings.ink_pixel_m)
         return WritingScore(
             rmse_pen_down_m=m.rmse_pen_down_m,
             rmse_m=m.rmse_m,
@@ -130,14 +128,15 @@ class QuadrotorBrush:
         """The report figure: tracking against time, paths on the board, ink against target."""
         from vehicles.quadrotor_brush.metrics import flight_metrics, ink_result
         from vehicles.quadrotor_brush.report import build_report
-        from vehicles.quadrotor_brush.trace import log_of
 
-        log = log_of(flown, plan.samples, settings.flight.world.brush, plan.surface.origin_m_enu[2])
-        ink = ink_result(log, pixel_m=settings.ink_pixel_m)
-        scores = flight_metrics(log, ink=ink)
+        brush = settings.flight.world.brush
+        ink = ink_result(flown, brush, pixel_m=settings.ink_pixel_m)
+        scores = flight_metrics(flown, brush, ink=ink)
         board = board_of(plan.surface)
         strokes_xy = [board.to_world(np.asarray(s.xy_m))[:, :2] for s in plan.strokes]
-        return build_report(log, scores, ink, input_strokes_xy_m=strokes_xy, title=title)
+        return build_report(
+            flown, plan.samples, brush, scores, ink, input_strokes_xy_m=strokes_xy, title=title
+        )
 
     def simulated_vehicle(
         self, start_m_enu: Vec3, settings: QuadrotorSettings, *, seed: int = 0

@@ -1,12 +1,19 @@
 """How well a flight wrote: tracking errors of the brush and ink intersection over union.
 
+Read from the kinds' one trace format (:class:`vehicles.kind.FlownWriting`) of one vehicle: a batch
+flight's (:func:`vehicles.quadrotor_brush.trace.flown_of`) or the live agent's. Without a logged
+body axis (``extra["body_z_enu"]``; the live agent logs none) the brush axis from the tip
+(``extra["tip_m_enu"]``, else the writing point) up to the body stands for it; without a base
+position the writing point stands for the body.
+
 Tracking is measured at the *writing point*: the point of the brush axis one lever (reference point
 to tip at nominal press) below the vehicle reference point, ``p - lever * (n - e_z)`` with ``n``
 the body z axis. Level, it is the vehicle reference point itself (what Phang 2015 Fig. 12 plots);
 tilted, it moves with the brush. Its reference is the planned position.
 
-Ink (Guo 2024 section VII): the written raster is what the brush footprint painted while touching;
-the target raster is the planned pen-down path painted at the nominal width. Both at ``pixel_m``.
+Ink (Guo 2024 section VII): the written raster is what the brush footprint painted while touching
+(``ink_width_m`` above 0); the target raster is the planned pen-down path painted at the nominal
+width. Both at ``pixel_m``.
 """
 
 from __future__ import annotations
@@ -17,9 +24,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sim.ink import InkCanvas, RasterSpec, iou
-from vehicles.quadrotor_brush.flight import FlightLog
+from vehicles.kind import FlownWriting
+from vehicles.quadrotor_brush.brush import writing_point
+from vehicles.quadrotor_brush.params import BrushParams
 
 FloatArray = NDArray[np.float64]
+
+_UP = np.array([0.0, 0.0, 1.0])
 
 
 @dataclass(frozen=True)
@@ -69,26 +80,48 @@ class InkResult:
         return iou(self.written.pixels, self.target.pixels)
 
 
-def writing_point_error(log: FlightLog) -> FloatArray:
-    """Writing-point error per tick and vehicle, shape (K, N, 3), [m]."""
-    up = np.array([0.0, 0.0, 1.0])
-    point = log.position_m_enu - log.brush_lever_m * (log.body_z_enu - up)
-    error: FloatArray = point - log.reference_position_m_enu
+def body_of(flown: FlownWriting) -> FloatArray:
+    """(K, 3) vehicle reference point in [m], ENU (the writing point where none was logged)."""
+    return flown.base_m_enu if flown.base_m_enu is not None else flown.writing_point_m_enu
+
+
+def tip_of(flown: FlownWriting) -> FloatArray:
+    """(K, 3) brush tip in [m], ENU (the writing point where none was logged)."""
+    tip: FloatArray = flown.extra.get("tip_m_enu", flown.writing_point_m_enu)
+    return tip
+
+
+def body_z_of(flown: FlownWriting) -> FloatArray:
+    """(K, 3) body z axis (the brush axis, upwards): logged, or from the tip up to the body
+    (straight up where they meet)."""
+    body_z: FloatArray | None = flown.extra.get("body_z_enu")
+    if body_z is not None:
+        return body_z
+    axis = body_of(flown) - tip_of(flown)
+    length = np.linalg.norm(axis, axis=1, keepdims=True)
+    derived: FloatArray = np.where(length > 1e-9, axis / np.maximum(length, 1e-9), _UP)
+    return derived
+
+
+def writing_point_error(flown: FlownWriting, brush: BrushParams) -> FloatArray:
+    """Writing-point error per tick, shape (K, 3), [m]."""
+    point = writing_point(body_of(flown), body_z_of(flown), brush.write_height_m)
+    error: FloatArray = point - flown.reference_m_enu
     return error
 
 
-def ink_result(log: FlightLog, vehicle: int = 0, *, pixel_m: float = 0.001) -> InkResult:
-    """Paint the written and the target ink of one vehicle."""
-    pen = log.pen_down[:, vehicle]
-    contact = log.brush_contact[:, vehicle]
-    ref_xy = log.reference_position_m_enu[:, vehicle, :2]
-    tip_xy = log.tip_m_enu[:, vehicle, :2]
+def ink_result(flown: FlownWriting, brush: BrushParams, *, pixel_m: float = 0.001) -> InkResult:
+    """Paint the written and the target ink."""
+    pen = flown.pen_down
+    contact = flown.ink_width_m > 0.0
+    ref_xy = flown.reference_m_enu[:, :2]
+    tip_xy = tip_of(flown)[:, :2]
     covered = np.concatenate((ref_xy[pen], tip_xy[contact], ref_xy[:1]))
-    spec = RasterSpec.covering(covered, pixel_m=pixel_m, margin_m=log.nominal_width_m + 0.01)
+    spec = RasterSpec.covering(covered, pixel_m=pixel_m, margin_m=brush.nominal_width_m + 0.01)
     target = InkCanvas(spec)
-    target.paint_path(ref_xy, np.full(pen.shape, log.nominal_width_m), pen)
+    target.paint_path(ref_xy, np.full(pen.shape, brush.nominal_width_m), pen)
     written = InkCanvas(spec)
-    written.paint_path(tip_xy, log.brush_width_m[:, vehicle], contact)
+    written.paint_path(tip_xy, flown.ink_width_m, contact)
     return InkResult(written, target)
 
 
@@ -97,17 +130,22 @@ def _rms(values: FloatArray) -> float:
 
 
 def flight_metrics(
-    log: FlightLog, vehicle: int = 0, *, pixel_m: float = 0.001, ink: InkResult | None = None
+    flown: FlownWriting,
+    brush: BrushParams,
+    *,
+    pixel_m: float = 0.001,
+    ink: InkResult | None = None,
 ) -> FlightMetrics:
-    """Scores of vehicle ``vehicle`` (paints the ink unless ``ink`` is given)."""
-    err = writing_point_error(log)[:, vehicle]
-    pen = log.pen_down[:, vehicle]
+    """Scores of the flight of ``brush`` (paints the ink unless ``ink`` is given)."""
+    err = writing_point_error(flown, brush)
+    pen = flown.pen_down
     sq = np.sum(err * err, axis=1)
-    veh = log.position_m_enu[:, vehicle] - log.reference_position_m_enu[:, vehicle]
-    ink = ink if ink is not None else ink_result(log, vehicle, pixel_m=pixel_m)
+    veh = body_of(flown) - flown.reference_m_enu
+    ink = ink if ink is not None else ink_result(flown, brush, pixel_m=pixel_m)
     target = max(int(np.count_nonzero(ink.target.pixels)), 1)
     both = int(np.count_nonzero(ink.written.pixels & ink.target.pixels))
     either = int(np.count_nonzero(ink.written.pixels | ink.target.pixels))
+    t_s = flown.t_s
     return FlightMetrics(
         rmse_pen_down_m=_rms(sq[pen]),
         rmse_m=_rms(sq),
@@ -119,5 +157,5 @@ def flight_metrics(
         iou=ink.iou,
         ink_intersection_ratio=both / target,
         ink_union_ratio=either / target,
-        sim_time_s=float(log.t_s[-1] - log.t_s[0]) if log.t_s.size else 0.0,
+        sim_time_s=float(t_s[-1] - t_s[0]) if t_s.size else 0.0,
     )

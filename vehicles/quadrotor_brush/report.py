@@ -18,29 +18,46 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
-from vehicles.quadrotor_brush.flight import FlightLog
-from vehicles.quadrotor_brush.metrics import FlightMetrics, InkResult, writing_point_error
+from planner.samples import TrajectorySamples
+from vehicles.kind import FlownWriting
+from vehicles.quadrotor_brush.metrics import (
+    FlightMetrics,
+    InkResult,
+    body_of,
+    tip_of,
+    writing_point_error,
+)
+from vehicles.quadrotor_brush.params import BrushParams
 
 FloatArray = NDArray[np.float64]
 
 _AXES = "xyz"
 
 
-def _time_rows(fig: Figure, log: FlightLog, vehicle: int, grid: object) -> None:
-    t = log.t_s - log.t_s[0]
-    pen = log.pen_down[:, vehicle]
-    writing = log.reference_position_m_enu + writing_point_error(log)
+def _planned_velocity(flown: FlownWriting, planned: TrajectorySamples) -> FloatArray:
+    """(K, 3) the plan's velocity in [m/s] at the flown ticks."""
+    v = planned.velocity_mps_enu
+    return np.stack([np.interp(flown.t_s, planned.t_s, v[:, c]) for c in range(3)], axis=1)
+
+
+def _time_rows(
+    fig: Figure, flown: FlownWriting, planned: TrajectorySamples, brush: BrushParams, grid: object
+) -> None:
+    t = flown.t_s - flown.t_s[0]
+    pen = flown.pen_down
+    writing = flown.reference_m_enu + writing_point_error(flown, brush)
+    velocity = flown.extra.get("velocity_mps_enu", np.zeros((t.shape[0], 3)))
     rows = (
-        ("writing point", "m", log.reference_position_m_enu, writing, log.position_m_enu),
-        ("velocity", "m/s", log.reference_velocity_mps_enu, log.velocity_mps_enu, None),
+        ("writing point", "m", flown.reference_m_enu, writing, body_of(flown)),
+        ("velocity", "m/s", _planned_velocity(flown, planned), velocity, None),
     )
-    for r, (name, unit, ref, flown, body) in enumerate(rows):
+    for r, (name, unit, ref, actual, body) in enumerate(rows):
         for c in range(3):
             ax = fig.add_subplot(grid[r, c])  # type: ignore[index]
             if body is not None:
-                ax.plot(t, body[:, vehicle, c], color="tab:green", lw=0.7, alpha=0.6, label="body")
-            ax.plot(t, ref[:, vehicle, c], "--", color="tab:gray", lw=1.0, label="reference")
-            ax.plot(t, flown[:, vehicle, c], color="tab:blue", lw=0.9, label="flown")
+                ax.plot(t, body[:, c], color="tab:green", lw=0.7, alpha=0.6, label="body")
+            ax.plot(t, ref[:, c], "--", color="tab:gray", lw=1.0, label="reference")
+            ax.plot(t, actual[:, c], color="tab:blue", lw=0.9, label="flown")
             lo, hi = ax.get_ylim()
             ax.fill_between(t, lo, hi, where=pen, color="tab:orange", alpha=0.12, lw=0)
             ax.set_ylim(lo, hi)
@@ -54,8 +71,7 @@ def _time_rows(fig: Figure, log: FlightLog, vehicle: int, grid: object) -> None:
 
 def _board_panel(
     fig: Figure,
-    log: FlightLog,
-    vehicle: int,
+    flown: FlownWriting,
     grid: object,
     input_strokes_xy_m: Sequence[FloatArray] | None,
 ) -> None:
@@ -65,11 +81,11 @@ def _board_panel(
             pts = np.asarray(stroke, dtype=np.float64)
             ax.plot(pts[:, 0], pts[:, 1], color="tab:green", lw=2.5, alpha=0.45,
                     label="input" if i == 0 else None)  # fmt: skip
-    ref = log.reference_position_m_enu[:, vehicle, :2].copy()
-    ref[~log.pen_down[:, vehicle]] = np.nan
+    ref = flown.reference_m_enu[:, :2].copy()
+    ref[~flown.pen_down] = np.nan
     ax.plot(ref[:, 0], ref[:, 1], ":", color="k", lw=1.0, label="planned")
-    tip = log.tip_m_enu[:, vehicle, :2].copy()
-    tip[~log.brush_contact[:, vehicle]] = np.nan
+    tip = tip_of(flown)[:, :2].copy()
+    tip[~(flown.ink_width_m > 0.0)] = np.nan
     ax.plot(tip[:, 0], tip[:, 1], color="tab:red", lw=0.8, label="brush (flown)")
     ax.set_aspect("equal")
     ax.set_title("board: input, planned, flown", fontsize=9)
@@ -107,20 +123,22 @@ def plain_title(text: str) -> str:
 
 
 def build_report(
-    log: FlightLog,
+    flown: FlownWriting,
+    planned: TrajectorySamples,
+    brush: BrushParams,
     metrics: FlightMetrics,
     ink: InkResult,
     *,
-    vehicle: int = 0,
     input_strokes_xy_m: Sequence[FloatArray] | None = None,
     title: str = "",
 ) -> Figure:
-    """The report figure of one vehicle (not yet saved)."""
+    """The report figure of one vehicle's flight of ``planned`` (the writing point's reference,
+    whose velocity is drawn) with ``brush`` (not yet saved)."""
     fig = Figure(figsize=(15.0, 13.0), dpi=100)
     FigureCanvasAgg(fig)
     grid = fig.add_gridspec(3, 3, height_ratios=(1.0, 1.0, 1.7), hspace=0.35, wspace=0.25)
-    _time_rows(fig, log, vehicle, grid)
-    _board_panel(fig, log, vehicle, grid, input_strokes_xy_m)
+    _time_rows(fig, flown, planned, brush, grid)
+    _board_panel(fig, flown, grid, input_strokes_xy_m)
     _ink_panels(fig, ink, metrics, grid)
     summary = (
         f"pen-down RMSE {metrics.rmse_pen_down_m * 1000:.1f} mm, "
