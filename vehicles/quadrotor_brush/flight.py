@@ -130,10 +130,6 @@ class FlightLog:
     """The estimator's external acceleration, shape (K, N, 3)."""
     brush_lever_m: float
     """Reference point to tip at nominal press [m] (the error is measured at that point)."""
-    nominal_width_m: float
-    """Nominal stroke width [m] (the target ink)."""
-    board_height_m: float
-    """Board surface height [m]."""
     abort_reason: str | None = None
     """Why the flight ended early (a deviation abort), None when it was flown to its end."""
 
@@ -322,8 +318,6 @@ class Flight:
             reference_velocity_mps_enu=self._v[rows],
             pen_down=self._pen[rows],
             brush_lever_m=cfg.world.brush.write_height_m,
-            nominal_width_m=cfg.world.brush.nominal_width_m,
-            board_height_m=cfg.world.board_height_m,
             abort_reason=self.abort_reason,
             **stacked,
         )
