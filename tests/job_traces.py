@@ -3,10 +3,29 @@ per row through :class:`vehicle_agent.trace.TraceRecorder`."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
+from bus.messages import JobAssignment
+from showfile import load_show
 from vehicle_agent.backends.base import Setpoint, Vec3, VehicleSnapshot
+from vehicle_agent.jobs import PreparedJob, prepare_job
+from vehicle_agent.setup import VehicleSetup, vehicle_setup
 from vehicle_agent.trace import JobTrace, TraceRecorder
+
+SHOWS = Path(__file__).resolve().parent.parent / "shows"
+
+
+def solo_job(tmp_path: Path, job_files: str) -> tuple[VehicleSetup, PreparedJob]:
+    """uav1 of the solo show with its database in ``tmp_path`` and per-job files ``full`` or
+    ``compact``, and its job "j1" (一) prepared."""
+    show = load_show(SHOWS / "solo.yaml")
+    storage = show.storage.model_copy(
+        update={"database": tmp_path / "show.sqlite3", "job_files": job_files}
+    )
+    setup = vehicle_setup(show.model_copy(update={"storage": storage}), "uav1")
+    return setup, prepare_job(setup, JobAssignment(job_id="j1", text="一"))
 
 
 def _vec(row: np.ndarray) -> Vec3:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from job_traces import recorded_trace
+from job_traces import recorded_trace, solo_job
 
 from bus.messages import JobAssignment
 from planner.errors import PlannerError
@@ -115,12 +115,7 @@ def test_metrics_of_a_perfectly_flown_job(airshow_uav3) -> None:  # type: ignore
 
 @pytest.mark.parametrize("detail", ["full", "compact"])
 def test_a_flown_job_is_recorded_next_to_the_database(tmp_path: Path, detail: str) -> None:
-    show = load_show(SHOWS / "solo.yaml")
-    storage = show.storage.model_copy(
-        update={"database": tmp_path / "show.sqlite3", "job_files": detail}
-    )
-    setup = vehicle_setup(show.model_copy(update={"storage": storage}), "uav1")
-    prepared = prepare_job(setup, JobAssignment(job_id="j1", text="一"))
+    setup, prepared = solo_job(tmp_path, detail)
     s = prepared.samples
     trace = recorded_trace(
         "j1", 2, s.t_s, s.position_m_enu, s.velocity_mps_enu, s.position_m_enu, s.pen_down, None

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from job_traces import recorded_trace
+from job_traces import recorded_trace, solo_job
 
 from bus.messages import JobAssignment
 from showfile import load_show
@@ -111,12 +111,7 @@ def test_a_recorded_job_measures_as_its_kind_scores_the_same_flight() -> None:
 
 @pytest.mark.parametrize("detail", ["full", "compact"])
 def test_flight_npz_holds_the_trace_under_its_field_names(tmp_path: Path, detail: str) -> None:
-    show = load_show(SHOWS / "solo.yaml")
-    storage = show.storage.model_copy(
-        update={"database": tmp_path / "show.sqlite3", "job_files": detail}
-    )
-    setup = vehicle_setup(show.model_copy(update={"storage": storage}), "uav1")
-    prepared = prepare_job(setup, JobAssignment(job_id="j1", text="一"))
+    setup, prepared = solo_job(tmp_path, detail)
     s = prepared.samples
     tip = s.position_m_enu - np.array([0.0, 0.0, 0.25])
     width = np.where(s.pen_down, 0.02, 0.0)
