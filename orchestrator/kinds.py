@@ -19,8 +19,9 @@ from orchestrator.jobs import Job
 
 @dataclass(frozen=True)
 class KindPlans:
-    """A glyph planned by the first vehicle of each kind of a show
-    (``orchestrator.submissions.planned_durations_s``)."""
+    """A glyph planned by the vehicle standing for each kind of a show (its first in board
+    order, ``vehicles.jobs.kind_writers``, as the kiosk's preview;
+    ``orchestrator.submissions.planned_durations_s``)."""
 
     durations_s: dict[str, float]
     """Planned duration in [s] by kind (a job takes as long as the kind that writes it)."""
