@@ -56,13 +56,8 @@ def plan_preview(submission: Submission, settings: KioskSettings) -> dict[str, A
     fraction = ink_fraction(glyph)
     if fraction is not None and fraction < MIN_INK_FRACTION:
         raise RejectedError("too_small", wording.TOO_SMALL, status=422)
-    setup, job, refusals = _plan_kinds(glyph, settings.kinds())
+    setup, job, refusals = _plan_kinds(glyph, settings.kinds(), settings.max_flight_s)
     planned, fitted = job.plan, job.glyph
-    if planned.duration_s > settings.max_flight_s:
-        message = wording.TOO_LONG_FLIGHT.format(
-            seconds=round(planned.duration_s), limit=round(settings.max_flight_s)
-        )
-        raise RejectedError("too_long", message, status=422)
     samples = planned.samples
     board_xy = planned.surface.to_surface(samples.position_m_enu)
     step = max(1, int(np.ceil(board_xy.shape[0] / PATH_POINTS_MAX)))
@@ -92,23 +87,36 @@ def plan_preview(submission: Submission, settings: KioskSettings) -> dict[str, A
         "widths": planned.width_m is not None,
         "width_range_m": width_range_m and list(width_range_m),
         "widths_clamped": int(planned.feasibility.get("widths_clamped", 0)),
-        "kinds_refused": {name: _one_line(exc) for name, exc in refusals.items()},
+        "kinds_refused": refusals,
     }
 
 
 def _plan_kinds(
-    glyph: Glyph, kinds: tuple[JobSetup, ...]
-) -> tuple[JobSetup, JobPlan, dict[str, PlannerError]]:
-    """The first kind whose planner accepts ``glyph``, its plan, and the refusals of the kinds
-    tried before it (the kinds after it are not planned: a preview waits for one plan, not for
-    every kind's); RejectedError for the first kind's reason when every kind refuses."""
-    refusals: dict[str, PlannerError] = {}
+    glyph: Glyph, kinds: tuple[JobSetup, ...], max_flight_s: float
+) -> tuple[JobSetup, JobPlan, dict[str, str]]:
+    """The first kind whose planner accepts ``glyph`` within ``max_flight_s`` of writing, its
+    plan, and the one-line reasons of the kinds tried before it (the kinds after it are not
+    planned: a preview waits for one plan, not for every kind's); RejectedError for the first
+    kind's reason when every kind refuses."""
+    refusals: dict[str, str] = {}
+    first: RejectedError | None = None
     for setup in kinds:
         try:
-            return setup, setup.plan(glyph), refusals
+            job = setup.plan(glyph)
         except PlannerError as exc:
-            refusals[setup.kind.name] = exc
-    raise _rejection(next(iter(refusals.values())))
+            rejection, reason = _rejection(exc), str(exc)
+        else:
+            duration_s = job.plan.duration_s
+            if duration_s <= max_flight_s:
+                return setup, job, refusals
+            message = wording.TOO_LONG_FLIGHT.format(
+                seconds=round(duration_s), limit=round(max_flight_s)
+            )
+            rejection = RejectedError("too_long", message, status=422)
+            reason = f"writes for {duration_s:.0f} s, over the show's {max_flight_s:.0f} s"
+        refusals[setup.kind.name] = _one_line(reason)
+        first = first or rejection
+    raise first or RejectedError("unplannable", wording.UNPLANNABLE, status=422)
 
 
 def _rejection(exc: PlannerError) -> RejectedError:
@@ -124,9 +132,9 @@ def _rejection(exc: PlannerError) -> RejectedError:
     return RejectedError("unplannable", wording.UNPLANNABLE, status=422)
 
 
-def _one_line(exc: PlannerError) -> str:
+def _one_line(reason: str) -> str:
     """A kind's refusal in one line of at most ``REASON_CHARS_MAX`` characters (plain text)."""
-    line = " ".join(str(exc).split())
+    line = " ".join(reason.split())
     return line if len(line) <= REASON_CHARS_MAX else line[: REASON_CHARS_MAX - 1] + "…"
 
 

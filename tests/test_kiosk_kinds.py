@@ -140,3 +140,14 @@ def test_a_single_kind_shows_preview_keeps_its_fields_and_adds_the_refusals() ->
     flown = plan_job(show, "uav1", text_glyph("永")).plan
     assert preview["duration_s"] == pytest.approx(flown.duration_s, abs=0.01)
     assert preview["turning_point_count"] == sum(len(tp) for tp in flown.turning_points_m)
+
+
+def test_a_kind_too_slow_for_the_kiosks_limit_leaves_it_to_the_next() -> None:
+    narrow = drawing([{**p, "w": 0.009} for p in WIDE])
+    slow_brush = settings_from_show(show_of(wall_first=False, total_time_s="60.0"))
+    preview = plan_preview(narrow, replace(slow_brush, max_flight_s=30.0))
+    assert preview["kind"] == WALL and preview["duration_s"] < 30.0
+    assert preview["kinds_refused"] == {BRUSH: "writes for 60 s, over the show's 30 s"}
+    with pytest.raises(RejectedError) as err:  # every kind too slow: the first one's seconds
+        plan_preview(narrow, replace(slow_brush, max_flight_s=preview["duration_s"] / 2))
+    assert err.value.code == "too_long" and "about 60 seconds" in err.value.message
