@@ -95,14 +95,15 @@ Measured on the shared 2-core machine under ``nice -n 15`` (others' load average
   through memoryviews and the fence re-read only near its edges, four runs alternating with
   the commit before: factor 0.901 / 0.848 on 0.98 / 0.95 core against 0.779 / 0.791 on 1.00 /
   1.02 (+17 % a core); orchestrator 0.53-0.54 cores, router 0.22-0.25; 50/50 done in each.
-- Next stop, on a machine shared with test runs (load 2-12): the orchestrator spent 12-25 % of
-  its samples on ETAs of an empty queue (every report settled them) and 9 % checking recorded
-  payloads with ``json.loads``; both cut, its cores while writing 0.40-0.45 in four runs against
-  0.45-0.64 before. Tried again and dropped, now noted at the call (``bus/rpc.py``): query
-  callbacks on Zenoh's threads (48/50 and 32/50 done); issuing the queries from one helper
-  thread (factor 0.97/0.86/0.69/0.62, 1/0/6/13 of 50 failed, against 0.65-0.84 and 0-9 failed
-  without it). Under such load jobs fail "is not writing it" three times: the agents give their
-  jobs up unacknowledged (the lease) and the orchestrator counts each as an attempt.
+- Next stop, on a machine shared with test runs (load 2-12): the orchestrator spent 12-25 % of its
+  samples on ETAs of an empty queue (every report settled them) and 9 % checking recorded payloads
+  with ``json.loads``; both cut, its cores while writing 0.40-0.45 in four runs against 0.45-0.64
+  before (on a quiet machine 0.48 against 0.52-0.54; hosts' factor 0.81, 50/50). Tried again and
+  dropped, now noted at the call (``bus/rpc.py``): query callbacks on Zenoh's threads (48/50 and
+  32/50 done); issuing the queries from one helper thread (factor 0.97/0.86/0.69/0.62, 1/0/6/13 of
+  50 failed, against 0.65-0.84 and 0-9 failed without it). Under such load jobs fail "is not writing
+  it" three times: the agents give their jobs up unacknowledged (the lease) and the orchestrator
+  counts each as an attempt.
 
 ``--profile PATH`` writes a cProfile of each fleet host to ``PATH.<host number>``.
 """
