@@ -21,8 +21,6 @@ Problem = tuple[Loc, str]
 
 _VERTICAL_DEPTH_M = 0.05
 """Plan-view depth assumed for a vertical board (a wall panel)."""
-_MIN_HOME_SEPARATION_M = 0.3
-"""Closest two vehicles may stand at take-off, in [m] (40 cm Airshow airframes overlap below)."""
 
 
 def footprint(board: Board) -> list[tuple[float, float]]:
@@ -118,18 +116,30 @@ def cross_check(show: Show) -> list[Problem]:
             why = reach_problem(show, vehicle)
             if why is not None:
                 problems.append((("vehicles", i, "board"), why))
-        for j in range(i):
-            neighbour = show.vehicles[j]
-            if math.dist(vehicle.home_m_enu, neighbour.home_m_enu) < _MIN_HOME_SEPARATION_M:
-                problems.append(
-                    (
-                        ("vehicles", i, "home_m_enu"),
-                        f"closer than {_MIN_HOME_SEPARATION_M} m to the home of {neighbour.id!r}",
-                    )
-                )
+        problems += _homes_overlap(show, i)
     problems += _mavlink_problems(show)
     if show.zenoh.multicast_scouting is False and not show.zenoh.connect:
         problems.append((("zenoh", "connect"), "no connect endpoint and multicast scouting off"))
+    return problems
+
+
+def _homes_overlap(show: Show, i: int) -> list[Problem]:
+    """Vehicle ``i``'s home closer to an earlier vehicle's than their footprints allow (each
+    kind's ``footprint_radius_m``: the two would touch standing at their homes)."""
+    vehicle, radius_m = show.vehicles[i], ROOMS[show.vehicles[i].kind].footprint_radius_m
+    problems: list[Problem] = []
+    for neighbour in show.vehicles[:i]:
+        need_m = radius_m + ROOMS[neighbour.kind].footprint_radius_m
+        distance_m = math.dist(vehicle.home_m_enu, neighbour.home_m_enu)
+        if distance_m < need_m:
+            problems.append(
+                (
+                    ("vehicles", i, "home_m_enu"),
+                    f"{distance_m:.2f} m from the home of {neighbour.id!r}: their footprints "
+                    f"need {need_m:.2f} m ({vehicle.kind} {radius_m:.2f} m, "
+                    f"{neighbour.kind} {need_m - radius_m:.2f} m)",
+                )
+            )
     return problems
 
 

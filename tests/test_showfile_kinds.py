@@ -4,6 +4,7 @@ their records in ``vehicles.ROOMS`` and their rooms' light ``show_section`` modu
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -104,7 +105,7 @@ def test_an_unknown_kind_is_refused_at_its_line_naming_the_kinds() -> None:
 
 
 def test_a_new_kind_needs_a_record_not_an_edit_of_the_show_file(monkeypatch: Any) -> None:
-    monkeypatch.setitem(ROOMS, "quadrotor-pencil", Room("no.such.module", "vertical"))
+    monkeypatch.setitem(ROOMS, "quadrotor-pencil", Room("no.such.module", "vertical", 0.3))
     text = SOLO.replace("kind: quadrotor-brush", "kind: quadrotor-pencil")
     with pytest.raises(ShowFileError) as info:
         parse_show(text, file="bad.yaml")
@@ -112,8 +113,64 @@ def test_a_new_kind_needs_a_record_not_an_edit_of_the_show_file(monkeypatch: Any
     assert problem.message == (
         "a quadrotor-pencil writes on a vertical board, but board 'b1' is horizontal"
     )
-    monkeypatch.setitem(ROOMS, "quadrotor-pencil", Room("no.such.module", "horizontal"))
+    monkeypatch.setitem(ROOMS, "quadrotor-pencil", Room("no.such.module", "horizontal", 0.3))
     assert parse_show(text).vehicles[0].kind == "quadrotor-pencil"
+
+
+TWO_HOMES = """\
+show_id: t
+boards:
+  - {id: b1, center_m_enu: [-2, 0, 0.75], size_m: [1.4, 1.4], writing_area_m: [1.2, 1.2]}
+  - {id: b2, center_m_enu: [2, 0, 0.75], size_m: [1.4, 1.4], writing_area_m: [1.2, 1.2]}
+vehicles:
+  - {id: first, kind: KIND, board: b1, home_m_enu: [0, -1.2, 0]}
+  - {id: second, kind: KIND, board: b2, home_m_enu: [DX, -1.2, 0]}
+"""
+
+
+def _two_homes(kind: str, dx_m: float) -> str:
+    return TWO_HOMES.replace("KIND", kind).replace("DX", str(dx_m))
+
+
+def test_homes_closer_than_two_footprints_are_refused_at_the_second() -> None:
+    parse_show(_two_homes("quadrotor-brush", 0.66))
+    with pytest.raises(ShowFileError) as info:
+        parse_show(_two_homes("quadrotor-brush", 0.64), file="bad.yaml")
+    problem = {p.field: p for p in info.value.problems}["vehicles[1].home_m_enu"]
+    assert problem.line == 7
+    assert problem.message == (
+        "0.64 m from the home of 'first': their footprints need 0.66 m "
+        "(quadrotor-brush 0.33 m, quadrotor-brush 0.33 m)"
+    )
+
+
+def test_two_ground_writers_half_a_metre_apart_are_refused() -> None:
+    text = (ROOT / "shows" / "ground-writers.yaml").read_text()
+    assert "home_m_enu: [0.0, -2.0, 0.0]" in text
+    near = text.replace("home_m_enu: [0.0, -2.0, 0.0]", "home_m_enu: [-1.4, -2.0, 0.0]")
+    parse_show(text)
+    with pytest.raises(
+        ShowFileError, match=r"0\.60 m from the home of 'ground1': their footprints need 1\.00 m"
+    ):
+        parse_show(near)
+
+
+def test_each_kinds_footprint_holds_its_rooms_dimensions() -> None:
+    from vehicles.hexarotor_sponge.params import HexarotorParams
+    from vehicles.omni_wheel.writing import DEFAULT_SETTINGS
+
+    hexarotor = HexarotorParams()
+    assert ROOMS["hexarotor-sponge"].footprint_radius_m >= max(
+        hexarotor.rotor_radius_m + 0.127, hexarotor.arm_length_m
+    )
+    omni, g = DEFAULT_SETTINGS, DEFAULT_SETTINGS.geometry
+    rear_m = g.middle_rear_m + g.wheel_radius_m + omni.pen_offset_m()  # behind the marker
+    front_m = g.front_middle_m + g.wheel_radius_m - omni.pen_offset_m()
+    assert ROOMS["omni-wheel"].footprint_radius_m >= math.hypot(
+        max(rear_m, front_m), g.half_track_m
+    )
+    airshow_m = 0.40 / 2 + 0.127  # motor to motor (Phang et al.) and a 10-inch propeller
+    assert ROOMS["quadrotor-brush"].footprint_radius_m >= airshow_m
 
 
 def test_the_json_schema_lists_the_kinds_and_their_sections() -> None:

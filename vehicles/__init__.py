@@ -27,6 +27,10 @@ class Room:
     """The module whose ``KIND`` implements the kind (imported on first use)."""
     orientation: Orientation
     """The surface it writes on: a board's ``orientation`` in a show file."""
+    footprint_radius_m: float
+    """Radius in [m] of a circle about the vehicle's home point that holds its whole plan view
+    (rotor tips, wheels, arm): two homes closer than the sum of their kinds' radii are refused
+    (tests/test_showfile_kinds.py holds each against its room's dimensions)."""
     autopilot: bool = False
     """A MAVLink autopilot can fly it (``backend: mavlink``); False: the sim backend only."""
     section: str | None = None
@@ -40,17 +44,22 @@ class Room:
 
 ROOMS: dict[str, Room] = {
     "quadrotor-brush": Room(
-        kind_module="vehicles.quadrotor_brush.kind", orientation="horizontal", autopilot=True
+        kind_module="vehicles.quadrotor_brush.kind",
+        orientation="horizontal",
+        footprint_radius_m=0.33,  # Airshow: 40 cm motor to motor, 10-inch propellers
+        autopilot=True,
     ),
     "omni-wheel": Room(
         kind_module="vehicles.omni_wheel.kind",
         orientation="floor",
+        footprint_radius_m=0.5,  # home is the marker; the rear wheels reach 0.44 m behind it
         section="omni_wheel",
         show_checks="vehicles.omni_wheel.show_section",
     ),
     "hexarotor-sponge": Room(
         kind_module="vehicles.hexarotor_sponge.kind",
         orientation="vertical",
+        footprint_radius_m=0.45,  # rotors 0.28 m out, the pen's arm 0.40 m
         section="hexarotor",
         show_checks="vehicles.hexarotor_sponge.show_section",
     ),
