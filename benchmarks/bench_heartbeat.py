@@ -55,8 +55,9 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from bench_stop import wide_show  # noqa: E402
 
+from bus.codec import decode, encode  # noqa: E402
 from bus.keys import ShowKeys  # noqa: E402
-from bus.messages import AgentReport, VehicleStatus, decode, encode  # noqa: E402
+from bus.messages import AgentReport, VehicleStatus  # noqa: E402
 from orchestrator.jobs import Job, transition  # noqa: E402
 from orchestrator.service import OrchestratorService  # noqa: E402
 from orchestrator.store import JobStore  # noqa: E402

@@ -3,7 +3,8 @@
 The only package that imports ``zenoh``.
 
 - ``bus.keys``: every key expression (:class:`~bus.keys.ShowKeys`).
-- ``bus.messages``: every message (msgspec structs), ``encode``/``decode``.
+- ``bus.messages``: every message (msgspec structs).
+- ``bus.codec``: ``encode``/``decode``, the payload checks made before parsing, ``MessageError``.
 - ``bus.session``: ``open_session(settings, role=...)``, the one way to open a session.
 - ``bus.bridge``: Zenoh threads -> asyncio channels (drop-oldest ring, FIFO, latest-by-key).
 - ``bus.pubsub``: typed publish/subscribe, liveliness tokens and watchers.

@@ -17,7 +17,7 @@ from typing import ClassVar, Literal, TypeVar
 import msgspec
 import zenoh
 
-from bus.messages import MessageError, decode, encode
+from bus.codec import MessageError, decode, encode
 
 M = TypeVar("M", bound=msgspec.Struct)
 

@@ -24,7 +24,8 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar, overload
 import msgspec
 import zenoh
 
-from bus.messages import ErrorInfo, MessageError, Request, decode, encode
+from bus.codec import MessageError, decode, encode
+from bus.messages import ErrorInfo, Request
 from bus.session import BusError
 
 if TYPE_CHECKING:  # imported where used: a blocking client (skyquill status) needs no event loop

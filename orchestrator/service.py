@@ -64,7 +64,7 @@ VEHICLE_COMMAND_TIMEOUT_S = 2.0
 """How long an agent has to answer a command, [s]."""
 SNAPSHOT_STROKES_BYTES = 300_000
 """JSON bytes of waiting jobs' strokes a ``snapshot`` reply carries at most (replies stay well
-under ``bus.messages.MAX_PAYLOAD_BYTES``); ``jobs/<id>`` publications always carry them."""
+under ``bus.codec.MAX_PAYLOAD_BYTES``); ``jobs/<id>`` publications always carry them."""
 STATUS_MERGE_S = 0.05
 """Wall time over which vehicles' statuses are merged, the newest per vehicle kept, [s]: at most
 20 rounds of decisions a second however many vehicles speak (telemetry is merged likewise)."""

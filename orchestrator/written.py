@@ -12,7 +12,8 @@ from collections.abc import Callable, Iterable, Mapping
 
 import msgspec
 
-from bus.messages import JobMetrics, JobState, ShowSnapshot, WrittenInk, encode
+from bus.codec import encode
+from bus.messages import JobMetrics, JobState, ShowSnapshot, WrittenInk
 
 
 def split_written(metrics: JobMetrics | None) -> tuple[JobMetrics | None, WrittenInk | None]:

@@ -10,7 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from job_traces import recorded_trace
 
-from bus.messages import JobAssignment, WrittenInk, decode, encode
+from bus.codec import decode, encode
+from bus.messages import JobAssignment, WrittenInk
 from planner.board import BoardFrame
 from showfile import load_show
 from vehicle_agent.agent import job_metrics, prepare_job, vehicle_setup

@@ -35,16 +35,15 @@ import pytest
 import zenoh
 from bus_fuzz_payloads import Fuzzer
 
+from bus.codec import MessageError, decode
 from bus.messages import (
     AgentReport,
     CommandReply,
-    MessageError,
     OperatorCommand,
     Request,
     SubmitReply,
     SubmitRequest,
     VehicleCommand,
-    decode,
 )
 from bus.rpc import NoReplyError, query_one
 from bus.session import Session, open_session

@@ -12,24 +12,26 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from bus.keys import ShowKeys, vehicle_id_from_key
-from bus.messages import (
+from bus.codec import (
     MAX_DEPTH,
-    MAX_ID_CHARS,
     MAX_PAYLOAD_BYTES,
-    MAX_TEXT_CHARS,
-    AgentReport,
-    JobState,
     MessageError,
-    OperatorCommand,
-    SubmitRequest,
-    Telemetry,
-    VehicleCommand,
     _depth_scanned,
     _depth_vectorised,
     decode,
     encode,
     nesting_depth,
+)
+from bus.keys import ShowKeys, vehicle_id_from_key
+from bus.messages import (
+    MAX_ID_CHARS,
+    MAX_TEXT_CHARS,
+    AgentReport,
+    JobState,
+    OperatorCommand,
+    SubmitRequest,
+    Telemetry,
+    VehicleCommand,
 )
 
 

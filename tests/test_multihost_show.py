@@ -141,7 +141,8 @@ def observe(show_path: str, out_dir: str) -> None:
 def _answer(session: Any, keys: Any, request: dict[str, Any]) -> str:
     """A submission, acknowledged (retried under one idempotency key while the orchestrator is
     busy or away), or the orchestrator's snapshot (empty while it is not up)."""
-    from bus.messages import SubmitReply, SubmitRequest, encode
+    from bus.codec import encode
+    from bus.messages import SubmitReply, SubmitRequest
     from bus.rpc import NoReplyError, RemoteError, query_one
     from cli.showrun import snapshot
 

@@ -11,8 +11,9 @@ from typing import Any
 import pytest
 import zenoh
 
+from bus.codec import encode
 from bus.keys import ShowKeys
-from bus.messages import AgentReport, VehicleStatus, encode
+from bus.messages import AgentReport, VehicleStatus
 from bus.pubsub import subscribe
 from orchestrator.core import Book
 from orchestrator.jobs import Job, transition

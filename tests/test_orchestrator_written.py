@@ -10,14 +10,8 @@ import numpy as np
 from test_orchestrator_core import METRICS, _config, _online, _submit
 from test_orchestrator_idempotency import V1_SCHEMA
 
-from bus.messages import (
-    MAX_PAYLOAD_BYTES,
-    AgentReport,
-    JobState,
-    ShowSnapshot,
-    WrittenInk,
-    encode,
-)
+from bus.codec import MAX_PAYLOAD_BYTES, encode
+from bus.messages import AgentReport, JobState, ShowSnapshot, WrittenInk
 from orchestrator.core import Book
 from orchestrator.jobs import Job
 from orchestrator.store import SCHEMA_VERSION, JobStore

@@ -16,13 +16,13 @@ from typing import Any
 
 import msgspec
 
+from bus.codec import MessageError
 from bus.keys import ShowKeys, vehicle_id_from_key
 from bus.messages import (
     CommandReply,
     ErrorInfo,
     Event,
     JobState,
-    MessageError,
     OperatorCommand,
     ShowSnapshot,
     Telemetry,
