@@ -3,7 +3,8 @@
 A :class:`Book` is fed facts (a validated submission, an agent report, a vehicle status, a
 liveliness change, an operator command, the passing of time) and returns :class:`Effects`: jobs
 that changed (to store and publish), events, and commands for vehicles. It never touches the
-network, the disk or a clock; the service (orchestrator/service.py) does, with what it returns.
+network, the disk or a clock; the service (orchestrator/service.py, its outputs in
+orchestrator/outputs.py) does, with what it returns.
 
 Invariants (tests/test_orchestrator_core.py checks them with hypothesis): no job is lost or
 duplicated; at most one active job per vehicle and per board; jobs are assigned in queue order

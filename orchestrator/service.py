@@ -20,14 +20,12 @@ import logging
 import os
 import time
 import uuid
-from collections.abc import Callable, Coroutine, Iterable
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-import msgspec
-
 from bus.bridge import FifoChannel, LatestByKey, RingChannel
-from bus.keys import ShowKeys, vehicle_id_from_key
+from bus.keys import vehicle_id_from_key
 from bus.messages import (
     AgentReport,
     CommandReply,
@@ -38,30 +36,19 @@ from bus.messages import (
     SubmitReply,
     SubmitRequest,
     Telemetry,
-    VehicleCommand,
     VehicleStatus,
 )
-from bus.pubsub import declare_token, publish, subscribe, subscribe_raw, watch_liveliness
-from bus.recorder import McapRecorder
-from bus.rpc import NoReplyError, RemoteError, aquery_one, serve_async
-from bus.session import Session
-from orchestrator.compaction import CompactionSchedule, HistoryPolicy
-from orchestrator.core import MAX_FINAL_JOBS, Book, CoreConfig, Effects
-from orchestrator.estimates import DurationEstimates
-from orchestrator.fleet import EtaModel, VehicleInfo
-from orchestrator.jobs import to_state
-from orchestrator.store import JobStore, StoreError
+from bus.pubsub import declare_token, subscribe, subscribe_raw, watch_liveliness
+from bus.rpc import serve_async
+from orchestrator.outputs import BookOutputs
 from orchestrator.submissions import SubmissionError, validate_submission
-from orchestrator.written import attach_written, with_written
+from orchestrator.written import attach_written
 from showfile import Show
-from showfile.checks import cannot_write
 
 log = logging.getLogger(__name__)
 
 TICK_PERIOD_S = 0.1
 """Wall time between timer decisions (loss detection, confirmation, assignment), [s]."""
-VEHICLE_COMMAND_TIMEOUT_S = 2.0
-"""How long an agent has to answer a command, [s]."""
 SNAPSHOT_STROKES_BYTES = 300_000
 """JSON bytes of waiting jobs' strokes a ``snapshot`` reply carries at most (replies stay well
 under ``bus.codec.MAX_PAYLOAD_BYTES``); ``jobs/<id>`` publications always carry them."""
@@ -74,33 +61,6 @@ STATUS_CHUNK = 32
 SNAPSHOT_WRITTEN_BYTES = 100_000
 """JSON bytes of done jobs' ink pictures a ``snapshot`` reply carries at most, newest first
 (about 25 jobs); strokes and pictures together stay under half the payload limit."""
-
-
-def core_config(show: Show) -> CoreConfig:
-    """The Book's policy from a show file."""
-    return CoreConfig(
-        show_id=show.show_id,
-        vehicles=tuple(
-            VehicleInfo(v.id, v.kind, v.board, cannot_write=cannot_write(show, v))
-            for v in show.vehicles
-        ),
-        moderation=show.policy.moderation,
-        lost_after_s=show.policy.lost_after_s,
-        lost_job_hold_s=show.policy.lost_job_hold_s,
-        max_queue=show.policy.max_queue,
-        max_attempts=show.policy.max_attempts,
-        tracking_error_alert_m=show.policy.tracking_error_alert_m,
-        eta=EtaModel(time_scale=show.time_scale),
-    )
-
-
-def history_policy(show: Show) -> HistoryPolicy:
-    """How much history the show's database keeps."""
-    age_h = show.storage.job_history_max_age_h
-    return HistoryPolicy(
-        budget_bytes=int(show.storage.database_budget_mb * 1e6),
-        max_age_s=None if age_h is None else age_h * 3600.0,
-    )
 
 
 def new_job_id() -> str:
@@ -123,160 +83,8 @@ def _own_key(key: str, vehicle_id: str) -> bool:
         return False
 
 
-class OrchestratorService:
+class OrchestratorService(BookOutputs):
     """One show's orchestrator on an open session; :meth:`run` until ``stop`` is set."""
-
-    def __init__(
-        self,
-        show: Show,
-        session: Session,
-        store: JobStore,
-        *,
-        recorder: McapRecorder | None = None,
-        clock: Callable[[], float] = time.time,
-    ) -> None:
-        self.show, self.session, self.store, self.recorder = show, session, store, recorder
-        self.keys = ShowKeys(show.show_id)
-        self.clock = clock
-        stored = store.load(max_final=MAX_FINAL_JOBS)
-        self.book = Book(
-            core_config(show),
-            stored.jobs,
-            now_s=clock(),
-            job_counts=stored.job_counts,
-            queue_paused=stored.queue_paused,
-            paused_vehicles=stored.paused_vehicles,
-            held_vehicles=stored.held_vehicles,
-            dirty_boards=stored.dirty_boards,
-        )
-        self.estimates = DurationEstimates(show)
-        """Planned durations for queue ETAs (``orchestrator/estimates.py``)."""
-        self._tasks: set[asyncio.Task[Any]] = set()
-        self._stop: asyncio.Event | None = None
-        self.fatal: BaseException | None = None
-        """Set when the database failed; :meth:`run` raises it after stopping."""
-        self.history = history_policy(show)
-        self._compaction = CompactionSchedule()
-        self.fleet_changed = False
-        """The fleet snapshot changed since it was last published (every ``TICK_PERIOD_S`` at
-        most: 250 vehicles coming or going were as many 50 kB snapshots, each encoded, sent
-        and recorded)."""
-        self.statuses: LatestByKey[str, VehicleStatus] | None = None
-        """The newest undecided status of each vehicle (made in the loop by :meth:`run`)."""
-        log.info("show %s: %d jobs restored", show.show_id, len(stored.jobs))
-
-    # --- effects ------------------------------------------------------------------------------
-    def apply(self, eff: Effects) -> None:
-        """Store, then publish, then send: the order that keeps acknowledged data safe."""
-        if eff.empty:
-            return
-        settings: dict[str, Any] = {}
-        if eff.settings_changed:
-            settings = {
-                "queue_paused": self.book.queue_paused,
-                "paused_vehicles": [v for v, view in self.book.vehicles.items() if view.paused],
-                "held_vehicles": [v for v, view in self.book.vehicles.items() if view.held],
-                "dirty_boards": self.book.dirty_boards,
-            }
-        try:
-            changed = [job for job_id, job in eff.jobs.items() if job_id not in eff.progressed]
-            self.store.save(changed, eff.events, written=eff.written, **settings)
-        except Exception as exc:
-            # Memory and disk may now disagree: stop, and let the supervisor restart us from
-            # the database (crash-only). The caller's query gets an ``internal`` error.
-            log.critical("cannot store state, stopping: %s", exc)
-            self.fatal = exc
-            if self._stop is not None:
-                self._stop.set()
-            raise
-        self._compaction.finished += sum(1 for job in eff.jobs.values() if job.final)
-        now = self.clock()
-        etas = self.book.etas(now) if eff.jobs or eff.moved else {}
-        moved = [
-            self.book.jobs[j] for j in sorted(eff.moved - eff.jobs.keys()) if j in self.book.jobs
-        ]
-        for job in [*eff.jobs.values(), *moved]:  # moved: only their position/ETA changed
-            position, eta = etas.get(job.job_id, (None, None))
-            with_strokes = job.job_id in eff.jobs
-            state = to_state(job, queue_position=position, eta_s=eta, with_strokes=with_strokes)
-            state = with_written(state, eff.written.get(job.job_id))
-            self._publish(self.keys.job(job.job_id), state)
-        for event in eff.events:
-            self._publish(self.keys.events, event)
-        if eff.fleet_changed or eff.jobs or eff.moved:
-            self.fleet_changed = True  # published by the timer: many changes, one snapshot
-        for vehicle_id, command in eff.commands:
-            self._spawn(self._send(vehicle_id, command))
-
-    def _publish_fleet(self) -> None:
-        self.fleet_changed = False
-        self._publish(self.keys.fleet, self.book.snapshot(self.clock(), include_final=False))
-
-    def _publish(self, key: str, message: msgspec.Struct) -> None:
-        try:
-            publish(self.session, key, message)
-        except Exception as exc:  # the session is closing
-            log.warning("cannot publish on %s: %s", key, exc)
-
-    def _spawn(self, coro: Coroutine[Any, Any, None]) -> None:
-        task = asyncio.get_running_loop().create_task(coro)
-        self._tasks.add(task)
-        task.add_done_callback(self._tasks.discard)
-
-    async def _send(self, vehicle_id: str, command: VehicleCommand) -> None:
-        if command.command == "assign":
-            key = self.keys.vehicle_assign(vehicle_id)
-        else:
-            key = self.keys.vehicle_command(vehicle_id)
-        self._record(key + "#request", command)
-        reply: CommandReply | None
-        try:
-            reply = await aquery_one(
-                self.session, key, command, CommandReply, timeout_s=VEHICLE_COMMAND_TIMEOUT_S
-            )
-        except RemoteError as exc:
-            reply = CommandReply(ok=False, message=exc.info.message, error=exc.info)
-        except NoReplyError:
-            reply = None
-        if reply is not None:
-            self._record(key + "#reply", reply)
-        log.info("%s %s -> %s", vehicle_id, command.command, reply.message if reply else "no reply")
-        if command.command == "assign" and command.job is not None:
-            now = self.clock()
-            self.apply(self.book.assignment_result(vehicle_id, command.job.job_id, reply, now))
-
-    def _record(self, topic: str, message: msgspec.Struct) -> None:
-        if self.recorder is not None:
-            self.recorder.record_message(topic, message)
-
-    def compact_history(self, now_s: float) -> None:
-        """Keep the database within the show's history policy when due (small transactions;
-        a failure is logged and retried: memory and disk still agree)."""
-        if not self._compaction.due(now_s):
-            return
-        try:
-            result = self.store.compact(self.history, now_s, resume=self._compaction.more)
-        except StoreError as exc:
-            log.error("cannot compact the database (retried later): %s", exc)
-            self._compaction.ran(now_s, more=False)
-            return
-        self._compaction.ran(now_s, more=result.more)
-        if result.jobs or result.folded or result.events:
-            log.info(
-                "database compacted: %d jobs, %d folded, %d events; %.1f -> %.1f MB",
-                result.jobs,
-                result.folded,
-                result.events,
-                result.before_bytes / 1e6,
-                result.after_bytes / 1e6,
-            )
-        if not result.more and result.after_bytes > self.history.budget_bytes:
-            log.warning(
-                "database %.1f MB over its %.1f MB budget: unfinished jobs, the newest finished"
-                " and every idempotency key are kept",
-                result.after_bytes / 1e6,
-                self.history.budget_bytes / 1e6,
-            )
 
     # --- queryables ---------------------------------------------------------------------------
     async def on_submit(self, request: SubmitRequest) -> SubmitReply:

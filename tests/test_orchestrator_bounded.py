@@ -18,7 +18,8 @@ from orchestrator.estimates import CACHED_DURATIONS
 from orchestrator.finished import FinishedJobs
 from orchestrator.jobs import Job, transition
 from orchestrator.kinds import KindPlans
-from orchestrator.service import OrchestratorService, core_config
+from orchestrator.outputs import core_config
+from orchestrator.service import OrchestratorService
 from orchestrator.store import JobStore
 from showfile import load_show
 

@@ -21,7 +21,7 @@ from bus.rpc import NoReplyError, RemoteError, query, query_one
 from bus.session import open_session
 from orchestrator.core import Book
 from orchestrator.jobs import Job
-from orchestrator.service import core_config
+from orchestrator.outputs import core_config
 from orchestrator.store import SCHEMA_VERSION, JobStore, StoreError
 from showfile import load_show
 

@@ -17,7 +17,8 @@ from bus.messages import AgentReport, VehicleStatus
 from bus.pubsub import subscribe
 from orchestrator.core import Book
 from orchestrator.jobs import Job, transition
-from orchestrator.service import STATUS_CHUNK, OrchestratorService, core_config
+from orchestrator.outputs import core_config
+from orchestrator.service import STATUS_CHUNK, OrchestratorService
 from orchestrator.store import JobStore
 from showfile import Show, load_show
 

@@ -10,7 +10,7 @@ from bus.messages import AgentReport, ErrorInfo, SubmitRequest, VehicleStatus
 from orchestrator.core import Book, CoreConfig, Effects
 from orchestrator.fleet import EtaModel, VehicleInfo, queue_etas
 from orchestrator.kinds import KindPlans
-from orchestrator.service import core_config
+from orchestrator.outputs import core_config
 from orchestrator.submissions import planned_durations_s
 from planner.glyphs import parse_strokes_json
 from showfile import load_show, parse_show

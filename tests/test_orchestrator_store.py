@@ -16,7 +16,7 @@ from bus.rpc import query, query_one
 from bus.session import open_session
 from orchestrator.core import Book
 from orchestrator.jobs import Job, transition
-from orchestrator.service import core_config
+from orchestrator.outputs import core_config
 from orchestrator.store import JobStore, StoreError
 from showfile import load_show
 
