@@ -16,6 +16,7 @@ from orchestrator import holders
 from orchestrator.core_types import Effects
 from orchestrator.fleet import ready_for_job
 from orchestrator.jobs import transition, update
+from orchestrator.requeue import requeue
 
 if TYPE_CHECKING:
     from orchestrator.core import Book
@@ -87,7 +88,8 @@ def answered(
         why = reply.message if reply is not None else "no answer"
         if reply is not None and reply.error is not None:
             why = reply.error.message
-        book.requeue(
+        requeue(
+            book,
             eff,
             update(job, now_s, attempts=job.attempts - 1),
             now_s,

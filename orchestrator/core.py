@@ -274,68 +274,6 @@ class Book:
         if job.state == "queued" and job.holder_hold_until_s is not None and job.vehicle_id:
             self._awaited[job.vehicle_id] = job.job_id
 
-    def requeue(
-        self,
-        eff: Effects,
-        job: Job,
-        now_s: float,
-        reason: str,
-        *,
-        lost: bool,
-        wait_for_holder: bool = False,
-    ) -> None:
-        """Take an active job back: queued again, or failed after too many lost attempts;
-        ``wait_for_holder``: its vehicle was lost, and the job waits for it a while
-        (``orchestrator/holders.py``)."""
-        info = ErrorInfo(code="vehicle_lost" if lost else "requeued", message=reason)
-        if job.board_id is not None and (job.state == "writing" or job.progress > 0):
-            self.dirty_boards.add(job.board_id)
-            eff.settings_changed = True
-            self.event(
-                eff,
-                now_s,
-                "alert",
-                "board_dirty",
-                f"{job.board_id} half-written by {job.label}: fresh sheet needed",
-                vehicle_id=job.vehicle_id,
-                job_id=job.job_id,
-            )
-        if lost and job.attempts >= self.config.max_attempts:
-            self.put(eff, transition(job, "failed", now_s, error=info, progress=0.0))
-            self.event(
-                eff,
-                now_s,
-                "alert",
-                "job_failed",
-                f"{job.label}: {reason}; gave up after {job.attempts} attempts",
-                vehicle_id=job.vehicle_id,
-                job_id=job.job_id,
-            )
-            return
-        hold_until_s = now_s + self.config.lost_job_hold_s if wait_for_holder else None
-        if hold_until_s is not None:
-            reason = f"{reason}; waits {self.config.lost_job_hold_s:.0f} s for it to come back"
-        queued = transition(
-            job,
-            "queued",
-            now_s,
-            error=info,
-            progress=0.0,
-            assigned_at_s=None,
-            holder_hold_until_s=hold_until_s,
-        )
-        self.put(eff, queued)
-        self.event(
-            eff,
-            now_s,
-            "warning",
-            "job_requeued",
-            f"{job.label}: {reason}",
-            vehicle_id=job.vehicle_id,
-            job_id=job.job_id,
-        )
-        eff.fleet_changed = True
-
     # --- submissions --------------------------------------------------------------------------
     def submit(
         self, job_id: str, request: SubmitRequest, *, label: str, estimate_s: float, now_s: float

@@ -30,6 +30,7 @@ if TYPE_CHECKING:
     from orchestrator.jobs import Job
 
 from orchestrator.jobs import transition, update
+from orchestrator.requeue import requeue
 
 
 def _error(code: str, message: str, field: str | None = None) -> CommandReply:
@@ -73,7 +74,7 @@ def _stop_vehicles(
         eff.commands.append((vid, VehicleCommand(command=order)))
         job = book.active_job_of(vid)
         if job is not None:
-            book.requeue(eff, job, now_s, f"{vid}: operator {cmd.command}", lost=False)
+            requeue(book, eff, job, now_s, f"{vid}: operator {cmd.command}", lost=False)
     eff.settings_changed = eff.fleet_changed = True
     return vids
 

@@ -22,6 +22,7 @@ from bus.messages import Event, VehicleStatus
 from orchestrator import holders
 from orchestrator.core_types import Effects
 from orchestrator.fleet import VehicleView
+from orchestrator.requeue import requeue
 
 RELAY_BURST = 10.0
 """Events of one vehicle relayed at once before the rate limit applies."""
@@ -85,7 +86,9 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
         view.mismatch_since_s = view.mismatch_since_s or now_s
         if _restarted_since(view, job.assigned_at_s):
             view.mismatch_since_s = None
-            book.requeue(eff, job, now_s, f"{view.info.vehicle_id} restarted without it", lost=True)
+            requeue(
+                book, eff, job, now_s, f"{view.info.vehicle_id} restarted without it", lost=True
+            )
     else:
         view.mismatch_since_s = None
     eff.fleet_changed = changed
@@ -210,11 +213,11 @@ def check_vehicle(book: Book, eff: Effects, view: VehicleView, now_s: float) -> 
                 )
         job = book.active_job_of(vid)
         if job is not None:
-            book.requeue(eff, job, now_s, f"{vid} was lost", lost=True, wait_for_holder=True)
+            requeue(book, eff, job, now_s, f"{vid} was lost", lost=True, wait_for_holder=True)
     job = book.active_job_of(vid)
     if job is None or not view.alive or view.mismatch_since_s is None:
         return
     since = max(view.mismatch_since_s, job.assigned_at_s or 0.0)
     if now_s - since >= book.config.confirm_grace_s:
         view.mismatch_since_s = None
-        book.requeue(eff, job, now_s, f"{vid} is not writing it", lost=True)
+        requeue(book, eff, job, now_s, f"{vid} is not writing it", lost=True)

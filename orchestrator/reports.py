@@ -22,6 +22,7 @@ from bus.messages import AgentReport, CommandReply, ErrorInfo, VehicleCommand
 from orchestrator import holders
 from orchestrator.core_types import Effects
 from orchestrator.jobs import Job, transition, update
+from orchestrator.requeue import requeue
 from orchestrator.written import split_written
 
 PLAN_FAILED = "plan_failed"
@@ -135,7 +136,9 @@ def _handed_back(
         requeued = job
     else:
         requeued = update(job, now_s, attempts=max(0, job.attempts - 1))
-    book.requeue(eff, requeued, now_s, f"{rep.vehicle_id} could not start it: {reason}", lost=False)
+    requeue(
+        book, eff, requeued, now_s, f"{rep.vehicle_id} could not start it: {reason}", lost=False
+    )
     book.assign(eff, now_s)
     return CommandReply(ok=True, message="job back in the queue")
 
