@@ -20,17 +20,14 @@ if TYPE_CHECKING:
     from showfile.models import (
         Board,
         ControllerSettings,
-        KioskSettings,
         Limits,
         MavlinkSimSettings,
         PlanningSettings,
-        PolicySettings,
         Show,
-        StorageSettings,
         Vehicle,
-        ZenohSettings,
     )
     from showfile.security import SecuritySettings
+    from showfile.services import KioskSettings, PolicySettings, StorageSettings, ZenohSettings
 
 _MODULE_OF = {
     "ShowError": "showfile.errors",
@@ -41,17 +38,16 @@ _MODULE_OF = {
         (
             "Board",
             "ControllerSettings",
-            "KioskSettings",
             "Limits",
             "MavlinkSimSettings",
             "PlanningSettings",
-            "PolicySettings",
             "Show",
-            "StorageSettings",
             "Vehicle",
-            "ZenohSettings",
         ),
         "showfile.models",
+    ),
+    **dict.fromkeys(
+        ("KioskSettings", "PolicySettings", "StorageSettings", "ZenohSettings"), "showfile.services"
     ),
     "SecuritySettings": "showfile.security",
 }

@@ -6,7 +6,7 @@
 ids) and ignores the rest. It returns None for any file it does not vouch for (unreadable, not
 YAML, a duplicate key, a value of another type, a field it does not know): load that one with
 :func:`showfile.load_show`, whose errors name file, line and field. The defaults are those of
-``showfile/models.py`` and ``showfile/security.py``; tests/test_showfile_bus_view.py keeps the two
+``showfile/services.py`` and ``showfile/security.py``; tests/test_showfile_bus_view.py keeps the two
 equal on every show in ``shows/`` and fails when a model gains a field this view does not know.
 
 :class:`ShowBus` is what :mod:`trust` reads of a show to open a session; both a loaded
@@ -102,7 +102,7 @@ class ShowBus(Protocol):
 
 @dataclass(frozen=True)
 class HostView:
-    """``zenoh.hosts.<name>`` (see ``showfile.models.ZenohHost``)."""
+    """``zenoh.hosts.<name>`` (see ``showfile.services.ZenohHost``)."""
 
     router_listen: tuple[str, ...]
     connect: tuple[str, ...] = ()
@@ -118,7 +118,7 @@ class HostView:
 
 @dataclass(frozen=True)
 class ZenohView:
-    """``zenoh`` (see ``showfile.models.ZenohSettings``)."""
+    """``zenoh`` (see ``showfile.services.ZenohSettings``)."""
 
     router_listen: tuple[str, ...] = DEFAULT_ENDPOINTS
     connect: tuple[str, ...] = DEFAULT_ENDPOINTS

@@ -17,7 +17,7 @@ from showfile.bus_view import (
     ZenohView,
     read_bus_view,
 )
-from showfile.models import ZenohHost
+from showfile.services import ZenohHost
 from trust.files import IdentityFiles
 from trust.settings import companion_routers, identities, secured
 

@@ -1,0 +1,14 @@
+"""What every model of a show file shares: frozen, no unknown field, attribute docstrings as
+field descriptions; and the form of an id."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict
+
+Identifier = str
+
+_ID_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]*$"
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid", use_attribute_docstrings=True)

@@ -1,0 +1,170 @@
+"""The show file's sections for its services rather than its vehicles: ``zenoh`` (endpoints and
+hosts), ``storage`` (the orchestrator's durable state), ``policy`` (moderation and queue) and
+``kiosk`` (the public web page)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import Field, field_validator
+from pydantic.networks import IPvAnyNetwork
+
+from showfile.model_base import _ID_PATTERN, Identifier, _Model
+
+
+class ZenohHost(_Model):
+    """One machine of a show that spans several (a ground station, companion computers): its own
+    router, linked to the ground station's, and the processes that run on it."""
+
+    router_listen: tuple[str, ...] = Field(min_length=1)
+    """Endpoints this host's router listens on (those its own processes and, on the ground
+    station, the companion routers reach it at)."""
+    connect: tuple[str, ...] = ()
+    """Endpoints this host's processes connect to (default: its router's first endpoint)."""
+    router_connect: tuple[str, ...] = ()
+    """The ground station router's endpoints as this host reaches them (a companion host)."""
+    services: bool = False
+    """The ground station: the orchestrator, the kiosk and the operators' clients run here."""
+    vehicles: tuple[Identifier, ...] = ()
+    """The vehicles whose agents run on this host (each vehicle on exactly one host)."""
+
+    @property
+    def local_connect(self) -> tuple[str, ...]:
+        """Where this host's processes reach its router."""
+        return self.connect or self.router_listen[:1]
+
+
+class ZenohSettings(_Model):
+    """How processes of the show find each other (explicit endpoints; see bus/session.py)."""
+
+    router_listen: tuple[str, ...] = ("tcp/127.0.0.1:7447",)
+    """Endpoints the show's router listens on."""
+    connect: tuple[str, ...] = ("tcp/127.0.0.1:7447",)
+    """Endpoints clients and peers connect to (the router, as seen from them)."""
+    multicast_scouting: bool = False
+    """Discover other processes by UDP multicast; off so that only explicit endpoints are used."""
+    router_connect: tuple[str, ...] = ()
+    """Other routers the show's router links to (ground station <-> companion computers)."""
+    peer_listen: tuple[str, ...] = ()
+    """Endpoints a peer-mode process listens on (none: peers go through the router)."""
+    extra: dict[str, Any] = Field(default_factory=dict)
+    """Further Zenoh settings as ``{"path/in/config": value}``."""
+    open_timeout_s: float = Field(default=5.0, ge=0.0)
+    """How long clients and peers retry reaching the router at start, in [s]."""
+    hosts: dict[Identifier, ZenohHost] = Field(default_factory=dict)
+    """A show across several machines, by host name: one router per host (``skyquill up SHOW
+    --host NAME`` on each); ``router_listen``, ``connect`` and ``router_connect`` above are then
+    unused. Empty: one machine."""
+
+    @field_validator("hosts")
+    @classmethod
+    def _one_ground_station(cls, hosts: dict[str, ZenohHost]) -> dict[str, ZenohHost]:
+        if not hosts:
+            return hosts
+        for name in hosts:
+            if not re.match(_ID_PATTERN, name):
+                raise ValueError(f"host name {name!r} must match {_ID_PATTERN}")
+        ground = [name for name, host in hosts.items() if host.services]
+        if len(ground) != 1:
+            raise ValueError(
+                f"exactly one host must have services: true (the ground station), not {ground}"
+            )
+        seen: dict[str, str] = {}
+        for name, host in hosts.items():
+            if not host.services and not host.router_connect:
+                raise ValueError(f"host {name}: router_connect must name the ground router")
+            for vehicle_id in host.vehicles:
+                if vehicle_id in seen:
+                    raise ValueError(
+                        f"vehicle {vehicle_id} is on hosts {seen[vehicle_id]} and {name}"
+                    )
+                seen[vehicle_id] = name
+        return hosts
+
+
+class StorageSettings(_Model):
+    """Where the orchestrator keeps its durable state (relative paths: from the working dir)."""
+
+    database: Path | None = None
+    """SQLite file of the job queue and event log; default ``out/<show_id>/show.sqlite3``."""
+    recordings_dir: Path | None = None
+    """Directory of the MCAP recordings, one file per run; default ``out/<show_id>/recordings``."""
+    record: bool = True
+    """Record every message of the show to MCAP."""
+    recording_part_mb: float = Field(default=25.0, gt=0.0)
+    """A recording is finished and the next part begun past this size, in [MB]: each part is a
+    whole MCAP file, and the recorder's index (which grows with every job) starts afresh."""
+    recordings_budget_mb: float = Field(default=2000.0, gt=0.0)
+    """Disk for the show's recordings, in [MB]; the oldest parts go first."""
+    job_files: Literal["compact", "full"] = "compact"
+    """Per-job files next to the database (``jobs/``): ``compact`` keeps a job under ~100 kB
+    (metrics, a small picture, the reference and the flight at 20 Hz in one compressed file);
+    ``full`` keeps every tick and a full-size picture."""
+    job_files_budget_mb: float = Field(default=1000.0, gt=0.0)
+    """Disk for job files, in [MB], shared evenly by the vehicles; the oldest go first."""
+    job_files_max_age_h: float | None = Field(default=None, gt=0.0)
+    """Job files older than this are removed, in [h]; None: only the budget limits them."""
+    database_budget_mb: float = Field(default=100.0, gt=0.0)
+    """Disk for the SQLite database, in [MB] (its WAL adds up to ~4 MB). Past it, down to 80 %:
+    the oldest finished jobs are compacted (strokes and ink picture dropped, ~1.2 kB record
+    left), the oldest events deleted, then the oldest records folded into per-state totals and
+    a key table (~80 B a job), so counts stay exact and idempotency keys answered; unfinished
+    jobs are never touched (``orchestrator/compaction.py``). About 9 MB per hour of show before
+    compaction, 0.15 MB once folding."""
+    job_history_max_age_h: float | None = Field(default=None, gt=0.0)
+    """Finished jobs older than this are compacted and older events deleted, in [h], whatever
+    the database's size; None: only the budget limits them."""
+
+
+class PolicySettings(_Model):
+    """Moderation and queue policy."""
+
+    moderation: bool = False
+    """Submissions wait for an operator's approval before they are queued."""
+    lost_after_s: float = Field(default=1.5, gt=0.0)
+    """A vehicle whose liveliness token is gone this long is lost; its job is requeued, in [s]."""
+    lost_job_hold_s: float = Field(default=5.0, ge=0.0)
+    """A lost vehicle's job waits this long for that vehicle before another may take it, in [s]:
+    it may have finished the character with its report held up (a router restart, a Wi-Fi drop);
+    it cannot still be writing (its lease ran out). 5 s covers a router restart (back within 2 s,
+    every client within a second more). Longer: fewer characters written twice after a long
+    outage; shorter: a vehicle that died delays its job less."""
+    tracking_error_alert_m: float = Field(default=0.05, gt=0.0)
+    """Tracking error that raises an alert event, in [m]."""
+    max_queue: int = Field(default=200, ge=1)
+    """Submissions beyond this many waiting jobs are refused."""
+    max_attempts: int = Field(default=3, ge=1)
+    """A job whose vehicle was lost this many times fails instead of being requeued again."""
+    fleet_period_s: float = Field(default=1.0, gt=0.0)
+    """Period of the fleet snapshot publication, in [s]."""
+
+
+class KioskSettings(_Model):
+    """The public web kiosk."""
+
+    host: str = "127.0.0.1"
+    """Address the kiosk's HTTP server binds to."""
+    port: int = Field(default=8765, ge=1, le=65535)
+    """TCP port of the kiosk."""
+    rate_limit_per_minute: int = Field(default=6, ge=1)
+    """Submissions accepted per client address per minute (whatever its cookies)."""
+    trusted_proxies: tuple[IPvAnyNetwork, ...] = ()
+    """Reverse proxies (addresses or networks, e.g. ``["127.0.0.1"]``) whose ``X-Forwarded-For``
+    names the client; none by default: the header is then ignored."""
+    max_payload_bytes: int = Field(default=200_000, ge=1)
+    """Largest request body, in bytes."""
+    max_strokes: int = Field(default=60, ge=1)
+    """Most strokes in one drawing."""
+    max_points: int = Field(default=5000, ge=2)
+    """Most points in one drawing, all strokes together."""
+    max_text_chars: int = Field(default=1, ge=1, le=64)
+    """Longest typed text, in characters (1: one letter or one Chinese character)."""
+    blocklist: tuple[str, ...] = ()
+    """Texts refused by the kiosk (compared after Unicode normalisation, case-folded)."""
+    max_flight_s: float = Field(default=90.0, gt=0.0)
+    """Longest planned writing flight of one character, in [s]; longer ones are refused with
+    the reason before they are sent."""
+    idle_reset_s: float = Field(default=60.0, ge=0.0)
+    """A page left alone this long goes back to the start (shared tablets), in [s]; 0: never."""
