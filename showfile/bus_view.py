@@ -26,7 +26,7 @@ import yaml
 from showfile.roles import RESERVED_IDS
 
 ID_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
-"""Show, vehicle and host ids (the models' ``_ID_PATTERN``)."""
+"""Show, vehicle and host ids (the models' ``ID_PATTERN``)."""
 DEFAULT_ENDPOINTS = ("tcp/127.0.0.1:7447",)
 """The router's endpoint when the show names none."""
 

@@ -18,7 +18,7 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
-from showfile.model_base import _ID_PATTERN, Identifier, _Model
+from showfile.model_base import ID_PATTERN, Identifier, ShowModel
 from showfile.safety import SafetySettings
 from showfile.security import RESERVED_IDS, SecuritySettings
 from showfile.services import KioskSettings, PolicySettings, StorageSettings, ZenohSettings
@@ -30,10 +30,10 @@ Vec3 = tuple[float, float, float]
 Size2 = tuple[float, float]
 
 
-class Board(_Model):
+class Board(ShowModel):
     """A writing board: its writing area is centred on ``center_m_enu``."""
 
-    id: Identifier = Field(pattern=_ID_PATTERN)
+    id: Identifier = Field(pattern=ID_PATTERN)
     """Board identifier, referenced by vehicles."""
     center_m_enu: Vec3
     """Centre of the writing area on the board surface, in [m], world ENU."""
@@ -77,7 +77,7 @@ KindName = Annotated[str, AfterValidator(_known_kind), Field(json_schema_extra=_
 ``vehicles/``); any other is refused naming the kinds. The JSON schema lists them."""
 
 
-class Limits(_Model):
+class Limits(ShowModel):
     """Dynamic limits used by the planner (planner.pipeline.VehicleLimits). The defaults are the
     planner's own (one set for shows, ``plan`` and ``fly``; tests/test_vehicles_jobs.py holds them
     equal; the show file cannot import the planner, which the console and trust must not see)."""
@@ -100,7 +100,7 @@ class Limits(_Model):
         return self
 
 
-class PlanningSettings(_Model):
+class PlanningSettings(ShowModel):
     """How a job is planned on its board (planner.pipeline.PlanOptions). The defaults are
     ``planner.defaults`` (held equal by tests/test_vehicles_jobs.py)."""
 
@@ -127,7 +127,7 @@ class PlanningSettings(_Model):
     """Fixed duration of a character, or None to let the planner choose, in [s]."""
 
 
-class ControllerSettings(_Model):
+class ControllerSettings(ShowModel):
     """Outer-loop controller of the vehicles."""
 
     preset: Literal["default", "paper"] = "default"
@@ -138,10 +138,10 @@ class ControllerSettings(_Model):
     """Individual gains replacing the preset's (names as in vehicles/quadrotor_brush/control)."""
 
 
-class Vehicle(_Model):
+class Vehicle(ShowModel):
     """One vehicle and the board it writes on."""
 
-    id: Identifier = Field(pattern=_ID_PATTERN)
+    id: Identifier = Field(pattern=ID_PATTERN)
 
     @field_validator("id")
     @classmethod
@@ -191,7 +191,7 @@ class Vehicle(_Model):
         return self
 
 
-class MavlinkSimSettings(_Model):
+class MavlinkSimSettings(ShowModel):
     """Simulated MAVLink vehicles for rehearsals (``skyquill sim-mavlink``)."""
 
     enabled: bool = False
@@ -199,10 +199,10 @@ class MavlinkSimSettings(_Model):
     the agents), simulating every ``backend: mavlink`` vehicle on its ``mavlink_url``."""
 
 
-class Show(_Model):
+class Show(ShowModel):
     """A whole show: fleet, boards, endpoints, policies."""
 
-    show_id: Identifier = Field(pattern=_ID_PATTERN)
+    show_id: Identifier = Field(pattern=ID_PATTERN)
     """Show identifier; the Zenoh namespace ``skyquill/<show_id>/``."""
     title: str = ""
     """Human title for displays."""

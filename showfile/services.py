@@ -11,10 +11,10 @@ from typing import Any, Literal
 from pydantic import Field, field_validator
 from pydantic.networks import IPvAnyNetwork
 
-from showfile.model_base import _ID_PATTERN, Identifier, _Model
+from showfile.model_base import ID_PATTERN, Identifier, ShowModel
 
 
-class ZenohHost(_Model):
+class ZenohHost(ShowModel):
     """One machine of a show that spans several (a ground station, companion computers): its own
     router, linked to the ground station's, and the processes that run on it."""
 
@@ -36,7 +36,7 @@ class ZenohHost(_Model):
         return self.connect or self.router_listen[:1]
 
 
-class ZenohSettings(_Model):
+class ZenohSettings(ShowModel):
     """How processes of the show find each other (explicit endpoints; see bus/session.py)."""
 
     router_listen: tuple[str, ...] = ("tcp/127.0.0.1:7447",)
@@ -64,8 +64,8 @@ class ZenohSettings(_Model):
         if not hosts:
             return hosts
         for name in hosts:
-            if not re.match(_ID_PATTERN, name):
-                raise ValueError(f"host name {name!r} must match {_ID_PATTERN}")
+            if not re.match(ID_PATTERN, name):
+                raise ValueError(f"host name {name!r} must match {ID_PATTERN}")
         ground = [name for name, host in hosts.items() if host.services]
         if len(ground) != 1:
             raise ValueError(
@@ -84,7 +84,7 @@ class ZenohSettings(_Model):
         return hosts
 
 
-class StorageSettings(_Model):
+class StorageSettings(ShowModel):
     """Where the orchestrator keeps its durable state (relative paths: from the working dir)."""
 
     database: Path | None = None
@@ -118,7 +118,7 @@ class StorageSettings(_Model):
     the database's size; None: only the budget limits them."""
 
 
-class PolicySettings(_Model):
+class PolicySettings(ShowModel):
     """Moderation and queue policy."""
 
     moderation: bool = False
@@ -141,7 +141,7 @@ class PolicySettings(_Model):
     """Period of the fleet snapshot publication, in [s]."""
 
 
-class KioskSettings(_Model):
+class KioskSettings(ShowModel):
     """The public web kiosk."""
 
     host: str = "127.0.0.1"
