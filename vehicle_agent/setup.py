@@ -15,7 +15,7 @@ from vehicle_agent.backends.base import Vec3
 from vehicle_agent.job_runner import RunnerConfig
 from vehicle_agent.safety import DeviationLimit, SafetyLimits, WritingBounds, vehicle_fence
 from vehicles.jobs import board_surface
-from vehicles.kind import JobPhases, VehicleKind
+from vehicles.kind import AutopilotWorld, JobPhases, VehicleKind
 from vehicles.registry import vehicle_kind
 from vehicles.surface import Surface
 
@@ -167,10 +167,10 @@ def on_board(setup: VehicleSetup) -> Callable[[Vec3], bool]:
     return inside
 
 
-def world_params(setup: VehicleSetup) -> Any:
-    """The simulated world an autopilot-flown vehicle of this kind follows its pen in (the brush
-    quadrotor's brush, board height and mocap, for the MAVLink backend); ValueError for a kind
-    that flies in the sim only."""
+def autopilot_world(setup: VehicleSetup) -> AutopilotWorld:
+    """What this vehicle flown behind an autopilot takes from its kind's simulated world (its
+    pen from its pose, the mocap; ``VehicleKind.autopilot_world``, for the MAVLink backend);
+    ValueError for a kind that flies in the sim only."""
     world = setup.kind.autopilot_world(setup.settings)
     if world is None:
         raise ValueError(

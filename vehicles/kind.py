@@ -15,7 +15,9 @@ A job flows through a kind the same way for every kind (``vehicles.jobs`` does t
 
 The live agent also asks ``VehicleKind.phases`` how the kind moves between its home and its
 writing (take off and land, or drive on the floor; cruise height; pen-up speed and route) and
-``VehicleKind.autopilot_world`` what an autopilot-flown vehicle of the kind needs (MAVLink).
+``VehicleKind.autopilot_world`` what an autopilot-flown vehicle of the kind needs (MAVLink): an
+:class:`AutopilotWorld`, the kind's :class:`AutopilotPen` read from the pose the autopilot
+reports and the motion capture of its simulated world.
 
 Pure: no transport, no asyncio; a room reads a parsed show only in ``settings``.
 """
@@ -207,6 +209,46 @@ class LiveStateView(Protocol):
     def force_n(self) -> float | None: ...
 
 
+Mat3 = tuple[Vec3, Vec3, Vec3]
+"""A 3x3 matrix by rows."""
+
+
+@dataclass(frozen=True)
+class PenReading:
+    """The pen of an autopilot-flown vehicle at one instant, modelled from its pose."""
+
+    tip_m_enu: Vec3
+    """Where the pen tip is in [m], ENU."""
+    width_m: float
+    """Width in [m] of the ink it lays now (0 without contact)."""
+    contact: bool
+    """The pen touches its surface (anywhere on its plane; the agent knows the board's edges)."""
+
+
+class AutopilotPen(Protocol):
+    """The pen a vehicle flown behind an autopilot carries, which nothing senses: modelled from
+    the vehicle's pose alone, as its kind's simulated world models it, so that the agent can
+    measure ink and the writing point's error of a vehicle it only hears over MAVLink."""
+
+    def read(self, position_m_enu: Vec3, rotation_body_to_enu: Mat3) -> PenReading:
+        """The pen of a vehicle whose reference point is at ``position_m_enu`` in [m] and whose
+        body (forward-left-up) is turned into the world (ENU) by ``rotation_body_to_enu``."""
+        ...
+
+
+@dataclass(frozen=True)
+class AutopilotWorld:
+    """What the agent's MAVLink backend takes from a kind's simulated world for a vehicle of the
+    kind flown behind an autopilot."""
+
+    pen: AutopilotPen
+    """Its pen, modelled from its pose (contact over the whole surface plane)."""
+    mocap_latency_s: float
+    """Age in [s] of a motion-capture frame simulated from the true pose (a simulated vehicle)."""
+    mocap_noise_std_m: float
+    """Standard deviation in [m] per axis of the noise of such a frame."""
+
+
 class SimulatedVehicle(Protocol):
     """A live simulated vehicle in flight (or driving), one control period per ``step``: the
     kind's world and controller in one closed loop. The agent's ``sim`` backend wraps it with an
@@ -304,8 +346,8 @@ class VehicleKind(Protocol):
         visitors draw widths within it), or None where it draws one width."""
         ...
 
-    def autopilot_world(self, settings: Any) -> Any | None:
+    def autopilot_world(self, settings: Any) -> AutopilotWorld | None:
         """What a vehicle of this kind flown behind an autopilot (the MAVLink backend) takes from
-        its simulated world to follow a pen it cannot sense (the brush quadrotor: its
-        ``WorldParams``, brush, board height and mocap); None: the kind flies in the sim only."""
+        its simulated world: its pen modelled from its pose, and the motion capture (the brush
+        quadrotor: its brush over the board's height); None: the kind flies in the sim only."""
         ...

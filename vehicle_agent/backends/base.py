@@ -89,11 +89,12 @@ class VehicleSnapshot:
     fault: str | None = None
     """A fault that stops flying (lost link, failsafe, crash), in words; None when healthy."""
     pen_contact: bool | None = None
-    """Whether the brush touches the board, when the backend knows (the simulator does)."""
+    """Whether the pen touches the board, when the backend knows (the simulator; MAVLink: the
+    kind's pen model, from the pose)."""
     pen_tip_m_enu: Vec3 | None = None
-    """Where the brush tip is in [m], ENU, when the backend knows (for ink metrics)."""
+    """Where the pen tip is in [m], ENU, when the backend knows (for ink metrics)."""
     pen_width_m: float | None = None
-    """Width in [m] of the stroke the brush paints now (0 without contact), when known."""
+    """Width in [m] of the stroke the pen lays now (0 without contact), when known."""
     force_n: float | None = None
     """Measured normal contact force in [N], for kinds that sense it."""
     autopilot_mode: str | None = None

@@ -30,7 +30,6 @@ from dataclasses import replace
 from typing import Any
 
 from vehicle_agent.backends.base import BackendError, BackendMode, Setpoint, Vec3, VehicleSnapshot
-from vehicle_agent.backends.mavlink_brush import BrushModel
 from vehicle_agent.backends.mavlink_commands import CommandChannel
 from vehicle_agent.backends.mavlink_errors import (
     CommandRejectedError,
@@ -48,6 +47,7 @@ from vehicle_agent.backends.mavlink_params import (
     mocap_params,
     show_params,
 )
+from vehicle_agent.backends.mavlink_pen import PenOverBoard
 from vehicle_agent.backends.mavlink_response import ResponseAid
 from vehicle_agent.backends.mavlink_settings import MavlinkSettings, settings_from_show
 from vehicle_agent.backends.mavlink_state import (
@@ -60,7 +60,7 @@ from vehicle_agent.backends.mavlink_stream import SetpointStream
 from vehicle_agent.backends.mavlink_url import parse_mavlink_url
 from vehicle_agent.backends.mavlink_watchdog import Commanded, Watchdog, WatchLimits
 from vehicle_agent.motion import Move, plan_move
-from vehicle_agent.setup import VehicleSetup, on_board, world_params
+from vehicle_agent.setup import VehicleSetup, autopilot_world, on_board
 
 log = logging.getLogger(__name__)
 
@@ -84,11 +84,11 @@ class MavlinkBackend:
         *,
         on_text: TextHandler | None = None,
         mocap_source: MocapSource | None = None,
-        brush: BrushModel | None = None,
+        pen: PenOverBoard | None = None,
     ) -> None:
         self.settings = settings
-        self.brush = brush
-        """The vehicle's passive brush, modelled from its pose for the snapshot (None: none)."""
+        self.pen = pen
+        """The vehicle's pen, modelled from its pose for the snapshot (None: none)."""
         self.frame = LocalFrame(settings.origin_m_enu)
         self.state = LinkState(settings.system_id)
         self.mode: BackendMode = "idle"
@@ -433,9 +433,9 @@ class MavlinkBackend:
         truth = self.aid.true_state(now_s)
         body, attitude = (position, st.attitude_ned) if truth is None else (
             truth.position_m_enu, truth.attitude_ned_rad)  # fmt: skip
-        brush = None
-        if self.brush is not None and attitude is not None:
-            brush = self.brush.read(body, attitude)
+        pen = None
+        if self.pen is not None and attitude is not None:
+            pen = self.pen.read(body, attitude)
         return VehicleSnapshot(
             t_s=now_s,
             position_m_enu=position,
@@ -445,9 +445,9 @@ class MavlinkBackend:
             on_ground=on_ground,
             battery_fraction=st.battery_fraction,
             fault=self.fault,
-            pen_tip_m_enu=None if brush is None else brush.tip_m_enu,
-            pen_width_m=None if brush is None else brush.width_m,
-            pen_contact=None if brush is None else brush.contact,
+            pen_tip_m_enu=None if pen is None else pen.tip_m_enu,
+            pen_width_m=None if pen is None else pen.width_m,
+            pen_contact=None if pen is None else pen.contact,
             autopilot_mode=None if st.flavor is None else st.flavor.mode_name(st.custom_mode or 0),
             true_position_m_enu=None if truth is None else truth.position_m_enu,
         )
@@ -455,7 +455,7 @@ class MavlinkBackend:
 
 def create_backend(setup: VehicleSetup, **kwargs: Any) -> MavlinkBackend:
     """The backend of ``setup`` (a :class:`vehicle_agent.agent.VehicleSetup` whose vehicle has
-    ``backend: mavlink``), carrying the show's brush over its board and, as a second line, the
+    ``backend: mavlink``), carrying its kind's pen over its board and, as a second line, the
     autopilot's own fence around the agent's geofence; ``kwargs`` go to :class:`MavlinkBackend`
     (``on_text``, ``mocap_source``)."""
     show = setup.show
@@ -469,8 +469,8 @@ def create_backend(setup: VehicleSetup, **kwargs: Any) -> MavlinkBackend:
                 fence, settings.origin_m_enu, show.safety.autopilot_fence_margin_m
             ),
         )
-    world = world_params(setup)
-    settings = replace(settings, mocap_latency_s=world.mocap.latency_s,
-                       mocap_noise_std_m=world.mocap.noise_std_m)  # fmt: skip
-    kwargs.setdefault("brush", BrushModel(world.brush, world.board_height_m, on_board(setup)))
+    world = autopilot_world(setup)
+    settings = replace(settings, mocap_latency_s=world.mocap_latency_s,
+                       mocap_noise_std_m=world.mocap_noise_std_m)  # fmt: skip
+    kwargs.setdefault("pen", PenOverBoard(world.pen, on_board(setup)))
     return MavlinkBackend(settings, **kwargs)

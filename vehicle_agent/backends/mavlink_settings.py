@@ -59,7 +59,7 @@ class MavlinkSettings:
     """Rate of forwarded mocap poses in [Hz]."""
     truth: TruthSource = "none"
     """``sitl``: read the simulator's true state off the link (ArduPilot SIM_STATE, PX4
-    HIL_STATE_QUATERNION); the brush and the job metrics use it, and with ``mocap`` it is the
+    HIL_STATE_QUATERNION); the pen model and the job metrics use it, and with ``mocap`` it is the
     mocap source (with ``mocap_latency_s`` and ``mocap_noise_std_m``)."""
     mocap_latency_s: float = 0.005
     """Age in [s] of a mocap pose made from the truth."""

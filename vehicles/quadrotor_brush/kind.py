@@ -20,10 +20,17 @@ import numpy as np
 
 from planner.board import BoardFrame
 from planner.samples import TrajectorySamples
-from vehicles.kind import FlownWriting, JobPhases, StrokeInput, WritingPlan, WritingScore
+from vehicles.kind import (
+    AutopilotWorld,
+    FlownWriting,
+    JobPhases,
+    StrokeInput,
+    WritingPlan,
+    WritingScore,
+)
+from vehicles.quadrotor_brush.autopilot_pen import autopilot_world
 from vehicles.quadrotor_brush.control.controller import body_reference
 from vehicles.quadrotor_brush.loop import QuadrotorFleet, SimulatedQuadrotor
-from vehicles.quadrotor_brush.params import WorldParams
 from vehicles.quadrotor_brush.settings import QuadrotorSettings, quadrotor_settings
 from vehicles.surface import Orientation, Surface, Vec3
 
@@ -53,9 +60,9 @@ class QuadrotorBrush:
         """None: the brush's width follows its height, not the visitor's line."""
         return None
 
-    def autopilot_world(self, settings: QuadrotorSettings) -> WorldParams:
-        """The brush, board height and mocap of its simulated world (for the MAVLink backend)."""
-        return settings.flight.world
+    def autopilot_world(self, settings: QuadrotorSettings) -> AutopilotWorld:
+        """The brush over the board and the mocap of its simulated world (MAVLink backend)."""
+        return autopilot_world(settings.flight.world)
 
     def settings(self, show: Show | None, vehicle_id: str | None) -> QuadrotorSettings:
         """Settings of ``vehicle_id`` in ``show``, or a default show's with ``show`` None."""
