@@ -45,6 +45,7 @@ from planner.samples import TrajectorySamples  # noqa: E402
 from sim.params import WindParams  # noqa: E402
 from sim.reference import writing_reference  # noqa: E402
 from vehicles.jobs import plan_glyph  # noqa: E402
+from vehicles.quadrotor_brush import KIND_NAME  # noqa: E402
 from vehicles.quadrotor_brush.control.controller import DEFAULT_CONFIG, PAPER_CONFIG  # noqa: E402
 from vehicles.quadrotor_brush.flight import FlightConfig, fly  # noqa: E402
 from vehicles.quadrotor_brush.metrics import flight_metrics  # noqa: E402
@@ -67,7 +68,7 @@ def plan_corpus(chars: list[str]) -> tuple[dict[str, TrajectorySamples], list[st
     """Plan every character 1 m tall as ``skyquill fly`` does (the one job-planning function, a
     show file's default settings); one the planner rejects for straying from its strokes is
     planned again without that check (the flight is judged against the plan, not the strokes)."""
-    kind = vehicle_kind("quadrotor-brush")
+    kind = vehicle_kind(KIND_NAME)
     settings = kind.settings(None, None)
     loose_settings = dataclasses.replace(
         settings, plan=dataclasses.replace(settings.plan, fit_tolerance_m=None)

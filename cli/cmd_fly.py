@@ -14,10 +14,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-QUADROTOR = "quadrotor-brush"
-"""The Airshow brush quadrotor: the kind whose wind, brush and gains ``fly`` can set."""
+from vehicles import DEFAULT_KIND
+from vehicles.quadrotor_brush import KIND_NAME as BRUSH_KIND
+
 BRUSH_OPTIONS = {"wind": 0.0, "wind_heading_deg": 0.0, "stroke_width": 0.02, "gains": "default"}
-"""Options of the brush quadrotor's world and controller, with their defaults."""
+"""Options of the brush quadrotor's world and controller (its wind, brush and gains), with
+their defaults."""
 NAME = "fly"
 HELP = "Plan, fly in the simulator and score a strokes file or text (metrics.json, report.png)."
 
@@ -28,8 +30,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--kind",
         choices=kind_names(),
-        default=QUADROTOR,
-        help=f"vehicle kind ({QUADROTOR}); the options below marked [brush] are its own",
+        default=DEFAULT_KIND,
+        help=f"vehicle kind ({DEFAULT_KIND}); the options below marked [brush] are "
+        f"{BRUSH_KIND}'s own",
     )
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--strokes", metavar="FILE", help="strokes JSON (docs/formats.md)")
@@ -110,7 +113,7 @@ def _settings(args: argparse.Namespace) -> Any:
     from vehicles.quadrotor_brush.control.controller import PAPER_CONFIG
     from vehicles.registry import vehicle_kind
 
-    base = vehicle_kind("quadrotor-brush").settings(None, None)
+    base = vehicle_kind(BRUSH_KIND).settings(None, None)
     world = base.flight.world
     world = dataclasses.replace(
         world,
@@ -127,7 +130,7 @@ def _settings(args: argparse.Namespace) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.kind != QUADROTOR:
+    if args.kind != BRUSH_KIND:
         from cli.fly_kind import run_kind
         from showfile.safety import SafetySettings
 
@@ -144,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
     from vehicles.surface import Surface
     from vehicles.verdict import WritingBounds, writing_verdict
 
-    kind = vehicle_kind(QUADROTOR)
+    kind = vehicle_kind(BRUSH_KIND)
     try:
         glyph = glyph_of(args)
         settings = _settings(args)

@@ -16,12 +16,12 @@ from typing import Any
 
 from planner import defaults
 from planner.limits import VehicleLimits
+from vehicles import DEFAULT_KIND
+from vehicles.quadrotor_brush import KIND_NAME as BRUSH_KIND
 
 NAME = "plan"
 HELP = "Plan a flyable minimum-jerk writing trajectory for a strokes file or text."
 
-QUADROTOR = "quadrotor-brush"
-"""The Airshow brush quadrotor: the kind whose limits and planner the options below set."""
 _PROG = "skyquill plan"
 
 
@@ -49,8 +49,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--kind",
         choices=kind_names(),
-        default=QUADROTOR,
-        help=f"vehicle kind ({QUADROTOR}); the options marked [brush] are its own",
+        default=DEFAULT_KIND,
+        help=f"vehicle kind ({DEFAULT_KIND}); the options marked [brush] are {BRUSH_KIND}'s own",
     )
     parser.set_defaults(brush_options_given=())
     source = parser.add_mutually_exclusive_group(required=True)
@@ -60,7 +60,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--out", metavar="TRAJ.json", help="write the trajectory here (another kind: PLAN.json)"
     )
     parser.add_argument(
-        "--plot", metavar="PLOT.png", help="write a figure of the plan here (quadrotor-brush)"
+        "--plot", metavar="PLOT.png", help=f"write a figure of the plan here ({BRUSH_KIND})"
     )
     _add_board_arguments(parser)
     _add_limit_arguments(parser)
@@ -270,7 +270,7 @@ def _one_blas_thread() -> None:
 
 def run(args: argparse.Namespace) -> int:
     _one_blas_thread()
-    if args.kind != QUADROTOR:
+    if args.kind != BRUSH_KIND:
         from cli.plan_kind import run_kind
 
         return run_kind(args)
@@ -281,7 +281,7 @@ def run(args: argparse.Namespace) -> int:
     from vehicles.surface import Surface
 
     source = source_of(args)
-    kind = vehicle_kind(QUADROTOR)
+    kind = vehicle_kind(BRUSH_KIND)
     try:
         glyph = read_glyph(args)
         settings = _settings(args, kind.settings(None, None))

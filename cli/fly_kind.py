@@ -25,6 +25,7 @@ def run_kind(args: argparse.Namespace, brush_options_set: dict[str, bool]) -> in
     from cli.cmd_fly import glyph_of
     from planner.errors import PlannerError
     from vehicles.jobs import plan_glyph
+    from vehicles.quadrotor_brush import KIND_NAME as BRUSH_KIND
     from vehicles.registry import vehicle_kind
     from vehicles.surface import Surface
     from vehicles.verdict import WritingBounds, writing_verdict
@@ -32,7 +33,7 @@ def run_kind(args: argparse.Namespace, brush_options_set: dict[str, bool]) -> in
     given = [name for name, is_set in brush_options_set.items() if is_set]
     if given:
         flag = "--" + given[0].replace("_", "-")
-        print(f"skyquill fly: {flag} is an option of quadrotor-brush, not of {args.kind}",
+        print(f"skyquill fly: {flag} is an option of {BRUSH_KIND}, not of {args.kind}",
               file=sys.stderr)  # fmt: skip
         return 2
     kind = vehicle_kind(args.kind)

@@ -26,19 +26,20 @@ PLAN_FORMAT = "skyquill.plan/1"
 
 def run_kind(args: argparse.Namespace) -> int:
     """Plan ``args.kind`` and report it (``args`` as ``skyquill plan`` parses them)."""
-    from cli.cmd_plan import QUADROTOR, cannot_write, print_error, read_glyph, source_of
+    from cli.cmd_plan import cannot_write, print_error, read_glyph, source_of
     from cli.fly_kind import WALL_CENTRE_HEIGHT_M
     from planner.errors import PlannerError
     from vehicles.jobs import plan_glyph
+    from vehicles.quadrotor_brush import KIND_NAME as BRUSH_KIND
     from vehicles.registry import vehicle_kind
     from vehicles.surface import Surface
 
     if args.brush_options_given:
         flag = args.brush_options_given[0]
-        return _refuse(f"{flag} is an option of {QUADROTOR}, not of {args.kind}")
+        return _refuse(f"{flag} is an option of {BRUSH_KIND}, not of {args.kind}")
     if args.plot:
         return _refuse(
-            f"--plot draws {QUADROTOR} plans only; a figure of {args.kind} needs a flight:"
+            f"--plot draws {BRUSH_KIND} plans only; a figure of {args.kind} needs a flight:"
             f" skyquill fly --kind {args.kind} --report DIR"
         )
     kind = vehicle_kind(args.kind)

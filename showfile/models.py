@@ -22,7 +22,7 @@ from showfile.model_base import ID_PATTERN, Identifier, ShowModel
 from showfile.safety import SafetySettings
 from showfile.security import RESERVED_IDS, SecuritySettings
 from showfile.services import KioskSettings, PolicySettings, StorageSettings, ZenohSettings
-from vehicles import ROOMS, UnknownKindError
+from vehicles import DEFAULT_KIND, ROOMS, UnknownKindError
 from vehicles.hexarotor_sponge.show_section import HexarotorKindSettings
 from vehicles.omni_wheel.show_section import OmniWheelSettings
 
@@ -154,7 +154,7 @@ class Vehicle(ShowModel):
         return value
 
     """Vehicle identifier (also in its Zenoh keys)."""
-    kind: KindName = Field(default="quadrotor-brush", validate_default=True)
+    kind: KindName = Field(default=DEFAULT_KIND, validate_default=True)
     """What kind of vehicle it is: one of the kinds that have a room (``vehicles.ROOMS``)."""
     backend: Literal["sim", "mavlink"] = "sim"
     """``sim``: the in-process simulator; ``mavlink``: an autopilot at ``mavlink_url``."""

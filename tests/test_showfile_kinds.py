@@ -17,7 +17,8 @@ from pydantic import BaseModel
 
 from showfile import ShowFileError, parse_show
 from showfile.models import Show
-from vehicles import ROOMS, Room
+from vehicles import DEFAULT_KIND, ROOMS, Room
+from vehicles.quadrotor_brush import KIND_NAME
 from vehicles.registry import vehicle_kind
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -63,6 +64,20 @@ def test_each_rooms_kind_agrees_with_its_record() -> None:
         assert kind.name == name
         assert kind.orientation == room.orientation, name
         # the autopilot flag: tests/test_showfile_load.py (it asks each kind's autopilot_world)
+
+
+def test_a_vehicle_without_a_kind_is_of_the_default_kind_which_has_a_room() -> None:
+    assert DEFAULT_KIND in ROOMS
+    without_kind = SOLO.replace("    kind: quadrotor-brush\n", "")
+    assert "kind:" not in without_kind
+    show = parse_show(without_kind)
+    assert show.vehicles[0].kind == DEFAULT_KIND
+
+
+def test_the_brush_rooms_own_name_is_its_kinds() -> None:
+    """``vehicles.quadrotor_brush.KIND_NAME`` names the brush without importing its kind."""
+    assert ROOMS[KIND_NAME].kind_module == "vehicles.quadrotor_brush.kind"
+    assert vehicle_kind(KIND_NAME).name == KIND_NAME
 
 
 def test_each_kind_section_is_a_show_field_typed_by_its_rooms_model() -> None:

@@ -23,6 +23,7 @@ from bus.messages import (
 from tui.inputs import OrchestratorPresence, VehiclePresence
 from tui.model import ConsoleModel
 from tui.settings import BoardGeometry, ConsoleSettings, VehicleSpec
+from vehicles import DEFAULT_KIND
 
 DEMO_TIME_S = 1_700_000_000.0
 """Console time of the demo state (a fixed Unix time)."""
@@ -36,12 +37,12 @@ GONG_STROKES_M = (
 
 
 def demo_settings(vehicles: int = 3) -> ConsoleSettings:
-    """Boards side by side along east, one vehicle each."""
+    """Boards side by side along east, one vehicle of the default kind each."""
     boards = tuple(
         BoardGeometry(f"b{i + 1}", center_m_enu=(3.0 * i, 0.0, 0.0)) for i in range(vehicles)
     )
     specs = tuple(
-        VehicleSpec(f"uav{i + 1}", "quadrotor-brush", f"b{i + 1}", "board") for i in range(vehicles)
+        VehicleSpec(f"uav{i + 1}", DEFAULT_KIND, f"b{i + 1}", "board") for i in range(vehicles)
     )
     return ConsoleSettings(show_id="demo-show", boards=boards, vehicles=specs)
 

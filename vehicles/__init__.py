@@ -66,6 +66,11 @@ ROOMS: dict[str, Room] = {
 }
 """Kind name (as in show files) -> its room's record."""
 
+DEFAULT_KIND = "quadrotor-brush"
+"""The kind meant where none is named: a show file's vehicle without ``kind``, ``skyquill plan``
+and ``fly`` without ``--kind``, a simulated vehicle made without one, a kiosk without a show, the
+console's demo."""
+
 
 class UnknownKindError(LookupError):
     """A vehicle kind without a room; the message names the kinds that exist."""

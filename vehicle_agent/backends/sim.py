@@ -32,11 +32,9 @@ from vehicle_agent.backends.base import (
 )
 from vehicle_agent.backends.sim_round import StepRound
 from vehicle_agent.motion import Move, plan_move
+from vehicles import DEFAULT_KIND
 from vehicles.kind import LiveReference, SimulatedFleet, SimulatedVehicle, VehicleKind
 from vehicles.registry import vehicle_kind
-
-DEFAULT_KIND = "quadrotor-brush"
-"""The kind simulated when none is given."""
 
 TOUCHDOWN_TOLERANCE_M = 0.03
 """Height above the ground in [m] below which a finished descent counts as landed."""
@@ -47,8 +45,8 @@ SETTLE_LIMIT_S = 2.0
 class SimVehicle:
     """One simulated vehicle of a kind with an autopilot-like mode logic (synchronous, pure).
 
-    ``kind`` and its ``settings`` (default: the brush quadrotor with the defaults a show file
-    has) make a new live vehicle per flight, seeded ``seed`` plus the flight's number."""
+    ``kind`` and its ``settings`` (default: ``vehicles.DEFAULT_KIND`` with the defaults a show
+    file has) make a new live vehicle per flight, seeded ``seed`` plus the flight's number."""
 
     def __init__(
         self,

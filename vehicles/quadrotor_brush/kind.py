@@ -28,6 +28,7 @@ from vehicles.kind import (
     WritingPlan,
     WritingScore,
 )
+from vehicles.quadrotor_brush import KIND_NAME
 from vehicles.quadrotor_brush.autopilot_pen import autopilot_world
 from vehicles.quadrotor_brush.control.controller import body_reference
 from vehicles.quadrotor_brush.loop import QuadrotorFleet, SimulatedQuadrotor
@@ -49,7 +50,7 @@ def board_of(surface: Surface) -> BoardFrame:
 class QuadrotorBrush:
     """The ``quadrotor-brush`` kind (see :class:`vehicles.kind.VehicleKind`)."""
 
-    name = "quadrotor-brush"
+    name = KIND_NAME
     orientation: Orientation = "horizontal"
 
     def phases(self, settings: QuadrotorSettings) -> JobPhases:
