@@ -7,6 +7,7 @@ from typing import Any
 
 from kiosk.limits import SubmissionLimits
 from kiosk.wording import board_numbers
+from vehicles import DEFAULT_KIND
 from vehicles.jobs import JobSetup, job_setup, kind_writers
 from vehicles.registry import vehicle_kind
 from vehicles.surface import Surface
@@ -56,10 +57,6 @@ class KioskSettings:
     """The page goes back to the start after this long without a touch, [s] (0: never)."""
     stale_after_s: float = 2.0
     """The status is stale when the orchestrator's 1 Hz fleet snapshot is older than this, [s]."""
-    preview_kind: str = "quadrotor-brush"
-    """The first kind in board order (the first of :attr:`preview_kinds`); without
-    :attr:`preview_kinds`, the one kind the preview plans for, with its default settings
-    (``VehicleKind.settings(None, None)``) on :attr:`writing_area_m`."""
     width_range_m: tuple[float, float] | None = None
     """Narrowest and widest line in [m] a visitor may draw: the span of the pens of the kinds
     that write with a width (the drawing pad then sends a width per point); None where every
@@ -68,16 +65,23 @@ class KioskSettings:
     """Each kind of the show as the orchestrator plans for it (``vehicles.jobs``: the settings,
     board and margin of the vehicle standing for the kind), in the order of their first board,
     sampled at :data:`PATH_RATE_HZ`; the preview shows the first whose planner accepts the
-    submission. Empty: :attr:`preview_kind` alone."""
+    submission. Empty (a kiosk without a show): ``vehicles.DEFAULT_KIND`` alone
+    (:func:`kind_preview` on :attr:`writing_area_m`)."""
 
     def kinds(self) -> tuple[JobSetup, ...]:
         """The kinds the preview plans for, first choice first."""
         if self.preview_kinds:
             return self.preview_kinds
-        kind = vehicle_kind(self.preview_kind)
-        area = Surface.of(kind.orientation, (0.0, 0.0, 0.0), 0.0)
-        settings = kind.settings(None, None)
-        return (JobSetup(kind, settings, area, self.writing_area_m, self.margin_m),)
+        return (kind_preview(DEFAULT_KIND, self.writing_area_m, self.margin_m),)
+
+
+def kind_preview(name: str, writing_area_m: tuple[float, float], margin_m: float) -> JobSetup:
+    """How a kiosk without a show previews for kind ``name``: its default settings
+    (``VehicleKind.settings(None, None)``) on a writing area ``writing_area_m`` in [m] centred at
+    the origin, ``margin_m`` in [m] kept free inside it."""
+    kind = vehicle_kind(name)
+    area = Surface.of(kind.orientation, (0.0, 0.0, 0.0), 0.0)
+    return JobSetup(kind, kind.settings(None, None), area, writing_area_m, margin_m)
 
 
 def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
@@ -117,7 +121,6 @@ def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
             {vehicle.id: vehicle.board for vehicle in show.vehicles},
             [b.id for b in show.boards],
         ),
-        preview_kind=kinds[0].kind.name if kinds else KioskSettings.preview_kind,
         width_range_m=width_span_m(kinds),
         preview_kinds=kinds,
     )

@@ -25,17 +25,16 @@ def wall_kiosk() -> Iterator[str]:
     """A kiosk (no show around it) whose previews are planned for the wall hexarotor: its URL."""
     from bus.session import loopback_settings
     from kiosk.service import serving
-    from kiosk.settings import KioskSettings
-    from vehicles.registry import vehicle_kind
+    from kiosk.settings import KioskSettings, kind_preview
 
-    wall = vehicle_kind("hexarotor-sponge")
-
+    area_m = (0.5, 0.5)
+    wall = kind_preview("hexarotor-sponge", area_m, KioskSettings.margin_m)
     settings = KioskSettings(
         show_id="kiosk-widths",
         port=0,
-        writing_area_m=(0.5, 0.5),
-        preview_kind="hexarotor-sponge",
-        width_range_m=wall.width_range_m(wall.settings(None, None)),
+        writing_area_m=area_m,
+        width_range_m=wall.kind.width_range_m(wall.settings),
+        preview_kinds=(wall,),
     )
     with serving(settings, loopback_settings(), role="peer") as server:
         yield server.url

@@ -68,14 +68,14 @@ def test_each_kind_says_the_widths_it_draws() -> None:
 def test_a_show_previews_for_the_kind_on_its_first_board() -> None:
     show = load_show(Path(__file__).resolve().parents[1] / "shows" / "solo.yaml")
     brush = settings_from_show(show)
-    assert brush.preview_kind == "quadrotor-brush"
+    assert [k.kind.name for k in brush.kinds()] == ["quadrotor-brush"]
     assert brush.width_range_m is None
     first = show.boards[0].id
     vehicles = [
         v.model_copy(update={"kind": WALL}) if v.board == first else v for v in show.vehicles
     ]
     wall = settings_from_show(show.model_copy(update={"vehicles": vehicles}))
-    assert wall.preview_kind == WALL
+    assert [k.kind.name for k in wall.kinds()] == [WALL]
     assert wall.width_range_m == pytest.approx((0.005, 0.014))  # the show file's pen
     # each kind's settings are its vehicle's own, the brush's like any other kind's
     assert type(wall.preview_kinds[0].settings).__name__ == "WallSettings"
