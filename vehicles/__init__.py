@@ -20,8 +20,9 @@ if TYPE_CHECKING:
 class Room:
     """What is known of a vehicle kind without importing its room (plain data).
 
-    The kind object is the truth at run time; tests hold its ``orientation`` and
-    ``autopilot_world`` to this record (tests/test_showfile_kinds.py)."""
+    The kind object is the truth at run time; tests hold its ``orientation``
+    (tests/test_showfile_kinds.py) and ``autopilot_world`` (tests/test_showfile_load.py) to this
+    record."""
 
     kind_module: str
     """The module whose ``KIND`` implements the kind (imported on first use)."""
