@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from planner.errors import InfeasibleTrajectoryError, PlannerError
-from vehicles.hexarotor_sponge import nlp, period_nlp, solver_cache
+from vehicles.hexarotor_sponge import nlp, period_cache, period_nlp, solver_cache
 from vehicles.hexarotor_sponge.nlp import Limits, solve_period
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
 from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing
@@ -95,9 +95,11 @@ def test_planned_contact_period_obeys_dynamics_and_limits() -> None:
 
 @pytest.mark.slow
 def test_plan_reports_ipopt_and_keeps_limits() -> None:
+    period_cache.SOLVED_PERIODS.clear()  # solved now, not reused from an earlier test's plan
     plan = plan_writing([StrokeInput(np.array([[0.0, 0.0], [0.1, 0.0]]))], SURFACE, PlanSettings())
     rep = plan.feasibility
     assert all(p["ipopt_status"] == "Solve_Succeeded" for p in rep["periods"])
+    assert all(p["start"] == "cold" for p in rep["periods"]) and rep["periods_reused"] == 0
     assert rep["ipopt_iterations"] > 0 and 0.0 < rep["ipopt_solve_s"] <= rep["build_and_solve_s"]
     assert rep["peak_speed_mps"] <= 0.2 + 1e-3
     assert plan.force_n is not None and plan.width_m is not None

@@ -18,8 +18,9 @@ from planner.errors import InfeasibleTrajectoryError, PlannerError
 from planner.samples import TrajectorySamples
 from vehicles.hexarotor_sponge import defaults
 from vehicles.hexarotor_sponge.allocation import Allocator
-from vehicles.hexarotor_sponge.nlp import Limits, PeriodSolution, solve_period
+from vehicles.hexarotor_sponge.nlp import Limits, PeriodSolution, PeriodStart
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
+from vehicles.hexarotor_sponge.period_cache import solve_period_reusing
 from vehicles.hexarotor_sponge.waypoints import Period, periods_of, stroke_forces_n
 from vehicles.kind import StrokeInput, WritingPlan
 from vehicles.surface import Surface
@@ -121,14 +122,16 @@ def _periods(
 
 
 PeriodSolver = Callable[[Period, HexarotorParams, Limits], PeriodSolution]
-"""Eq. 7 for one period: :func:`solve_period`, or a peer a benchmark compares it with."""
+"""Eq. 7 for one period: :func:`solve_period_reusing` (an identical period's trajectory if one
+was solved in this process, else :func:`nlp.solve_period`), or a peer a benchmark compares it
+with."""
 
 
 def plan_writing(
     strokes: Sequence[StrokeInput],
     surface: Surface,
     settings: PlanSettings,
-    solve: PeriodSolver = solve_period,
+    solve: PeriodSolver = solve_period_reusing,
 ) -> WritingPlan:
     """The contact-aware motion-force plan of ``strokes`` on a vertical ``surface``."""
     checked, periods, clamped = _periods(strokes, settings)
@@ -192,14 +195,20 @@ def _report(
     settings: PlanSettings,
     clamped: int,
 ) -> dict[str, object]:
+    """The plan's feasibility report: per period how it was found (``start``: ``cold`` solved
+    now, ``reused`` from an identical period solved before, with that solve's IPOPT status,
+    iterations and times), the IPOPT work of this plan (the periods solved now), and the peaks
+    against the limits."""
     lim = settings.limits
     rate = np.abs(np.diff(f)) / np.maximum(np.diff(t), 1e-9)
+    solved = [s for s in solutions if s.start is PeriodStart.COLD]
     return {
         "planner": "contact-aware motion-force (CasADi/IPOPT)",
         "periods": [
             {
                 "label": per.label,
                 "contact": per.contact,
+                "start": sol.start.value,
                 "ipopt_status": sol.status,
                 "ipopt_iterations": sol.iterations,
                 "ipopt_s": round(sol.ipopt_s, 4),
@@ -209,9 +218,10 @@ def _report(
             }
             for per, sol in zip(periods, solutions, strict=True)
         ],
-        "ipopt_solve_s": round(sum(s.ipopt_s for s in solutions), 4),
-        "build_and_solve_s": round(sum(s.solve_s for s in solutions), 4),
-        "ipopt_iterations": sum(s.iterations for s in solutions),
+        "periods_reused": len(solutions) - len(solved),
+        "ipopt_solve_s": round(sum(s.ipopt_s for s in solved), 4),
+        "build_and_solve_s": round(sum(s.solve_s for s in solved), 4),
+        "ipopt_iterations": sum(s.iterations for s in solved),
         "peak_speed_mps": round(float(np.linalg.norm(v, axis=1).max()), 4),
         "v_max_mps": lim.v_max_mps,
         "peak_acceleration_mps2": round(float(np.linalg.norm(a, axis=1).max()), 4),
