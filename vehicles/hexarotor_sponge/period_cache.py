@@ -23,6 +23,7 @@ from collections import OrderedDict
 from dataclasses import dataclass, replace
 
 from vehicles.hexarotor_sponge.nlp import (
+    FloatArray,
     Limits,
     PeriodSolution,
     PeriodStart,
@@ -61,9 +62,13 @@ def _key(local: Period, params: HexarotorParams, limits: Limits) -> tuple[object
     )
 
 
+def _arrays(solution: PeriodSolution) -> tuple[FloatArray, ...]:
+    return (solution.t_s, solution.p_m, solution.v_mps, solution.a_mps2, solution.force_n,
+            solution.control_n)  # fmt: skip
+
+
 def _nbytes(solution: PeriodSolution) -> int:
-    arrays = (solution.t_s, solution.p_m, solution.v_mps, solution.a_mps2, solution.force_n)
-    return sum(a.nbytes for a in arrays) + solution.control_n.nbytes
+    return sum(a.nbytes for a in _arrays(solution))
 
 
 class SolvedPeriods:
@@ -99,6 +104,8 @@ class SolvedPeriods:
             self._misses += 1
             if key in self._kept or size > self._max_bytes:
                 return
+            for array in _arrays(solution):  # shared with every plan that reuses it
+                array.setflags(write=False)
             self._kept[key] = solution
             self._nbytes += size
             while self._nbytes > self._max_bytes:
