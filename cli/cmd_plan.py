@@ -150,9 +150,19 @@ def _add_planner_arguments(parser: argparse.ArgumentParser) -> None:
         "--total-time", type=float, action=_BrushOption, help="fixed total time [s] (default: free)"
     )
     opt.add_argument(
-        "--solver", choices=("piqp", "clarabel", "osqp"), default="piqp", action=_BrushOption
+        "--solver",
+        choices=defaults.SOLVERS,
+        default=defaults.SOLVERS[0],
+        action=_BrushOption,
+        help=f"QP solver of the acceleration-limited fit ({defaults.SOLVERS[0]})",
     )
-    opt.add_argument("--method", choices=("qp", "closed-form"), default="qp", action=_BrushOption)
+    opt.add_argument(
+        "--method",
+        choices=("qp", "closed-form"),
+        default="qp",
+        action=_BrushOption,
+        help="qp: the limits imposed; closed-form: only checked (qp)",
+    )
     opt.add_argument(
         "--no-resegment",
         nargs=0,
@@ -166,6 +176,8 @@ def _add_planner_arguments(parser: argparse.ArgumentParser) -> None:
         choices=("analytic", "numerical"),
         default="analytic",
         action=_BrushOption,
+        help="re-segmentation gradient: analytic (envelope, L-BFGS) or numerical "
+        "(the paper's eq. 56) (analytic)",
     )
     opt.add_argument(
         "--split-threshold",
@@ -179,7 +191,7 @@ def _add_planner_arguments(parser: argparse.ArgumentParser) -> None:
         type=float,
         default=defaults.SAMPLE_RATE_HZ,
         action=_BrushOption,
-        help="sample rate of TRAJ.json [Hz]",
+        help=f"sample rate of TRAJ.json [Hz] ({defaults.SAMPLE_RATE_HZ:g})",
     )
 
 
