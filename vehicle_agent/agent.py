@@ -73,7 +73,7 @@ def make_backend(
             fleet=None if step_round is None else step_round.fleet,
         )
         return SimBackend(sim, step_round)
-    mavlink = importlib.import_module("vehicle_agent.backends.mavlink")
+    mavlink = importlib.import_module("vehicle_agent.backends.mavlink_setup")
     backend: VehicleBackend = mavlink.create_backend(setup, on_text=on_text)
     return backend
 

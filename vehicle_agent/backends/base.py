@@ -27,8 +27,9 @@ MAVLink backend stamps messages with ``now_s`` passed by the agent. World frame 
 everywhere; conversion to NED happens only inside the MAVLink backend.
 
 Creating a backend: ``vehicle_agent.agent.make_backend(setup)`` builds the simulator itself and,
-for ``backend: mavlink`` vehicles, calls ``vehicle_agent.backends.mavlink.create_backend(setup)``
-with the agent's ``VehicleSetup`` (show, vehicle id, board frame, runner config, time scale).
+for ``backend: mavlink`` vehicles, calls
+``vehicle_agent.backends.mavlink_setup.create_backend(setup)`` with the agent's ``VehicleSetup``
+(show, vehicle id, board frame, runner config, time scale).
 """
 
 from __future__ import annotations

@@ -1,10 +1,9 @@
 """The MAVLink backend: the agent flies a PX4 or ArduPilot vehicle (or ``skyquill sim-mavlink``).
 
-``start`` opens the link, announces itself as a ground station (HEARTBEAT MAV_TYPE_GCS: PX4 sends
-STATUSTEXT only to links where it hears one), waits for the autopilot's heartbeat (system and
-component id from it, ArduPilot or PX4 from its ``autopilot`` field), asks for position/attitude
-telemetry at the control rate, then sets and reads back the parameters the show depends on
-(:mod:`~vehicle_agent.backends.mavlink_params`; if they do not hold, the vehicle is in fault).
+Built from a show's vehicle by :func:`~vehicle_agent.backends.mavlink_setup.create_backend`.
+``start`` opens the link and connects (:mod:`~vehicle_agent.backends.mavlink_connect`: our
+ground-station heartbeat, the autopilot's, the telemetry asked for, the show's parameters set and
+read back; if they do not hold, the vehicle is in fault).
 ``takeoff``: ArduPilot -> GUIDED (custom mode 4, MAV_CMD_DO_SET_MODE), arm, MAV_CMD_NAV_TAKEOFF
 (param 7: metres above home); PX4 -> stream setpoints for a second, OFFBOARD, arm, then our own
 climb ramp. ``tick`` streams SET_POSITION_TARGET_LOCAL_NED (p, v, a and the take-off heading) or
@@ -26,53 +25,43 @@ import math
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import replace
 from typing import Any
 
 from vehicle_agent.backends.base import BackendError, BackendMode, Setpoint, Vec3, VehicleSnapshot
 from vehicle_agent.backends.mavlink_commands import CommandChannel
+from vehicle_agent.backends.mavlink_connect import (
+    GCS_HEARTBEAT_PERIOD_S,
+    await_autopilot,
+    request_telemetry,
+    send_gcs_heartbeat,
+    set_show_params,
+)
 from vehicle_agent.backends.mavlink_errors import (
     CommandRejectedError,
     LinkLostError,
     UnsupportedAutopilotError,
     VehicleFaultError,
 )
-from vehicle_agent.backends.mavlink_frames import LocalFrame, ned_to_enu
+from vehicle_agent.backends.mavlink_frames import LocalFrame
 from vehicle_agent.backends.mavlink_link import MavlinkLink
 from vehicle_agent.backends.mavlink_mocap import MocapForwarder, MocapSource, TickTime
-from vehicle_agent.backends.mavlink_params import (
-    ParamChannel,
-    ParamError,
-    autopilot_fence,
-    mocap_params,
-    show_params,
-)
+from vehicle_agent.backends.mavlink_params import ParamChannel
 from vehicle_agent.backends.mavlink_pen import PenOverBoard
 from vehicle_agent.backends.mavlink_response import ResponseAid
-from vehicle_agent.backends.mavlink_settings import MavlinkSettings, settings_from_show
-from vehicle_agent.backends.mavlink_state import (
-    MAV_AUTOPILOT_INVALID,
-    MAV_TYPE_GCS,
-    SEVERITY_WARNING,
-    LinkState,
-)
+from vehicle_agent.backends.mavlink_settings import MavlinkSettings
+from vehicle_agent.backends.mavlink_snapshot import vehicle_snapshot
+from vehicle_agent.backends.mavlink_state import SEVERITY_WARNING, LinkState
 from vehicle_agent.backends.mavlink_stream import SetpointStream
 from vehicle_agent.backends.mavlink_url import parse_mavlink_url
 from vehicle_agent.backends.mavlink_watchdog import Commanded, Watchdog, WatchLimits
 from vehicle_agent.motion import Move, plan_move
-from vehicle_agent.setup import VehicleSetup, autopilot_world, on_board
 
 log = logging.getLogger(__name__)
 
 CMD_NAV_LAND, CMD_NAV_TAKEOFF, CMD_DO_SET_MODE = 21, 22, 176
-CMD_ARM_DISARM, CMD_SET_MESSAGE_INTERVAL = 400, 511
+CMD_ARM_DISARM = 400
 FORCE_DISARM = 21196.0
-STREAMED = {32: "LOCAL_POSITION_NED", 30: "ATTITUDE", 85: "POSITION_TARGET_LOCAL_NED"}
-SLOW = {1: "SYS_STATUS", 147: "BATTERY_STATUS", 245: "EXTENDED_SYS_STATE"}
 TextHandler = Callable[[int, str], None]
-GCS_HEARTBEAT_PERIOD_S = 0.5
-"""Our heartbeat period in [s]: PX4 drops a ground station unheard for 2.5 s (and its texts with
-it), so a stall of the agent of up to 2 s keeps the texts coming."""
 
 
 class MavlinkBackend:
@@ -140,66 +129,33 @@ class MavlinkBackend:
     # --- connection --------------------------------------------------------------------------
     async def start(self) -> VehicleSnapshot:
         """Open the link and wait for the autopilot's heartbeat."""
-        self._link = MavlinkLink(parse_mavlink_url(self.settings.url), self._on_message)
+        s = self.settings
+        self._link = MavlinkLink(parse_mavlink_url(s.url), self._on_message)
         await self._link.open()
-        loop = asyncio.get_running_loop()
-        deadline = loop.time() + self.settings.connect_timeout_s
-        while not self.state.connected:
-            self._send_gcs_heartbeat()
-            if loop.time() >= deadline:
-                self.close_link()
-                raise LinkLostError(
-                    f"no autopilot heartbeat on {self.settings.url} within "
-                    f"{self.settings.connect_timeout_s:.0f} s"
-                )
-            try:
-                await asyncio.wait_for(self._heartbeat_seen.wait(), timeout=0.5)
-            except TimeoutError:
-                continue
-        if self.state.flavor is None:
+        try:
+            await await_autopilot(self.state, self._heartbeat_seen, self._send_gcs_heartbeat,
+                                  url=s.url, timeout_s=s.connect_timeout_s)  # fmt: skip
+        except (LinkLostError, UnsupportedAutopilotError):
             self.close_link()
-            raise UnsupportedAutopilotError(
-                f"autopilot type {self.state.autopilot} on {self.settings.url} is neither "
-                "ArduPilot nor PX4"
-            )
-        self._request_telemetry()
+            raise
+        request_telemetry(
+            self.commands, s.telemetry_rate_hz, self.aid.truth_message(self._flavor().name)
+        )
         # also after a fault: the autopilot (or the pilot) still flies on the mocap
         self._mocap.start(lambda: self._link, self.tick_time)
         if self.state.armed:
             self.fault = "vehicle already armed when the agent connected: the pilot has it"
         else:
-            if self.settings.set_params:
-                await self._configure()
+            if s.set_params:
+                fault = await set_show_params(self.params, s, self._flavor().name, self.params_set)
+                if fault is not None:
+                    self.fault = fault
+                    log.error("vehicle %s: %s", self.state.system_id, fault)
             if self._flavor().name == "px4":  # ArduPilot: once it says it uses external nav
                 self._mocap.set_ekf_origin(self.link, self.state.system_id or 0)
         log.info("MAVLink vehicle %s (%s) on %s", self.state.system_id,
-                 self.state.flavor.name, self.settings.url)  # fmt: skip
+                 self._flavor().name, s.url)  # fmt: skip
         return self._snapshot(0.0)
-
-    async def _configure(self) -> None:
-        """Set and read back every parameter the show needs; a fault if one does not hold."""
-        s = self.settings
-        specs = show_params(self._flavor().name, setpoint_timeout_s=s.setpoint_timeout_s,
-                            fence=s.fence)  # fmt: skip
-        if s.mocap != "none":
-            specs += mocap_params(self._flavor().name, with_velocity=s.mocap == "odometry")
-        for spec in specs:
-            try:
-                self.params_set[spec.name] = await self.params.ensure(spec)
-            except ParamError as exc:
-                self.fault = f"parameters not set, vehicle refused: {exc}"
-                log.error("vehicle %s: %s", self.state.system_id, self.fault)
-                return
-
-    def _request_telemetry(self) -> None:
-        fast_us = 1e6 / self.settings.telemetry_rate_hz
-        for message_id in STREAMED:
-            self.commands.send(CMD_SET_MESSAGE_INTERVAL, message_id, fast_us)
-        for message_id in SLOW:
-            self.commands.send(CMD_SET_MESSAGE_INTERVAL, message_id, 1e6)
-        truth = self.aid.truth_message(self._flavor().name)
-        if truth is not None:
-            self.commands.send(CMD_SET_MESSAGE_INTERVAL, truth, fast_us)
 
     def _on_message(self, message: Any) -> None:
         kind = self.state.absorb(message)
@@ -349,9 +305,7 @@ class MavlinkBackend:
 
     def _send_gcs_heartbeat(self) -> None:
         if self._link is not None:
-            # a ground station (PX4 sends STATUSTEXT only then), no autopilot, MAV_STATE_ACTIVE
-            hb = self._link.mav.heartbeat_encode(MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, 0, 0, 4)
-            self._link.send(hb)
+            send_gcs_heartbeat(self._link)
 
     def _set_backend_mode(self, mode: BackendMode) -> None:
         self.mode = mode
@@ -427,50 +381,6 @@ class MavlinkBackend:
         return self.frame.origin_m_enu if ned is None else self.frame.position_from_ned(ned)
 
     def _snapshot(self, now_s: float) -> VehicleSnapshot:
-        st = self.state
-        on_ground = st.landed_state == 1 if st.landed_state is not None else not st.armed
         position = self._position_m_enu()
-        truth = self.aid.true_state(now_s)
-        body, attitude = (position, st.attitude_ned) if truth is None else (
-            truth.position_m_enu, truth.attitude_ned_rad)  # fmt: skip
-        pen = None
-        if self.pen is not None and attitude is not None:
-            pen = self.pen.read(body, attitude)
-        return VehicleSnapshot(
-            t_s=now_s,
-            position_m_enu=position,
-            velocity_mps_enu=ned_to_enu(st.velocity_ned),
-            armed=st.armed,
-            mode=self.mode,
-            on_ground=on_ground,
-            battery_fraction=st.battery_fraction,
-            fault=self.fault,
-            pen_tip_m_enu=None if pen is None else pen.tip_m_enu,
-            pen_width_m=None if pen is None else pen.width_m,
-            pen_contact=None if pen is None else pen.contact,
-            autopilot_mode=None if st.flavor is None else st.flavor.mode_name(st.custom_mode or 0),
-            true_position_m_enu=None if truth is None else truth.position_m_enu,
-        )
-
-
-def create_backend(setup: VehicleSetup, **kwargs: Any) -> MavlinkBackend:
-    """The backend of ``setup`` (a :class:`vehicle_agent.agent.VehicleSetup` whose vehicle has
-    ``backend: mavlink``), carrying its kind's pen over its board and, as a second line, the
-    autopilot's own fence around the agent's geofence; ``kwargs`` go to :class:`MavlinkBackend`
-    (``on_text``, ``mocap_source``)."""
-    show = setup.show
-    vehicle = show.vehicle(setup.vehicle_id)
-    settings = settings_from_show(show, vehicle)
-    fence = setup.runner_config.safety.fence
-    if show.safety.autopilot_fence and fence is not None:
-        settings = replace(
-            settings,
-            fence=autopilot_fence(
-                fence, settings.origin_m_enu, show.safety.autopilot_fence_margin_m
-            ),
-        )
-    world = autopilot_world(setup)
-    settings = replace(settings, mocap_latency_s=world.mocap_latency_s,
-                       mocap_noise_std_m=world.mocap_noise_std_m)  # fmt: skip
-    kwargs.setdefault("pen", PenOverBoard(world.pen, on_board(setup)))
-    return MavlinkBackend(settings, **kwargs)
+        return vehicle_snapshot(self.state, now_s, position, self.aid.true_state(now_s),
+                                mode=self.mode, fault=self.fault, pen=self.pen)  # fmt: skip
