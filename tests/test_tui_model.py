@@ -153,10 +153,10 @@ def test_the_orchestrator_leaving_keeps_the_last_known_state() -> None:
     assert model.orchestrator == "offline"
     assert model.job("j1") is not None
     assert [a.kind for a in model.alerts()] == ["orchestrator_lost"]
-    assert model.events_after(0)[-1][1].kind == "orchestrator"
+    assert model.events.after(0)[-1][1].kind == "orchestrator"
     model.apply(OrchestratorPresence(alive=True), 6.0)
     assert model.orchestrator == "online"
-    assert model.events_after(0)[-1][1].message == "orchestrator back"
+    assert model.events.after(0)[-1][1].message == "orchestrator back"
 
 
 def test_an_older_job_state_never_overwrites_a_newer_one() -> None:
@@ -224,7 +224,7 @@ def test_a_snapshot_of_another_show_is_ignored_and_logged() -> None:
     model = ConsoleModel(SETTINGS)
     model.apply_snapshot(snapshot([job("j1", "queued")], show_id="other"), 0.0, full=True)
     assert model.job("j1") is None
-    assert model.events_after(0)[-1][1].kind == "bad_message"
+    assert model.events.after(0)[-1][1].kind == "bad_message"
 
 
 def test_queue_rows_come_in_sections_and_queue_order() -> None:
@@ -276,11 +276,11 @@ def test_refused_commands_and_bad_payloads_are_logged() -> None:
     model.record_command(
         OperatorCommand(command="land", vehicle_id="uav1"), CommandReply(ok=True, message="ok"), 1.0
     )
-    assert model.events_after(0) == []  # the orchestrator logs accepted commands itself
+    assert model.events.after(0) == []  # the orchestrator logs accepted commands itself
     refused = CommandReply(ok=False, error=ErrorInfo(code="no_answer", message="no answer"))
     model.record_command(OperatorCommand(command="land", vehicle_id="uav1"), refused, 1.5)
     model.apply(BadPayload("skyquill/s/events", "not valid JSON"), 2.0)
-    events = [e for _, e in model.events_after(0)]
+    events = [e for _, e in model.events.after(0)]
     assert (events[0].kind, events[0].message, events[0].vehicle_id) == (
         "command",
         "land uav1 -> no answer",
@@ -294,8 +294,8 @@ def test_event_log_is_bounded_and_sequenced() -> None:
     model = ConsoleModel(SETTINGS, max_events=3)
     for i in range(5):
         model.apply(Event(time_s=float(i), level="info", kind="k", message=str(i)), 0.0)
-    assert [e.message for _, e in model.events_after(0)] == ["2", "3", "4"]
-    assert [e.message for _, e in model.events_after(4)] == ["4"]
+    assert [e.message for _, e in model.events.after(0)] == ["2", "3", "4"]
+    assert [e.message for _, e in model.events.after(4)] == ["4"]
 
 
 def test_tracks_restart_with_a_new_job_and_ignore_samples_without_one() -> None:
@@ -356,7 +356,7 @@ def ev(time_s: float, message: str) -> Event:
 
 def test_a_late_joiner_gets_recent_history_from_the_snapshot_once() -> None:
     m = ConsoleModel(SETTINGS)
-    m.note(5.0, "info", "console", "console's own note")  # never hides the show's history
+    m.events.note(5.0, "info", "console", "console's own note")  # never hides the show's history
     with_history = msgspec.structs.replace(snapshot([]), events=[ev(1.0, "a"), ev(2.0, "b")])
     m.apply_snapshot(with_history, 10.0, full=True)
     m.apply(ev(3.0, "c"), 10.5)  # live
@@ -366,7 +366,7 @@ def test_a_late_joiner_gets_recent_history_from_the_snapshot_once() -> None:
         full=True,
     )
     m.apply_snapshot(msgspec.structs.replace(snapshot([]), events=[ev(9.0, "x")]), 12, full=False)
-    shown = [e.message for _, e in m.events_after(0)]
+    shown = [e.message for _, e in m.events.after(0)]
     assert shown == ["console's own note", "a", "b", "c", "d"]  # fleet publications add none
 
 

@@ -135,10 +135,10 @@ def test_console_approves_and_pauses_with_the_real_orchestrator(tmp_path: Path) 
             # The orchestrator's event log reaches the console: one line per accepted command.
             await until(
                 pilot,
-                lambda: len([e for _, e in app.model.events_after(0) if e.kind == "operator"]) == 3,
+                lambda: len([e for _, e in app.model.events.after(0) if e.kind == "operator"]) == 3,
                 "three operator events",
             )
-            logged = [e.message for _, e in app.model.events_after(0) if e.kind == "operator"]
+            logged = [e.message for _, e in app.model.events.after(0) if e.kind == "operator"]
             for line, command in zip(logged, ["approve", "pause", "resume"], strict=True):
                 assert command in line
 
@@ -171,7 +171,7 @@ def test_console_holds_releases_rejects_with_reason_and_reprioritises(tmp_path: 
             await until(pilot, lambda: app._queue.selected_job == job_ids[0], "the submissions")
             await until(  # from before the console joined: only the snapshot has them
                 pilot,
-                lambda: [e.kind for _, e in app.model.events_after(0)].count("job_submitted") == 2,
+                lambda: [e.kind for _, e in app.model.events.after(0)].count("job_submitted") == 2,
                 "the show's recent history",
             )
             app._queue.focus()

@@ -188,7 +188,7 @@ class ConsoleApp(App[None]):
         snapshot = await self.link.query_snapshot()
         now_s = self.clock()
         if snapshot is None:
-            self.model.note(now_s, "warning", "console", "no snapshot from the orchestrator")
+            self.model.events.note(now_s, "warning", "console", "no snapshot from the orchestrator")
         else:
             self.model.apply_snapshot(snapshot, now_s, full=True)
 
@@ -205,8 +205,8 @@ class ConsoleApp(App[None]):
         table_done = self._redraw_fleet(now_s)
         self._redraw_queue()
         self._redraw_boards(now_s)
-        if self.model.event_seq != self._event_log.last_seq:
-            self._event_log.add_events(self.model.events_after(self._event_log.last_seq))
+        if self.model.events.seq != self._event_log.last_seq:
+            self._event_log.add_events(self.model.events.after(self._event_log.last_seq))
         if isinstance(self.screen, VehicleDetailScreen):
             self.screen.sync(now_s)
         if table_done:  # else the next tick comes back for the table

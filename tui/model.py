@@ -4,11 +4,12 @@ Pure: no Textual and no Zenoh. :meth:`ConsoleModel.apply` takes any message from
 console's own presence/command records) with the time it arrived; widgets read rows from it.
 Telemetry of many vehicles is merged here, so widgets redraw at a bounded rate whatever the
 message rate. Each area has a version counter so a view can tell whether it has to redraw.
+The event log is :class:`tui.event_history.EventHistory` (``ConsoleModel.events``); the alerts
+are raised by :func:`tui.records.current_alerts`, the model keeps which ones were acknowledged.
 """
 
 from __future__ import annotations
 
-from collections import deque
 from typing import Literal
 
 from bus.messages import (
@@ -21,14 +22,16 @@ from bus.messages import (
     VehicleStatus,
     VehicleSummary,
 )
+from tui.event_history import EventHistory
 from tui.inputs import BadPayload, BusInput, OrchestratorPresence, VehiclePresence
 from tui.records import (
     AWAITING_JOB_STATES,
     FINAL_JOB_STATES,
     VehicleRecord,
-    job_alerts,
+    current_alerts,
+    force_off,
+    over_threshold,
     queue_rows,
-    vehicle_alert,
     with_known_strokes,
 )
 from tui.rows import Alert, QueueRow, VehicleRow
@@ -58,10 +61,8 @@ class ConsoleModel:
             )
         self._sorted_ids: list[str] | None = None
         self._jobs: dict[str, JobState] = {}
-        self._events: deque[tuple[int, Event]] = deque(maxlen=max_events)
-        self._event_seq = 0
-        self._show_event_s = float("-inf")
-        """Time of the newest event of the show (not the console's own notes) in the log."""
+        self.events = EventHistory(max_events)
+        """The event log: the show's events and the console's own notes."""
         self._acknowledged: set[str] = set()
         self.orchestrator: OrchestratorStatus = "unknown"
         """Whether the orchestrator's liveliness token exists (unknown before any news)."""
@@ -90,7 +91,7 @@ class ConsoleModel:
             + self.queue_version
             + self.status_version
             + self.tracks_version
-            + self._event_seq
+            + self.events.seq
         )
 
     def vehicle_ids(self) -> list[str]:
@@ -121,14 +122,14 @@ class ConsoleModel:
             battery_fraction=v.battery_fraction,
             link_age_s=age,
             stale=age is not None and age > self.settings.lost_after_s,
-            over_threshold=self._over_threshold(v),
+            over_threshold=over_threshold(v, self.settings),
             message=v.message,
             position_m_enu=v.position_m_enu,
             held=v.held,
             surface=v.surface,
             force_n=v.force_n,
             force_reference_n=v.force_reference_n,
-            force_off=self._force_off(v),
+            force_off=force_off(v, self.settings),
         )
 
     def vehicle_rows(self, now_s: float) -> list[VehicleRow]:
@@ -178,15 +179,6 @@ class ConsoleModel:
         """Awaiting approval, queued (in queue order), active, then ended (newest first)."""
         return queue_rows(self._jobs.values())
 
-    def events_after(self, seq: int) -> list[tuple[int, Event]]:
-        """Events with a sequence number above ``seq`` (0 for all kept), oldest first."""
-        return [(s, e) for s, e in self._events if s > seq]
-
-    @property
-    def event_seq(self) -> int:
-        """Sequence number of the newest event."""
-        return self._event_seq
-
     def alerts(self) -> list[Alert]:
         """Current alerts, minus the acknowledged ones (whose causes still last)."""
         current = self._all_alerts()
@@ -201,42 +193,10 @@ class ConsoleModel:
         return len(current)
 
     def _all_alerts(self) -> list[Alert]:
-        alerts: list[Alert] = []
-        if self.orchestrator == "offline":
-            alerts.append(
-                Alert(
-                    "orchestrator",
-                    "orchestrator_lost",
-                    "orchestrator gone: showing the last known state",
-                )
-            )
-        limit_m = self.settings.tracking_error_alert_m
-        for vid in self.vehicle_ids():
-            v = self._vehicles[vid]
-            alert = vehicle_alert(
-                v, limit_m, over_threshold=self._over_threshold(v), force_off=self._force_off(v)
-            )
-            if alert is not None:
-                alerts.append(alert)
-        alerts.extend(job_alerts(self._jobs.values(), self.dirty_boards))
-        return alerts
-
-    def _over_threshold(self, v: VehicleRecord) -> bool:
-        return (
-            v.alive is not False
-            and v.state == "writing"
-            and v.tracking_error_m is not None
-            and v.tracking_error_m > self.settings.tracking_error_alert_m
-        )
-
-    def _force_off(self, v: VehicleRecord) -> bool:
-        return (
-            v.alive is not False
-            and v.state == "writing"
-            and v.force_n is not None
-            and v.force_reference_n is not None
-            and abs(v.force_n - v.force_reference_n) > self.settings.force_error_alert_n
-        )
+        vehicles = [self._vehicles[vid] for vid in self.vehicle_ids()]
+        offline = self.orchestrator == "offline"
+        jobs = self._jobs.values()
+        return current_alerts(offline, vehicles, jobs, self.dirty_boards, self.settings)
 
     # --- writing ---------------------------------------------------------------------------------
     def apply(self, item: BusInput, now_s: float) -> None:
@@ -248,8 +208,7 @@ class ConsoleModel:
         elif isinstance(item, JobState):
             self._job(item)
         elif isinstance(item, Event):
-            self._show_event_s = max(self._show_event_s, item.time_s)
-            self.add_event(item)
+            self.events.show_event(item)
         elif isinstance(item, ShowSnapshot):
             self.apply_snapshot(item, now_s, full=False)
         elif isinstance(item, VehiclePresence):
@@ -257,14 +216,14 @@ class ConsoleModel:
         elif isinstance(item, OrchestratorPresence):
             self._orchestrator(item.alive, now_s)
         elif isinstance(item, BadPayload):
-            self.note(
+            self.events.note(
                 now_s, "warning", "bad_message", f"unreadable message on {item.key}: {item.message}"
             )
 
     def apply_snapshot(self, snapshot: ShowSnapshot, now_s: float, *, full: bool) -> None:
         """A ``snapshot`` answer (``full``: it lists every job) or a ``fleet`` publication."""
         if snapshot.show_id != self.settings.show_id:
-            self.note(
+            self.events.note(
                 now_s, "warning", "bad_message", f"snapshot of show {snapshot.show_id!r} ignored"
             )
             return
@@ -278,7 +237,7 @@ class ConsoleModel:
             self._jobs = jobs
             self._evict_finished()
             self.queue_version += 1
-            self._history(snapshot.events)
+            self.events.history(snapshot.events)
         else:
             for job in snapshot.jobs:
                 self._job(job)
@@ -297,31 +256,6 @@ class ConsoleModel:
         self.last_snapshot_s = now_s
         self.fleet_version += 1
 
-    def _history(self, events: list[Event]) -> None:
-        """The show's recent events from a snapshot: those newer than any already logged."""
-        for event in events:
-            if event.time_s > self._show_event_s:
-                self._show_event_s = event.time_s
-                self.add_event(event)
-
-    def add_event(self, event: Event) -> None:
-        self._event_seq += 1
-        self._events.append((self._event_seq, event))
-
-    def note(
-        self,
-        now_s: float,
-        level: Literal["info", "warning", "alert"],
-        kind: str,
-        message: str,
-        *,
-        vehicle_id: str | None = None,
-    ) -> None:
-        """An event of the console itself (operator actions, answers, presence)."""
-        self.add_event(
-            Event(time_s=now_s, level=level, kind=kind, message=message, vehicle_id=vehicle_id)
-        )
-
     def record_command(self, command: OperatorCommand, reply: CommandReply, now_s: float) -> None:
         """An operator command and the orchestrator's answer (kept for the status line).
 
@@ -330,19 +264,8 @@ class ConsoleModel:
         """
         self.last_reply = (command, reply)
         self.status_version += 1
-        if reply.ok:
-            return
-        target = command.job_id or command.vehicle_id or ""
-        answer = reply.message or "refused"
-        if reply.error is not None:
-            answer = f"{answer}: {reply.error.message}" if reply.message else reply.error.message
-        self.note(
-            now_s,
-            "warning",
-            "command",
-            f"{command.command} {target}".rstrip() + f" -> {answer}",
-            vehicle_id=command.vehicle_id,
-        )
+        if not reply.ok:
+            self.events.command_refused(command, reply, now_s)
 
     def _vehicle(self, vehicle_id: str) -> VehicleRecord:
         v = self._vehicles.get(vehicle_id)
@@ -436,6 +359,8 @@ class ConsoleModel:
         self.orchestrator_changed_s = now_s
         self.status_version += 1
         if not alive:
-            self.note(now_s, "alert", "orchestrator", "orchestrator gone; last known state kept")
+            self.events.note(
+                now_s, "alert", "orchestrator", "orchestrator gone; last known state kept"
+            )
         elif previous == "offline":
-            self.note(now_s, "info", "orchestrator", "orchestrator back")
+            self.events.note(now_s, "info", "orchestrator", "orchestrator back")

@@ -1,4 +1,4 @@
-"""What the console keeps per vehicle, and the alerts its records raise (pure)."""
+"""What the console keeps per vehicle and job, and the alerts they raise (pure)."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import msgspec
 
 from bus.messages import JobState
 from tui.rows import Alert, QueueRow, QueueSection
+from tui.settings import ConsoleSettings
 from tui.tracks import Track
 
 AWAITING_JOB_STATES = frozenset({"awaiting_approval", "submitted"})
@@ -46,6 +47,56 @@ class VehicleRecord:
         self.force_n: float | None = None
         self.force_reference_n: float | None = None
         self.track = Track()
+
+
+def over_threshold(v: VehicleRecord, settings: ConsoleSettings) -> bool:
+    """Whether a present vehicle writes with a tracking error over the console's limit."""
+    return (
+        v.alive is not False
+        and v.state == "writing"
+        and v.tracking_error_m is not None
+        and v.tracking_error_m > settings.tracking_error_alert_m
+    )
+
+
+def force_off(v: VehicleRecord, settings: ConsoleSettings) -> bool:
+    """Whether a present vehicle writes with a contact force off its target by over the limit."""
+    return (
+        v.alive is not False
+        and v.state == "writing"
+        and v.force_n is not None
+        and v.force_reference_n is not None
+        and abs(v.force_n - v.force_reference_n) > settings.force_error_alert_n
+    )
+
+
+def current_alerts(
+    orchestrator_offline: bool,
+    vehicles: Iterable[VehicleRecord],
+    jobs: Iterable[JobState],
+    dirty_boards: Iterable[str],
+    settings: ConsoleSettings,
+) -> list[Alert]:
+    """Every alert raised now: the orchestrator gone, then each vehicle's (in ``vehicles``'
+    order), then the boards' and jobs' (:func:`job_alerts`)."""
+    alerts: list[Alert] = []
+    if orchestrator_offline:
+        alerts.append(
+            Alert(
+                "orchestrator",
+                "orchestrator_lost",
+                "orchestrator gone: showing the last known state",
+            )
+        )
+    limit_m = settings.tracking_error_alert_m
+    for v in vehicles:
+        alert = vehicle_alert(
+            v, limit_m, over_threshold=over_threshold(v, settings), force_off=force_off(v, settings)
+        )
+        if alert is not None:
+            alerts.append(alert)
+    alerts.extend(job_alerts(jobs, dirty_boards))
+    return alerts
 
 
 def vehicle_alert(

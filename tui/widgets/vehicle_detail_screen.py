@@ -108,7 +108,7 @@ class VehicleDetailScreen(Screen[None]):
         self.query_one(BoardView).sync(now_s)
         self.query_one(ForcePlot).sync()
         log = self.query_one(EventLog)
-        log.add_events(self.model.events_after(log.last_seq))
+        log.add_events(self.model.events.after(log.last_seq))
 
     def action_back(self) -> None:
         self.dismiss()
