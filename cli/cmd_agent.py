@@ -29,7 +29,7 @@ def run(args: argparse.Namespace) -> int:
     from bus.session import SessionOpenError
     from showfile import ShowError, load_show
     from vehicle_agent.agent import make_backend, run_agent_blocking, vehicle_setup
-    from vehicle_agent.service import EventOutbox
+    from vehicle_agent.events import EventOutbox
 
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,

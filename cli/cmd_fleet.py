@@ -41,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
 
     from showfile import ShowError, load_show
     from vehicle_agent.fleet import FleetError, FleetHost
-    from vehicle_agent.service import run_until_signalled
+    from vehicle_agent.signals import run_until_signalled
 
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,

@@ -26,8 +26,10 @@ from bus.rpc import aquery_one, serve
 from bus.session import BusSettings, Session, open_session
 from vehicle_agent.backends.base import BackendError, CommandRefusedError, Vec3
 from vehicle_agent.backends.kinematic import KinematicBackend
+from vehicle_agent.events import EventOutbox
 from vehicle_agent.job_runner import JobRunner, PreparedJob
-from vehicle_agent.service import AgentService, EventOutbox, ServiceSettings
+from vehicle_agent.service import AgentService
+from vehicle_agent.service_settings import ServiceSettings
 from vehicle_agent.trace import JobTrace
 from vehicle_agent.work import ThreadJobWork
 

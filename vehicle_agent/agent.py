@@ -19,16 +19,14 @@ from trust.settings import session_settings
 from vehicle_agent.backends.base import VehicleBackend
 from vehicle_agent.backends.sim import SimBackend, SimVehicle
 from vehicle_agent.backends.sim_round import StepRounds
+from vehicle_agent.events import EventOutbox
 from vehicle_agent.job_runner import JobRunner
 from vehicle_agent.pacer import Pacer
 from vehicle_agent.rest import REST_PERIOD_S
-from vehicle_agent.service import (
-    AgentService,
-    EventOutbox,
-    ServiceSettings,
-    run_until_signalled,
-)
+from vehicle_agent.service import AgentService
+from vehicle_agent.service_settings import ServiceSettings
 from vehicle_agent.setup import VehicleSetup, on_board, vehicle_setup
+from vehicle_agent.signals import run_until_signalled
 from vehicle_agent.work import JobWork
 from vehicle_agent.worker_client import ProcessJobWork
 

@@ -37,8 +37,9 @@ from bus.session import Session, open_session
 from showfile import Show
 from vehicle_agent.agent import make_backend, make_service, vehicle_setup
 from vehicle_agent.backends.sim_round import StepRounds
+from vehicle_agent.events import EventOutbox
 from vehicle_agent.pacer import SharedTicker
-from vehicle_agent.service import AgentService, EventOutbox
+from vehicle_agent.service import AgentService
 from vehicle_agent.setup import VehicleSetup
 from vehicle_agent.work_pool import PlanPool, pool_size
 

@@ -14,9 +14,10 @@ Tasks of a running agent (one process, one event loop):
   the status heartbeat (:func:`status_due_s`): the status at least every ``status_period_s``,
   and something of its own (status or telemetry) at least every ``lost_after_s / 3`` (the
   orchestrator takes a silent vehicle as lost, token or not);
-- the job lease (``vehicle_agent/lease.py``): before each tick, a job that may have been given to
-  another vehicle (this agent stalled, its writing went unacknowledged, or the orchestrator said
-  ``not_assigned``) is given up: brush lifted, back home;
+- the job lease (``vehicle_agent/lease.py``, held by :class:`vehicle_agent.job_guard.JobGuard`):
+  before each tick, a job that may have been given to another vehicle (this agent stalled, its
+  writing went unacknowledged, or the orchestrator said ``not_assigned``) is given up: brush
+  lifted, back home;
 - commands: the ``vehicles/<id>/command`` queryable answered by ``runner.handle_command``;
 - events: what the vehicle says (autopilot STATUSTEXT, a refused take-off) published as Event on
   ``vehicles/<id>/events``, which the orchestrator relays into the show's event log.
@@ -28,18 +29,15 @@ import asyncio
 import contextlib
 import logging
 import math
-import signal
 import time
 from collections import deque
 from dataclasses import replace
-from typing import Protocol
 
 import msgspec
 
 from bus.bridge import FifoChannel
 from bus.keys import ShowKeys
 from bus.messages import (
-    AgentReport,
     CommandReply,
     ErrorInfo,
     JobAssignment,
@@ -59,17 +57,16 @@ from vehicle_agent.backends.base import (
 from vehicle_agent.clock import TickClock
 from vehicle_agent.events import EventOutbox
 from vehicle_agent.fault import clear_fault
+from vehicle_agent.job_guard import JobGuard
 from vehicle_agent.job_runner import JobRunner, PreparedJob, TickActions
 from vehicle_agent.lease import JobLease
 from vehicle_agent.pacer import OwnTimer, Pacer
 from vehicle_agent.reports import ReportOutbox
 from vehicle_agent.rest import at_rest
-from vehicle_agent.runner_io import ACTIVE_PHASES, result_report
+from vehicle_agent.runner_io import result_report
 from vehicle_agent.service_settings import ServiceSettings
 from vehicle_agent.trace import JobTrace
 from vehicle_agent.work import JobWork
-
-__all__ = ["AgentService", "EventOutbox", "ServiceSettings", "run_until_signalled"]
 
 log = logging.getLogger(__name__)
 
@@ -109,6 +106,9 @@ class AgentService:
         self._status_sent: VehicleStatus | None = None
         self._tasks: set[asyncio.Task[None]] = set()
         self._lease = JobLease(settings.lost_after_s)
+        self._guard = JobGuard(
+            self._lease, runner, self.events, self.vehicle_id, lambda: self.clock.now_s
+        )
         self.reports = ReportOutbox(
             self.keys,
             self.vehicle_id,
@@ -116,7 +116,7 @@ class AgentService:
             retry_s=settings.report_retry_s,
             timeout_s=settings.report_timeout_s,
             running_job=lambda: self.runner.job_id,
-            refused=self._give_up,
+            refused=self._guard.give_up,
         )
         self.pacer = pacer if pacer is not None else OwnTimer()
         """What the control loop waits on for its next tick (a fleet host's shared ticker)."""
@@ -242,7 +242,10 @@ class AgentService:
                 await self.pacer.wait_until(time.monotonic() + self.clock.delay_s())
             self.tick_starts_s.append(time.monotonic())
             now_s = self.clock.now_s
-            self._guard_job(time.monotonic())
+            probe = self._guard.before_tick(time.monotonic(), self._stalled_s, self._progress)
+            self._stalled_s = 0.0
+            if probe is not None:
+                self.reports.queue(probe)
             actions = self.runner.step(snapshot, now_s)
             snapshot = await self._fly(actions, snapshot, now_s)
             self._snapshot = snapshot
@@ -267,38 +270,6 @@ class AgentService:
             self.resting = False
             self.clock.catch_up()
             self._wake.set()
-
-    def _guard_job(self, wall_s: float) -> None:
-        """Before a tick: give the job up if it may be someone else's by now; ask the
-        orchestrator to confirm it when the flown job has gone unacknowledged for a while."""
-        lease, runner = self._lease, self.runner
-        gap_s, self._stalled_s = max(lease.tick(wall_s), self._stalled_s), 0.0
-        writing = runner.phase == "write"
-        lease.hold(
-            runner.job_id, active=runner.phase in ACTIVE_PHASES, writing=writing, now_s=wall_s
-        )
-        why = lease.breach(gap_s, wall_s)
-        if why is not None:
-            self._give_up(why)
-        elif lease.job_id is not None and lease.probe_due(wall_s):
-            probe = AgentReport(
-                vehicle_id=self.vehicle_id,
-                job_id=lease.job_id,
-                event="progress" if writing else "holding",
-                progress=self._progress if writing else 0.0,
-            )
-            self.reports.queue(probe)
-
-    def _give_up(self, why: str) -> None:
-        """Stop the job at once (brush up, home): the orchestrator requeues it, or did already."""
-        runner, job_id = self.runner, self.runner.job_id
-        if job_id is None or runner.phase not in ACTIVE_PHASES:
-            return
-        runner.handle_command(VehicleCommand(command="cancel", job_id=job_id), self.clock.now_s)
-        runner.message = f"gave {job_id} up ({why}): brush lifted, returning"
-        log.warning("%s: gave job %s up: %s", self.vehicle_id, job_id, why)
-        message = f"{self.vehicle_id} gave job {job_id} up: {why}"
-        self.events.push("warning", "job_given_up", message, job_id=job_id)
 
     async def _fly(
         self, actions: TickActions, snapshot: VehicleSnapshot, now_s: float
@@ -433,19 +404,3 @@ def _error_reply(info: ErrorInfo) -> CommandReply:
 
 def _with_fault(snapshot: VehicleSnapshot, fault: str) -> VehicleSnapshot:
     return replace(snapshot, fault=fault)
-
-
-class Stoppable(Protocol):
-    """Runs until its stop event is set (an agent's service, a fleet host)."""
-
-    async def run(self, stop: asyncio.Event) -> None: ...
-
-
-async def run_until_signalled(runner: Stoppable) -> None:
-    """Run ``runner`` until SIGINT or SIGTERM."""
-    stop = asyncio.Event()
-    loop = asyncio.get_running_loop()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        with contextlib.suppress(NotImplementedError):
-            loop.add_signal_handler(sig, stop.set)
-    await runner.run(stop)

@@ -1,0 +1,74 @@
+"""The job lease (:mod:`vehicle_agent.lease`) applied to the job the runner flies.
+
+Before each tick the service asks :meth:`JobGuard.before_tick`: a job that may have been given to
+another vehicle by now (this agent stalled, or its writing went unacknowledged) is given up at
+once, brush lifted, back home (:meth:`JobGuard.give_up`, also what the report outbox calls when the
+orchestrator answers ``not_assigned``); a flown job unacknowledged for a while gets a report that
+asks the orchestrator to confirm it, which the service queues.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+
+from bus.messages import AgentReport, VehicleCommand
+from vehicle_agent.events import EventOutbox
+from vehicle_agent.job_runner import JobRunner
+from vehicle_agent.lease import JobLease
+from vehicle_agent.runner_io import ACTIVE_PHASES
+
+log = logging.getLogger(__name__)
+
+
+class JobGuard:
+    """Holds ``runner``'s job to ``lease``; says what it gave up in ``events``."""
+
+    def __init__(
+        self,
+        lease: JobLease,
+        runner: JobRunner,
+        events: EventOutbox,
+        vehicle_id: str,
+        now_s: Callable[[], float],
+    ) -> None:
+        self.lease = lease
+        self.runner = runner
+        self.events = events
+        self.vehicle_id = vehicle_id
+        self._now_s = now_s
+        """The agent's clock, in [s] (commands to the runner are stamped with it)."""
+
+    def before_tick(self, wall_s: float, stalled_s: float, progress: float) -> AgentReport | None:
+        """Give the job up if it may be someone else's by now; the report asking the orchestrator
+        to confirm the job when it has gone unacknowledged for a while, else None. ``wall_s``:
+        wall (monotonic) time in [s]; ``stalled_s``: the longest stall in [s] seen since the last
+        tick; ``progress``: the job's latest progress (0..1)."""
+        lease, runner = self.lease, self.runner
+        gap_s = max(lease.tick(wall_s), stalled_s)
+        writing = runner.phase == "write"
+        lease.hold(
+            runner.job_id, active=runner.phase in ACTIVE_PHASES, writing=writing, now_s=wall_s
+        )
+        why = lease.breach(gap_s, wall_s)
+        if why is not None:
+            self.give_up(why)
+        elif lease.job_id is not None and lease.probe_due(wall_s):
+            return AgentReport(
+                vehicle_id=self.vehicle_id,
+                job_id=lease.job_id,
+                event="progress" if writing else "holding",
+                progress=progress if writing else 0.0,
+            )
+        return None
+
+    def give_up(self, why: str) -> None:
+        """Stop the job at once (brush up, home): the orchestrator requeues it, or did already."""
+        runner, job_id = self.runner, self.runner.job_id
+        if job_id is None or runner.phase not in ACTIVE_PHASES:
+            return
+        runner.handle_command(VehicleCommand(command="cancel", job_id=job_id), self._now_s())
+        runner.message = f"gave {job_id} up ({why}): brush lifted, returning"
+        log.warning("%s: gave job %s up: %s", self.vehicle_id, job_id, why)
+        message = f"{self.vehicle_id} gave job {job_id} up: {why}"
+        self.events.push("warning", "job_given_up", message, job_id=job_id)
