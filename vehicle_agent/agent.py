@@ -71,9 +71,9 @@ def make_backend(
             fleet=None if step_round is None else step_round.fleet,
         )
         return SimBackend(sim, step_round)
-    mavlink = importlib.import_module("vehicle_agent.backends.mavlink_setup")
-    backend: VehicleBackend = mavlink.create_backend(setup, on_text=on_text)
-    return backend
+    from vehicle_agent.backends.mavlink_setup import create_backend  # pymavlink: only here
+
+    return create_backend(setup, on_text=on_text)
 
 
 def make_runner(setup: VehicleSetup) -> JobRunner:
