@@ -3,15 +3,18 @@
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
 
-from vehicles.kind import Mat3
 from vehicles.quadrotor_brush.autopilot_pen import BrushPen
 from vehicles.quadrotor_brush.brush import brush_state
 from vehicles.quadrotor_brush.params import BrushParams
 from vehicles.registry import vehicle_kind
+
+if TYPE_CHECKING:
+    from vehicles.kind import Mat3
 
 BOARD_HEIGHT_M = 0.4
 PARAMS = BrushParams()

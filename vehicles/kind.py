@@ -24,21 +24,24 @@ Pure: no transport, no asyncio; a room reads a parsed show only in ``settings``.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal, Protocol
 
-import numpy as np
-from numpy.typing import NDArray
-
-from planner.samples import TrajectorySamples
-from vehicles.surface import Orientation, Surface, Vec3
-
 if TYPE_CHECKING:
-    from showfile.models import Show
+    # annotations only: the registry imports this module, and must not load numpy or the planner
+    from collections.abc import Mapping, Sequence
 
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
+    import numpy as np
+    from numpy.typing import NDArray
+
+    from planner.samples import TrajectorySamples
+    from showfile.models import Show
+    from vehicles.surface import Orientation, Surface, Vec3
+
+    FloatArray = NDArray[np.float64]
+    BoolArray = NDArray[np.bool_]
+    Mat3 = tuple[Vec3, Vec3, Vec3]
+    """A 3x3 matrix by rows."""
 
 
 @dataclass(frozen=True)
@@ -207,10 +210,6 @@ class LiveStateView(Protocol):
 
     @property
     def force_n(self) -> float | None: ...
-
-
-Mat3 = tuple[Vec3, Vec3, Vec3]
-"""A 3x3 matrix by rows."""
 
 
 @dataclass(frozen=True)

@@ -10,13 +10,17 @@ the agent can measure ink and the writing point's error of a vehicle it only hea
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from vehicles.kind import AutopilotWorld, Mat3, PenReading
+from vehicles.kind import AutopilotWorld, PenReading
 from vehicles.quadrotor_brush.brush import brush_state
 from vehicles.quadrotor_brush.params import BrushParams, WorldParams
 from vehicles.surface import Vec3
+
+if TYPE_CHECKING:
+    from vehicles.kind import Mat3
 
 
 @dataclass(frozen=True)
