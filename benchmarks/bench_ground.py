@@ -48,16 +48,11 @@ from vehicles.omni_wheel.climb import (
     climb,
     configuration_of,
 )
+from vehicles.omni_wheel.floor_plan import DEFAULT_SETTINGS, RUBBER_ROLLERS, plan_floor
 from vehicles.omni_wheel.sim import OmniWorld
 from vehicles.omni_wheel.terrain import Terrain
 from vehicles.omni_wheel.wheel_control import proposed_references
-from vehicles.omni_wheel.writing import (
-    DEFAULT_SETTINGS,
-    RUBBER_ROLLERS,
-    drive_plan,
-    plan_floor,
-    score_floor,
-)
+from vehicles.omni_wheel.writing import drive_plan, score_floor
 from vehicles.surface import Surface
 
 PAPER_TABLE_2 = {

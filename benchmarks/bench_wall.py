@@ -42,8 +42,9 @@ from wall_opti_peer import solve_period_opti
 from planner.glyphs.layout import fit_to_area
 from planner.glyphs.text import text_glyph
 from vehicles.hexarotor_sponge.flight import fly_plan
+from vehicles.hexarotor_sponge.fly_settings import FlySettings, WorldNoise
 from vehicles.hexarotor_sponge.kind import KIND, WallSettings, with_default_widths
-from vehicles.hexarotor_sponge.loop import FlySettings, base_for_tip
+from vehicles.hexarotor_sponge.loop import base_for_tip
 from vehicles.hexarotor_sponge.nlp import Limits, solve_period
 from vehicles.hexarotor_sponge.period_cache import solve_period_reusing
 from vehicles.hexarotor_sponge.plan import (
@@ -51,7 +52,7 @@ from vehicles.hexarotor_sponge.plan import (
     plan_equal_distance,
     plan_writing,
 )
-from vehicles.hexarotor_sponge.world import WallWorld, WorldNoise
+from vehicles.hexarotor_sponge.world import WallWorld
 from vehicles.kind import StrokeInput, WritingPlan
 from vehicles.surface import Surface
 

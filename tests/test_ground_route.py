@@ -6,9 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from vehicles.omni_wheel.floor_plan import OmniSettings
 from vehicles.omni_wheel.route import FloorArea, RouteError, check_route, drive_route
 from vehicles.omni_wheel.terrain import Step, Terrain
-from vehicles.omni_wheel.writing import FloorWriter, OmniSettings
+from vehicles.omni_wheel.writing import FloorWriter
 
 TERRAIN = Terrain(steps=(Step(2.0, 0.05), Step(5.0, 0.3)), half_width_m=10.0)
 

@@ -9,10 +9,10 @@ import pytest
 import yaml
 from pydantic import ValidationError
 
+from vehicles.omni_wheel.floor_plan import DEFAULT_SETTINGS
 from vehicles.omni_wheel.route import FloorArea, RouteError, check_route
 from vehicles.omni_wheel.settings import omni_settings
 from vehicles.omni_wheel.show_section import OmniWheelSettings, StepSettings
-from vehicles.omni_wheel.writing import DEFAULT_SETTINGS
 
 SHOW = Path(__file__).resolve().parents[1] / "shows" / "ground-writers.yaml"
 

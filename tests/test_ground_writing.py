@@ -8,7 +8,8 @@ import pytest
 from planner.glyphs.layout import fit_to_area
 from planner.glyphs.text import text_glyph
 from vehicles.kind import StrokeInput
-from vehicles.omni_wheel.writing import DEFAULT_SETTINGS, drive_plan, plan_floor, score_floor
+from vehicles.omni_wheel.floor_plan import DEFAULT_SETTINGS, plan_floor
+from vehicles.omni_wheel.writing import drive_plan, score_floor
 from vehicles.surface import Surface
 
 

@@ -172,7 +172,7 @@ def test_two_ground_writers_half_a_metre_apart_are_refused() -> None:
 
 def test_each_kinds_footprint_holds_its_rooms_dimensions() -> None:
     from vehicles.hexarotor_sponge.params import HexarotorParams
-    from vehicles.omni_wheel.writing import DEFAULT_SETTINGS
+    from vehicles.omni_wheel.floor_plan import DEFAULT_SETTINGS
 
     hexarotor = HexarotorParams()
     assert ROOMS["hexarotor-sponge"].footprint_radius_m >= max(

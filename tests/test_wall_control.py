@@ -8,9 +8,9 @@ import pytest
 from planner.samples import TrajectorySamples
 from vehicles.hexarotor_sponge.controller import HybridController, Reference
 from vehicles.hexarotor_sponge.flight import fly_plan
-from vehicles.hexarotor_sponge.loop import FlySettings
+from vehicles.hexarotor_sponge.fly_settings import CALM, FlySettings, WorldNoise
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
-from vehicles.hexarotor_sponge.world import CALM, Measurement, WorldNoise, facing_rotation
+from vehicles.hexarotor_sponge.world import Measurement, facing_rotation
 from vehicles.kind import StrokeInput, WritingPlan
 from vehicles.surface import Surface
 

@@ -10,8 +10,8 @@ import pytest
 
 from planner.samples import TrajectorySamples
 from vehicles.hexarotor_sponge.flight import fly_plan
+from vehicles.hexarotor_sponge.fly_settings import FlySettings
 from vehicles.hexarotor_sponge.kind import KIND, WallSettings, with_default_widths
-from vehicles.hexarotor_sponge.loop import FlySettings
 from vehicles.hexarotor_sponge.metrics import reference_base_m_enu
 from vehicles.hexarotor_sponge.params import HexarotorParams
 from vehicles.kind import FlownWriting, LiveReference, StrokeInput, WritingPlan

@@ -3,7 +3,8 @@ writes on a vertical wall with a sponge pen whose line width follows the contact
 
 ``defaults`` the default figures (plain constants); ``show_section`` the show file's ``hexarotor``
 section (defaulting to them) and the wall's reach check; ``params`` the vehicle; ``pen`` force
-<-> width; ``allocation`` wrench -> six tilted rotor thrusts; ``world`` MuJoCo;
+<-> width; ``allocation`` wrench -> six tilted rotor thrusts; ``world`` MuJoCo, ``fly_settings``
+how a plan is flown there (noise, control period; plain data);
 ``waypoints``/``nlp``/``plan`` contact-aware motion-force planning (eq. 7), ``contact_model`` its
 contact and rotor model, ``solver_cache`` its built IPOPT solvers, ``diagnosis`` the limit that
 rules out a period IPOPT finds no trajectory for; ``controller`` hybrid motion-force control

@@ -6,7 +6,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from vehicles.hexarotor_sponge.controller import Reference
-from vehicles.hexarotor_sponge.loop import FlySettings, WallLoop
+from vehicles.hexarotor_sponge.fly_settings import FlySettings
+from vehicles.hexarotor_sponge.loop import WallLoop
 from vehicles.kind import FlownWriting, WritingPlan
 
 FloatArray = NDArray[np.float64]

@@ -1,29 +1,32 @@
-"""The hexarotor sponge writer behind the vehicle-kind interface (``vehicles.kind``)."""
+"""The hexarotor sponge writer behind the vehicle-kind interface (``vehicles.kind``).
+
+Settings, phases, widths and a plan (CasADi + IPOPT) load no MuJoCo: the simulated flight, the
+live vehicle, the metrics and the report are imported in the methods that use them.
+"""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from planner.samples import TrajectorySamples
-from vehicles.hexarotor_sponge.flight import fly_plan
-from vehicles.hexarotor_sponge.live import WallVehicle
-from vehicles.hexarotor_sponge.loop import FlySettings
-from vehicles.hexarotor_sponge.metrics import score_writing
+from vehicles.hexarotor_sponge.fly_settings import FlySettings
 from vehicles.hexarotor_sponge.nlp import Limits
 from vehicles.hexarotor_sponge.params import HexarotorParams
 from vehicles.hexarotor_sponge.pen import PenCurve
 from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing
-from vehicles.hexarotor_sponge.report import report_figure
 from vehicles.hexarotor_sponge.show_section import HexarotorKindSettings
 from vehicles.hexarotor_sponge.widths import default_width_profile, with_profile_knots
 from vehicles.kind import FlownWriting, JobPhases, StrokeInput, WritingPlan, WritingScore
 from vehicles.surface import Orientation, Surface, Vec3
+
+if TYPE_CHECKING:
+    from vehicles.hexarotor_sponge.live import WallVehicle
 
 FloatArray = NDArray[np.float64]
 
@@ -148,17 +151,23 @@ class HexarotorSpongeKind:
 
     def fly(self, plan: WritingPlan, settings: Any, *, seed: int = 0) -> FlownWriting:
         """Fly the plan in the MuJoCo world under the hybrid controller."""
+        from vehicles.hexarotor_sponge.flight import fly_plan
+
         return fly_plan(plan, _settings(settings).fly, seed=seed)
 
     def score(self, plan: WritingPlan, flown: FlownWriting, settings: Any = None) -> WritingScore:
         """Table I's metrics (``rmse_ee_m``, ``rmse_base_m``, ``force_rmse_n``, IoU); a live
         run, sampled at its own ticks, is compared with the plan at those ticks."""
+        from vehicles.hexarotor_sponge.metrics import score_writing
+
         s = _settings(settings)
         plan, flown = aligned(plan, flown)
         return score_writing(plan, flown, s.fly.params, s.plan.default_width_m)
 
     def report(self, plan: WritingPlan, flown: FlownWriting, settings: Any, title: str) -> Any:
         """Images, tip error, force and width against time."""
+        from vehicles.hexarotor_sponge.report import report_figure
+
         s = _settings(settings)
         score = self.score(plan, flown, s)
         return report_figure(plan, flown, score, title, s.plan.default_width_m)
@@ -169,6 +178,8 @@ class HexarotorSpongeKind:
 
     def simulated_vehicle(self, start_m_enu: Vec3, settings: Any, *, seed: int = 0) -> WallVehicle:
         """A live vehicle, tip at ``start_m_enu``, hovering in front of the settings' wall."""
+        from vehicles.hexarotor_sponge.live import WallVehicle
+
         s = _settings(settings)
         if s.surface is None:
             raise ValueError("hexarotor-sponge: a live vehicle needs settings.surface (its wall)")

@@ -5,33 +5,16 @@ live simulated vehicle (``live.WallVehicle``) both step it, so they fly alike
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 from numpy.typing import NDArray
 
 from vehicles.hexarotor_sponge.controller import ControlOutput, HybridController, Reference
+from vehicles.hexarotor_sponge.fly_settings import FlySettings
 from vehicles.hexarotor_sponge.params import HexarotorParams
-from vehicles.hexarotor_sponge.world import Truth, WallWorld, WorldNoise, facing_rotation
+from vehicles.hexarotor_sponge.world import Truth, WallWorld, facing_rotation
 from vehicles.surface import Surface
 
 FloatArray = NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class FlySettings:
-    """How a plan is flown in simulation."""
-
-    params: HexarotorParams = field(default_factory=HexarotorParams)
-    """The vehicle."""
-    noise: WorldNoise = field(default_factory=WorldNoise)
-    """Wind and sensor noise."""
-    contact_model: bool = True
-    """False: the paper's control baseline (no contact wrench model in the controller)."""
-    settle_s: float = 1.0
-    """Hover at the first reference point before writing starts, in [s]."""
-    control_dt_s: float = 0.01
-    """Control period in [s]."""
 
 
 def base_for_tip(tip_m_enu: FloatArray, surface: Surface, params: HexarotorParams) -> FloatArray:

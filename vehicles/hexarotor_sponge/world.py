@@ -14,38 +14,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from vehicles.hexarotor_sponge.allocation import rotor_geometry
+from vehicles.hexarotor_sponge.fly_settings import WorldNoise
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
 from vehicles.surface import Surface
 
 FloatArray = NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class WorldNoise:
-    """Disturbances and sensor imperfections of one run."""
-
-    wind_mps: float = 1.0
-    """Mean wind speed in [m/s], blowing along the wall (the surface's x axis)."""
-    gust_mps: float = 0.3
-    """Standard deviation in [m/s] of the wind's turbulence (Ornstein-Uhlenbeck, 1 s)."""
-    drag_area_m2: float = 0.15
-    """Drag coefficient times frontal area of the vehicle in [m^2]."""
-    mocap_position_m: float = 1.0e-3
-    """Motion-capture position noise, standard deviation in [m]."""
-    mocap_attitude_rad: float = 3.0e-3
-    """Motion-capture attitude noise, standard deviation in [rad] per axis."""
-    mocap_velocity_mps: float = 5.0e-3
-    """Velocity estimate noise, standard deviation in [m/s]."""
-    mocap_latency_s: float = 0.01
-    """Motion-capture latency in [s]."""
-    ft_force_n: float = 0.05
-    """F/T sensor force noise, standard deviation in [N]."""
-    ft_torque_nm: float = 5.0e-3
-    """F/T sensor torque noise, standard deviation in [N m]."""
-
-
-CALM = WorldNoise(0.0, 0.0, 0.15, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-"""No wind, perfect sensors (for tests that isolate one effect)."""
 
 
 @dataclass(frozen=True)

@@ -1,9 +1,11 @@
 """The omnidirectional step-climbing ground writer (Chugo et al.) as a vehicle kind.
 
-Plans with the stroke pipeline in the floor plane (:mod:`vehicles.omni_wheel.writing`), drives in
-MuJoCo (:mod:`vehicles.omni_wheel.sim`) with the proposed wheel control
-(:mod:`vehicles.omni_wheel.wheel_control`), scores the marker's tracking and the ink IoU, and
-draws ``report.png`` (:mod:`vehicles.omni_wheel.report`, imported only when a report is drawn).
+Plans with the stroke pipeline in the floor plane (:mod:`vehicles.omni_wheel.floor_plan`), drives
+in MuJoCo (:mod:`vehicles.omni_wheel.writing` on :mod:`vehicles.omni_wheel.sim`) with the proposed
+wheel control (:mod:`vehicles.omni_wheel.wheel_control`), scores the marker's tracking and the ink
+IoU, and draws ``report.png`` (:mod:`vehicles.omni_wheel.report`). MuJoCo, the scoring and the
+report are imported only in the methods that use them: settings, phases and a plan (a kiosk
+preview, an orchestrator's estimate) load the planner alone.
 """
 
 from __future__ import annotations
@@ -13,19 +15,14 @@ from typing import TYPE_CHECKING, Any
 
 from planner.samples import TrajectorySamples
 from vehicles.kind import FlownWriting, JobPhases, StrokeInput, WritingPlan, WritingScore
-from vehicles.omni_wheel.live import OmniLiveVehicle
+from vehicles.omni_wheel.floor_plan import DEFAULT_SETTINGS, OmniSettings, plan_floor
 from vehicles.omni_wheel.settings import omni_settings
-from vehicles.omni_wheel.writing import (
-    DEFAULT_SETTINGS,
-    OmniSettings,
-    drive_plan,
-    plan_floor,
-    score_floor,
-)
 from vehicles.surface import Orientation, Surface, Vec3
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
+
+    from vehicles.omni_wheel.live import OmniLiveVehicle
 
 TRANSIT_WAIT_M = 0.05
 """The pen-up reference waits for the writer while it is this far behind in [m] (it stalls on a
@@ -76,10 +73,14 @@ class OmniWheel:
 
     def fly(self, plan: WritingPlan, settings: OmniSettings, *, seed: int = 0) -> FlownWriting:
         """Drive ``plan`` in MuJoCo to its end (one vehicle, batch)."""
+        from vehicles.omni_wheel.writing import drive_plan
+
         return drive_plan(plan, settings, seed=seed)
 
     def score(self, plan: WritingPlan, flown: FlownWriting, settings: OmniSettings) -> WritingScore:
         """Marker errors and ink IoU at the marker's width."""
+        from vehicles.omni_wheel.writing import score_floor
+
         return score_floor(plan, flown, settings.marker_width_m)
 
     def report(
@@ -98,6 +99,8 @@ class OmniWheel:
         self, start_m_enu: Vec3, settings: OmniSettings, *, seed: int = 0
     ) -> OmniLiveVehicle:
         """One live ground writer at rest at ``start_m_enu`` (motors off until enabled)."""
+        from vehicles.omni_wheel.live import OmniLiveVehicle
+
         return OmniLiveVehicle(start_m_enu, settings, seed=seed)
 
 

@@ -20,7 +20,8 @@ from typing import Protocol
 
 import numpy as np
 
-from vehicles.omni_wheel.writing import FloorWriter, OmniSettings
+from vehicles.omni_wheel.floor_plan import OmniSettings
+from vehicles.omni_wheel.writing import FloorWriter
 from vehicles.surface import Vec3
 
 

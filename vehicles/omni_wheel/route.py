@@ -22,7 +22,8 @@ from vehicles.omni_wheel.check_route import (
     RouteError,
     check_route,
 )
-from vehicles.omni_wheel.writing import FloorWriter, OmniSettings
+from vehicles.omni_wheel.floor_plan import OmniSettings
+from vehicles.omni_wheel.writing import FloorWriter
 
 __all__ = [
     "MAX_ROUTE_M",

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from vehicles.omni_wheel.floor_plan import DEFAULT_SETTINGS, OmniSettings
 from vehicles.omni_wheel.show_section import OmniWheelSettings
 from vehicles.omni_wheel.terrain import Step, Terrain
-from vehicles.omni_wheel.writing import DEFAULT_SETTINGS, OmniSettings
 
 _DYNAMIC_OVER_STATIC = (
     DEFAULT_SETTINGS.geometry.friction_dynamic / DEFAULT_SETTINGS.geometry.friction_static
