@@ -4,7 +4,8 @@
     python benchmarks/bench_show.py --quick    # 4 characters (smoke run)
 
 Each character is laid out and planned as a vehicle agent of ``shows/airshow-2014.yaml`` does it
-(``showfile.planning``: the show's board, writing area, margin, limits and planning settings),
+(``vehicles.jobs.job_setup``: the show's board, writing area and margin, and the brush room's
+settings of the vehicle, its limits and planning section),
 once at the ``"nominal"`` pace (the planner's default before issue 15: every leg at 0.6 v_max and
 half the smallest acceleration limit) and once at the new default ``"limits"`` pace. A vehicle
 flies every job through the same phases (vehicle_agent.job_runner): take-off climb to the pen-up
@@ -64,7 +65,8 @@ from planner.glyphs import text_glyph  # noqa: E402
 from planner.pipeline import PlanOptions, plan_strokes  # noqa: E402
 from showfile import load_show  # noqa: E402
 from showfile.models import Show  # noqa: E402
-from showfile.planning import fit_to_board, vehicle_plan_options  # noqa: E402
+from vehicles.jobs import job_setup, lay_out  # noqa: E402
+from vehicles.quadrotor_brush.kind import board_of  # noqa: E402
 
 SHOW = ROOT / "shows" / "airshow-2014.yaml"
 VEHICLES = 4
@@ -109,8 +111,9 @@ def cycle(show: Show, vehicle_id: str, char: str, pace: str) -> Cycle:
     """Plan ``char`` on ``vehicle_id``'s board at ``pace`` and time the job's phases."""
     vehicle = show.vehicle(vehicle_id)
     board = show.board(vehicle.board)
-    options: PlanOptions = replace(vehicle_plan_options(show, vehicle_id), pace=pace)
-    glyph = fit_to_board(text_glyph(char), board, show.planning)
+    setup = job_setup(show, vehicle_id)
+    options: PlanOptions = replace(setup.settings.plan, board=board_of(setup.surface), pace=pace)
+    glyph = lay_out(text_glyph(char), setup.writing_area_m, setup.margin_m)
     start = time.perf_counter()
     traj = plan_strokes(glyph.strokes, options)
     plan_s = time.perf_counter() - start

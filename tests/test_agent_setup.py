@@ -36,7 +36,7 @@ def test_setup_takes_board_heights_and_rates_from_the_show(airshow_uav3) -> None
     assert cfg.board_id == "b3" and cfg.home_m_enu == (1.0, -1.2, 0.0)
     assert cfg.cruise_z_m == pytest.approx(0.75 + 0.25 + 0.05)
     assert cfg.telemetry_period_s == pytest.approx(4.0 / 20.0)  # 20 Hz of wall time
-    assert setup.board_frame.center_m_enu == (1.0, 0.0, 0.75)
+    assert setup.surface.origin_m_enu == (1.0, 0.0, 0.75)
 
 
 def test_a_job_is_laid_out_inside_its_board_area_and_planned(airshow_uav3) -> None:  # type: ignore[no-untyped-def]

@@ -141,7 +141,7 @@ def test_the_agents_metrics_carry_the_picture_of_the_flown_job() -> None:
     ink = metrics.written
     assert ink is not None and decode(encode(metrics), type(metrics)) == metrics
     pixels = ink_pixels(ink)
-    on_board = setup.board_frame.to_board(s.position_m_enu[s.pen_down])
+    on_board = setup.surface.to_surface(s.position_m_enu[s.pen_down])
     assert all(pixels[pixel_of(ink, x, y)] for x, y in on_board)  # the whole path is inked
     assert not pixels[pixel_of(ink, *(-on_board.mean(axis=0)))]  # and not the mirrored spot
     no_brush = recorded_trace(*args, None)

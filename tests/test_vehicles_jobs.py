@@ -19,7 +19,6 @@ from planner.limits import VehicleLimits
 from planner.options import PlanOptions
 from showfile import load_show
 from showfile.models import ControllerSettings, Limits, PlanningSettings
-from showfile.planning import plan_options
 from vehicles import UnknownKindError, kind_names
 from vehicles.jobs import board_surface, plan_glyph, plan_job
 from vehicles.kind import LiveReference
@@ -27,6 +26,7 @@ from vehicles.quadrotor_brush.flight import Flight, FlightConfig
 from vehicles.quadrotor_brush.settings import (
     QuadrotorSettings,
     controller_config,
+    plan_options,
     quadrotor_settings,
     world_params,
 )

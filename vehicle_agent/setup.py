@@ -7,10 +7,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from planner.board import BoardFrame
 from showfile import Board, PlanningSettings, Show
 from showfile.checks import footprint
-from showfile.planning import board_frame
 from vehicle_agent.backends.base import Vec3
 from vehicle_agent.job_runner import RunnerConfig
 from vehicle_agent.safety import DeviationLimit, SafetyLimits, WritingBounds, vehicle_fence
@@ -35,8 +33,6 @@ class VehicleSetup:
     """The validated show."""
     vehicle_id: str
     """This vehicle."""
-    board_frame: BoardFrame
-    """Its board's pose (plan view)."""
     surface: Surface
     """Its board, wall or floor area as a writing plane (``to_surface``: world -> board metres)."""
     writing_area_m: tuple[float, float]
@@ -66,7 +62,6 @@ def vehicle_setup(show: Show, vehicle_id: str, *, time_scale: float | None = Non
     scale = float(time_scale if time_scale is not None else show.time_scale)
     if vehicle.backend != "sim":
         scale = 1.0  # an autopilot lives in real time
-    frame = board_frame(board)
     kind = vehicle_kind(vehicle.kind)
     settings = kind.settings(show, vehicle.id)
     phases = kind.phases(settings)
@@ -90,7 +85,6 @@ def vehicle_setup(show: Show, vehicle_id: str, *, time_scale: float | None = Non
     return VehicleSetup(
         show=show,
         vehicle_id=vehicle.id,
-        board_frame=frame,
         surface=board_surface(board),
         writing_area_m=board.writing_area_m,
         margin_m=planning.margin_m,

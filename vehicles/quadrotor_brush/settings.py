@@ -1,7 +1,8 @@
 """The brush quadrotor's settings from a show file (or the defaults a show file has).
 
 One place decides them for the agent, the orchestrator, the kiosk preview, ``plan`` and ``fly``:
-the planner options of the show's planning section and the vehicle's limits, the simulated world
+the planner options of the show's ``planning`` section and the vehicle's ``limits`` (sections the
+brush quadrotor alone reads, but for ``planning.margin_m``), the simulated world
 (a brush reaching the show's writing height, the board's height, the control rate) and the
 controller preset aiming the brush at that height.
 
@@ -14,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
+from planner.limits import VehicleLimits
 from planner.options import PlanOptions
 from vehicles.quadrotor_brush.control.controller import (
     DEFAULT_CONFIG,
@@ -24,7 +26,7 @@ from vehicles.quadrotor_brush.flight import FlightConfig
 from vehicles.quadrotor_brush.params import BrushParams, WorldParams
 
 if TYPE_CHECKING:
-    from showfile.models import Show
+    from showfile.models import Limits, PlanningSettings, Show
 
 INK_PIXEL_M = 0.002
 """Pixel size in [m] of the ink rasters compared for a job's IoU (2 mm: cheap for 1 m glyphs)."""
@@ -68,14 +70,34 @@ def quadrotor_settings(show: Show | None, vehicle_id: str | None) -> QuadrotorSe
     board at height 0."""
     if show is None or vehicle_id is None:
         return _settings(PlanOptions(), 0.0, DEFAULT_CONTROL_RATE_HZ, DEFAULT_PRESET)
-    from showfile.planning import plan_options
-
     vehicle = show.vehicle(vehicle_id)
     return _settings(
         plan_options(show.planning, show.vehicle_limits(vehicle_id)),
         show.board(vehicle.board).center_m_enu[2],
         show.controller.rate_hz,
         show.controller.preset,
+    )
+
+
+def plan_options(planning: PlanningSettings, limits: Limits) -> PlanOptions:
+    """Planner options of a show's ``planning`` section and a vehicle's ``limits``, on the
+    planner's default board (a job's plan puts them on its surface)."""
+    return PlanOptions(
+        limits=VehicleLimits(
+            a_max_mps2=limits.a_max_mps2,
+            v_max_mps=limits.v_max_mps,
+            mass_kg=limits.mass_kg,
+            thrust_max_n=limits.thrust_max_n,
+            body_rate_max_radps=limits.body_rate_max_radps,
+        ),
+        write_height_m=planning.write_height_m,
+        clearance_m=planning.clearance_m,
+        total_time_s=planning.total_time_s,
+        split_threshold_m=planning.split_threshold_m,
+        resegment=planning.resegment,
+        solver=planning.solver,
+        sample_rate_hz=planning.sample_rate_hz,
+        pace=planning.pace,
     )
 
 
