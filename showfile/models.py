@@ -78,20 +78,29 @@ KindName = Annotated[str, AfterValidator(_known_kind), Field(json_schema_extra=_
 
 
 class Limits(ShowModel):
-    """Dynamic limits used by the planner (planner.pipeline.VehicleLimits). The defaults are the
-    planner's own (one set for shows, ``plan`` and ``fly``; tests/test_vehicles_jobs.py holds them
-    equal; the show file cannot import the planner, which the console and trust must not see)."""
+    """Dynamic limits of the brush quadrotor (``quadrotor-brush``): its planner's
+    (planner.limits.VehicleLimits), its pen-up moves and its MAVLink simulator's vehicle. The
+    hexarotor and the ground writer read none of them (their limits are in their own sections,
+    ``hexarotor`` and ``omni_wheel``), but for the show's ``v_max_mps`` in the orchestrator's rough
+    duration of a job not yet planned. Each field says who reads it ("Read by:"). The defaults are
+    the planner's own (one set for shows, ``plan`` and ``fly``; tests/test_vehicles_jobs.py holds
+    them equal; the show file cannot import the planner, which the console and trust must not
+    see)."""
 
     a_max_mps2: Vec3 = (0.8, 0.8, 0.5)
-    """Largest acceleration per world axis x, y, z, in [m/s^2]."""
+    """Largest acceleration per world axis x, y, z, in [m/s^2]. Read by: quadrotor-brush (its
+    plan; the smallest axis, its pen-up moves)."""
     v_max_mps: float = Field(default=0.5, gt=0.0)
-    """Largest speed, in [m/s]."""
+    """Largest speed, in [m/s]. Read by: quadrotor-brush (its plan and pen-up moves); the show's
+    value, for every kind, by the orchestrator's rough duration of a job not yet planned."""
     mass_kg: float = Field(default=1.0, gt=0.0)
-    """Vehicle mass, in [kg] (the Airshow quadrotors were about 1 kg)."""
+    """Vehicle mass, in [kg] (the Airshow quadrotors were about 1 kg). Read by: quadrotor-brush
+    (its plan's thrust limit; the MAVLink simulator's vehicle)."""
     thrust_max_n: float = Field(default=19.6133, gt=0.0)
-    """Largest total thrust, in [N]."""
+    """Largest total thrust, in [N]. Read by: quadrotor-brush (its plan; the MAVLink simulator's
+    vehicle)."""
     body_rate_max_radps: float = Field(default=3.0, gt=0.0)
-    """Largest body rate, in [rad/s]."""
+    """Largest body rate, in [rad/s]. Read by: quadrotor-brush."""
 
     @model_validator(mode="after")
     def _positive_acceleration(self) -> Limits:
@@ -101,41 +110,60 @@ class Limits(ShowModel):
 
 
 class PlanningSettings(ShowModel):
-    """How a job is planned on its board (planner.pipeline.PlanOptions). The defaults are
-    ``planner.defaults`` (held equal by tests/test_vehicles_jobs.py)."""
+    """How a job is planned on its board: ``margin_m`` for every kind, ``clearance_m`` for the
+    airborne kinds, the rest the brush quadrotor's planner options (planner.options.PlanOptions).
+    The hexarotor and the ground writer plan with their own sections (``hexarotor``,
+    ``omni_wheel``) and their rooms' figures. Each field says who reads it ("Read by:"). The
+    defaults are ``planner.defaults`` (held equal by tests/test_vehicles_jobs.py)."""
 
     write_height_m: float = Field(default=0.335, gt=0.0)
-    """Height of the vehicle reference point above the board surface while writing, in [m]."""
+    """Height of the vehicle reference point above the board surface while writing, in [m].
+    Read by: quadrotor-brush (its plan, its brush's length, its controller's lever and its pen-up
+    height)."""
     clearance_m: float = Field(default=0.05, ge=0.0)
-    """Extra height with the pen up between strokes, in [m]."""
+    """Extra height with the pen up, in [m]. Read by: quadrotor-brush (between strokes and on its
+    way, above the write height) and hexarotor-sponge (its pen-up moves, above the top of its
+    wall's writing area)."""
     margin_m: float = Field(default=0.05, ge=0.0)
-    """Margin kept free inside the writing area when a glyph is fitted to it, in [m]."""
+    """Margin kept free inside the writing area when a glyph is fitted to it, in [m].
+    Read by: every kind (the layout of a job on any board, wall or floor; the hexarotor's reach
+    check)."""
     split_threshold_m: float = Field(default=0.01, gt=0.0)
-    """Split-and-merge tolerance for turning points, in [m]."""
+    """Split-and-merge tolerance for turning points, in [m]. Read by: quadrotor-brush."""
     resegment: bool = True
     """Re-time the segments (with ``pace: limits``, at the limits; with ``nominal``, the paper's
-    re-segmentation from a conservative start)."""
+    re-segmentation from a conservative start). Read by: quadrotor-brush."""
     pace: Literal["limits", "nominal"] = "limits"
     """``limits``: as fast as the limits allow (within ~1.25x of time-optimal); ``nominal``: the
     earlier, slower default (about 2x), for vehicles that track less tightly (an autopilot's own
-    position loop behind MAVLink)."""
+    position loop behind MAVLink). Read by: quadrotor-brush."""
     solver: Literal["piqp", "clarabel"] = "piqp"
-    """QP solver of the acceleration-limited fit."""
+    """QP solver of the acceleration-limited fit. Read by: quadrotor-brush."""
     sample_rate_hz: float = Field(default=100.0, ge=100.0)
-    """Rate the trajectory is sampled at for the control loop, in [Hz]."""
+    """Rate the trajectory is sampled at for the control loop, in [Hz]. Read by: quadrotor-brush
+    (the kiosk's preview replaces it with its own)."""
     total_time_s: float | None = Field(default=None, gt=0.0)
-    """Fixed duration of a character, or None to let the planner choose, in [s]."""
+    """Fixed duration of a character, or None to let the planner choose, in [s].
+    Read by: quadrotor-brush."""
 
 
 class ControllerSettings(ShowModel):
-    """Outer-loop controller of the vehicles."""
+    """Outer-loop controller of the brush quadrotor, and the loop rate of the vehicles flown
+    behind an autopilot (MAVLink; today the brush quadrotor alone). The hexarotor and the ground
+    writer have their controllers and their 100 Hz loops in their rooms. Each field says who
+    reads it ("Read by:")."""
 
     preset: Literal["default", "paper"] = "default"
-    """``paper``: the RPT gains of the Airshow paper; ``default``: the project's tuned gains."""
+    """``paper``: the RPT gains of the Airshow paper; ``default``: the project's tuned gains.
+    Read by: quadrotor-brush."""
     rate_hz: float = Field(default=100.0, gt=0.0)
-    """Control loop rate, in [Hz]."""
+    """Control loop rate, in [Hz]. Read by: quadrotor-brush (its simulated world's tick; with
+    ``backend: mavlink``, the agent's loop and telemetry, and the bound of the vehicle's
+    ``mavlink_setpoint_rate_hz``)."""
     overrides: dict[str, float] = Field(default_factory=dict)
-    """Individual gains replacing the preset's (names as in vehicles/quadrotor_brush/control)."""
+    """Individual gains replacing the preset's (names as in vehicles/quadrotor_brush/control).
+    Read by: nobody yet: no code applies them (a show that sets them flies its preset's
+    gains)."""
 
 
 class Vehicle(ShowModel):
@@ -182,7 +210,8 @@ class Vehicle(ShowModel):
     """How far in [s] ahead on the plan position setpoints are sent, cancelling the autopilot's
     lag; None: identified in flight from the vehicle's response (mavlink backend only)."""
     limits: Limits | None = None
-    """Limits of this vehicle, replacing the show's ``limits``."""
+    """Limits of this vehicle, replacing the show's ``limits`` (a brush quadrotor's: the other
+    kinds read theirs from their own sections)."""
 
     @model_validator(mode="after")
     def _mavlink_needs_url(self) -> Vehicle:
@@ -223,11 +252,15 @@ class Show(ShowModel):
     vehicles: tuple[Vehicle, ...] = Field(min_length=1)
     """Vehicles, each assigned to one board."""
     limits: Limits = Field(default_factory=Limits)
-    """Default dynamic limits of every vehicle."""
+    """Dynamic limits of the brush quadrotors (a vehicle's own ``limits`` replaces them); the
+    hexarotor and the ground writer have theirs in their sections ``hexarotor`` and
+    ``omni_wheel``."""
     planning: PlanningSettings = Field(default_factory=PlanningSettings)
-    """Planner settings."""
+    """How jobs are planned: the layout margin of every kind, the pen-up clearance of the
+    airborne kinds, the brush quadrotor's planner options."""
     controller: ControllerSettings = Field(default_factory=ControllerSettings)
-    """Controller settings."""
+    """The brush quadrotor's controller and the loop rate of autopilot-flown vehicles; the
+    hexarotor and the ground writer have theirs in their rooms."""
     safety: SafetySettings = Field(default_factory=SafetySettings)
     """Tracking, geofence and writing bounds, and the abort policy (``showfile/safety.py``)."""
     mavlink_sim: MavlinkSimSettings = Field(default_factory=MavlinkSimSettings)

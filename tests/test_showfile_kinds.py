@@ -216,3 +216,20 @@ def test_loading_every_show_loads_no_kind_machinery() -> None:
     )
     count, loaded = json.loads(out.stdout.strip().splitlines()[-1])
     assert count == len(list((ROOT / "shows").glob("*.yaml"))) and loaded == []
+
+
+NOT_APPLIED = {("ControllerSettings", "overrides")}
+"""Fields of the shared sections that no code reads yet (their description says so)."""
+
+
+@pytest.mark.parametrize("section", ["limits", "planning", "controller"])
+def test_every_field_of_the_shared_sections_names_the_kinds_that_read_it(section: str) -> None:
+    """``limits``, ``planning`` and ``controller`` hold mostly the brush quadrotor's facts next
+    to a few every kind reads: each field's schema description ends its own words with "Read by:"
+    and a kind that has a room, or every kind (or nobody, for the fields not applied yet)."""
+    schema = Show.model_json_schema()
+    model = schema["properties"][section]["$ref"].rsplit("/", 1)[-1]
+    for name, field in schema["$defs"][model]["properties"].items():
+        readers = " ".join(field["description"].split()).split("Read by: ", 1)[1]
+        allowed = {*ROOMS, "every kind"} | ({"nobody"} if (model, name) in NOT_APPLIED else set())
+        assert any(readers.startswith(reader) for reader in allowed), (model, name, readers)
