@@ -25,6 +25,7 @@ from showfile.services import KioskSettings, PolicySettings, StorageSettings, Ze
 from vehicles import DEFAULT_KIND, ROOMS, UnknownKindError
 from vehicles.hexarotor_sponge.show_section import HexarotorKindSettings
 from vehicles.omni_wheel.show_section import OmniWheelSettings
+from vehicles.quadrotor_brush.gain_names import GAIN_NAMES
 
 Vec3 = tuple[float, float, float]
 Size2 = tuple[float, float]
@@ -161,9 +162,23 @@ class ControllerSettings(ShowModel):
     ``backend: mavlink``, the agent's loop and telemetry, and the bound of the vehicle's
     ``mavlink_setpoint_rate_hz``)."""
     overrides: dict[str, float] = Field(default_factory=dict)
-    """Individual gains replacing the preset's (names as in vehicles/quadrotor_brush/control).
-    Read by: nobody yet: no code applies them (a show that sets them flies its preset's
-    gains)."""
+    """RPT design parameters replacing the preset's, per world axis: ``<axis>.<parameter>`` with
+    axis ``x``, ``y`` or ``z`` and parameter ``eps``, ``wn_radps``, ``zeta`` or ``ki_radps``
+    (eq. 9 of the Airshow paper), each positive, e.g. ``{z.eps: 0.8}``. Read by:
+    quadrotor-brush."""
+
+    @field_validator("overrides")
+    @classmethod
+    def _known_gains(cls, overrides: dict[str, float]) -> dict[str, float]:
+        for name, value in overrides.items():
+            if name not in GAIN_NAMES:
+                why = f"unknown gain {name!r}; the gains are: {', '.join(GAIN_NAMES)}"
+            elif not (math.isfinite(value) and value > 0.0):
+                why = f"gain {name!r} must be positive and finite, got {value!r}"
+            else:
+                continue
+            raise PydanticCustomError("bad_gain", "{reason}", {"reason": why})
+        return overrides
 
 
 class Vehicle(ShowModel):

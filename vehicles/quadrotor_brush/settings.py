@@ -12,6 +12,7 @@ Without a show, the defaults a show file has are built without importing the sho
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
@@ -22,7 +23,9 @@ from vehicles.quadrotor_brush.control.controller import (
     PAPER_CONFIG,
     ControllerConfig,
 )
+from vehicles.quadrotor_brush.control.rpt import RptGains
 from vehicles.quadrotor_brush.flight import FlightConfig
+from vehicles.quadrotor_brush.gain_names import AXES
 from vehicles.quadrotor_brush.params import BrushParams, WorldParams
 
 if TYPE_CHECKING:
@@ -56,12 +59,24 @@ def world_params(
     return WorldParams(brush=brush, board_height_m=board_height_m, control_rate_hz=control_rate_hz)
 
 
-def controller_config(preset: str, write_height_m: float) -> ControllerConfig:
+def controller_config(
+    preset: str, write_height_m: float, overrides: Mapping[str, float] | None = None
+) -> ControllerConfig:
     """The position controller of a show's ``controller.preset``, aiming the brush from
-    ``write_height_m`` [m] above the board (the paper's preset aims the body)."""
-    if preset == "paper":
-        return PAPER_CONFIG
-    return replace(DEFAULT_CONFIG, brush_lever_m=write_height_m)
+    ``write_height_m`` [m] above the board (the paper's preset aims the body), with the gains
+    ``overrides`` names (``x.eps``: ``gain_names.GAIN_NAMES``) replacing the preset's."""
+    config = PAPER_CONFIG
+    if preset != "paper":
+        config = replace(DEFAULT_CONFIG, brush_lever_m=write_height_m)
+    if not overrides:
+        return config
+    gains = config.gains
+    axes = {axis: getattr(gains, axis) for axis in AXES}
+    for name, value in overrides.items():
+        axis, parameter = name.split(".", 1)
+        axes[axis] = replace(axes[axis], **{parameter: float(value)})
+    label = f"{gains.name} with {', '.join(sorted(overrides))}"
+    return replace(config, gains=RptGains(label, axes["x"], axes["y"], axes["z"]))
 
 
 def quadrotor_settings(show: Show | None, vehicle_id: str | None) -> QuadrotorSettings:
@@ -76,6 +91,7 @@ def quadrotor_settings(show: Show | None, vehicle_id: str | None) -> QuadrotorSe
         show.board(vehicle.board).center_m_enu[2],
         show.controller.rate_hz,
         show.controller.preset,
+        show.controller.overrides,
     )
 
 
@@ -108,8 +124,12 @@ DEFAULT_PRESET = "default"
 
 
 def _settings(
-    plan: PlanOptions, board_height_m: float, control_rate_hz: float, preset: str
+    plan: PlanOptions,
+    board_height_m: float,
+    control_rate_hz: float,
+    preset: str,
+    overrides: Mapping[str, float] | None = None,
 ) -> QuadrotorSettings:
     world = world_params(plan.write_height_m, board_height_m, control_rate_hz)
-    flight = FlightConfig(world=world, controller=controller_config(preset, plan.write_height_m))
-    return QuadrotorSettings(plan=plan, flight=flight)
+    controller = controller_config(preset, plan.write_height_m, overrides)
+    return QuadrotorSettings(plan=plan, flight=FlightConfig(world=world, controller=controller))
