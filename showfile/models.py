@@ -156,7 +156,7 @@ class ControllerSettings(ShowModel):
 
     preset: Literal["default", "paper"] = "default"
     """``paper``: the RPT gains of the Airshow paper; ``default``: the project's tuned gains.
-    Read by: quadrotor-brush."""
+    Read by: quadrotor-brush (with ``backend: sim``; an autopilot flies its own gains)."""
     rate_hz: float = Field(default=100.0, gt=0.0)
     """Control loop rate, in [Hz]. Read by: quadrotor-brush (its simulated world's tick; with
     ``backend: mavlink``, the agent's loop and telemetry, and the bound of the vehicle's
@@ -165,7 +165,7 @@ class ControllerSettings(ShowModel):
     """RPT design parameters replacing the preset's, per world axis: ``<axis>.<parameter>`` with
     axis ``x``, ``y`` or ``z`` and parameter ``eps``, ``wn_radps``, ``zeta`` or ``ki_radps``
     (eq. 9 of the Airshow paper), each positive, e.g. ``{z.eps: 0.8}``. Read by:
-    quadrotor-brush."""
+    quadrotor-brush (with ``backend: sim``; an autopilot flies its own gains)."""
 
     @field_validator("overrides")
     @classmethod
