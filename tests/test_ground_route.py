@@ -6,8 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from vehicles.omni_wheel.check_route import FloorArea, RouteError, check_route
 from vehicles.omni_wheel.floor_plan import OmniSettings
-from vehicles.omni_wheel.route import FloorArea, RouteError, check_route, drive_route
+from vehicles.omni_wheel.route import drive_route
 from vehicles.omni_wheel.terrain import Step, Terrain
 from vehicles.omni_wheel.writing import FloorWriter
 

@@ -9,8 +9,8 @@ import pytest
 import yaml
 from pydantic import ValidationError
 
+from vehicles.omni_wheel.check_route import FloorArea, RouteError, check_route
 from vehicles.omni_wheel.floor_plan import DEFAULT_SETTINGS
-from vehicles.omni_wheel.route import FloorArea, RouteError, check_route
 from vehicles.omni_wheel.settings import omni_settings
 from vehicles.omni_wheel.show_section import OmniWheelSettings, StepSettings
 

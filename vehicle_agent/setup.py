@@ -47,8 +47,6 @@ class VehicleSetup:
     """The job runner's configuration."""
     time_scale: float
     """Agent seconds per wall second."""
-    control_rate_hz: float
-    """Control loop rate in [Hz]."""
 
 
 def vehicle_setup(show: Show, vehicle_id: str, *, time_scale: float | None = None) -> VehicleSetup:
@@ -92,7 +90,6 @@ def vehicle_setup(show: Show, vehicle_id: str, *, time_scale: float | None = Non
         settings=settings,
         runner_config=runner,
         time_scale=scale,
-        control_rate_hz=show.controller.rate_hz,
     )
 
 

@@ -15,25 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from vehicles.omni_wheel.check_route import (
-    MAX_ROUTE_M,
-    MAX_STEP_HEIGHT_M,
-    FloorArea,
-    RouteError,
-    check_route,
-)
 from vehicles.omni_wheel.floor_plan import OmniSettings
 from vehicles.omni_wheel.writing import FloorWriter
-
-__all__ = [
-    "MAX_ROUTE_M",
-    "MAX_STEP_HEIGHT_M",
-    "FloorArea",
-    "RouteError",
-    "TransitResult",
-    "check_route",
-    "drive_route",
-]
 
 FloatArray = NDArray[np.float64]
 
