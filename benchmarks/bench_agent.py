@@ -231,10 +231,11 @@ def percentiles(values: Sequence[float]) -> str:
 
 
 async def loop_under_planning(in_process: bool, port: int) -> LoopFigures:
-    from vehicle_agent.agent import make_backend, make_runner, vehicle_setup
+    from vehicle_agent.agent import make_backend, make_runner
     from vehicle_agent.jobs import job_metrics, prepare_job
     from vehicle_agent.service import AgentService
     from vehicle_agent.service_settings import ServiceSettings
+    from vehicle_agent.setup import vehicle_setup
     from vehicle_agent.work import JobWork, ThreadJobWork
     from vehicle_agent.worker_client import ProcessJobWork
 

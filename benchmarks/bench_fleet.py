@@ -48,10 +48,12 @@ sys.path.insert(0, str(ROOT))
 from bus.messages import JobAssignment, VehicleCommand  # noqa: E402
 from cli.showrun import ShowRun, derived_show, submit_texts, wait_for_jobs  # noqa: E402
 from showfile import load_show  # noqa: E402
-from vehicle_agent.agent import make_backend, prepare_job, vehicle_setup  # noqa: E402
+from vehicle_agent.agent import make_backend  # noqa: E402
 from vehicle_agent.backends.sim import SimBackend  # noqa: E402
 from vehicle_agent.backends.sim_round import StepRounds  # noqa: E402
 from vehicle_agent.job_runner import JobRunner  # noqa: E402
+from vehicle_agent.jobs import prepare_job  # noqa: E402
+from vehicle_agent.setup import vehicle_setup  # noqa: E402
 
 AIRSHOW = ROOT / "shows" / "airshow-2014.yaml"
 TEXTS = ["一", "L", "二", "十", "I", "T", "V", "Z", "永", "A", "光", "马"]

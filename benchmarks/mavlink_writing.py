@@ -25,11 +25,13 @@ from typing import Any
 
 from bus.messages import JobAssignment, JobMetrics, VehicleCommand
 from showfile import parse_show
-from vehicle_agent.agent import job_metrics, make_backend, prepare_job, vehicle_setup
+from vehicle_agent.agent import make_backend
 from vehicle_agent.backends.base import CommandRefusedError, VehicleBackend
 from vehicle_agent.backends.mavlink import MavlinkBackend
 from vehicle_agent.clock import TickClock
 from vehicle_agent.job_runner import JobRunner
+from vehicle_agent.jobs import job_metrics, prepare_job
+from vehicle_agent.setup import vehicle_setup
 
 ROOT = Path(__file__).resolve().parents[1]
 HOME_M_ENU = (0.0, -1.0, 0.0)

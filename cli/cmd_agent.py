@@ -28,8 +28,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from bus.session import SessionOpenError
     from showfile import ShowError, load_show
-    from vehicle_agent.agent import make_backend, run_agent_blocking, vehicle_setup
+    from vehicle_agent.agent import make_backend, run_agent_blocking
     from vehicle_agent.events import EventOutbox
+    from vehicle_agent.setup import vehicle_setup
 
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,

@@ -13,14 +13,9 @@ from job_traces import recorded_trace, solo_job
 from bus.messages import JobAssignment
 from planner.errors import PlannerError
 from showfile import load_show
-from vehicle_agent.agent import (
-    job_metrics,
-    prepare_job,
-    vehicle_setup,
-    write_job_picture,
-    write_job_report,
-)
 from vehicle_agent.job_picture import PictureWorker
+from vehicle_agent.jobs import job_metrics, prepare_job, write_job_picture, write_job_report
+from vehicle_agent.setup import vehicle_setup
 
 SHOWS = Path(__file__).resolve().parent.parent / "shows"
 

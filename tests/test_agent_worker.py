@@ -116,7 +116,8 @@ def test_the_agent_process_loads_no_solver_and_no_plotting() -> None:
     probe = (
         "import sys\n"
         "from showfile import load_show\n"
-        "from vehicle_agent.agent import make_backend, run_agent_blocking, vehicle_setup\n"
+        "from vehicle_agent.agent import make_backend, run_agent_blocking\n"
+        "from vehicle_agent.setup import vehicle_setup\n"
         "import cli.cmd_agent\n"
         f"show = load_show({str(AIRSHOW)!r})\n"
         "setup = vehicle_setup(show, show.vehicles[0].id)\n"

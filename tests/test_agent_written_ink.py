@@ -14,7 +14,8 @@ from bus.codec import decode, encode
 from bus.messages import JobAssignment, WrittenInk
 from planner.board import BoardFrame
 from showfile import load_show
-from vehicle_agent.agent import job_metrics, prepare_job, vehicle_setup
+from vehicle_agent.jobs import job_metrics, prepare_job
+from vehicle_agent.setup import vehicle_setup
 from vehicle_agent.trace import JobTrace
 from vehicle_agent.written_ink import (
     MAX_SIDE_PX,

@@ -21,11 +21,13 @@ from mavsim.config import STIFF_EPS, PositionGains
 from mavsim.server import MavsimServer
 from mavsim.show import vehicle_configs
 from showfile import parse_show
-from vehicle_agent.agent import job_metrics, make_backend, prepare_job, vehicle_setup
+from vehicle_agent.agent import make_backend
 from vehicle_agent.backends.base import VehicleBackend
 from vehicle_agent.backends.mavlink import MavlinkBackend
 from vehicle_agent.clock import TickClock
 from vehicle_agent.job_runner import JobRunner
+from vehicle_agent.jobs import job_metrics, prepare_job
+from vehicle_agent.setup import vehicle_setup
 
 SCALE = 2.0
 """Vehicle and agent both run this many times faster than real time."""

@@ -19,14 +19,16 @@ from mavsim.modes import CopterMode
 from mavsim.server import MavsimServer
 from mavsim.show import vehicle_configs
 from showfile import parse_show
-from vehicle_agent.agent import job_metrics, make_backend, prepare_job, vehicle_setup
+from vehicle_agent.agent import make_backend
 from vehicle_agent.backends.mavlink import MavlinkBackend
 from vehicle_agent.backends.mavlink_params import ARDUPILOT_TRACKING, PX4_TRACKING, FenceSpec
 from vehicle_agent.backends.mavlink_settings import MavlinkSettings
 from vehicle_agent.clock import TickClock
 from vehicle_agent.job_runner import JobRunner
+from vehicle_agent.jobs import job_metrics, prepare_job
 from vehicle_agent.motion import plan_move
 from vehicle_agent.runner_io import RunnerEvent, result_report
+from vehicle_agent.setup import vehicle_setup
 
 pytestmark = pytest.mark.timeout(120)
 

@@ -8,7 +8,7 @@ import pytest
 
 from showfile import ShowError, load_show, parse_show
 from showfile.safety import SafetySettings
-from vehicle_agent.agent import vehicle_setup
+from vehicle_agent.setup import vehicle_setup
 
 SHOWS = Path(__file__).resolve().parents[1] / "shows"
 BASE = """show_id: s

@@ -1,19 +1,15 @@
 """One vehicle of a show as a process: its backend, its job runner and the agent service.
 
-Pure apart from :func:`run_agent` (the process entry point used by ``skyquill agent``):
-:func:`vehicle_setup` (:mod:`vehicle_agent.setup`) reads the show once; :func:`prepare_job`
-(:mod:`vehicle_agent.jobs`) turns an assignment into a planned reference on this vehicle's board
-through its kind; :func:`job_metrics` measures a flown job. The agent process plans and measures
-in its planning worker (:mod:`vehicle_agent.plan_worker`), so this module imports neither the
-planner nor matplotlib: the job functions are loaded on first use of these names.
+Pure apart from :func:`run_agent` (the process entry point used by ``skyquill agent``): the show
+is read once by :func:`vehicle_agent.setup.vehicle_setup`; jobs are planned and measured in the
+agent's planning worker (:mod:`vehicle_agent.plan_worker`, with :mod:`vehicle_agent.jobs`), so
+this module imports neither the planner nor matplotlib.
 """
 
 from __future__ import annotations
 
 import asyncio
-import importlib
 from collections.abc import Callable
-from typing import Any
 
 from trust.settings import session_settings
 from vehicle_agent.backends.base import VehicleBackend
@@ -25,28 +21,10 @@ from vehicle_agent.pacer import Pacer
 from vehicle_agent.rest import REST_PERIOD_S
 from vehicle_agent.service import AgentService
 from vehicle_agent.service_settings import ServiceSettings
-from vehicle_agent.setup import VehicleSetup, on_board, vehicle_setup
+from vehicle_agent.setup import VehicleSetup, on_board
 from vehicle_agent.signals import run_until_signalled
 from vehicle_agent.work import JobWork
 from vehicle_agent.worker_client import ProcessJobWork
-
-__all__ = [
-    "make_backend",
-    "make_runner",
-    "make_service",
-    "run_agent",
-    "run_agent_blocking",
-    "vehicle_setup",
-]
-
-JOB_FUNCTIONS = ("job_metrics", "prepare_job", "write_job_picture", "write_job_report")
-"""Names of :mod:`vehicle_agent.jobs` this module also hands out, importing it on first use."""
-
-
-def __getattr__(name: str) -> Any:
-    if name in JOB_FUNCTIONS:
-        return getattr(importlib.import_module("vehicle_agent.jobs"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def make_backend(

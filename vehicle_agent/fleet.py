@@ -35,12 +35,12 @@ from collections.abc import Sequence
 
 from bus.session import Session, open_session
 from showfile import Show
-from vehicle_agent.agent import make_backend, make_service, vehicle_setup
+from vehicle_agent.agent import make_backend, make_service
 from vehicle_agent.backends.sim_round import StepRounds
 from vehicle_agent.events import EventOutbox
 from vehicle_agent.pacer import SharedTicker
 from vehicle_agent.service import AgentService
-from vehicle_agent.setup import VehicleSetup
+from vehicle_agent.setup import VehicleSetup, vehicle_setup
 from vehicle_agent.work_pool import PlanPool, pool_size
 
 log = logging.getLogger(__name__)
