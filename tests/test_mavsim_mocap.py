@@ -90,7 +90,7 @@ boards:
 vehicles:
   - {id: v1, board: b1, home_m_enu: [0.0, -1.0, 0.0], backend: mavlink,
      mavlink_url: "udp:127.0.0.1:14601", mavlink_mocap: vision_position_estimate}
-  - {id: v2, board: b1, home_m_enu: [0.5, -1.0, 0.0], backend: mavlink,
+  - {id: v2, board: b1, home_m_enu: [1.0, -1.0, 0.0], backend: mavlink,
      mavlink_url: "udp:127.0.0.1:14602"}
 """)
     ardu = {c.vehicle_id: dict(c.params) for c in vehicle_configs(show)}

@@ -207,8 +207,9 @@ class ConsoleApp(App[None]):
         self._redraw_boards(now_s)
         if self.model.events.seq != self._event_log.last_seq:
             self._event_log.add_events(self.model.events.after(self._event_log.last_seq))
-        if isinstance(self.screen, VehicleDetailScreen):
-            self.screen.sync(now_s)
+        stack = self.screen_stack  # empty while the app is being torn down
+        if stack and isinstance(stack[-1], VehicleDetailScreen):
+            stack[-1].sync(now_s)
         if table_done:  # else the next tick comes back for the table
             self._drawn["all"] = self.model.version
         self.frames += 1
