@@ -1,10 +1,10 @@
 """The brush quadrotor's settings from a show file (or the defaults a show file has).
 
 One place decides them for the agent, the orchestrator, the kiosk preview, ``plan`` and ``fly``:
-the planner options of the show's ``planning`` section and the vehicle's ``limits`` (sections the
-brush quadrotor alone reads, but for ``planning.margin_m``), the simulated world
+the planner options of the show's ``planning`` section and the vehicle's ``limits`` (mostly the
+brush quadrotor's: each field's description names who reads it), the simulated world
 (a brush reaching the show's writing height, the board's height, the control rate) and the
-controller preset aiming the brush at that height.
+controller preset aiming the brush at that height, with the show's gain overrides.
 
 Without a show, the defaults a show file has are built without importing the show file models
 (pydantic: ~0.25 s of CPU, a third of a one-off ``skyquill plan``); a test keeps the two equal.
