@@ -159,7 +159,7 @@ def test_homes_closer_than_two_footprints_are_refused_at_the_second() -> None:
     )
 
 
-def test_two_ground_writers_half_a_metre_apart_are_refused() -> None:
+def test_two_ground_writers_0_6_m_apart_are_refused() -> None:
     text = (ROOT / "shows" / "ground-writers.yaml").read_text()
     assert "home_m_enu: [0.0, -2.0, 0.0]" in text
     near = text.replace("home_m_enu: [0.0, -2.0, 0.0]", "home_m_enu: [-1.4, -2.0, 0.0]")
