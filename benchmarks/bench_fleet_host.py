@@ -24,7 +24,7 @@ awake (flying), for ``--window-s`` seconds:
 Python process runs on one core at most. The peer, in the same run: the same show with
 ``--peer`` vehicles as separate agent processes (one each, what ``skyquill up`` ran before
 ``fleet_hosts``) beside a fleet host of as many.
-The fleet host of the benchmark is this script in ``--child`` mode: ``vehicle_agent.fleet``'s
+The fleet host of the benchmark is ``fleet_host_child.py``: ``vehicle_agent.fleet``'s
 ``FleetHost`` as ``skyquill fleet`` runs it, plus a task writing its figures once a second.
 
 Measured on the shared 2-core machine under ``nice -n 15`` (others' load average 1.5-10):
@@ -111,13 +111,9 @@ Measured on the shared 2-core machine under ``nice -n 15`` (others' load average
 from __future__ import annotations
 
 import argparse
-import asyncio
 import collections
-import itertools
 import json
-import operator
 import os
-import signal
 import statistics
 import subprocess
 import sys
@@ -126,7 +122,6 @@ import threading
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from functools import partial
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -135,6 +130,7 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from bench_agent import cpu_ticks, rss_mib, worker_count  # noqa: E402
 from bench_stop import wait_present, wide_show  # noqa: E402
+from fleet_host_child import STATS_PERIOD_S  # noqa: E402
 
 from bus.keys import ShowKeys  # noqa: E402
 from bus.messages import Telemetry  # noqa: E402
@@ -155,97 +151,8 @@ from trust.settings import ensure_show_keys, session_settings  # noqa: E402
 
 CORPUS = ("永", "書", "龍", "風", "雲", "飛", "鳥", "魚", "水", "鬱")
 """Characters written (cycled), long enough to keep M vehicles writing through the window."""
-PERIOD_S = 0.01
-STATS_PERIOD_S = 1.0
-
-
-# --- the fleet process (--child) -----------------------------------------------------------------
-async def record_figures(host: object, path: Path) -> None:
-    """Once a second, one JSON line: ticks run and due of the vehicles awake throughout the
-    second, their tick jitter, the loop's lag, RSS and CPU."""
-    from vehicle_agent.fleet import FleetHost
-
-    assert isinstance(host, FleetHost)
-    lags: list[float] = []
-
-    async def probe() -> None:
-        while True:
-            started = time.monotonic()
-            await asyncio.sleep(PERIOD_S)
-            lags.append((time.monotonic() - started - PERIOD_S) * 1e3)
-
-    prober = asyncio.create_task(probe())
-    before: dict[str, tuple[int, bool]] = {}
-    wall_s = time.monotonic()
-    with path.open("a") as out:
-        try:
-            while True:
-                await asyncio.sleep(STATS_PERIOD_S)
-                now_s = time.monotonic()
-                ran = due = 0.0
-                jitter: list[float] = []
-                awake = 0
-                for vehicle_id, service in list(host.services.items()):
-                    tick, resting = service.clock.tick, service.resting
-                    last = before.get(vehicle_id)
-                    before[vehicle_id] = (tick, resting)
-                    if last is None or last[1] or resting:
-                        continue
-                    awake += 1
-                    ran += tick - last[0]
-                    due += (now_s - wall_s) / service.clock.wall_period_s
-                    starts = list(
-                        itertools.takewhile(
-                            partial(operator.lt, wall_s), reversed(service.tick_starts_s)
-                        )
-                    )[::-1]  # the last second's, newest first: not a scan of the history
-                    jitter += [abs(b - a - PERIOD_S) * 1e3 for a, b in itertools.pairwise(starts)]
-                line = {
-                    "t": now_s,
-                    "awake": awake,
-                    "ran": ran,
-                    "due": due,
-                    "jitter_ms": [round(j, 2) for j in jitter],
-                    "lag_ms": [round(lag, 2) for lag in lags],
-                    "restarts": sum(host.restarts.values()),
-                }
-                lags.clear()
-                out.write(json.dumps(line) + "\n")
-                out.flush()
-                wall_s = now_s
-        finally:
-            prober.cancel()
-
-
-def child_main(
-    show_path: Path, vehicle_ids: list[str], stats: Path, profile: Path | None = None
-) -> None:
-    """The fleet host of a case; with ``profile``, a cProfile of it written there at the end."""
-    from vehicle_agent.fleet import FleetHost
-
-    host = FleetHost(load_show(show_path), vehicle_ids)
-
-    async def main() -> None:
-        stop = asyncio.Event()
-        loop = asyncio.get_running_loop()
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            loop.add_signal_handler(sig, stop.set)
-        figures = asyncio.create_task(record_figures(host, stats))
-        await host.run(stop)
-        figures.cancel()
-
-    if profile is None:
-        asyncio.run(main())
-    else:
-        import cProfile
-
-        # The loop thread's CPU time, not wall: a wall-clock profile of a process whose threads
-        # wait for the interpreter lock charges those waits to whatever held it (a geofence
-        # check of 2 us showed 44 us).
-        profiler = cProfile.Profile(time.thread_time)
-        profiler.runcall(asyncio.run, main())
-        profiler.dump_stats(str(profile))
-    os._exit(0)
+CHILD = Path(__file__).resolve().parent / "fleet_host_child.py"
+"""The fleet host process of a case."""
 
 
 # --- one case ------------------------------------------------------------------------------------
@@ -327,7 +234,7 @@ def run_case(
         stats = [Path(tmp) / f"fleet{i + 1}.jsonl" for i in range(hosts)]
         for i, figures in enumerate(stats):
             group = ids[i::hosts]  # dealt round-robin, as cli/fleets.py does
-            argv: tuple[str, ...] = (sys.executable, __file__, "--child", str(path))
+            argv: tuple[str, ...] = (sys.executable, str(CHILD), str(path))
             argv += (",".join(group), str(figures))
             if profile is not None:
                 argv += ("--profile", f"{profile}.{i + 1}")
@@ -567,13 +474,8 @@ def main() -> None:
     parser.add_argument("--peer", type=int, default=10)
     parser.add_argument("--skip-peer", action="store_true")
     parser.add_argument("--hosts", type=int, default=1, help="fleet host processes per show")
-    parser.add_argument("--child", nargs=3, metavar=("SHOW", "IDS", "STATS"))
     parser.add_argument("--profile", help="cProfile each fleet host to PROFILE.<host number>")
     args = parser.parse_args()
-    if args.child:
-        profile = None if args.profile is None else Path(args.profile)
-        child_main(Path(args.child[0]), args.child[1].split(","), Path(args.child[2]), profile)
-        return
     print(f"load average before: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     if not args.skip_peer:
         print(f"peer ({args.peer} vehicles, every one writing):")
