@@ -195,8 +195,9 @@ def _write_sitl(kind: str, texts: list[str]) -> list[Written]:
     launch = launcher()
     binary = launch.binary_for(kind)
     run_dir = Path(tempfile.mkdtemp(prefix=f"skyquill-writing-{kind}-"))
+    vibration = launch.RESEARCH_AIRFRAME_VIBRATION if kind == "px4" else None  # start.py's default
     inst = launch.Instance(kind, SITL_INDEX, SITL_INDEX + 1, launch.home_lla(HOME_M_ENU), binary,
-                           run_dir, mocap=True)  # fmt: skip
+                           run_dir, mocap=True, imu_vibration=vibration)  # fmt: skip
     process = launch.start(inst)
     try:
         if kind == "ardupilot":  # its EKF waits for the mocap the agent forwards: the agent waits

@@ -126,3 +126,39 @@ def test_a_missing_binary_variable_is_named(
     monkeypatch.setenv("SKYQUILL_PX4_SITL", os.devnull)
     with pytest.raises(launch.SitlError, match="not an executable file"):
         launch.binary_for("px4")
+
+
+def test_a_px4_research_airframe_needs_a_binary_with_the_vibration_parameter(
+    launch: ModuleType, tmp_path: Path
+) -> None:
+    binary = tmp_path / "build" / "px4_sitl_default" / "bin" / "px4"
+    binary.parent.mkdir(parents=True)
+    binary.write_bytes(b"\0" * 100 + b"SIH_T_TAU\0" + b"\0" * 100)
+    inst = launch.Instance("px4", 0, 1, (0.0, 0.0, 0.0), binary, tmp_path / "run", mocap=True)
+    launch.check_instance(inst)  # SIH's own vibration: any binary
+    research = replace(inst, imu_vibration=0.0)
+    with pytest.raises(launch.SitlError, match="has no SIH_IMU_VIB: build it with scripts/sitl"):
+        launch.check_instance(research)
+    # the name read across the boundary between two chunks of the file
+    binary.write_bytes(b"\0" * 5 + launch.PX4_VIBRATION_PARAM.encode() + b"\0")
+    assert launch.binary_has(binary, b"SIH_IMU_VIB", chunk_bytes=8)
+    assert not launch.binary_has(binary, b"SIH_IMU_VIBX", chunk_bytes=8)
+    launch.check_instance(research)
+    assert launch.command(research)[1]["PX4_PARAM_SIH_IMU_VIB"] == "0"
+    assert "PX4_PARAM_SIH_IMU_VIB" not in launch.command(inst)[1]
+    with pytest.raises(launch.SitlError, match="PX4 SIH only"):
+        launch.check_instance(replace(research, kind="ardupilot", imu_vibration=0.5))
+
+
+def test_px4_vehicles_on_mocap_fly_a_research_airframe_unless_told(
+    launch: ModuleType, tmp_path: Path
+) -> None:
+    binary = tmp_path / "px4"
+    binary.write_bytes(b"SIH_IMU_VIB")
+    binary.chmod(0o755)
+    show = Path(__file__).resolve().parents[1] / "shows" / "sitl-px4.yaml"
+    found = launch.show_instances(show, tmp_path, {"ardupilot": None, "px4": str(binary)})
+    assert [inst.imu_vibration for _, inst in found] == [0.0] * len(found)
+    assert all(inst.mocap for _, inst in found)
+    stock = launch.show_instances(show, tmp_path, {"ardupilot": None, "px4": str(binary)}, None)
+    assert [inst.imu_vibration for _, inst in stock] == [None] * len(found)

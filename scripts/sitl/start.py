@@ -11,6 +11,11 @@ which autopilot and which instance it is:
   offboard link there from 14580 + I); PX4 forces MAV_SYS_ID = I + 1, so that must be the
   vehicle's ``mavlink_system_id``; binary from ``--px4`` or $SKYQUILL_PX4_SITL.
 
+A PX4 vehicle that forwards mocap flies a research airframe: SIH's armed IMU noise at its
+disarmed level (``SIH_IMU_VIB`` 0, a parameter scripts/sitl/build.py adds to SIH;
+``--px4-imu-vibration`` says otherwise). SIH's stock airframe vibrates too much for centimetre
+writing (scripts/sitl/source_edits.py says what was measured).
+
 Each instance starts at the geodetic point of the vehicle's ``home_m_enu`` (east/north metres from
 a reference point), which is also its LOCAL_NED origin, and runs in its own directory under
 ``--run-dir`` (eeprom, logs, parameters; its console output in ``console.log``). ArduCopter starts
@@ -31,7 +36,7 @@ import signal
 import subprocess
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -59,6 +64,10 @@ PX4_MOCAP_BOOT_PARAMS = {"EKF2_ASP_DELAY": "0", "EKF2_DELAY_MAX": "20"}
 """The same for PX4, given as PX4_PARAM_* variables (vehicle_agent/backends/mavlink_params.py
 sets and checks them at connect, and refuses a vehicle that would need a reboot)."""
 PX4_OFFBOARD_REMOTE_PORT = 14540
+PX4_VIBRATION_PARAM = "SIH_IMU_VIB"
+"""SIH's armed IMU noise as a fraction of its own (added by scripts/sitl/source_edits.py)."""
+RESEARCH_AIRFRAME_VIBRATION = 0.0
+"""SIH_IMU_VIB of a vehicle on mocap: SIH's disarmed noise level (0.1 m/s^2, 0.01 rad/s)."""
 MAV_SYS_STATUS_PREARM_CHECK = 0x10000000
 READY_TIMEOUT_S = 180.0
 """Longest wait for a fresh instance to be ready to arm, in [s] (ArduCopter's EKF: ~40 s)."""
@@ -87,6 +96,9 @@ class Instance:
     mocap: bool = False
     """The agent forwards motion capture: ArduCopter boots with VISO_TYPE 1 and ExternalNav as
     its EKF3 sources (``MOCAP_BOOT_PARAMS``; the agent sets and verifies them again at connect)."""
+    imu_vibration: float | None = None
+    """PX4 SIH: its armed IMU noise as a fraction of SIH's own (:data:`PX4_VIBRATION_PARAM`, needs
+    a binary built by scripts/sitl/build.py); None leaves SIH's."""
 
     @property
     def url(self) -> str:
@@ -177,6 +189,8 @@ def command(inst: Instance) -> tuple[list[str], dict[str, str]]:
     )
     if inst.mocap:
         env.update({f"PX4_PARAM_{name}": value for name, value in PX4_MOCAP_BOOT_PARAMS.items()})
+    if inst.imu_vibration is not None:
+        env[f"PX4_PARAM_{PX4_VIBRATION_PARAM}"] = f"{inst.imu_vibration:g}"
     return [str(inst.binary), "-i", str(inst.index), "-d", str(etc)], env
 
 
@@ -195,10 +209,30 @@ def check_instance(inst: Instance) -> None:
             f"PX4 instance {inst.index} always has MAV_SYS_ID {inst.index + 1}, not "
             f"{inst.system_id}: use udpin:127.0.0.1:{PX4_OFFBOARD_REMOTE_PORT + inst.system_id - 1}"
         )
+    if inst.imu_vibration is not None:
+        if inst.kind != "px4" or not 0.0 <= inst.imu_vibration <= 1.0:
+            raise SitlError(f"IMU vibration {inst.imu_vibration}: PX4 SIH only, from 0 to 1")
+        if not binary_has(inst.binary, PX4_VIBRATION_PARAM.encode()):
+            raise SitlError(
+                f"{inst.binary} has no {PX4_VIBRATION_PARAM}: build it with scripts/sitl/build.py "
+                '(README, "Real autopilot SITL"), or --px4-imu-vibration stock for SIH\'s '
+                "vibrating airframe (no centimetre writing)"
+            )
     if inst.kind == "ardupilot":
         defaults = _copter_defaults(inst.binary)
         if not defaults.is_file():
             raise SitlError(f"{defaults}: ArduCopter defaults not found beside {inst.binary}")
+
+
+def binary_has(binary: Path, name: bytes, chunk_bytes: int = 1 << 22) -> bool:
+    """Whether ``name`` occurs in the file ``binary`` (a PX4 binary names its parameters)."""
+    with open(binary, "rb") as f:
+        tail = b""
+        while chunk := f.read(chunk_bytes):
+            if name in tail + chunk:
+                return True
+            tail = chunk[-len(name) :]
+    return False
 
 
 def start(inst: Instance) -> subprocess.Popen[bytes]:
@@ -303,8 +337,14 @@ def _poll_ready(
             return time.monotonic() - t0
 
 
-def show_instances(show_path: Path, run_dir: Path, binaries: dict[str, str | None]) -> list[Any]:
-    """(vehicle id, Instance) of every ``backend: mavlink`` vehicle of the show."""
+def show_instances(
+    show_path: Path,
+    run_dir: Path,
+    binaries: dict[str, str | None],
+    px4_imu_vibration: float | None = RESEARCH_AIRFRAME_VIBRATION,
+) -> list[Any]:
+    """(vehicle id, Instance) of every ``backend: mavlink`` vehicle of the show; PX4 vehicles on
+    mocap get ``px4_imu_vibration`` (None: SIH's own)."""
     sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
     from showfile import load_show
 
@@ -325,11 +365,25 @@ def show_instances(show_path: Path, run_dir: Path, binaries: dict[str, str | Non
             run_dir / f"{kind}-{index}",
             mocap=vehicle.mavlink_mocap != "none",
         )
+        if kind == "px4" and inst.mocap:
+            inst = replace(inst, imu_vibration=px4_imu_vibration)
         check_instance(inst)
         found.append((vehicle.id, inst))
     if not found:
         raise SitlError(f"{show_path}: no vehicle with backend: mavlink")
     return found
+
+
+def _vibration(text: str) -> float | None:
+    if text == "stock":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not 0.0 <= value <= 1.0:
+        raise argparse.ArgumentTypeError(f"{text!r}: a number from 0 to 1, or stock")
+    return value
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -344,13 +398,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--arducopter", help=f"arducopter binary (${ENV_BINARY['ardupilot']})")
     parser.add_argument("--px4", help=f"px4 binary (${ENV_BINARY['px4']})")
     parser.add_argument("--ready-timeout", type=float, default=READY_TIMEOUT_S, metavar="S")
+    parser.add_argument(
+        "--px4-imu-vibration",
+        type=_vibration,
+        default=RESEARCH_AIRFRAME_VIBRATION,
+        metavar="F|stock",
+        help="PX4 SIH vehicles on mocap: armed IMU noise as a fraction of SIH's own, 0-1 "
+        "(default 0: a research airframe; needs a px4 from build.py); stock: SIH's own",
+    )
     args = parser.parse_args(argv)
     run_dir = args.run_dir or Path("out") / f"{args.show.stem}-sitl"
     procs: list[subprocess.Popen[bytes]] = []
     signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt))
     try:
         pairs = show_instances(
-            args.show, run_dir.resolve(), {"ardupilot": args.arducopter, "px4": args.px4}
+            args.show,
+            run_dir.resolve(),
+            {"ardupilot": args.arducopter, "px4": args.px4},
+            args.px4_imu_vibration,
         )
         for vehicle_id, inst in pairs:
             procs.append(start(inst))
