@@ -359,7 +359,7 @@ class MavlinkBackend:
             if self.mode != "offboard":
                 self._set_backend_mode("offboard")
             self._hold = Setpoint(position_m_enu=setpoint.position_m_enu)
-            target = self.aid.lead(setpoint)
+            target = self.aid.lead(setpoint, now_s)
         elif self.mode in ("hold", "offboard") and self._hold is not None:
             if self.mode == "offboard":
                 self._set_backend_mode("hold")

@@ -23,6 +23,11 @@ import numpy as np
 
 from vehicle_agent.backends.base import Setpoint, Vec3
 
+JERK_MAX_DT_S = 0.05
+"""Longest gap in [s] between two setpoints whose accelerations give the plan's jerk."""
+JERK_MAX_MPS3 = 20.0
+"""Largest jerk in [m/s^3] taken from two setpoints (a plan's is a few; a jump is no jerk)."""
+
 
 @dataclass(frozen=True)
 class LagSettings:
@@ -42,7 +47,16 @@ class LagSettings:
     smoothing: float = 0.5
     """Weight of a new fit in the running delay (1: take each fit as it is)."""
     explained_fraction: float = 0.5
-    """A fit is taken only when it leaves at most this fraction of the zero-delay RMS error."""
+    """A fit identifies the delay only when it leaves at most this fraction of the zero-delay RMS
+    error (a leg the delay clearly explains)."""
+    refine_fraction: float = 0.8
+    """Once a delay is identified, a fit leaving at most this fraction refines it. On PX4 1.16
+    SIH the vehicle wanders 6-8 mm about its setpoint, as much as a 0.05 s delay at writing speed
+    (0.2 m/s: 10 mm), so only fast transits explained half their error; with its gains at 2.5x
+    their fits (0.08-0.09 s) alone led the writing 0.03-0.04 s too far (一 16.9 mm, IoU 0.50);
+    refined by the writing legs the lead settled at 0.03-0.06 s (11.2 mm, 0.65). Not for
+    identifying: on mavsim's stiff PX4 loop (no delay) one fit of a transient explained a third
+    (0.113 s) and, taken, over-led a show's strokes to 20 mm."""
 
 
 @dataclass(frozen=True)
@@ -130,11 +144,14 @@ class ResponseDelayEstimator:
 
     def plausible(self, fit: DelayFit) -> bool:
         """A delay explains the response: inside the search range (not at its end) and leaving at
-        most ``explained_fraction`` of the error at zero delay; otherwise the vehicle is not
-        following the setpoints as a delay (it is disturbed, saturated or elsewhere) and the lead
-        stays as it is."""
+        most ``explained_fraction`` of the error at zero delay, or ``refine_fraction`` once a
+        delay has been identified; otherwise the vehicle is not following the setpoints as a
+        delay (it is disturbed, saturated or elsewhere) and the lead stays as it is."""
         inside = fit.delay_s < self.settings.max_delay_s - self.settings.step_s
-        return inside and fit.rms_m <= self.settings.explained_fraction * fit.rms_at_zero_m
+        fraction = self.settings.explained_fraction
+        if self.delay_s is not None:
+            fraction = self.settings.refine_fraction
+        return inside and fit.rms_m <= fraction * fit.rms_at_zero_m
 
     def _trim(self, now_s: float) -> None:
         horizon = now_s - self.settings.window_s - self.settings.max_delay_s
@@ -163,22 +180,35 @@ class ResponseDelayEstimator:
             self.delay_s = (1 - w) * self.delay_s + w * fit.delay_s
 
 
-def lead_setpoint(setpoint: Setpoint, lead_s: float) -> Setpoint:
-    """The setpoint ``lead_s`` [s] ahead along its own velocity and acceleration (constant
-    acceleration over the lead); a hold (v = a = 0) is unchanged."""
+def lead_setpoint(
+    setpoint: Setpoint, lead_s: float, jerk_mps3_enu: Vec3 = (0.0, 0.0, 0.0)
+) -> Setpoint:
+    """The setpoint ``lead_s`` [s] ahead along its own velocity, acceleration and jerk in
+    [m/s^3] (constant jerk over the lead, so the acceleration, which the autopilot turns into
+    tilt, is led too); a hold (v = a = j = 0) is unchanged."""
     if lead_s <= 0:
         return setpoint
     p = np.asarray(setpoint.position_m_enu, dtype=np.float64)
     v = np.asarray(setpoint.velocity_mps_enu, dtype=np.float64)
     a = np.asarray(setpoint.acceleration_mps2_enu, dtype=np.float64)
-    p_lead = p + v * lead_s + 0.5 * a * lead_s**2
-    v_lead = v + a * lead_s
+    j = np.asarray(jerk_mps3_enu, dtype=np.float64)
     return Setpoint(
-        position_m_enu=_vec(p_lead),
-        velocity_mps_enu=_vec(v_lead),
-        acceleration_mps2_enu=setpoint.acceleration_mps2_enu,
+        position_m_enu=_vec(p + v * lead_s + a * lead_s**2 / 2 + j * lead_s**3 / 6),
+        velocity_mps_enu=_vec(v + a * lead_s + j * lead_s**2 / 2),
+        acceleration_mps2_enu=_vec(a + j * lead_s),
         pen_down=setpoint.pen_down,
     )
+
+
+def plan_jerk(previous: tuple[float, Setpoint] | None, now_s: float, setpoint: Setpoint) -> Vec3:
+    """The plan's jerk in [m/s^3] between the previous setpoint (time [s], setpoint) and this
+    one, clipped to +-:data:`JERK_MAX_MPS3`; zero without a previous one at most
+    :data:`JERK_MAX_DT_S` before (a new plan starts from rest)."""
+    if previous is None or not 0.0 < now_s - previous[0] <= JERK_MAX_DT_S:
+        return (0.0, 0.0, 0.0)
+    a0 = np.asarray(previous[1].acceleration_mps2_enu, dtype=np.float64)
+    a1 = np.asarray(setpoint.acceleration_mps2_enu, dtype=np.float64)
+    return _vec(np.clip((a1 - a0) / (now_s - previous[0]), -JERK_MAX_MPS3, JERK_MAX_MPS3))
 
 
 def _vec(x: np.ndarray) -> Vec3:

@@ -126,18 +126,20 @@ and four times its jerk limit (5 m/s^3), so a stroke's target is shaped less and
 closer. On ArduCopter SITL with mocap, 一's pen-down RMSE 39 mm -> 17 mm (15 mm with the truth
 de-quantized); three times the defaults (and ATC_INPUT_TC 0.1) gave no more (18 mm)."""
 PX4_TRACKING = (
-    ("MPC_XY_P", 2.5),
-    ("MPC_XY_VEL_P_ACC", 5.0),
-    ("MPC_XY_VEL_I_ACC", 2.5),
+    ("MPC_XY_P", 1.8),
+    ("MPC_XY_VEL_P_ACC", 3.6),
+    ("MPC_XY_VEL_I_ACC", 1.6),
     ("MPC_Z_P", 2.0),
     ("MPC_Z_VEL_P_ACC", 6.0),
 )
-"""PX4's position loop for writing: about 2.5 times its default P-PI cascade (0.95, 1.8, 0.4),
-MPC_Z_P 2 and MPC_Z_VEL_P_ACC 6 (defaults 1 and 4). PX4 1.16 SIH on mocap: with the defaults
-the vehicle drifted 0.1-0.2 m from a still setpoint and the transit was aborted (deviation
-0.18-0.2 m > 0.15 m); with twice the defaults and the position alone fused it hovered 29-47 /
-15-31 / 25-53 mm RMS (x, y, z) off its setpoint; with the mocap's velocity fused too (ODOMETRY)
-and these, 15 / 10 / 8 mm. Three times the defaults shook the x axis (16 mm at 1 Hz)."""
+"""PX4's position loop for writing: about twice its default P-PI cascade (0.95, 1.8, 0.4),
+MPC_Z_P 2 and MPC_Z_VEL_P_ACC 6 (defaults 1 and 4). Measured on PX4 1.16 SIH on mocap
+(ODOMETRY), research airframe (SIH_IMU_VIB 0), 一 / 十 pen-down RMSE and IoU: 2x (these)
+5.5-8.6 / 9.3-10.6 mm, IoU 0.75-0.82 / 0.62-0.80 (five runs, lead 0.06-0.10 s); 2.5x
+10.0-13.2 / 9.8-11.7 mm, IoU 0.60-0.69 / 0.58-0.72 (four runs); 3.5x 13.0 / 11.8 mm, 0.49 /
+0.66; 1.3x lagged and wandered (37 / 26 mm). Stiffer loops hold the body closer (5 mm against
+6-9) but tilt it more to do so, and the brush hangs about 0.3 m below it: its tip wanders more.
+On SIH's stock vibrating airframe 2x hovered 29-47 mm off its setpoint."""
 
 
 def show_params(

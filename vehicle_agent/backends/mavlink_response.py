@@ -11,7 +11,7 @@ import logging
 from typing import Any
 
 from vehicle_agent.backends.base import Setpoint, Vec3
-from vehicle_agent.backends.mavlink_lag import ResponseDelayEstimator, lead_setpoint
+from vehicle_agent.backends.mavlink_lag import ResponseDelayEstimator, lead_setpoint, plan_jerk
 from vehicle_agent.backends.mavlink_mocap import MocapSource
 from vehicle_agent.backends.mavlink_settings import MavlinkSettings
 from vehicle_agent.backends.mavlink_truth import (
@@ -37,6 +37,8 @@ class ResponseAid:
         self.lag = ResponseDelayEstimator()
         self._seed = seed
         self._logged_lead = -1.0
+        self._previous: tuple[float, Setpoint] | None = None
+        """The last plan setpoint led and its time [s], for the plan's jerk."""
 
     @property
     def lead_s(self) -> float:
@@ -67,16 +69,23 @@ class ResponseAid:
             return None
         return sample
 
-    def lead(self, setpoint: Setpoint) -> Setpoint:
-        """The plan's setpoint led by the autopilot's delay (position setpoints only)."""
+    def lead(self, setpoint: Setpoint, now_s: float) -> Setpoint:
+        """The plan's setpoint at agent time ``now_s`` [s] led by the autopilot's delay
+        (position setpoints only), along the plan's jerk between consecutive setpoints."""
         lead_s = self.lead_s
         if abs(lead_s - self._logged_lead) >= 0.01:
             self._logged_lead = lead_s
             log.info("leading setpoints by %.3f s", lead_s)
-        return lead_setpoint(setpoint, lead_s)
+        jerk = plan_jerk(self._previous, now_s, setpoint)
+        self._previous = (now_s, setpoint)
+        return lead_setpoint(setpoint, lead_s, jerk)
 
     def sent(self, now_s: float, position_m_enu: Vec3) -> None:
         self.lag.sent(now_s, position_m_enu)
 
-    def measured(self, now_s: float, position_m_enu: Vec3) -> None:
-        self.lag.measured(now_s, position_m_enu)
+    def measured(self, now_s: float, estimate_m_enu: Vec3) -> None:
+        """Where the vehicle is, for the lag: the truth when it is fresh (what the brush follows;
+        on PX4 1.16 SIH the autopilot's estimate trails it by 0.015-0.025 s, which a fit on the
+        estimate added to the lead), else the autopilot's estimate."""
+        truth = self.true_state(now_s)
+        self.lag.measured(now_s, estimate_m_enu if truth is None else truth.position_m_enu)
