@@ -265,6 +265,7 @@ def _settings(args: argparse.Namespace, base: Any) -> Any:
         resegment=not args.no_resegment,
         resegment_method=args.resegment_method,
         solver=args.solver,
+        dense_qp_budget_s=defaults.ONE_OFF_DENSE_QP_BUDGET_S,
         method=args.method,
         sample_rate_hz=args.rate,
     )

@@ -19,9 +19,9 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from planner.coo import CooMatrix
 from planner.errors import PlannerError
 
 FloatArray = NDArray[np.float64]
@@ -152,12 +152,12 @@ class BasisRows:
     n_ctrl: int
     """Number of control points (columns of the full matrix)."""
 
-    def to_sparse(self) -> sp.csr_matrix:
-        """Full ``(n, n_ctrl)`` CSR matrix (``H`` of eq. 35 for derivative 0)."""
-        n = self.first.shape[0]
-        cols = self.first[:, None] + np.arange(4)[None, :]
-        indptr = np.arange(0, 4 * n + 1, 4)
-        return sp.csr_matrix((self.values.ravel(), cols.ravel(), indptr), shape=(n, self.n_ctrl))
+    def toarray(self) -> FloatArray:
+        """Dense ``(n, n_ctrl)`` matrix (``H`` of eq. 35 for derivative 0)."""
+        dense = np.zeros((self.first.shape[0], self.n_ctrl))
+        rows = np.arange(self.first.shape[0])[:, None]
+        dense[rows, self.first[:, None] + np.arange(4)[None, :]] = self.values
+        return dense
 
     def apply(self, control_points: FloatArray) -> FloatArray:
         """Values ``sum_a values[:, a] * ctrl[first + a]``; ctrl shape (n_ctrl,) or (n_ctrl, d)."""
@@ -198,54 +198,70 @@ def basis_rows_pair(u: FloatArray, n_spans: int) -> tuple[BasisRows, BasisRows]:
 # --- control-point difference operators (eq. 45-52) -------------------------------------------
 
 
-def velocity_operator(n_spans: int) -> sp.csr_matrix:
+def _band(values: FloatArray, n_cols: int) -> CooMatrix:
+    """The matrix whose row ``i`` holds ``values[i]`` in columns ``i .. i + width - 1``."""
+    n_rows, width = values.shape
+    rows = np.repeat(np.arange(n_rows), width)
+    cols = rows + np.tile(np.arange(width), n_rows)
+    return CooMatrix(rows, cols, values.ravel(), (n_rows, n_cols))
+
+
+def _difference_values(n_spans: int, order: int) -> FloatArray:
+    """Row values ``[-s, s]`` of the ``order``-th hodograph difference (eq. 46 for 1, eq. 50 for
+    2): ``s = (4 - order) / (knot[i + 4] - knot[i + order])``."""
+    knots = knot_vector(n_spans)
+    i = np.arange(n_spans + DEGREE - order)
+    scale = (4 - order) / (knots[i + 4] - knots[i + order])
+    return np.stack([-scale, scale], axis=1)
+
+
+def velocity_operator(n_spans: int) -> CooMatrix:
     """``K_u``: hodograph control points ``eta = K_u tau`` of ``dS/du`` (eq. 46-47 with alpha = 1).
 
     Rows ``[-3, 3]``, ``[-3/2, 3/2]``, ``[-1, 1]``, ... , ``[-3/2, 3/2]``, ``[-3, 3]`` for m >= 4.
     Shape ``(m + 2, m + 3)``. Multiply by ``alpha`` for the time derivative.
     """
-    knots = knot_vector(n_spans)
-    n = n_spans + DEGREE
-    i = np.arange(n - 1)
-    scale = 3.0 / (knots[i + 4] - knots[i + 1])
-    return sp.csr_matrix(
-        (np.concatenate([-scale, scale]), (np.concatenate([i, i]), np.concatenate([i, i + 1]))),
-        shape=(n - 1, n),
-    )
+    return _band(_difference_values(n_spans, 1), n_spans + DEGREE)
 
 
-def _second_difference(n_spans: int) -> sp.csr_matrix:
-    """``K'_u`` of eq. (50): quadratic -> linear hodograph, shape ``(m + 1, m + 2)``."""
-    knots = knot_vector(n_spans)
-    n = n_spans + DEGREE
-    i = np.arange(n - 2)
-    scale = 2.0 / (knots[i + 4] - knots[i + 2])
-    return sp.csr_matrix(
-        (np.concatenate([-scale, scale]), (np.concatenate([i, i]), np.concatenate([i, i + 1]))),
-        shape=(n - 2, n - 1),
+@lru_cache(maxsize=64)
+def _acceleration_values(n_spans: int) -> FloatArray:
+    """Rows of ``L_u = K'_u K_u``, shape ``(m + 1, 3)``: row ``i`` is columns ``i .. i + 2``."""
+    k = _difference_values(n_spans, 1)  # K_u, (m + 2, 2)
+    k2 = _difference_values(n_spans, 2)  # K'_u of eq. (50), (m + 1, 2)
+    return np.stack(
+        [k2[:, 0] * k[:-1, 0], k2[:, 0] * k[:-1, 1] + k2[:, 1] * k[1:, 0], k2[:, 1] * k[1:, 1]],
+        axis=1,
     )
 
 
 @lru_cache(maxsize=64)
-def acceleration_operator(n_spans: int) -> sp.csr_matrix:
+def acceleration_operator(n_spans: int) -> CooMatrix:
     """``L_u = K'_u K_u`` (eq. 52 with alpha = 1), shape ``(m + 1, m + 3)``.
 
     Rows ``[6, -9, 3]``, ``[3/2, -5/2, 1]``, ``[1, -2, 1]``, .... The second derivative is
     piecewise linear with value ``(L_u tau)_k`` at knot ``u = k``: bounding these rows bounds
     the acceleration exactly (not only sufficiently).
     """
-    return sp.csr_matrix(_second_difference(n_spans) @ velocity_operator(n_spans))
+    return _band(_acceleration_values(n_spans), n_spans + DEGREE)
 
 
 @lru_cache(maxsize=64)
-def jerk_operator(n_spans: int) -> sp.csr_matrix:
+def _jerk_values(n_spans: int) -> FloatArray:
+    """Rows of ``D3_u``, shape ``(m, 4)``: row ``s`` is columns ``s .. s + 3``."""
+    accel = _acceleration_values(n_spans)
+    zero = np.zeros((n_spans, 1))
+    return np.hstack([zero, accel[1:]]) - np.hstack([accel[:-1], zero])
+
+
+@lru_cache(maxsize=64)
+def jerk_operator(n_spans: int) -> CooMatrix:
     """``D3_u``: constant third derivative on each span, shape ``(m, m + 3)``.
 
     The linear hodograph has unit knot spacing, so the jerk on span ``s`` is
     ``(L_u tau)_{s+1} - (L_u tau)_s``.
     """
-    accel = acceleration_operator(n_spans)
-    return sp.csr_matrix(accel[1:] - accel[:-1])
+    return _band(_jerk_values(n_spans), n_spans + DEGREE)
 
 
 @lru_cache(maxsize=64)
@@ -255,19 +271,21 @@ def jerk_gram_banded(n_spans: int) -> FloatArray:
     ``G = alpha**5 * G_u`` is eq. (34): ``int (d^3 S/dt^3)^2 dt = tau^T G tau``. Each span has
     unit length in ``u``, so the integral of the squared constant jerk is the plain sum.
     """
-    gram = (jerk_operator(n_spans).T @ jerk_operator(n_spans)).todia()
-    n = gram.shape[0]
+    jerk = _jerk_values(n_spans)
+    n = n_spans + DEGREE
     ab = np.zeros((4, n))
-    for k in range(4):
-        ab[3 - k, k:] = gram.diagonal(k)
+    for a in range(4):  # entry (s + a, s + b) of span s's outer product sits at ab[3 - (b - a)]
+        for b in range(a, 4):
+            ab[3 - (b - a), b : b + n_spans] += jerk[:, a] * jerk[:, b]
     ab.setflags(write=False)
     return ab
 
 
-def jerk_gram(n_spans: int, alpha: float) -> sp.csr_matrix:
-    """Dense-free sparse ``G`` of eq. (34) in time units: ``alpha**5 * D3_u^T D3_u``."""
-    d3 = jerk_operator(n_spans)
-    return sp.csr_matrix(alpha**5 * (d3.T @ d3))
+def jerk_gram(n_spans: int, alpha: float) -> FloatArray:
+    """Dense ``G`` of eq. (34) in time units: ``alpha**5 * D3_u^T D3_u`` (for checks; the fits
+    use :func:`jerk_gram_banded`)."""
+    d3 = jerk_operator(n_spans).toarray()
+    return np.asarray(alpha**5 * (d3.T @ d3))
 
 
 # --- a spline as a value ----------------------------------------------------------------------

@@ -18,3 +18,7 @@ SAMPLE_RATE_HZ = 100.0
 
 SOLVERS = ("piqp", "clarabel", "osqp")
 """QP solvers the planner can use (``planner.qp_solvers``), the default first."""
+ONE_OFF_DENSE_QP_BUDGET_S = 0.2
+"""``PlanOptions.dense_qp_budget_s`` of a process that plans once (``skyquill plan``), [s]: about
+what importing ``scipy.sparse`` costs there (0.2 s on a 2-core machine), which the sparse QP
+interface would need."""

@@ -1,4 +1,4 @@
-"""Minimum-jerk regression as a sparse QP with acceleration and speed limits (eq. 44-54).
+"""Minimum-jerk regression as a QP with acceleration and speed limits (eq. 44-54).
 
 Variables are the control points of the three axes stacked, ``x = [tau_x; tau_y; tau_z]``.
 
@@ -13,6 +13,15 @@ Variables are the control points of the three axes stacked, ``x = [tau_x; tau_y;
 
 The constraint matrix never depends on ``alpha``: the bounds are divided by ``alpha^e`` instead, so
 re-solves during time re-segmentation keep one sparsity pattern (PIQP ``update``).
+
+Which PIQP interface solves (:class:`QpFitter`): the sparse one, unless the caller gives a dense
+budget (``PlanOptions.dense_qp_budget_s``; a one-off ``skyquill plan`` does). The sparse interface
+takes SciPy matrices, and importing ``scipy.sparse`` costs about 0.2 s once per process; the dense
+one needs only numpy but its solve grows with n^3 + n^2 q (n variables, q rows of ``G``). A
+process that plans once therefore solves densely as long as the predicted dense time stays within
+its budget, and sparsely from the first QP that would exceed it on: as renting skis until the
+rent paid equals the price, it pays at most about twice what the better choice in hindsight
+would have cost (a default plan solves 1 to 3 QPs; a fixed total time, 10 to 20).
 """
 
 from __future__ import annotations
@@ -22,10 +31,10 @@ from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from planner.bspline import FloatArray, IntArray, acceleration_operator, velocity_operator
+from planner.coo import CooMatrix, kron, vstack
 from planner.errors import InfeasibleTrajectoryError, PlannerError
 from planner.minjerk import (
     FitProblem,
@@ -37,7 +46,13 @@ from planner.minjerk import (
     fixed_indices,
     normal_equations,
 )
-from planner.qp_solvers import QpBackend, QpData, QpSolverError, make_backend
+from planner.qp_solvers import (
+    PiqpDenseBackend,
+    QpBackend,
+    QpData,
+    QpSolverError,
+    make_backend,
+)
 
 
 def _speed_directions() -> FloatArray:
@@ -54,6 +69,17 @@ def _speed_directions() -> FloatArray:
 SPEED_DIRECTIONS = _speed_directions()
 SPEED_POLYTOPE_APOTHEM = 1.0 / 1.1280928107595818
 """Bound on ``|n_k . v|`` that keeps the 13-pair polytope inside the unit ball (circumradius 1)."""
+DENSE_SECONDS_PER_UNIT = 9e-10
+"""Predicted time of one dense PIQP solve of these QPs per unit of ``n^3 + n^2 q`` (n variables, q
+inequality rows: the KKT factorisation and the ``G^T G`` it forms every iteration), [s]. Measured
+on one core: 2.3e-10 to 4.1e-10 without rows (9 ms at 282 variables, 250 ms at 1026), 6.5e-10 to
+8.3e-10 at 384 variables with 194 to 1043 rows (65 to 173 ms, 14 to 16 iterations); the largest,
+rounded up, so that the prediction errs towards the sparse interface."""
+
+
+def dense_qp_seconds(n_variables: int, n_rows: int) -> float:
+    """Predicted time [s] of one dense PIQP solve: ``n_variables``, ``n_rows`` rows of ``G``."""
+    return DENSE_SECONDS_PER_UNIT * n_variables**2 * (n_variables + n_rows)
 
 
 @dataclass(frozen=True)
@@ -72,7 +98,7 @@ class QpLimits:
 
 @dataclass(frozen=True)
 class _Structure:
-    G: sp.csr_matrix
+    G: CooMatrix
     """All inequality rows: acceleration (3 axes x (m+1)), then speed (13 x (m+2))."""
     exponent: FloatArray
     """Power of alpha in each row's physical value (2 acceleration, 1 velocity)."""
@@ -80,48 +106,45 @@ class _Structure:
     """0 for an acceleration row, 1 for a speed row."""
     position: IntArray
     """Knot / hodograph index of each row (its place along the trajectory)."""
-    A: sp.csc_matrix
-    P_indptr: IntArray
-    P_indices: IntArray
+    A: CooMatrix
+    P_rows: IntArray
+    P_cols: IntArray
+    """Entries of the upper band of ``P``'s three diagonal blocks, row by row."""
     P_gather: IntArray
-    """Flat indices into the banded ``ab`` (4, n) for the three diagonal blocks of ``P``."""
+    """Flat index into the banded ``ab`` (4, n) of each entry of ``P``."""
 
 
 @lru_cache(maxsize=32)
 def _structure(n_spans: int, with_speed: bool) -> _Structure:
     n = n_spans + 3
-    eye3 = sp.identity(3, format="csr")
-    acc = sp.kron(eye3, acceleration_operator(n_spans), format="csr")
+    acc = kron(np.eye(3), acceleration_operator(n_spans))
     blocks = [acc]
     exponent = [np.full(acc.shape[0], 2.0)]
     kind = [np.zeros(acc.shape[0], dtype=np.int64)]
     position = [np.tile(np.arange(n_spans + 1), 3)]
     if with_speed:
-        vel = sp.kron(sp.csr_matrix(SPEED_DIRECTIONS), velocity_operator(n_spans), format="csr")
+        vel = kron(SPEED_DIRECTIONS, velocity_operator(n_spans))
         blocks.append(vel)
         exponent.append(np.full(vel.shape[0], 1.0))
         kind.append(np.ones(vel.shape[0], dtype=np.int64))
         position.append(np.tile(np.arange(n - 1), SPEED_DIRECTIONS.shape[0]))
     fixed = fixed_indices(n)
     cols = (np.arange(3)[:, None] * n + fixed[None, :]).ravel()
-    A = sp.csc_matrix((np.ones(18), (np.arange(18), cols)), shape=(18, 3 * n))
-    # Upper-banded pattern of one block, column by column: rows max(0, j-3) .. j.
-    indptr, indices, gather = [0], [], []
-    for block in range(3):
-        for j in range(n):
-            for i in range(max(0, j - 3), j + 1):
-                indices.append(block * n + i)
-                gather.append((3 - (j - i)) * n + j)
-            indptr.append(len(indices))
+    A = CooMatrix(np.arange(18), cols, np.ones(18), (18, 3 * n))
+    # Upper band of one block, row by row: row i holds columns i .. min(i + 3, n - 1).
+    row = np.repeat(np.arange(n), 4)
+    col = row + np.tile(np.arange(4), n)
+    row, col = row[col < n], col[col < n]
+    offsets = (np.arange(3) * n)[:, None]
     return _Structure(
-        G=sp.csr_matrix(sp.vstack(blocks, format="csr")),
+        G=vstack(blocks),
         exponent=np.concatenate(exponent),
         kind=np.concatenate(kind),
         position=np.concatenate(position),
         A=A,
-        P_indptr=np.array(indptr, dtype=np.int64),
-        P_indices=np.array(indices, dtype=np.int64),
-        P_gather=np.array(gather, dtype=np.int64),
+        P_rows=(offsets + row).ravel(),
+        P_cols=(offsets + col).ravel(),
+        P_gather=np.tile((3 - (col - row)) * n + col, 3),
     )
 
 
@@ -159,18 +182,16 @@ def _qp_data(
     rows: IntArray | None,
 ) -> QpData:
     n = problem.n_ctrl
-    P = sp.csc_matrix(
-        (2.0 * ab.ravel()[st.P_gather], st.P_indices, st.P_indptr), shape=(3 * n, 3 * n)
-    )
+    P = CooMatrix(st.P_rows, st.P_cols, 2.0 * ab.ravel()[st.P_gather], (3 * n, 3 * n))
     G, h_l, h_u = st.G, bounds.h_l, bounds.h_u
     if rows is not None:
-        G, h_l, h_u = G[rows], h_l[rows], h_u[rows]
+        G, h_l, h_u = G.take_rows(rows), h_l[rows], h_u[rows]
     return QpData(
         P_upper=P,
         c=-2.0 * rhs.T.ravel(),
         A=st.A,
         b=fixed_control_points(problem).T.ravel(),
-        G=sp.csc_matrix(G),
+        G=G,
         h_l=h_l,
         h_u=h_u,
         x_l=bounds.x_l,
@@ -198,18 +219,41 @@ class QpFitter:
     QPs are solved with a working set of rows around the violated ones, grown until the
     solution respects all rows. The working set persists between calls (stable pattern for
     PIQP ``update`` during re-segmentation). ``"full"`` always passes every row.
+
+    ``dense_budget_s`` (PIQP only): QPs are solved on PIQP's dense interface while their predicted
+    time (:func:`dense_qp_seconds` each) fits in what is left of it; from the first QP that does
+    not fit on, on the sparse one (see the module docstring).
     """
 
-    def __init__(self, limits: QpLimits, solver: str = "piqp", strategy: str = "lazy") -> None:
+    def __init__(
+        self,
+        limits: QpLimits,
+        solver: str = "piqp",
+        strategy: str = "lazy",
+        dense_budget_s: float = 0.0,
+    ) -> None:
         if strategy not in ("lazy", "full"):
             raise PlannerError(f"unknown strategy {strategy!r}", field="strategy")
         self.limits = limits
         self.solver = solver
         self.strategy = strategy
         self._backend: QpBackend = make_backend(solver)
+        dense = solver == "piqp" and dense_budget_s > 0.0
+        self._dense: QpBackend | None = PiqpDenseBackend() if dense else None
+        self._dense_left_s = dense_budget_s
         self._working: NDArray[np.bool_] | None = None
         self.solves = 0
         self.solve_ms = 0.0
+
+    def _backend_for(self, n_variables: int, n_rows: int) -> QpBackend:
+        """The dense backend while the budget holds this QP's predicted time, else the sparse
+        one for good (SciPy is then loaded: the sparse solve is the faster one)."""
+        predicted_s = dense_qp_seconds(n_variables, n_rows)
+        if self._dense is not None and predicted_s <= self._dense_left_s:
+            self._dense_left_s -= predicted_s
+            return self._dense
+        self._dense = None
+        return self._backend
 
     def fit(self, problem: FitProblem) -> SplineFit:
         """Optimal constrained fit; raises :class:`InfeasibleTrajectoryError` if none exists."""
@@ -240,10 +284,10 @@ class QpFitter:
     def _grow(self, st: _Structure, new: NDArray[np.bool_]) -> None:
         assert self._working is not None
         for kind in (0, 1):
-            hit = np.unique(st.position[new & (st.kind == kind)])
-            if hit.size:
-                near = np.unique((hit[:, None] + np.arange(-2, 3)[None, :]).ravel())
-                self._working |= (st.kind == kind) & np.isin(st.position, near)
+            hit = st.position[new & (st.kind == kind)]
+            if hit.size:  # a look-up table, not np.unique: that loads numpy.ma (10 ms)
+                near = (hit[:, None] + np.arange(-2, 3)[None, :]).ravel()
+                self._working |= (st.kind == kind) & np.isin(st.position, near, kind="table")
 
     def _solve_working(
         self,
@@ -267,7 +311,8 @@ class QpFitter:
         rhs: FloatArray,
         rows: IntArray | None,
     ) -> SplineFit:
-        sol = self._backend.solve(_qp_data(problem, st, bounds, ab, rhs, rows))
+        qp = _qp_data(problem, st, bounds, ab, rhs, rows)
+        sol = self._backend_for(qp.c.shape[0], qp.G.shape[0]).solve(qp)
         self.solves += 1
         self.solve_ms += sol.solve_ms
         if sol.status == "infeasible":
@@ -277,7 +322,7 @@ class QpFitter:
         tau = sol.x.reshape(3, problem.n_ctrl).T.copy()
         fit = evaluate_fit(problem, tau, method=self.solver)
         sel = slice(None) if rows is None else rows
-        g_x = st.G[sel] @ sol.x
+        g_x = (st.G @ sol.x)[sel]
         alpha_term = float(np.sum(st.exponent[sel] * sol.z * g_x)) / problem.alpha
         scale = max(1.0, float(np.max(np.abs(sol.z), initial=0.0))) * 1e-7
         return replace(

@@ -7,7 +7,8 @@ Criterion (eq. 32/37, with per-point weights ``w_i``, all three axes at once)::
 
 The first and last three control points are fixed by the end states (eq. 38, 54); the others
 follow from the normal equations ``R_PP tau_P = S_P^T - R_PF tau_F`` (eq. 43). ``R`` is banded
-(3 super-diagonals) and shared by the three axes, so one banded Cholesky solves them all.
+(3 super-diagonals) and shared by the three axes, so one band solve (planner.band_solve) solves
+them all.
 """
 
 from __future__ import annotations
@@ -15,11 +16,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.linalg import LinAlgError, solve_banded, solveh_banded
 
+from planner.band_solve import solve_symmetric_band
 from planner.bspline import (
     ClampedCubicSpline,
     FloatArray,
+    IntArray,
     basis_rows,
     basis_rows_pair,
     jerk_gram_banded,
@@ -165,7 +167,7 @@ def normal_equations(problem: FitProblem) -> tuple[FloatArray, FloatArray]:
     return ab, rhs.reshape(3, n).T.copy()
 
 
-def fixed_indices(n_ctrl: int) -> FloatArray:
+def fixed_indices(n_ctrl: int) -> IntArray:
     """Indices of the six control points fixed by the end states."""
     return np.array([0, 1, 2, n_ctrl - 3, n_ctrl - 2, n_ctrl - 1])
 
@@ -217,7 +219,7 @@ def evaluate_fit(
 
 
 def fit_closed_form(problem: FitProblem) -> SplineFit:
-    """Unconstrained minimum-jerk fit, eq. (43), by one banded Cholesky for all three axes."""
+    """Unconstrained minimum-jerk fit, eq. (43), by one band solve for all three axes."""
     ab, rhs = normal_equations(problem)
     return evaluate_fit(problem, closed_form_from_normal_equations(problem, ab, rhs))
 
@@ -231,22 +233,5 @@ def closed_form_from_normal_equations(
     fixed = fixed_indices(n)
     tau[fixed] = fixed_control_points(problem)
     rhs_free = (rhs - banded_matvec(ab, tau))[3 : n - 3]
-    band = ab[:, 3 : n - 3]
-    try:
-        tau[3 : n - 3] = solveh_banded(band, rhs_free, check_finite=False)
-    except LinAlgError:
-        # Round-off made the (positive semi-definite) normal matrix indefinite, as heavily
-        # re-weighted refinements can: solve it by banded LU with pivoting instead.
-        tau[3 : n - 3] = solve_banded_symmetric(band, rhs_free)
+    tau[3 : n - 3] = solve_symmetric_band(ab[:, 3 : n - 3], rhs_free)
     return tau
-
-
-def solve_banded_symmetric(ab_upper: FloatArray, rhs: FloatArray) -> FloatArray:
-    """Solve ``A x = rhs`` for a symmetric band matrix given in upper form (``ab_upper[u + i -
-    j, j] == A[i, j]``, as :func:`scipy.linalg.solveh_banded` takes it) by LU with pivoting."""
-    u, n = ab_upper.shape[0] - 1, ab_upper.shape[1]
-    full = np.zeros((2 * u + 1, n))
-    full[: u + 1] = ab_upper
-    for k in range(1, u + 1):
-        full[u + k, : n - k] = ab_upper[u - k, k:]
-    return np.asarray(solve_banded((u, u), full, rhs, check_finite=False))

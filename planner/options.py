@@ -11,7 +11,7 @@ from planner.errors import PlannerError
 from planner.limits import VehicleLimits
 from planner.waypoints import PathSettings
 
-if TYPE_CHECKING:  # the QP (scipy.sparse) is imported only where a job is planned
+if TYPE_CHECKING:  # the QP module is imported only where a job is planned
     from planner.fit_qp import QpLimits
 
 PACES = ("limits", "nominal")
@@ -50,6 +50,12 @@ class PlanOptions:
     """``"analytic"`` (envelope gradient, L-BFGS) or ``"numerical"`` (the paper's eq. 56)."""
     solver: str = "piqp"
     """QP solver: ``"piqp"`` (default), ``"clarabel"`` or ``"osqp"``."""
+    dense_qp_budget_s: float = 0.0
+    """Predicted time [s] one plan may spend solving QPs on PIQP's dense interface, which needs
+    no SciPy, before it turns to the sparse one (planner.fit_qp). 0, the default, always solves
+    sparse: right for a process that plans more than once, since a dense solve is 15 to 180
+    times slower; a process that plans once sets about the cost of importing ``scipy.sparse``
+    (``defaults.ONE_OFF_DENSE_QP_BUDGET_S``, as ``skyquill plan`` does)."""
     method: str = "qp"
     """``"qp"`` (limits imposed) or ``"closed-form"`` (limits only checked)."""
     sample_rate_hz: float = defaults.SAMPLE_RATE_HZ
@@ -90,6 +96,10 @@ class PlanOptions:
         for name in ("write_height_m", "knot_spacing_s", "jerk_weight_s5", "densify_spacing_m"):
             if not getattr(self, name) > 0.0:
                 raise PlannerError(f"must be > 0, got {getattr(self, name)}", field=name)
+        if not self.dense_qp_budget_s >= 0.0:
+            raise PlannerError(
+                f"must be >= 0, got {self.dense_qp_budget_s}", field="dense_qp_budget_s"
+            )
         if not self.clearance_m >= 0.0:
             raise PlannerError(f"must be >= 0, got {self.clearance_m}", field="clearance_m")
 

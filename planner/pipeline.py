@@ -176,7 +176,11 @@ def plan_strokes(strokes_board_m: Sequence[FloatArray], options: PlanOptions) ->
     limits = options.qp_limits(path.write_z_m)
     problem = fit_problem(path, initial_durations(path, options, limits), options)
     clock.lap("initial_times")
-    fitter = QpFitter(limits, options.solver) if options.method == "qp" else None
+    fitter = (
+        QpFitter(limits, options.solver, dense_budget_s=options.dense_qp_budget_s)
+        if options.method == "qp"
+        else None
+    )
     info: dict[str, float | str] = {}
     if options.resegment:  # its result is the optimal (QP or closed-form) fit at its times
         tolerances = point_tolerances_m(path, options)

@@ -10,6 +10,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from cli.main import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -37,13 +39,26 @@ def _loaded(prefixes: tuple[str, ...]) -> str:
 
 
 def test_plan_of_chinese_text_imports_no_font_plot_or_show_models() -> None:
-    unwanted = ("HersheyFonts", "matplotlib", "scipy.optimize", "pydantic", "yaml", "showfile")
+    unwanted = ("HersheyFonts", "matplotlib", "pydantic", "yaml", "showfile")
     unwanted += ("planner.retime", "planner.lbfgs")  # the paper's re-segmentation: not the default
     code = (
         "import contextlib, io, json, os, sys\n"
         "from cli.main import main\n"
         "with contextlib.redirect_stdout(io.StringIO()):\n"
         "    assert main(['plan', '--text', '永']) == 0\n" + _loaded(unwanted)
+    )
+    assert _probe(code) == []
+
+
+@pytest.mark.parametrize("text", ["永", "A"])
+def test_plan_of_one_character_imports_no_scipy(text: str) -> None:
+    """The command solves its QPs on PIQP's dense interface and its band systems in numpy:
+    importing scipy (0.2-0.3 s) would cost it more than the plan itself."""
+    code = (
+        "import contextlib, io, json, sys\n"
+        "from cli.main import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        f"    assert main(['plan', '--text', {text!r}]) == 0\n" + _loaded(("scipy",))
     )
     assert _probe(code) == []
 

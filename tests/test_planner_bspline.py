@@ -21,7 +21,7 @@ from planner.bspline import (
 @pytest.mark.parametrize("m", [1, 2, 3, 4, 5, 6, 7, 13])
 def test_partition_of_unity_and_cox_de_boor(m: int) -> None:
     u = np.linspace(0.0, m, 7 * m + 1)
-    full = basis_rows(u, m).to_sparse().toarray()
+    full = basis_rows(u, m).toarray()
     assert full.shape == (u.size, m + 3)
     np.testing.assert_allclose(full.sum(axis=1), 1.0, atol=1e-13)
     assert np.all(full >= -1e-14)
@@ -40,7 +40,7 @@ def test_boundary_bases_match_eq_22_to_24() -> None:
     continuity at the knots and by the recursion (17)."""
     m = 10
     u = np.linspace(0.0, 2.999, 400)
-    full = basis_rows(u, m).to_sparse().toarray()
+    full = basis_rows(u, m).toarray()
     n0 = np.where(u < 1, (1 - u) ** 3, 0.0)
     n1 = np.where(u < 1, u * (1 - u) ** 2 + u * (4 - 3 * u) * (2 - u) / 4, 0.0)
     n1 = np.where((u >= 1) & (u < 2), -((u - 2) ** 3) / 4, n1)
@@ -56,14 +56,14 @@ def test_boundary_bases_match_eq_22_to_24() -> None:
     np.testing.assert_allclose(full[:, 1], n1, atol=1e-13)
     np.testing.assert_allclose(full[:, 2], n2, atol=1e-13)
     # eq. (25)-(27): the last three bases mirror the first three.
-    mirrored = basis_rows(m - u, m).to_sparse().toarray()
+    mirrored = basis_rows(m - u, m).toarray()
     np.testing.assert_allclose(mirrored[:, -1:-4:-1], full[:, :3], atol=1e-13)
 
 
 def test_interior_basis_is_eq_21() -> None:
     m = 12
     s = np.linspace(0.0, 3.999, 500)
-    column = basis_rows(4.0 + s, m).to_sparse().toarray()[:, 7]  # B_3(u - 4)
+    column = basis_rows(4.0 + s, m).toarray()[:, 7]  # B_3(u - 4)
     expected = np.select(
         [s < 1, s < 2, s < 3, s < 4],
         [
@@ -138,7 +138,7 @@ def test_jerk_gram_is_the_integral_of_squared_jerk() -> None:
     spline = _random_spline(m, duration, seed=5)
     t = (np.arange(m * 200) + 0.5) / (m * 200) * duration  # midpoint rule, exact per span
     integral = np.sum(spline.evaluate(t, 3) ** 2, axis=0) * duration / t.size
-    gram = jerk_gram(m, spline.alpha).toarray()
+    gram = jerk_gram(m, spline.alpha)
     quad = np.einsum("ia,ij,ja->a", spline.control_points, gram, spline.control_points)
     np.testing.assert_allclose(quad, integral, rtol=1e-10)
 

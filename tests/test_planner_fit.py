@@ -7,9 +7,9 @@ import pytest
 
 from planner.bspline import basis_rows, jerk_gram
 from planner.errors import InfeasibleTrajectoryError
-from planner.fit_qp import QpFitter, QpLimits, build_qp
+from planner.fit_qp import QpFitter, QpLimits, build_qp, dense_qp_seconds
 from planner.minjerk import EndState, FitProblem, fit_closed_form, fixed_indices
-from planner.qp_solvers import make_backend
+from planner.qp_solvers import PiqpBackend, PiqpDenseBackend, make_backend
 
 
 def _problem(
@@ -39,9 +39,9 @@ def _problem(
 def test_closed_form_equals_dense_normal_equations() -> None:
     p = _problem()
     fit = fit_closed_form(p)
-    H = basis_rows(p.alpha * p.times_s, p.n_spans).to_sparse().toarray()
+    H = basis_rows(p.alpha * p.times_s, p.n_spans).toarray()
     W = np.diag(p.weights)
-    R = p.jerk_weight_s5 * jerk_gram(p.n_spans, p.alpha).toarray() + H.T @ W @ H
+    R = p.jerk_weight_s5 * jerk_gram(p.n_spans, p.alpha) + H.T @ W @ H
     fixed = fixed_indices(p.n_ctrl)
     free = np.setdiff1d(np.arange(p.n_ctrl), fixed)
     tau = fit.spline.control_points
@@ -115,6 +115,28 @@ def test_lazy_and_full_qp_agree_and_solvers_agree() -> None:
     np.testing.assert_allclose(costs, costs[0], rtol=1e-5)
 
 
+@pytest.mark.parametrize("strategy", ["lazy", "full"])
+def test_piqp_dense_interface_solves_like_the_sparse_one(strategy: str) -> None:
+    p = _problem(seed=4)
+    sparse = QpFitter(TIGHT, "piqp", strategy).fit(p)
+    dense = QpFitter(TIGHT, "piqp", strategy, dense_budget_s=10.0).fit(p)
+    np.testing.assert_allclose(dense.spline.control_points, sparse.spline.control_points, atol=1e-9)
+    assert dense.active_constraints == sparse.active_constraints > 0
+    assert dense.constraint_alpha_term == pytest.approx(sparse.constraint_alpha_term, rel=1e-6)
+
+
+def test_the_dense_budget_is_spent_then_the_sparse_interface_kept() -> None:
+    """Dense while the predicted time fits; from the first QP that does not, sparse for good
+    (SciPy is loaded then), even for a QP small enough for what is left."""
+    one_solve_s = dense_qp_seconds(100, 20)
+    assert dense_qp_seconds(100, 200) > one_solve_s > dense_qp_seconds(100, 0)  # rows cost too
+    fitter = QpFitter(TIGHT, "piqp", dense_budget_s=1.5 * one_solve_s)
+    chosen = [type(fitter._backend_for(100, 20)) for _ in range(2)]
+    chosen.append(type(fitter._backend_for(10, 0)))
+    assert chosen == [PiqpDenseBackend, PiqpBackend, PiqpBackend]
+    assert type(QpFitter(TIGHT, "piqp")._backend_for(10, 0)) is PiqpBackend  # no budget: sparse
+
+
 def test_full_qp_matches_paper_structure() -> None:
     p = _problem(seed=1, m=20)
     qp = build_qp(p, TIGHT)
@@ -156,19 +178,3 @@ def test_speed_polytope_is_inscribed_in_the_ball() -> None:
     assert np.min(support) >= SPEED_POLYTOPE_APOTHEM - 1e-12
     # and the bound is tight: a vertex direction (1, 1, sqrt(2)-ish) gets close to it
     assert np.min(support) < SPEED_POLYTOPE_APOTHEM * 1.01
-
-
-def test_the_symmetric_band_fallback_solves_like_a_dense_solve() -> None:
-    from planner.minjerk import solve_banded_symmetric
-
-    rng = np.random.default_rng(7)
-    n, u = 40, 3
-    dense = np.zeros((n, n))
-    for k in range(u + 1):
-        values = rng.normal(size=n - k)
-        dense += np.diag(values, k) + (np.diag(values, -k) if k else 0.0)
-    upper = np.zeros((u + 1, n))
-    for k in range(u + 1):
-        upper[u - k, k:] = np.diag(dense, k)
-    rhs = rng.normal(size=(n, 3))
-    np.testing.assert_allclose(solve_banded_symmetric(upper, rhs), np.linalg.solve(dense, rhs))
