@@ -11,7 +11,8 @@ from planner.samples import TrajectorySamples
 from sim.params import MocapParams, WindParams
 from sim.reference import writing_reference
 from vehicles.quadrotor_brush.control.controller import DEFAULT_CONFIG, PAPER_CONFIG
-from vehicles.quadrotor_brush.flight import Flight, FlightConfig, FlightLog, fly
+from vehicles.quadrotor_brush.flight import Flight, FlightLog, fly
+from vehicles.quadrotor_brush.flight_config import FlightConfig
 from vehicles.quadrotor_brush.metrics import flight_metrics
 from vehicles.quadrotor_brush.params import WorldParams
 from vehicles.quadrotor_brush.trace import flown_of

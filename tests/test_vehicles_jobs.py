@@ -22,7 +22,8 @@ from showfile.models import ControllerSettings, Limits, PlanningSettings
 from vehicles import UnknownKindError, kind_names
 from vehicles.jobs import board_surface, plan_glyph, plan_job
 from vehicles.kind import LiveReference
-from vehicles.quadrotor_brush.flight import Flight, FlightConfig
+from vehicles.quadrotor_brush.flight import Flight
+from vehicles.quadrotor_brush.flight_config import FlightConfig
 from vehicles.quadrotor_brush.settings import (
     QuadrotorSettings,
     controller_config,

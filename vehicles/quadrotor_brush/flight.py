@@ -18,24 +18,22 @@ agent does on a vehicle (lift the brush and stop writing), in batch form.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from planner.samples import TrajectorySamples
-from vehicles.deviation import DeviationLimit, DeviationMonitor, DeviationTrip
+from vehicles.deviation import DeviationMonitor, DeviationTrip
 from vehicles.quadrotor_brush.brush import BrushState, brush_state, writing_point
 from vehicles.quadrotor_brush.control.controller import (
-    DEFAULT_CONFIG,
-    ControllerConfig,
     ReferenceTick,
     body_reference,
 )
 from vehicles.quadrotor_brush.control.errors import ControlError
 from vehicles.quadrotor_brush.control.inner import InnerLoopSetpoint
+from vehicles.quadrotor_brush.flight_config import FlightConfig
 from vehicles.quadrotor_brush.loop import ClosedLoop
-from vehicles.quadrotor_brush.params import WorldParams
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -50,24 +48,6 @@ _LOGGED = (
     "wind_mps_enu",
     "disturbance_estimate_mps2_enu",
 )
-
-
-@dataclass(frozen=True)
-class FlightConfig:
-    """World and controller of a flight."""
-
-    world: WorldParams = field(default_factory=WorldParams)
-    """The simulated world (vehicle, brush, wind, mocap, board, rates)."""
-    controller: ControllerConfig = DEFAULT_CONFIG
-    """The position controller."""
-    settle_s: float = 1.0
-    """Extra flight after the longest reference ends, in [s]."""
-    preroll_s: float = 3.0
-    """Hover on the first reference sample before clock zero, in [s], not recorded: the vehicle
-    meets the job already settled in the wind (the filter has learnt it, the body leans into
-    it), as a vehicle that took off and flew to the start would."""
-    deviation: DeviationLimit | None = None
-    """End the flight when a vehicle's tracking error stays above this bound (None: never)."""
 
 
 @dataclass(frozen=True)

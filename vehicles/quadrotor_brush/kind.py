@@ -6,7 +6,8 @@ Plans with the Airshow planner (:func:`planner.pipeline.plan_strokes`), flies in
 (:mod:`vehicles.quadrotor_brush.metrics`) and draws ``report.png``
 (:mod:`vehicles.quadrotor_brush.report`, imported only when a report is drawn). The planner, the
 batch flight and the metrics are imported where they are used: a live agent that only flies
-loads none of them (nor scipy).
+loads none of them (nor scipy); nor does a plan load the closed loop, the live vehicle or the
+autopilot's pen.
 """
 
 from __future__ import annotations
@@ -29,9 +30,6 @@ from vehicles.kind import (
     WritingScore,
 )
 from vehicles.quadrotor_brush import KIND_NAME
-from vehicles.quadrotor_brush.autopilot_pen import autopilot_world
-from vehicles.quadrotor_brush.control.controller import body_reference
-from vehicles.quadrotor_brush.loop import QuadrotorFleet, SimulatedQuadrotor
 from vehicles.quadrotor_brush.settings import QuadrotorSettings, quadrotor_settings
 from vehicles.surface import Orientation, Surface, Vec3
 
@@ -39,6 +37,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from showfile.models import Show
+    from vehicles.quadrotor_brush.loop import QuadrotorFleet, SimulatedQuadrotor
 
 
 def board_of(surface: Surface) -> BoardFrame:
@@ -63,6 +62,8 @@ class QuadrotorBrush:
 
     def autopilot_world(self, settings: QuadrotorSettings) -> AutopilotWorld:
         """The brush over the board and the mocap of its simulated world (MAVLink backend)."""
+        from vehicles.quadrotor_brush.autopilot_pen import autopilot_world
+
         return autopilot_world(settings.flight.world)
 
     def settings(self, show: Show | None, vehicle_id: str | None) -> QuadrotorSettings:
@@ -93,6 +94,8 @@ class QuadrotorBrush:
         feed-forward led by the inner loop's lag: the preprocessing the batch flight applies
         (:func:`vehicles.quadrotor_brush.control.controller.body_reference`), so the live agent
         and a batch flight fly the same."""
+        from vehicles.quadrotor_brush.control.controller import body_reference
+
         s = plan.samples
         dt_s = float(np.mean(np.diff(s.t_s)))
         p, v, a = body_reference(
@@ -151,11 +154,15 @@ class QuadrotorBrush:
     ) -> SimulatedQuadrotor:
         """One live simulated quadrotor hovering at ``start_m_enu`` (the agent's sim backend
         creates one per flight, at take-off)."""
+        from vehicles.quadrotor_brush.loop import SimulatedQuadrotor
+
         flight = settings.flight
         return SimulatedQuadrotor(start_m_enu, flight.world, flight.controller, seed=seed)
 
     def simulated_fleet(self, settings: QuadrotorSettings) -> QuadrotorFleet:
         """Live simulated quadrotors of these settings stepped together (a fleet host)."""
+        from vehicles.quadrotor_brush.loop import QuadrotorFleet
+
         return QuadrotorFleet(settings.flight.world, settings.flight.controller)
 
 

@@ -24,7 +24,7 @@ from vehicles.quadrotor_brush.control.controller import (
     ControllerConfig,
 )
 from vehicles.quadrotor_brush.control.rpt import RptGains
-from vehicles.quadrotor_brush.flight import FlightConfig
+from vehicles.quadrotor_brush.flight_config import FlightConfig
 from vehicles.quadrotor_brush.gain_names import AXES
 from vehicles.quadrotor_brush.params import BrushParams, WorldParams
 
