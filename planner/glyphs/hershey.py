@@ -5,7 +5,8 @@ Each pen-down polyline of a Hershey glyph becomes one stroke. Coordinates are co
 unit is 1/30 em, which puts the cap height (21 units) at 0.7 em of a 1 em CJK cell.
 
 ``HersheyFonts`` is imported, and a font decoded, on the first Latin character only: together
-about 40 ms that a Chinese text never needs.
+about 50 ms that a Chinese text never needs (the archive of the fonts is read twice: for its
+names, then for the font).
 """
 
 from __future__ import annotations
@@ -45,14 +46,16 @@ def hershey_font_names() -> tuple[str, ...]:
 
 @functools.cache
 def _font(name: str) -> tuple[dict[str, Any], float]:
-    if name not in hershey_font_names():
-        raise PlannerError(
-            f"unknown Hershey font {name!r}; available: {', '.join(hershey_font_names())}",
-            field="latin_font",
-        )
     from HersheyFonts import HersheyFonts
 
     font = HersheyFonts()
+    names = (
+        font.default_font_names
+    )  # kept by ``font``: loading reads the archive once more, not twice
+    if name not in names:
+        raise PlannerError(
+            f"unknown Hershey font {name!r}; available: {', '.join(names)}", field="latin_font"
+        )
     font.load_default_font(name)
     glyphs: dict[str, Any] = font.all_glyphs
     base_line = float(font.render_options["base_line"])
