@@ -1,7 +1,7 @@
 """One-off commands' wall time: ``skyquill plan --text 永`` and ``skyquill status``; the indexed
 glyph store beside the old whole file.
 
-    .venv/bin/python benchmarks/bench_cli.py [--runs 7] [--text 永] [--no-status] [--imports]
+    .venv/bin/python benchmarks/bench_cli.py [--runs 7] [--text 永 A ...] [--no-status] [--imports]
 
 Glyphs (in this process, page cache warm for both): the indexed store
 (``planner/glyphs/data/hanzi_medians.bin``; open = header and index, then one record) beside the
@@ -10,30 +10,35 @@ the former encoder, then ``gzip`` + ``json`` decoded as the former loader did on
 "Cold" is the first character in a fresh store, "warm" a further character from the open store;
 every GB2312 level-1 character is looked up.
 
-CLI (fresh interpreters): the wall and CPU time of ``python -m cli.main plan --text 永`` and of
-``python -m cli.main status SHOW`` against a show this script runs (its own router and
-orchestrator, mutual TLS, keys made for it), the first run ("cold") and the median and least of
-the others ("warm"), every case with one OpenBLAS thread (as ``plan`` asks), beside peers
-measured in the same run: the interpreter alone, and the imports each
-command cannot do without (``scipy.sparse`` + ``scipy.linalg``: PIQP's sparse interface and the
-banded LAPACK solves; ``yaml`` + ``zenoh`` + ``msgspec``: the show file, the bus and its
-messages); the ratio is the command's warm wall time to that peer's. Each case runs twice: with
-the environment's bytecode setting (sessions here have ``PYTHONDONTWRITEBYTECODE=1``: every
-project module is compiled on every run) and with bytecode cached (``PYTHONPYCACHEPREFIX`` in a
-temporary folder, written by the first run), as an installed ``skyquill`` has it.
+CLI (fresh interpreters): the wall and CPU time of ``python -m cli.main plan --text T`` for each
+``--text`` and of ``python -m cli.main status SHOW`` against a show this script runs (its own
+router and orchestrator, mutual TLS, keys made for it), the first run ("cold") and the median and
+least of the others ("warm"), every case with one OpenBLAS thread (as ``plan`` asks), beside peers
+run in turn with the commands (a change of load on a shared machine falls on every case): the
+interpreter alone, and the imports each command cannot do without (``numpy`` + ``piqp``: the
+arrays and the QP solver, as a plan imports no SciPy; ``yaml`` + ``zenoh`` + ``msgspec``: the
+show file, the bus and its messages); the ratio is each command's warm wall time to that
+peer's. Each case runs twice: with the environment's bytecode setting (sessions here have
+``PYTHONDONTWRITEBYTECODE=1``: every project module is compiled on every run) and with bytecode
+cached (``PYTHONPYCACHEPREFIX`` in a temporary folder, written by the first run), as an installed
+``skyquill`` has it.
 ``--imports`` prints what each command imports, grouped, from ``python -X importtime``.
 
-Figures (2026-11-26, shared 2-core machine at load 2.3-2.6, 9 runs, warm median / least wall):
-plan 0.59 / 0.53 s with bytecode cached, 0.84 / 0.66 s with bytecode not written (the peer
-``import scipy.sparse, scipy.linalg`` 0.40 / 0.34 s); status 0.24 / 0.22 s and 0.22 / 0.17 s
-(peer ``import yaml, zenoh, msgspec`` 0.14 / 0.11 s). Before issue 15's import work, in one
-interleaved run with the former code (11 runs, load 2.4, bytecode not written): plan 1.07 ->
-0.85 s, status 0.84 -> 0.25 s. What the plan still imports, in-process CPU with bytecode cached
-(least of 8): numpy 96 ms; scipy.sparse 176 ms, most of it numpy's lazily loaded submodules
-(f2py, testing, ma, random) pulled in by SciPy's vendored array-api-compat cloning numpy's
-namespace (PIQP's sparse interface imports scipy.sparse whatever we do); scipy.linalg 57 ms (the
-banded Cholesky of the closed-form fit); planner 33 ms, vehicles 39 ms (the brush's settings
-import its flight module, which holds the closed loop), the plan itself 51 ms.
+Figures (2026-11-26, shared 2-core machine, warm median / least wall). Plan, at load 1.0-1.4 (7
+runs): 永 0.55 / 0.36 s with bytecode not written, 0.39 / 0.29 s cached; A 0.56 / 0.40 and 0.42 /
+0.33 s; 国 0.59 / 0.41 and 0.42 / 0.33 s; the peer ``import numpy, piqp`` 0.24 / 0.20 and 0.21 /
+0.16 s (other work shared the cores: a run beside it took about 1.5 times as long as a run alone,
+hence the gap between median and least). Issue 15's SciPy work (QPs on PIQP's dense interface, band
+solves in numpy, no flight code loaded), interleaved with the former code (15 runs, load 1.1-1.4,
+bytecode not written): 永 0.94 / 0.71 -> 0.54 / 0.36 s, A 0.93 / 0.74 -> 0.50 / 0.36 s, 国 0.87 /
+0.67 -> 0.52 / 0.40 s. What the plan imports now (``-X importtime`` self time, bytecode not
+written, median of 3): planner 93 ms, numpy 72 ms, the standard library 65 ms, vehicles 49 ms, piqp
+4 ms; the plan itself then takes 80-100 ms, 13 ms of it PIQP's dense solve. Before, scipy.sparse
+(176 ms of CPU, most of it numpy's submodules pulled in by SciPy's vendored array-api-compat) and
+scipy.linalg (57 ms) came on top. Status, as measured before (load 2.3-2.6, 9 runs): 0.24 / 0.22 s
+not written, 0.22 / 0.17 s cached (peer ``import yaml, zenoh, msgspec`` 0.14 / 0.11 s). Before
+issue 15's first import work (11 runs, load 2.4, bytecode not written): plan 1.07 -> 0.85 s, status
+0.84 -> 0.25 s.
 """
 
 from __future__ import annotations
@@ -142,17 +147,21 @@ def _envs(cache_dir: Path) -> dict[str, dict[str, str]]:
 
 
 def bench_commands(cases: dict[str, list[str]], peer: str, runs: int) -> None:
-    """Each case in both environments: cold, warm median (wall / CPU) and the peer ratio."""
+    """Each case in both environments: cold, warm median (wall / CPU) and, for each command
+    (the cases not named ``peer: ...``), its ratio to ``peer``."""
     with tempfile.TemporaryDirectory(prefix="bench_cli_pyc_") as cache_dir:
         for env_label, env in _envs(Path(cache_dir)).items():
             if "PYTHONPYCACHEPREFIX" in env:
                 for argv in cases.values():  # writes the cache; not counted
                     _run(argv, env)
             print(f"  {env_label}, {runs} runs each (wall / CPU user+sys; warm: median, min):")
+            results: dict[str, list[tuple[float, float]]] = {label: [] for label in cases}
+            for _ in range(runs):  # interleaved: a change of load on this machine hits every case
+                for label, argv in cases.items():
+                    results[label].append(_run(argv, env))
             warm_walls = {}
-            for label, argv in cases.items():
-                results = [_run(argv, env) for _ in range(runs)]
-                cold, warm = results[0], results[1:] or results
+            for label, timings in results.items():
+                cold, warm = timings[0], timings[1:] or timings
                 warm_walls[label] = statistics.median(w for w, _ in warm)
                 warm_cpu = statistics.median(c for _, c in warm)
                 least = min(warm)
@@ -161,19 +170,25 @@ def bench_commands(cases: dict[str, list[str]], peer: str, runs: int) -> None:
                     f"   warm {warm_walls[label]:5.2f} / {warm_cpu:5.2f} s,"
                     f" min {least[0]:5.2f} / {least[1]:5.2f} s"
                 )
-            command = next(iter(cases))
-            ratio = warm_walls[command] / warm_walls[peer]
-            print(f"    ratio {command} / {peer}: {ratio:.2f}")
+            for command in (label for label in cases if not label.startswith("peer:")):
+                ratio = warm_walls[command] / warm_walls[peer]
+                print(f"    ratio {command} / {peer}: {ratio:.2f}")
     print(f"  load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
 
 
-def plan_cases(text: str) -> dict[str, list[str]]:
+PLAN_PEER = "peer: import numpy, piqp"
+"""What ``skyquill plan`` cannot do without: numpy and the QP solver."""
+
+
+def plan_cases(texts: list[str]) -> dict[str, list[str]]:
     py = sys.executable
+    plans = {
+        f"skyquill plan --text {t}": [py, "-m", "cli.main", "plan", "--text", t] for t in texts
+    }
     return {
-        f"skyquill plan --text {text}": [py, "-m", "cli.main", "plan", "--text", text],
+        **plans,
         "peer: python -c pass": [py, "-c", "pass"],
-        "peer: import numpy": [py, "-c", "import numpy"],
-        "peer: import scipy.sparse, .linalg": [py, "-c", "import scipy.sparse, scipy.linalg"],
+        PLAN_PEER: [py, "-c", "import numpy, piqp"],
         "peer: import planner.pipeline": [py, "-c", "import planner.pipeline"],
     }
 
@@ -263,15 +278,17 @@ def print_imports(label: str, argv: list[str], top: int = 14) -> None:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=7, help="CLI runs per case (7)")
-    parser.add_argument("--text", default="永", help="text to plan (永)")
+    parser.add_argument(
+        "--text", nargs="+", default=["永"], help="texts to plan, one command each (永)"
+    )
     parser.add_argument("--no-status", action="store_true", help="skip skyquill status")
     parser.add_argument("--imports", action="store_true", help="print each command's imports")
     args = parser.parse_args()
     runs = max(2, args.runs)
-    bench_glyphs(args.text, repeats=5)
+    bench_glyphs(args.text[0], repeats=5)
     plan = plan_cases(args.text)
     print("CLI plan, fresh interpreters:")
-    bench_commands(plan, "peer: import scipy.sparse, .linalg", runs)
+    bench_commands(plan, PLAN_PEER, runs)
     if args.imports:
         print_imports(next(iter(plan)), next(iter(plan.values())))
     if args.no_status:
