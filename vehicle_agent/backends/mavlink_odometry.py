@@ -14,6 +14,7 @@ too instead of building it on its accelerometer alone. Each autopilot takes othe
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass
 from typing import Any
 
@@ -50,24 +51,36 @@ ODOMETRY_FRAMES: dict[Flavor, OdometryFrames] = {
 
 
 class PoseVelocity:
-    """The velocity between the last two distinct poses, in [m/s] (NaN until two came, and
-    after a gap: a difference across it would be an average, not the velocity)."""
+    """The velocity between a pose and the latest one at least ``min_baseline_s`` before it, in
+    [m/s] (NaN until there is one, and after a gap: a difference across it would be an average,
+    not the velocity). Not between the last two: the truth a SITL mocap is made of arrives in
+    bursts on a loaded machine (two captures 1 ms apart), and 0.2 mm of mocap noise over 1 ms is
+    0.28 m/s; PX4 then refused to arm after a landing, "Preflight Fail: horizontal velocity
+    unstable" for minutes (EKF2_EVV_NOISE 0.02 m/s)."""
 
-    def __init__(self, max_gap_s: float = 0.1) -> None:
+    def __init__(self, max_gap_s: float = 0.1, min_baseline_s: float = 0.02) -> None:
         self.max_gap_s = max_gap_s
         """Longest time in [s] between two captures that are differenced."""
-        self._last: tuple[float, Vec3] | None = None
+        self.min_baseline_s = min_baseline_s
+        """Shortest time in [s] a velocity is differenced over."""
+        self._poses: deque[tuple[float, Vec3]] = deque()
 
     def update(self, time_s: float, position_m: Vec3) -> Vec3:
         """The pose captured at ``time_s`` [s] at ``position_m`` [m]: the velocity since the
-        previous one (NaN for the first, after a gap, and for the same capture again)."""
-        last = self._last
-        if last is not None and time_s - last[0] <= 1e-6:
+        latest pose at least ``min_baseline_s`` before (NaN without one, after a gap, and for the
+        same capture again)."""
+        poses = self._poses
+        if poses and time_s - poses[-1][0] <= 1e-6:
             return NAN3
-        self._last = (time_s, position_m)
-        if last is None or time_s - last[0] > self.max_gap_s:
+        if poses and time_s - poses[-1][0] > self.max_gap_s:
+            poses.clear()
+        poses.append((time_s, position_m))
+        while len(poses) > 2 and time_s - poses[1][0] >= self.min_baseline_s:
+            poses.popleft()  # poses[0] stays the latest one far enough back
+        t0, p0 = poses[0]
+        dt = time_s - t0
+        if dt <= 0.0 or dt < self.min_baseline_s - 1e-9:
             return NAN3
-        dt, p0 = time_s - last[0], last[1]
         return ((position_m[0] - p0[0]) / dt, (position_m[1] - p0[1]) / dt,
                 (position_m[2] - p0[2]) / dt)  # fmt: skip
 
