@@ -135,7 +135,7 @@ PX4_TRACKING = (
 """PX4's position loop for writing: about twice its default P-PI cascade (0.95, 1.8, 0.4),
 MPC_Z_P 2 and MPC_Z_VEL_P_ACC 6 (defaults 1 and 4). Measured on PX4 1.16 SIH on mocap
 (ODOMETRY), research airframe (SIH_IMU_VIB 0), 一 / 十 pen-down RMSE and IoU: 2x (these)
-5.5-8.6 / 9.3-10.6 mm, IoU 0.75-0.82 / 0.62-0.80 (five runs, lead 0.06-0.10 s); 2.5x
+5.5-8.6 / 9.3-10.6 mm, IoU 0.65-0.82 / 0.62-0.80 (six runs, lead 0.06-0.10 s); 2.5x
 10.0-13.2 / 9.8-11.7 mm, IoU 0.60-0.69 / 0.58-0.72 (four runs); 3.5x 13.0 / 11.8 mm, 0.49 /
 0.66; 1.3x lagged and wandered (37 / 26 mm). Stiffer loops hold the body closer (5 mm against
 6-9) but tilt it more to do so, and the brush hangs about 0.3 m below it: its tip wanders more.
