@@ -177,5 +177,3 @@ PX4_EDITS = (
     ),
 )
 """PX4 v1.16 (SIH quadrotor)."""
-
-PX4_VIBRATION_PARAM = "SIH_IMU_VIB"
