@@ -176,6 +176,9 @@ class Case:
     cpu_cores: float = 0.0
     awake: float = 0.0
     rtf: float = float("nan")
+    steps_per_tick: float = float("nan")
+    """Fleet steps per control tick in a host (1.0: its vehicles in flight always stepped
+    together; each extra step split the fleet)."""
     telemetry_rtf: float = float("nan")
     jitter_ms: list[float] = field(default_factory=list)
     lag_ms: list[float] = field(default_factory=list)
@@ -364,20 +367,26 @@ def worker_pids(parents: Sequence[int]) -> list[int]:
 def window_figures(case: Case, stats: list[Path], started: float, ended: float) -> None:
     """The fleet processes' figures of the seconds inside the window."""
     ran = due = 0.0
+    stepped = 0
     awake = []
-    lines = [line for path in stats for line in path.read_text().splitlines()]
-    for line in lines:
-        figures = json.loads(line)
-        if not started + STATS_PERIOD_S <= figures["t"] <= ended + STATS_PERIOD_S:
-            continue  # a second not wholly inside the window
-        ran += figures["ran"]
-        due += figures["due"]
-        awake.append(figures["awake"])
-        case.jitter_ms += figures["jitter_ms"]
-        case.lag_ms += figures["lag_ms"]
+    for path in stats:
+        steps_before = 0
+        for line in path.read_text().splitlines():
+            figures = json.loads(line)
+            steps, steps_before = figures["steps"] - steps_before, figures["steps"]
+            if not started + STATS_PERIOD_S <= figures["t"] <= ended + STATS_PERIOD_S:
+                continue  # a second not wholly inside the window
+            ran += figures["ran"]
+            due += figures["due"]
+            stepped += steps
+            awake.append(figures["awake"])
+            case.jitter_ms += figures["jitter_ms"]
+            case.lag_ms += figures["lag_ms"]
     case.rtf = ran / due if due > 0 else float("nan")
     # one line a second from each host: the mean of a host's count, times the hosts
     case.awake = statistics.mean(awake) * len(stats) if awake else 0.0
+    control_ticks = ran / case.awake * len(stats) if case.awake else 0.0  # summed over hosts
+    case.steps_per_tick = stepped / control_ticks if control_ticks else float("nan")
 
 
 def wait_writing(session: object, keys: ShowKeys, job_ids: list[str], timeout_s: float) -> None:
@@ -446,7 +455,7 @@ def print_case(case: Case) -> None:
     awake = f" ({case.awake:.0f} vehicles awake)" if case.awake else ""
     print(
         f"    real-time factor of the writing vehicles: ticks {case.rtf:5.3f}{awake}, "
-        f"telemetry {case.telemetry_rtf:5.3f}"
+        f"telemetry {case.telemetry_rtf:5.3f}; fleet steps per tick {case.steps_per_tick:4.2f}"
     )
     if case.jitter_ms:
         print(

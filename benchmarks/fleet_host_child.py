@@ -33,7 +33,7 @@ STATS_PERIOD_S = 1.0
 
 async def record_figures(host: object, path: Path) -> None:
     """Once a second, one JSON line: ticks run and due of the vehicles awake throughout the
-    second, their tick jitter, the loop's lag, RSS and CPU."""
+    second, their tick jitter, the loop's lag, the fleet steps that stepped them."""
     from vehicle_agent.fleet import FleetHost
 
     assert isinstance(host, FleetHost)
@@ -79,6 +79,7 @@ async def record_figures(host: object, path: Path) -> None:
                     "jitter_ms": [round(j, 2) for j in jitter],
                     "lag_ms": [round(lag, 2) for lag in lags],
                     "restarts": sum(host.restarts.values()),
+                    "steps": host.rounds.steps,
                 }
                 lags.clear()
                 out.write(json.dumps(line) + "\n")

@@ -14,7 +14,7 @@ Clients call :func:`query` / :func:`aquery` (all replies, decoded) or :func:`que
 
 from __future__ import annotations
 
-import contextlib
+import functools
 import logging
 import re
 from collections.abc import Awaitable, Callable
@@ -160,37 +160,16 @@ async def aquery(
     *,
     timeout_s: float = DEFAULT_TIMEOUT_S,
 ) -> list[QueryReply[M]]:
-    """:func:`query` without blocking the event loop (replies collected on Zenoh's thread)."""
-    import asyncio
-
-    loop = asyncio.get_running_loop()
-    done: asyncio.Future[list[QueryReply[M]]] = loop.create_future()
-    replies: list[QueryReply[M]] = []
-
-    def on_reply(reply: zenoh.Reply) -> None:
-        replies.append(_decode_reply(reply, reply_type))
-
-    def on_done() -> None:
-        def finish() -> None:
-            if not done.done():
-                done.set_result(list(replies))
-
-        with contextlib.suppress(RuntimeError):  # loop closed: nobody waits any more
-            loop.call_soon_threadsafe(finish)
+    """:func:`query` without blocking the event loop (replies collected by the loop's
+    :class:`bus.reply_poll.ReplyPoller`, not by a thread per query)."""
+    from bus.reply_poll import reply_poller
 
     payload = _payload(request)
     kwargs: dict[str, Any] = {"timeout": timeout_s}
     if payload is not None:
         kwargs.update(payload=payload, encoding=JSON)
-    # Zenoh's default (indirect) callback starts a Python thread per query (6.8 % of a busy fleet
-    # host's samples); running the callbacks on Zenoh's own threads instead (indirect=False) made
-    # those threads wait for the interpreter lock: in bench_fleet_host (250 vehicles, 50 writing)
-    # vehicles were lost and jobs failed (48/50 and 32/50 done against 50/50). Keep it indirect.
-    # Issuing the gets from one helper thread instead spared the event loop the thread start but
-    # was no better: tick real-time factor 0.97/0.86/0.69/0.62 and 1/0/6/13 of 50 jobs failed,
-    # against 0.65-0.84 and 0-9 failed with this call, alternating in the same hours.
-    session.get(key_expr, zenoh.handlers.Callback(on_reply, on_done), **kwargs)
-    return await done
+    decode = functools.partial(_decode_reply, reply_type=reply_type)
+    return await reply_poller().get(session, key_expr, decode, **kwargs)
 
 
 async def aquery_one(

@@ -55,3 +55,31 @@ def test_loops_behind_their_schedule_take_turns_instead_of_holding_the_event_loo
         return order
 
     assert asyncio.run(main()) == ["a", "b", "a", "b", "a", "b"]
+
+
+def test_loops_of_one_instant_wake_together_however_late_in_the_period_they_ask() -> None:
+    """A loop asking past the half-period mark (its host busy) still waits for its instant with
+    the others, rather than running alone: otherwise the fleet is split at every tick."""
+
+    async def main() -> tuple[float, list[float]]:
+        ticker = SharedTicker(0.1)
+        await ticker.wait_until(time.monotonic() + 0.1)  # on the grid: an instant just fired
+        due_s = time.monotonic() + ticker.period_s  # the next instant
+        woke: list[float] = []
+
+        async def early() -> None:
+            await ticker.wait_until(due_s)
+            woke.append(time.monotonic())
+
+        async def late() -> None:
+            while time.monotonic() < due_s - 0.4 * ticker.period_s:  # busy past the mark
+                pass
+            await ticker.wait_until(due_s)
+            woke.append(time.monotonic())
+
+        await asyncio.gather(early(), late())
+        return due_s, woke
+
+    due_s, woke = asyncio.run(main())
+    assert min(woke) >= due_s - 0.02  # both at the instant (the timer's own latency aside)
+    assert max(woke) - min(woke) < 0.01  # in one turn

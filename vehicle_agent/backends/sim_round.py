@@ -62,6 +62,12 @@ class StepRounds:
     def __init__(self) -> None:
         self._rounds: list[tuple[str, Any, StepRound]] = []
 
+    @property
+    def steps(self) -> int:
+        """Fleet steps of every round so far: one per control tick when the host's vehicles in
+        flight all tick in the same turns (more when their ticks fall apart)."""
+        return sum(step_round.steps for _, _, step_round in self._rounds)
+
     def round_for(self, kind: VehicleKind, settings: Any) -> StepRound | None:
         """The round of vehicles of ``kind`` with ``settings`` (made on first use)."""
         for name, known, step_round in self._rounds:
