@@ -14,6 +14,12 @@ Variables are the control points of the three axes stacked, ``x = [tau_x; tau_y;
 The constraint matrix never depends on ``alpha``: the bounds are divided by ``alpha^e`` instead, so
 re-solves during time re-segmentation keep one sparsity pattern (PIQP ``update``).
 
+Only the speed rows couple the axes. A QP without them (no speed limit, or a working set of the
+lazy strategy without speed rows, as in every default plan of the planner benchmark's 172
+characters) is solved axis by axis (planner.axis_qp): three QPs of a third of the size, or the
+closed form for an axis without rows. Each axis keeps its own solver, so re-solves keep its
+pattern too.
+
 Which PIQP interface solves (:class:`QpFitter`): the sparse one, unless the caller gives a dense
 budget (``PlanOptions.dense_qp_budget_s``; a one-off ``skyquill plan`` does). The sparse interface
 takes SciPy matrices, and importing ``scipy.sparse`` costs about 0.2 s once per process; the dense
@@ -33,6 +39,7 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import NDArray
 
+from planner.axis_qp import axis_qp, closed_form_solution, joined, row_axes
 from planner.bspline import FloatArray, IntArray, acceleration_operator, velocity_operator
 from planner.coo import CooMatrix, kron, vstack
 from planner.errors import InfeasibleTrajectoryError, PlannerError
@@ -50,6 +57,7 @@ from planner.qp_solvers import (
     PiqpDenseBackend,
     QpBackend,
     QpData,
+    QpSolution,
     QpSolverError,
     make_backend,
 )
@@ -221,8 +229,8 @@ class QpFitter:
     PIQP ``update`` during re-segmentation). ``"full"`` always passes every row.
 
     ``dense_budget_s`` (PIQP only): QPs are solved on PIQP's dense interface while their predicted
-    time (:func:`dense_qp_seconds` each) fits in what is left of it; from the first QP that does
-    not fit on, on the sparse one (see the module docstring).
+    time (:func:`dense_qp_seconds` each, an axis's QP counting alone) fits in what is left of it;
+    from the first QP that does not fit on, on the sparse one (see the module docstring).
     """
 
     def __init__(
@@ -237,7 +245,7 @@ class QpFitter:
         self.limits = limits
         self.solver = solver
         self.strategy = strategy
-        self._backend: QpBackend = make_backend(solver)
+        self._sparse: dict[str, QpBackend] = {"xyz": make_backend(solver)}
         dense = solver == "piqp" and dense_budget_s > 0.0
         self._dense: QpBackend | None = PiqpDenseBackend() if dense else None
         self._dense_left_s = dense_budget_s
@@ -245,15 +253,39 @@ class QpFitter:
         self.solves = 0
         self.solve_ms = 0.0
 
-    def _backend_for(self, n_variables: int, n_rows: int) -> QpBackend:
-        """The dense backend while the budget holds this QP's predicted time, else the sparse
-        one for good (SciPy is then loaded: the sparse solve is the faster one)."""
+    def _backend_for(self, part: str, n_variables: int, n_rows: int) -> QpBackend:
+        """The dense backend while the budget holds this QP's predicted time, else a sparse one
+        for good (SciPy is then loaded: the sparse solve is the faster one). Each ``part`` (the
+        coupled QP ``"xyz"``, or one axis) has its own sparse backend, which keeps its pattern
+        from one solve to the next (PIQP ``update``)."""
         predicted_s = dense_qp_seconds(n_variables, n_rows)
         if self._dense is not None and predicted_s <= self._dense_left_s:
             self._dense_left_s -= predicted_s
             return self._dense
         self._dense = None
-        return self._backend
+        if part not in self._sparse:
+            self._sparse[part] = make_backend(self.solver)
+        return self._sparse[part]
+
+    def _solution(
+        self, qp: QpData, problem: FitProblem, ab: FloatArray, rhs: FloatArray
+    ) -> QpSolution:
+        """``qp``'s solution, axis by axis when no row couples the axes (planner.axis_qp)."""
+        n = problem.n_ctrl
+        axes = row_axes(qp.G, n)
+        if axes is None:
+            return self._backend_for("xyz", 3 * n, qp.G.shape[0]).solve(qp)
+        parts = [axis_qp(qp, axis, n, axes) for axis in range(len(_AXES))]
+        free = None
+        if any(part.G.shape[0] == 0 for part in parts):
+            free = closed_form_from_normal_equations(problem, ab, rhs)
+        solutions = []
+        for axis, part in enumerate(parts):
+            sol = None if free is None else closed_form_solution(part, free[:, axis])
+            if sol is None:
+                sol = self._backend_for(_AXES[axis], n, part.G.shape[0]).solve(part)
+            solutions.append(sol)
+        return joined(solutions, axes)
 
     def fit(self, problem: FitProblem) -> SplineFit:
         """Optimal constrained fit; raises :class:`InfeasibleTrajectoryError` if none exists."""
@@ -312,7 +344,7 @@ class QpFitter:
         rows: IntArray | None,
     ) -> SplineFit:
         qp = _qp_data(problem, st, bounds, ab, rhs, rows)
-        sol = self._backend_for(qp.c.shape[0], qp.G.shape[0]).solve(qp)
+        sol = self._solution(qp, problem, ab, rhs)
         self.solves += 1
         self.solve_ms += sol.solve_ms
         if sol.status == "infeasible":

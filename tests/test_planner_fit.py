@@ -127,14 +127,17 @@ def test_piqp_dense_interface_solves_like_the_sparse_one(strategy: str) -> None:
 
 def test_the_dense_budget_is_spent_then_the_sparse_interface_kept() -> None:
     """Dense while the predicted time fits; from the first QP that does not, sparse for good
-    (SciPy is loaded then), even for a QP small enough for what is left."""
+    (SciPy is loaded then), even for a QP small enough for what is left, and each part (the
+    coupled QP, an axis's) on a sparse backend of its own, which keeps its pattern."""
     one_solve_s = dense_qp_seconds(100, 20)
     assert dense_qp_seconds(100, 200) > one_solve_s > dense_qp_seconds(100, 0)  # rows cost too
     fitter = QpFitter(TIGHT, "piqp", dense_budget_s=1.5 * one_solve_s)
-    chosen = [type(fitter._backend_for(100, 20)) for _ in range(2)]
-    chosen.append(type(fitter._backend_for(10, 0)))
-    assert chosen == [PiqpDenseBackend, PiqpBackend, PiqpBackend]
-    assert type(QpFitter(TIGHT, "piqp")._backend_for(10, 0)) is PiqpBackend  # no budget: sparse
+    chosen = [fitter._backend_for("xyz", 100, 20) for _ in range(2)]
+    chosen += [fitter._backend_for("x", 10, 0), fitter._backend_for("x", 10, 0)]
+    assert [type(b) for b in chosen] == [PiqpDenseBackend, PiqpBackend, PiqpBackend, PiqpBackend]
+    assert chosen[2] is chosen[3] is not chosen[1]
+    no_budget = QpFitter(TIGHT, "piqp")
+    assert type(no_budget._backend_for("xyz", 10, 0)) is PiqpBackend
 
 
 def test_full_qp_matches_paper_structure() -> None:
