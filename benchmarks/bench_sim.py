@@ -46,7 +46,7 @@ from sim.params import WindParams  # noqa: E402
 from sim.reference import writing_reference  # noqa: E402
 from vehicles.jobs import plan_glyph  # noqa: E402
 from vehicles.quadrotor_brush import KIND_NAME  # noqa: E402
-from vehicles.quadrotor_brush.control.controller import DEFAULT_CONFIG, PAPER_CONFIG  # noqa: E402
+from vehicles.quadrotor_brush.control.config import DEFAULT_CONFIG, PAPER_CONFIG  # noqa: E402
 from vehicles.quadrotor_brush.flight import fly  # noqa: E402
 from vehicles.quadrotor_brush.flight_config import FlightConfig  # noqa: E402
 from vehicles.quadrotor_brush.metrics import flight_metrics  # noqa: E402

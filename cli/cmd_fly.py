@@ -110,7 +110,7 @@ def _settings(args: argparse.Namespace) -> Any:
 
     from sim.params import WindParams
     from vehicles.deviation import DeviationLimit
-    from vehicles.quadrotor_brush.control.controller import PAPER_CONFIG
+    from vehicles.quadrotor_brush.control.config import PAPER_CONFIG
     from vehicles.registry import vehicle_kind
 
     base = vehicle_kind(BRUSH_KIND).settings(None, None)

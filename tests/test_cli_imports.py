@@ -42,6 +42,7 @@ def test_plan_of_chinese_text_imports_no_font_plot_or_show_models() -> None:
     unwanted = ("HersheyFonts", "matplotlib", "pydantic", "yaml", "showfile")
     unwanted += ("planner.retime", "planner.lbfgs")  # the paper's re-segmentation: not the default
     flight = ("loop", "world", "dynamics", "autopilot_pen")  # the closed loop: flights, not plans
+    flight += ("control.controller", "control.tip")  # the control law: the settings hold its config
     unwanted += tuple(f"vehicles.quadrotor_brush.{name}" for name in flight)
     code = (
         "import contextlib, io, json, os, sys\n"

@@ -100,11 +100,8 @@ def test_bad_gains_name_the_field() -> None:
 
 def test_controller_command_is_f_aug_times_x_aug() -> None:
     """The paper's controller outputs u = F_aug x_aug per axis (eq. 8) on its own estimates."""
-    from vehicles.quadrotor_brush.control.controller import (
-        PAPER_CONFIG,
-        PositionController,
-        ReferenceTick,
-    )
+    from vehicles.quadrotor_brush.control.config import PAPER_CONFIG
+    from vehicles.quadrotor_brush.control.controller import PositionController, ReferenceTick
 
     ctrl = PositionController(PAPER_CONFIG, 0.01, np.zeros((2, 3)))
     rng = np.random.default_rng(0)

@@ -10,7 +10,7 @@ import pytest
 from planner.samples import TrajectorySamples
 from sim.params import MocapParams, WindParams
 from sim.reference import writing_reference
-from vehicles.quadrotor_brush.control.controller import DEFAULT_CONFIG, PAPER_CONFIG
+from vehicles.quadrotor_brush.control.config import DEFAULT_CONFIG, PAPER_CONFIG
 from vehicles.quadrotor_brush.flight import Flight, FlightLog, fly
 from vehicles.quadrotor_brush.flight_config import FlightConfig
 from vehicles.quadrotor_brush.metrics import flight_metrics

@@ -7,7 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from vehicles.deviation import DeviationLimit
-from vehicles.quadrotor_brush.control.controller import DEFAULT_CONFIG, ControllerConfig
+from vehicles.quadrotor_brush.control.config import DEFAULT_CONFIG, ControllerConfig
 from vehicles.quadrotor_brush.params import WorldParams
 
 

@@ -20,11 +20,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from vehicles.kind import LiveReference, LiveState
-from vehicles.quadrotor_brush.control.controller import (
-    ControllerConfig,
-    PositionController,
-    ReferenceTick,
-)
+from vehicles.quadrotor_brush.control.config import ControllerConfig
+from vehicles.quadrotor_brush.control.controller import PositionController, ReferenceTick
 from vehicles.quadrotor_brush.control.inner import InnerLoopSetpoint
 from vehicles.quadrotor_brush.dynamics import InnerLoopCommand
 from vehicles.quadrotor_brush.params import WorldParams

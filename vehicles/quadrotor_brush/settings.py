@@ -18,11 +18,7 @@ from typing import TYPE_CHECKING
 
 from planner.limits import VehicleLimits
 from planner.options import PlanOptions
-from vehicles.quadrotor_brush.control.controller import (
-    DEFAULT_CONFIG,
-    PAPER_CONFIG,
-    ControllerConfig,
-)
+from vehicles.quadrotor_brush.control.config import DEFAULT_CONFIG, PAPER_CONFIG, ControllerConfig
 from vehicles.quadrotor_brush.control.rpt import RptGains
 from vehicles.quadrotor_brush.flight_config import FlightConfig
 from vehicles.quadrotor_brush.gain_names import AXES
