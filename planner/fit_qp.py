@@ -82,7 +82,12 @@ DENSE_SECONDS_PER_UNIT = 9e-10
 inequality rows: the KKT factorisation and the ``G^T G`` it forms every iteration), [s]. Measured
 on one core: 2.3e-10 to 4.1e-10 without rows (9 ms at 282 variables, 250 ms at 1026), 6.5e-10 to
 8.3e-10 at 384 variables with 194 to 1043 rows (65 to 173 ms, 14 to 16 iterations); the largest,
-rounded up, so that the prediction errs towards the sparse interface."""
+rounded up, so that the prediction errs towards the sparse interface. One axis's QP (94 to 348
+variables, the floor, up to 10 rows) takes 1.8e-10 to 4.8e-10 (0.6 ms at 94 variables, 8 to 16 ms
+at 342; load 5-6): the margin leaves every character of the planner benchmark and 鬱 馕 矗 dense
+(鬱's four axis QPs: 147 ms predicted). It is not lowered for them: a fixed total time solves 10
+to 20 coupled QPs in a row (speed rows; 33 to 65 ms each dense, 2 ms sparse), and a lower
+prediction would only spend more of the budget before turning sparse."""
 
 
 def dense_qp_seconds(n_variables: int, n_rows: int) -> float:

@@ -53,8 +53,9 @@ class PlanOptions:
     dense_qp_budget_s: float = 0.0
     """Predicted time [s] one plan may spend solving QPs on PIQP's dense interface, which needs
     no SciPy, before it turns to the sparse one (planner.fit_qp). 0, the default, always solves
-    sparse: right for a process that plans more than once, since a dense solve is 15 to 180
-    times slower; a process that plans once sets about the cost of importing ``scipy.sparse``
+    sparse: right for a process that plans more than once, since a dense solve is 2 to 180
+    times slower (from one axis's QP of a short character to a coupled QP of the longest); a
+    process that plans once sets about the cost of importing ``scipy.sparse``
     (``defaults.ONE_OFF_DENSE_QP_BUDGET_S``, as ``skyquill plan`` does)."""
     method: str = "qp"
     """``"qp"`` (limits imposed) or ``"closed-form"`` (limits only checked)."""
