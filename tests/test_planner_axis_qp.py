@@ -97,16 +97,33 @@ def test_the_axes_solved_apart_are_the_coupled_qp(
         _assert_optimal_in(qp, split)
 
 
+def _counting_dense_solves(fitter: QpFitter) -> list[int]:
+    """The sizes (variables) of the QPs ``fitter`` solves on the dense interface, as it goes."""
+    dense = fitter._dense
+    assert dense is not None
+    solve = dense.solve
+    sizes: list[int] = []
+
+    def counted(qp: QpData) -> QpSolution:
+        sizes.append(qp.c.shape[0])
+        return solve(qp)
+
+    dense.solve = counted  # type: ignore[method-assign]
+    return sizes
+
+
 @pytest.mark.parametrize("dense_budget_s", [0.0, 10.0])
 @pytest.mark.parametrize("strategy", ["lazy", "full"])
-def test_the_fitter_splits_without_speed_rows_and_agrees(
+def test_the_fitter_splits_dense_solves_without_speed_rows_and_agrees(
     dense_budget_s: float, strategy: str
 ) -> None:
-    """Sparse and dense alike: the optimum of the coupled QP (to PIQP's default tolerance, at
-    which each axis's iterations stop on their own), its cost and alpha term."""
+    """Dense: axis by axis; sparse: coupled. Both reach the optimum of the coupled QP (to PIQP's
+    default tolerance, at which each axis's iterations stop on their own), its cost and alpha
+    term."""
     p = _problem(seed=4)
     limits = _limits(p, 0.3, floor=True)
     fitter = QpFitter(limits, "piqp", strategy, dense_budget_s=dense_budget_s)
+    sizes = _counting_dense_solves(fitter) if dense_budget_s else []
     fit = fitter.fit(p)
     coupled = _tight_solve(build_qp(p, limits))
     np.testing.assert_allclose(fit.spline.control_points.T.ravel(), coupled.x, atol=1e-5)
@@ -115,8 +132,8 @@ def test_the_fitter_splits_without_speed_rows_and_agrees(
     coupled_fit = QpFitter(idle_speed, "piqp", "full").fit(p)  # every speed row: coupled
     assert fit.cost == pytest.approx(coupled_fit.cost, rel=1e-7)
     assert fit.constraint_alpha_term == pytest.approx(coupled_fit.constraint_alpha_term, rel=1e-5)
-    if dense_budget_s == 0.0:
-        assert set(fitter._sparse) == {"xyz", "x", "y", "z"}  # one backend per axis
+    if dense_budget_s:
+        assert sizes and set(sizes) == {p.n_ctrl}  # every dense solve one axis's QP
 
 
 def test_an_axis_without_rows_is_its_closed_form_and_costs_no_solve() -> None:
@@ -125,24 +142,19 @@ def test_an_axis_without_rows_is_its_closed_form_and_costs_no_solve() -> None:
     z_free = QpFitter(QpLimits((-50.0,) * 3, (50.0,) * 3)).fit(p).spline.control_points[:, 2]
     floor = float(np.quantile(z_free, 0.2))
     limits = QpLimits((-50.0,) * 3, (50.0,) * 3, z_floor_m=floor)
-    fitter = QpFitter(limits)
+    fitter = QpFitter(limits, dense_budget_s=10.0)
+    sizes = _counting_dense_solves(fitter)
     fit = fitter.fit(p)
-    assert set(fitter._sparse) == {"xyz", "z"}
+    assert sizes == [p.n_ctrl] * fitter.solves  # z's QP once a fit, x and y in closed form
     assert np.min(fit.spline.control_points[:, 2]) >= floor - 1e-7
     coupled = _tight_solve(build_qp(p, limits))
     np.testing.assert_allclose(fit.spline.control_points.T.ravel(), coupled.x, atol=1e-6)
 
 
-def test_each_axis_re_solves_by_update_during_re_segmentation() -> None:
-    """New times, the same working set: every axis's PIQP solver is updated, not set up anew
-    (one sparsity pattern per axis, as the coupled QP keeps one)."""
+def test_a_budget_too_small_for_the_axes_solves_the_coupled_qp_sparse() -> None:
+    """Once the dense budget cannot hold a QP's solves, that QP and every later one go to the
+    sparse interface, coupled (its pattern kept from one re-solve to the next)."""
     p = _problem(seed=4)
-    fitter = QpFitter(_limits(p, 0.3, floor=True), "piqp")
-    fitter.fit(p)
-    solvers = {axis: backend._solver for axis, backend in fitter._sparse.items() if axis != "xyz"}
-    assert len(solvers) == 3
-    solves = fitter.solves
-    fitter.fit(p.with_durations(p.segment_durations() * 1.01))
-    assert fitter.solves > solves
-    for axis, solver in solvers.items():
-        assert fitter._sparse[axis]._solver is solver
+    fitter = QpFitter(_limits(p, 0.3, floor=True), "piqp", dense_budget_s=1e-9)
+    fit = fitter.fit(p)
+    assert fitter._dense is None and fit.active_constraints > 0

@@ -9,7 +9,7 @@ from planner.bspline import basis_rows, jerk_gram
 from planner.errors import InfeasibleTrajectoryError
 from planner.fit_qp import QpFitter, QpLimits, build_qp, dense_qp_seconds
 from planner.minjerk import EndState, FitProblem, fit_closed_form, fixed_indices
-from planner.qp_solvers import PiqpBackend, PiqpDenseBackend, make_backend
+from planner.qp_solvers import PiqpBackend, make_backend
 
 
 def _problem(
@@ -127,17 +127,15 @@ def test_piqp_dense_interface_solves_like_the_sparse_one(strategy: str) -> None:
 
 def test_the_dense_budget_is_spent_then_the_sparse_interface_kept() -> None:
     """Dense while the predicted time fits; from the first QP that does not, sparse for good
-    (SciPy is loaded then), even for a QP small enough for what is left, and each part (the
-    coupled QP, an axis's) on a sparse backend of its own, which keeps its pattern."""
+    (SciPy is loaded then), even for a QP small enough for what is left."""
     one_solve_s = dense_qp_seconds(100, 20)
     assert dense_qp_seconds(100, 200) > one_solve_s > dense_qp_seconds(100, 0)  # rows cost too
     fitter = QpFitter(TIGHT, "piqp", dense_budget_s=1.5 * one_solve_s)
-    chosen = [fitter._backend_for("xyz", 100, 20) for _ in range(2)]
-    chosen += [fitter._backend_for("x", 10, 0), fitter._backend_for("x", 10, 0)]
-    assert [type(b) for b in chosen] == [PiqpDenseBackend, PiqpBackend, PiqpBackend, PiqpBackend]
-    assert chosen[2] is chosen[3] is not chosen[1]
-    no_budget = QpFitter(TIGHT, "piqp")
-    assert type(no_budget._backend_for("xyz", 10, 0)) is PiqpBackend
+    chosen = [fitter._dense_fits(one_solve_s) for _ in range(2)]
+    chosen += [fitter._dense_fits(dense_qp_seconds(10, 0))]
+    assert chosen == [True, False, False] and fitter._dense is None
+    assert isinstance(fitter._sparse, PiqpBackend)
+    assert not QpFitter(TIGHT, "piqp")._dense_fits(dense_qp_seconds(10, 0))
 
 
 def test_full_qp_matches_paper_structure() -> None:
