@@ -104,6 +104,19 @@ Measured on the shared 2-core machine under ``nice -n 15`` (others' load average
   50 failed, against 0.65-0.84 and 0-9 failed without it). Under such load jobs fail "is not writing
   it" three times: the agents give their jobs up unacknowledged (the lease) and the orchestrator
   counts each as an attempt.
+- A day later on a quiet machine (the show's own processes load it to 3-6): real-time factor
+  0.98-1.00 (per second 1.00 +- 0.01 in steady writing, dips to 0.6-0.9 for a few seconds when
+  jobs finish or a full garbage collection runs, 90-110 ms), 50/50 done, status p95 0.05-0.10 s.
+  ``fleet steps per tick`` (new) showed the fleet split 1.19-1.41 steps a tick: the shared
+  ticker judged a loop behind by the moment it asked, so under load the loops finishing a
+  turn before and after the half-period mark fell into two groups (take and stack 11 % of a
+  host's samples). Judged by the grid instant instead: 1.06-1.12. Async queries no longer start
+  a Python thread each (``bus/reply_poll.py``: 3-7 % of a host's samples). Two runs each,
+  alternating: factor 0.990 / 0.984 against 0.982 / 1.000, host CPU per vehicle-tick 181-182
+  against 185-196 us: the saving is a few per cent, within the runs' spread. Where a writing
+  host's CPU goes now (per thread): its event loop 0.32 cores, Zenoh's threads 0.05; the
+  orchestrator 0.37 (Zenoh's receiving threads 0.13, its Python callback and recorder threads
+  0.16), the router 0.23, this benchmark's telemetry subscriber (a console's stand-in) 0.1.
 
 ``--profile PATH`` writes a cProfile of each fleet host to ``PATH.<host number>``.
 """
