@@ -27,96 +27,10 @@ Python process runs on one core at most. The peer, in the same run: the same sho
 The fleet host of the benchmark is ``fleet_host_child.py``: ``vehicle_agent.fleet``'s
 ``FleetHost`` as ``skyquill fleet`` runs it, plus a task writing its figures once a second.
 
-Measured on the shared 2-core machine under ``nice -n 15`` (others' load average 1.5-10):
-
-- 10 vehicles, all writing: agent processes 814 MiB + 10 planning workers 1,600 MiB, 0.84
-  cores; one fleet host 137 MiB + 2 workers 344 MiB, 0.61 cores; real time in both (1.00),
-  the host's tick jitter p50 0.7 ms, p99 9.6 ms; all 10 jobs done in both;
-- idle, per vehicle: 71 MiB an agent process; in a fleet host 0.27 MiB (host RSS 75.6, 86.2,
-  100.1, 139.4 MiB at 10, 50, 100, 250 vehicles) and 0.1 % of a core;
-- 100 vehicles, 10 writing: real-time factor 0.97, status p95 0.21 s, 10/10 done;
-- 250 vehicles: all on the bus 9.9 s after start; idle, the host takes 0.24 cores, the
-  orchestrator 0.63 and the router 0.21 (250 heartbeats at 2.7 Hz); 10 writing: factor 0.92
-  but status p50 1.1 s, p95 4.3 s, and acknowledgements later than ``lost_after_s`` made the
-  vehicles give their jobs up: the orchestrator was the limit there. After issue 15's
-  orchestrator work (statuses decided per vehicle, merged and in chunks, ``bench_heartbeat.py``;
-  a resting vehicle's status at 1 Hz; fleet snapshots merged), at load average 6-14 from
-  others: 10 writing, status p50 0.009 s, p95 0.157 s, 10/10 done, no vehicle lost; idle,
-  the orchestrator 0.23 cores and the router 0.17 (at 100 vehicles 0.05 and 0.04). The
-  recording shows 340-390 statuses and 415-480 telemetry samples a second from 250 resting
-  vehicles (their resting telemetry comes at ~1.8 Hz, not 1); per thread, the orchestrator's
-  Python threads (event loop, MCAP recorder) took 0.16-0.19 cores and Zenoh's receiving
-  threads 0.05: per message far more than deciding a status (12 us) costs;
-- 50 writing at once (50 vehicles, one host): factor 0.11 when each vehicle's world and
-  controller were stepped alone (a writing tick 0.6-1.2 ms of CPU, 60 % of it the world and
-  controller), the host's loop 250 ms late, 40/50 done. With the per-tick geometry in floats
-  and the vehicles in flight stepped together (one fleet, ``vehicles/quadrotor_brush/loop.py``):
-  factor 0.49 on 0.81 cores (others' load average 4-8 meanwhile), about 0.34 ms of host CPU per
-  vehicle-tick, loop lag p50 16 ms, 50/50 done, status p95 0.07 s (its rounds still split, see
-  ``vehicle_agent/backends/sim_round.py``); 20 writing (50 vehicles, the geometry change only):
-  factor 0.56 on 0.82 cores, 0.73 ms of host CPU per vehicle-tick;
-- 20 writing (20 vehicles, rounds merged; load average 8-10, the host given 0.32 cores): factor
-  0.67, i.e. 0.24 ms of host CPU per vehicle-tick, 20/20 done; 50 writing (same code, load
-  average 8, the host given 0.56 cores): factor 0.29, 0.39 ms per vehicle-tick, loop lag p50
-  17 ms, status p95 0.21 s, and only 9/50 final within 600 s after the window (the others given
-  up and requeued as their writing went unacknowledged): to be run again on a quiet machine.
-  The real-time factor is the CPU the host gets over what its vehicles need: read it with the
-  host's CPU beside it. Where the time goes (``--profile``, 20 writing, before the rounds were
-  merged): the fleet's step 33 %, two thirds of it splitting the fleet for vehicles a turn
-  apart. With merged rounds (50 writing, profiled: 44 vehicles per fleet step on average, 49
-  splits in the run, 50/50 done): the fleet's step 6.5 % of the host's CPU (world and
-  controller 3.9 %, brushes and states 2.5 %); the runner 24 % (reference interpolation 9 %,
-  safety 4.5 %); report delivery 12 %, status publishing 7 % and the status heartbeat 7 %,
-  ``Publisher.put`` 8 % (about 0.3 ms a message on each vehicle's own Zenoh session), the
-  simulated vehicles' snapshots 6 %, the lease 4 %: the service around the runner is the
-  limit now, not the physics.
-- The issue's case, everything above landed (plus the agents' `holding` lease renewals), 250
-  vehicles in 2 fleet hosts, 50 writing, load average 0.9 before, 11 after: real-time factor
-  0.57 (ticks) / 0.59 (telemetry) on 1.00 core for both hosts, orchestrator 0.57 and router
-  0.22 cores while writing (0.23 / 0.19 idle): the 2 cores are spent, not real time. Status
-  p50 0.064 s, p95 0.33 s (max 1.03 s; the `skyquill status` command 1.78 s in that load);
-  50/50 done; hosts 218 MiB idle, 346 MiB writing (+ 4 planning workers 640 MiB); tick jitter
-  p50 4.9 ms, p99 109 ms; stop 3.5 s, nothing SIGKILLed.
-- The same case in four runs the next day (load 1-9 from the show itself): 50, 50, 47 and
-  32 of 50 done, the others failed after 3 attempts: agents gave 22-46 jobs up, "no
-  acknowledgement from the orchestrator for 1.5 s" (the lease), in bursts. The orchestrator's
-  loop stalled 0.4-1.8 s in fsynced SQLite commits, one per progress report (100 a second).
-  Progress no longer stored: 50/50 and 50/50, 9 and 21 give-ups; factor 0.59 / 0.57 on 1.0 core,
-  orchestrator 0.55-0.59 cores. What still stalls it are the commits of real changes (a burst
-  of give-ups makes a burst of them). Tried and dropped: Zenoh callbacks on Zenoh's own threads
-  (``indirect=False``) for queries, or for every subscriber and queryable: 26, 41, 40 and 11 of
-  50 done (its I/O threads then wait for the interpreter lock), though a query's own thread
-  start cost the fleet host's loop 2-3 ms.
-- Where a host's time goes while 25 of its vehicles write (py-spy, sampling whichever thread
-  holds the interpreter lock; cProfile's per-call cost inflated the many small Python calls and
-  hid numpy's): the job runner's step 30 % (the reference interpolated through numpy 12.5 %,
-  the fence's edges 7 %), the fleet's physics 11 % (rounds split only at take-offs and
-  landings), frozen dataclasses built per tick 6 %. With the reference read by bisection
-  through memoryviews and the fence re-read only near its edges, four runs alternating with
-  the commit before: factor 0.901 / 0.848 on 0.98 / 0.95 core against 0.779 / 0.791 on 1.00 /
-  1.02 (+17 % a core); orchestrator 0.53-0.54 cores, router 0.22-0.25; 50/50 done in each.
-- Next stop, on a machine shared with test runs (load 2-12): the orchestrator spent 12-25 % of its
-  samples on ETAs of an empty queue (every report settled them) and 9 % checking recorded payloads
-  with ``json.loads``; both cut, its cores while writing 0.40-0.45 in four runs against 0.45-0.64
-  before (on a quiet machine 0.48 against 0.52-0.54; hosts' factor 0.81, 50/50). Tried again and
-  dropped, now noted at the call (``bus/rpc.py``): query callbacks on Zenoh's threads (48/50 and
-  32/50 done); issuing the queries from one helper thread (factor 0.97/0.86/0.69/0.62, 1/0/6/13 of
-  50 failed, against 0.65-0.84 and 0-9 failed without it). Under such load jobs fail "is not writing
-  it" three times: the agents give their jobs up unacknowledged (the lease) and the orchestrator
-  counts each as an attempt.
-- A day later on a quiet machine (the show's own processes load it to 3-6): real-time factor
-  0.98-1.00 (per second 1.00 +- 0.01 in steady writing, dips to 0.6-0.9 for a few seconds when
-  jobs finish or a full garbage collection runs, 90-110 ms), 50/50 done, status p95 0.05-0.10 s.
-  ``fleet steps per tick`` (new) showed the fleet split 1.19-1.41 steps a tick: the shared
-  ticker judged a loop behind by the moment it asked, so under load the loops finishing a
-  turn before and after the half-period mark fell into two groups (take and stack 11 % of a
-  host's samples). Judged by the grid instant instead: 1.06-1.12. Async queries no longer start
-  a Python thread each (``bus/reply_poll.py``: 3-7 % of a host's samples). Two runs each,
-  alternating: factor 0.990 / 0.984 against 0.982 / 1.000, host CPU per vehicle-tick 181-182
-  against 185-196 us: the saving is a few per cent, within the runs' spread. Where a writing
-  host's CPU goes now (per thread): its event loop 0.32 cores, Zenoh's threads 0.05; the
-  orchestrator 0.37 (Zenoh's receiving threads 0.13, its Python callback and recorder threads
-  0.16), the router 0.23, this benchmark's telemetry subscriber (a console's stand-in) 0.1.
+The latest figures (quiet 2-core machine, the show's own processes loading it to 3-6): 250
+vehicles in 2 hosts, 50 writing, real-time factor 0.98-1.00, 50/50 done, status p95 <= 0.1 s,
+fleet steps per tick 1.06-1.12. Every run so far, what it found and what changed because of it:
+``docs/fleet_host_measurements.md``.
 
 ``--profile PATH`` writes a cProfile of each fleet host to ``PATH.<host number>``.
 """

@@ -4,9 +4,9 @@ Zenoh's Python callbacks are the obvious way to hear replies without blocking, b
 (indirect) callback starts a Python thread per query to run them: in a fleet host whose writing
 vehicles each send a report every 0.5 s that was 3-7 % of the host's samples (``Thread.start``,
 the interpreter's shutdown-lock list), and the event loop waited for each thread to start. Two
-ways round it were measured and dropped (``bench_fleet_host.py``): callbacks on Zenoh's own
-threads (``indirect=False``), which then waited for the interpreter lock; and sending the queries
-from one helper thread.
+ways round it were measured and dropped (``docs/fleet_host_measurements.md``): callbacks on
+Zenoh's own threads (``indirect=False``), which then waited for the interpreter lock; and
+sending the queries from one helper thread.
 
 Here each query's replies go into a Zenoh FIFO channel, filled by Zenoh's threads in Rust
 without the interpreter lock, and one timer of the event loop, every :data:`POLL_PERIOD_S` while

@@ -259,15 +259,15 @@ class QpFitter:
         self.solves = 0
         self.solve_ms = 0.0
 
-    def _dense_fits(self, predicted_s: float) -> bool:
-        """Whether the dense budget still holds a solve of ``predicted_s`` (then spent on it);
-        once it does not, every later QP goes to the sparse backend (SciPy is then loaded: the
-        sparse solve is the faster one)."""
+    def _dense_for(self, predicted_s: float) -> QpBackend | None:
+        """The dense backend while its budget still holds a solve of ``predicted_s`` (then
+        spent on it); once it does not, None for this and every later QP, which go to the
+        sparse backend (SciPy is then loaded: the sparse solve is the faster one)."""
         if self._dense is not None and predicted_s <= self._dense_left_s:
             self._dense_left_s -= predicted_s
-            return True
+            return self._dense
         self._dense = None
-        return False
+        return None
 
     def _solution(
         self, qp: QpData, problem: FitProblem, ab: FloatArray, rhs: FloatArray
@@ -293,17 +293,15 @@ class QpFitter:
                 for part, sol in zip(parts, known, strict=True)
                 if sol is None
             )
-            if self._dense_fits(predicted_s):
-                assert self._dense is not None
+            dense = self._dense_for(predicted_s)
+            if dense is not None:
                 solutions = [
-                    self._dense.solve(part) if sol is None else sol
+                    dense.solve(part) if sol is None else sol
                     for part, sol in zip(parts, known, strict=True)
                 ]
                 return joined(solutions, axes)
-        if self._dense_fits(dense_qp_seconds(3 * n, qp.G.shape[0])):
-            assert self._dense is not None
-            return self._dense.solve(qp)
-        return self._sparse.solve(qp)
+        dense = self._dense_for(dense_qp_seconds(3 * n, qp.G.shape[0]))
+        return (dense or self._sparse).solve(qp)
 
     def fit(self, problem: FitProblem) -> SplineFit:
         """Optimal constrained fit; raises :class:`InfeasibleTrajectoryError` if none exists."""

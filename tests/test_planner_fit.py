@@ -131,11 +131,11 @@ def test_the_dense_budget_is_spent_then_the_sparse_interface_kept() -> None:
     one_solve_s = dense_qp_seconds(100, 20)
     assert dense_qp_seconds(100, 200) > one_solve_s > dense_qp_seconds(100, 0)  # rows cost too
     fitter = QpFitter(TIGHT, "piqp", dense_budget_s=1.5 * one_solve_s)
-    chosen = [fitter._dense_fits(one_solve_s) for _ in range(2)]
-    chosen += [fitter._dense_fits(dense_qp_seconds(10, 0))]
-    assert chosen == [True, False, False] and fitter._dense is None
+    chosen = [fitter._dense_for(one_solve_s) for _ in range(2)]
+    chosen += [fitter._dense_for(dense_qp_seconds(10, 0))]
+    assert [b is not None for b in chosen] == [True, False, False] and fitter._dense is None
     assert isinstance(fitter._sparse, PiqpBackend)
-    assert not QpFitter(TIGHT, "piqp")._dense_fits(dense_qp_seconds(10, 0))
+    assert QpFitter(TIGHT, "piqp")._dense_for(dense_qp_seconds(10, 0)) is None
 
 
 def test_full_qp_matches_paper_structure() -> None:
