@@ -124,9 +124,18 @@ def test_an_agent_killed_mid_character_is_detected_and_another_vehicle_finishes(
     (job,) = live.wait([job_id])
     assert job.state == "done" and job.vehicle_id not in (None, victim)
     assert job.attempts == 2 and job.metrics is not None
-    lost = [e for e in live.events_of("vehicle_lost") if e.vehicle_id == victim]
-    assert lost, "no vehicle_lost event"
-    assert 0.0 <= lost[0].time_s - killed_at < 2.0
+    # Detected: lost within 2 s (silent past lost_after_s 1.5); or, when the supervisor's restart
+    # brings the vehicle back sooner than that (0.5 s plus its start), back without its job,
+    # which the orchestrator takes from it after confirm_grace_s (3 s) of not hearing it named.
+    lost, requeued = (
+        [e for e in live.events_of(kind) if e.vehicle_id == victim and e.time_s >= killed_at]
+        for kind in ("vehicle_lost", "job_requeued")
+    )
+    if lost:
+        assert lost[0].time_s - killed_at < 2.0
+    else:
+        assert requeued, "the killed agent was not detected"
+        assert requeued[0].time_s - killed_at < 2.0 + 3.0 + 1.0  # back, grace, a tick's slack
     deadline = time.monotonic() + 30.0
     while live.run.supervisor.restarts(f"agent {victim}") < 1:  # and `up` brings it back
         assert time.monotonic() < deadline
