@@ -255,6 +255,9 @@ class VehicleStatus(State, frozen=True):
     board_id: str | None = None
     job_id: str | None = None
     message: str = ""
+    incarnation: str | None = None
+    """Random id of the agent's start (of each vehicle's, in a fleet host): a new one says the
+    agent restarted, and has lost the job it had."""
 
 
 class VehicleCommand(Request, frozen=True):

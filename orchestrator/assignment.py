@@ -4,7 +4,8 @@ Jobs go in queue order (priority, then submission) to vehicles that are ready
 (``orchestrator/fleet.py:ready_for_job``), whose board is free and clean, and whose kind can
 write the job (``orchestrator/kinds.py``); a job waiting for its lost vehicle goes to nobody
 (``orchestrator/holders.py``). A refused or unanswered assignment puts the job back without
-counting the attempt, and the vehicle gets no job for ``refuse_backoff_s``.
+counting the attempt (a hand-back, ``orchestrator/requeue.py``), and the vehicle gets no job for
+``refuse_backoff_s``.
 """
 
 from __future__ import annotations
@@ -15,8 +16,8 @@ from bus.messages import CommandReply, JobAssignment, VehicleCommand
 from orchestrator import holders
 from orchestrator.core_types import Effects
 from orchestrator.fleet import ready_for_job
-from orchestrator.jobs import transition, update
-from orchestrator.requeue import requeue
+from orchestrator.jobs import transition
+from orchestrator.requeue import hand_back
 
 if TYPE_CHECKING:
     from orchestrator.core import Book
@@ -88,13 +89,6 @@ def answered(
         why = reply.message if reply is not None else "no answer"
         if reply is not None and reply.error is not None:
             why = reply.error.message
-        requeue(
-            book,
-            eff,
-            update(job, now_s, attempts=job.attempts - 1),
-            now_s,
-            f"{vehicle_id} did not take the job: {why}",
-            lost=False,
-        )
+        hand_back(book, eff, job, now_s, f"{vehicle_id} did not take the job: {why}")
     assign(book, eff, now_s)
     return eff

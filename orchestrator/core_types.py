@@ -26,6 +26,8 @@ class CoreConfig:
     """Most waiting jobs (awaiting approval + queued)."""
     max_attempts: int = 3
     """Assignments lost before the job fails."""
+    max_handbacks: int = 10
+    """Times a job may be taken back uncounted before it fails (nothing goes round for ever)."""
     confirm_grace_s: float = 3.0
     """How long a vehicle may not mention its assigned job before it is taken back, [s]."""
     lost_job_hold_s: float = 5.0

@@ -72,7 +72,9 @@ class Job(msgspec.Struct, frozen=True, kw_only=True):
     assigned_at_s: float | None = None
     """Orchestrator time of the latest assignment (or of the restart that found it active), [s]."""
     attempts: int = 0
-    """Number of assignments so far."""
+    """Number of assignments so far, less those handed back uncounted (``handbacks``)."""
+    handbacks: int = 0
+    """Times it was taken back without counting an attempt (``orchestrator/requeue.py``)."""
     estimate_s: float = 30.0
     """Expected duration of writing in sim time, [s] (estimate, then the planner's)."""
     planned_duration_s: float | None = None

@@ -53,6 +53,7 @@ def core_config(show: Show) -> CoreConfig:
         lost_job_hold_s=show.policy.lost_job_hold_s,
         max_queue=show.policy.max_queue,
         max_attempts=show.policy.max_attempts,
+        max_handbacks=show.policy.max_handbacks,
         tracking_error_alert_m=show.policy.tracking_error_alert_m,
         eta=EtaModel(time_scale=show.time_scale),
     )

@@ -7,11 +7,14 @@ although its token remains (a frozen process, a token held by someone else), is 
 goes back to the queue; it is present again with its next status, and a job of its own that is
 still queued is its own again if that status names it (it finished writing it meanwhile, or is
 writing it still). A vehicle whose status has not mentioned the job it was given for
-``confirm_grace_s`` gives it back too (it refused silently); at once if its token was declared
-anew since the job was given (its agent restarted, faster than it could be found lost, and its
-new self says it has no job). After an orchestrator restart, jobs that were active wait for the
-same confirmation. Events the agents publish about
-their vehicles (autopilot messages, refused take-offs) join the show's event log here.
+``confirm_grace_s`` gives it back too (it refused silently, or gave it up on its lease under
+load): a hand-back that counts no attempt, and the vehicle gets no job for ``refuse_backoff_s``
+(``orchestrator/requeue.py``). At once if its agent started anew since the job was given (its
+token declared again, or its status's ``incarnation`` new: it restarted faster than it could be
+found lost, and its new self has no job): that counts, as a loss does (a restart may be a
+crash). After an orchestrator restart, jobs that were active wait for the same confirmation.
+Events the agents publish about their vehicles (autopilot messages, refused take-offs) join the
+show's event log here.
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from bus.messages import Event, VehicleStatus
 from orchestrator import holders
 from orchestrator.core_types import Effects
 from orchestrator.fleet import VehicleView
-from orchestrator.requeue import requeue
+from orchestrator.requeue import hand_back, requeue
 
 RELAY_BURST = 10.0
 """Events of one vehicle relayed at once before the rate limit applies."""
@@ -55,6 +58,7 @@ def liveliness(book: Book, vehicle_id: str, alive: bool, now_s: float) -> Effect
     view.alive, view.last_seen_s = alive, now_s
     if alive:
         view.gone_since_s, view.token_at_s = None, now_s
+        view.restarted_at_s = now_s
         _maybe_back(book, eff, view, now_s)
     else:
         view.gone_since_s, view.message = now_s, "liveliness token gone"
@@ -75,6 +79,10 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
     view.state, view.reported_job_id = status.state, status.job_id
     view.status_at_s = view.last_seen_s = view.heard_at_s = now_s
     view.message = status.message
+    if status.incarnation != view.incarnation:
+        if view.incarnation is not None:
+            view.restarted_at_s = now_s
+        view.incarnation = status.incarnation
     changed = _maybe_back(book, eff, view, now_s) or changed
     if not view.lost:  # back from a loss with the job it had: writing it, or written
         named = book.jobs.get(status.job_id) if status.job_id is not None else None
@@ -99,11 +107,11 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
 
 
 def _restarted_since(view: VehicleView, assigned_at_s: float | None) -> bool:
-    """Whether the vehicle's liveliness token was declared anew after the job was given to it."""
+    """Whether the vehicle's agent started anew after the job was given to it."""
     return (
-        view.token_at_s is not None
+        view.restarted_at_s is not None
         and assigned_at_s is not None
-        and view.token_at_s > assigned_at_s
+        and view.restarted_at_s > assigned_at_s
     )
 
 
@@ -220,4 +228,5 @@ def check_vehicle(book: Book, eff: Effects, view: VehicleView, now_s: float) -> 
     since = max(view.mismatch_since_s, job.assigned_at_s or 0.0)
     if now_s - since >= book.config.confirm_grace_s:
         view.mismatch_since_s = None
-        requeue(book, eff, job, now_s, f"{vid} is not writing it", lost=True)
+        view.refused_until_s = max(view.refused_until_s, now_s + book.config.refuse_backoff_s)
+        hand_back(book, eff, job, now_s, f"{vid} is not writing it")

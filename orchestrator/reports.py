@@ -21,8 +21,8 @@ from typing import TYPE_CHECKING
 from bus.messages import AgentReport, CommandReply, ErrorInfo, VehicleCommand
 from orchestrator import holders
 from orchestrator.core_types import Effects
-from orchestrator.jobs import Job, transition, update
-from orchestrator.requeue import requeue
+from orchestrator.jobs import Job, transition
+from orchestrator.requeue import hand_back, requeue
 from orchestrator.written import split_written
 
 PLAN_FAILED = "plan_failed"
@@ -121,24 +121,21 @@ def _handed_back(
 ) -> CommandReply:
     """The vehicle gave the job back before its brush touched, and is healthy: the job goes back
     to the queue and the vehicle gets no job for ``retry_after_s``. A take-off refusal or a plan
-    its kind cannot write (``UNCOUNTED``) does not count as an attempt; a safety abort
+    its kind cannot write (``UNCOUNTED``) does not count as an attempt (a hand-back, bounded
+    apart: ``orchestrator/requeue.py``); a safety abort
     (``not_settled``, ``deviation`` in transit) does, so a job that no vehicle can fly fails
     after ``max_attempts`` instead of going round for ever."""
     view = book.vehicles[rep.vehicle_id]
     view.refused_until_s = max(view.refused_until_s, now_s + max(0.0, retry_after_s))
     reason = rep.error.message if rep.error else "no reason given"
-    if rep.error is None or rep.error.code not in UNCOUNTED:
-        if job.attempts >= book.config.max_attempts:
-            message = f"{job.label} failed on {rep.vehicle_id}: {reason}"
-            return _fail(
-                book, job, rep, eff, now_s, f"{message}; gave up after {job.attempts} tries"
-            )
-        requeued = job
+    why = f"{rep.vehicle_id} could not start it: {reason}"
+    if rep.error is not None and rep.error.code in UNCOUNTED:
+        hand_back(book, eff, job, now_s, why)
+    elif job.attempts >= book.config.max_attempts:
+        message = f"{job.label} failed on {rep.vehicle_id}: {reason}"
+        return _fail(book, job, rep, eff, now_s, f"{message}; gave up after {job.attempts} tries")
     else:
-        requeued = update(job, now_s, attempts=max(0, job.attempts - 1))
-    requeue(
-        book, eff, requeued, now_s, f"{rep.vehicle_id} could not start it: {reason}", lost=False
-    )
+        requeue(book, eff, job, now_s, why, lost=False)
     book.assign(eff, now_s)
     return CommandReply(ok=True, message="job back in the queue")
 

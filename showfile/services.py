@@ -136,7 +136,13 @@ class PolicySettings(ShowModel):
     max_queue: int = Field(default=200, ge=1)
     """Submissions beyond this many waiting jobs are refused."""
     max_attempts: int = Field(default=3, ge=1)
-    """A job whose vehicle was lost this many times fails instead of being requeued again."""
+    """A job fails instead of being requeued again after this many attempts that may have been
+    its own fault: its vehicle lost or restarted with it, or a safety abort (``not_settled``)."""
+    max_handbacks: int = Field(default=10, ge=1)
+    """A job fails after being handed back this many times for reasons that are not its own
+    (uncounted by ``max_attempts``): an assignment refused or unanswered, a take-off refused,
+    a kind that cannot write it, or a present vehicle that gave it up unconfirmed (its lease
+    ran out under load or on a poor link). Bounds them so that nothing goes round for ever."""
     fleet_period_s: float = Field(default=1.0, gt=0.0)
     """Period of the fleet snapshot publication, in [s]."""
 

@@ -178,7 +178,49 @@ def test_vehicle_that_forgot_its_job_gives_it_back_after_the_grace() -> None:
     book.status(idle, 2.0)
     assert book.jobs["j1"].state == "assigned"
     eff = book.status(idle, 4.1)
-    assert eff.jobs["j1"].state == "assigned" and eff.jobs["j1"].attempts == 2  # given again
+    job = eff.jobs["j1"]
+    assert (job.state, job.attempts, job.handbacks) == ("queued", 0, 1)  # not the job's fault
+    assert "is not writing it" in eff.events[-1].message
+    assert not _assigned(book.tick(5.0))  # the vehicle backs off
+    eff = book.tick(4.1 + book.config.refuse_backoff_s + 0.1)
+    assert _assigned(eff) == [("uav1", "j1")] and eff.jobs["j1"].attempts == 1
+
+
+def test_jobs_given_up_unconfirmed_by_present_vehicles_count_no_attempt_but_are_bounded() -> None:
+    """Under CPU overload agents give jobs up for lack of acknowledgement (their lease): such a
+    job must not fail after ``max_attempts`` (nothing is wrong with it), nor go round for ever."""
+    book = Book(_config(max_attempts=3, max_handbacks=5, confirm_grace_s=3.0), now_s=0.0)
+    _online(book, "uav1", 0.0)
+    _submit(book, "j1", 0.0)
+    idle = VehicleStatus(vehicle_id="uav1", kind="q", state="idle")
+    now, states = 0.0, []
+    for _ in range(5):
+        assert book.jobs["j1"].state == "assigned"
+        book.status(idle, now + 0.1)  # given up: its status names no job
+        now += 3.2
+        eff = book.status(idle, now)
+        states.append((eff.jobs["j1"].state, eff.jobs["j1"].handbacks))
+        now += book.config.refuse_backoff_s + 0.1
+        book.status(idle, now)
+        book.tick(now)
+    assert states == [("queued", 1), ("queued", 2), ("queued", 3), ("queued", 4), ("failed", 5)]
+    assert "gave up after 5 hand-backs" in eff.events[-1].message
+
+
+def test_lost_attempts_and_hand_backs_are_bounded_apart() -> None:
+    book = Book(_config(max_attempts=2, max_handbacks=3, lost_after_s=1.0), now_s=0.0)
+    _online(book, "uav1", 0.0)
+    _submit(book, "j1", 0.0)
+    book.assignment_result("uav1", "j1", None, 0.1)  # unanswered: a hand-back
+    assert _assigned(book.tick(2.2)) == [("uav1", "j1")]
+    book.assignment_result("uav1", "j1", None, 2.3)
+    assert (book.jobs["j1"].attempts, book.jobs["j1"].handbacks) == (0, 2)
+    book.tick(4.5)
+    assert book.jobs["j1"].state == "assigned"
+    book.liveliness("uav1", False, 4.6)
+    book.tick(5.7)  # lost: a counted attempt, not a hand-back
+    assert (book.jobs["j1"].state, book.jobs["j1"].attempts) == ("queued", 1)
+    assert book.jobs["j1"].handbacks == 2
 
 
 def test_refused_assignment_goes_back_to_the_queue_without_an_attempt() -> None:
@@ -362,7 +404,8 @@ class FleetMachine(RuleBasedStateMachine):
 
     @initialize(moderation=st.booleans())
     def start(self, moderation: bool) -> None:
-        self.book = Book(_config(moderation=moderation, max_attempts=3), now_s=0.0)
+        config = _config(moderation=moderation, max_attempts=3, max_handbacks=4)
+        self.book = Book(config, now_s=0.0)
         self.now = 0.0
         self.submitted: list[str] = []
         self.agent_job: dict[str, str | None] = {v.vehicle_id: None for v in VEHICLES}
@@ -514,6 +557,15 @@ class FleetMachine(RuleBasedStateMachine):
                 assert start is seen[1], (job_id, seen, start)
             else:
                 assert abs(start - seen[1]) <= tolerance_s + 1e-9, (job_id, seen, start)
+
+    @invariant()
+    def hand_backs_are_bounded(self) -> None:
+        if not hasattr(self, "book"):
+            return
+        limit = self.book.config.max_handbacks
+        for job in self.book.jobs.values():
+            assert 0 <= job.handbacks <= limit and job.attempts >= 0, job
+            assert job.handbacks < limit or job.state == "failed", job
 
     @invariant()
     def one_job_per_vehicle_and_board(self) -> None:

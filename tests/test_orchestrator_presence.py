@@ -149,3 +149,24 @@ def test_an_agent_restarted_without_its_job_gives_it_back_at_once_a_token_flap_d
     assert [e.message for e in eff.events if e.kind == "job_requeued"] == [
         "L: uav1 restarted without it"
     ]
+
+
+def test_an_agent_restarted_unseen_by_liveliness_is_known_by_its_new_incarnation() -> None:
+    """A restart whose token the orchestrator never saw go (the new token came first, or the
+    router merged them) is told by the status's ``incarnation``: the job is taken back at once and
+    counts as an attempt; the same agent not naming its job is a hand-back after the grace."""
+    book = _book()
+    _writing_j1(book)
+    first = VehicleStatus(
+        vehicle_id="uav1", kind="q", state="writing", job_id="j1", incarnation="a"
+    )
+    book.status(first, 0.3)
+    again = VehicleStatus(vehicle_id="uav1", kind="q", state="idle", incarnation="a")
+    assert not book.status(again, 0.5).jobs  # the same agent: waits for the grace
+    reborn = VehicleStatus(vehicle_id="uav1", kind="q", state="idle", incarnation="b")
+    eff = book.status(reborn, 0.6)
+    assert [e.message for e in eff.events if e.kind == "job_requeued"] == [
+        "L: uav1 restarted without it"
+    ]
+    job = book.jobs["j1"]
+    assert (job.state, job.attempts, job.handbacks) == ("queued", 1, 0)  # counted

@@ -29,6 +29,7 @@ import asyncio
 import contextlib
 import logging
 import math
+import secrets
 import time
 from collections import deque
 from dataclasses import replace
@@ -104,6 +105,8 @@ class AgentService:
         )
         self._prepared: dict[str, PreparedJob] = {}
         self._status_sent: VehicleStatus | None = None
+        self.incarnation = secrets.token_hex(8)
+        """This start of the vehicle's agent, on its statuses (``bus.messages.VehicleStatus``)."""
         self._tasks: set[asyncio.Task[None]] = set()
         self._lease = JobLease(settings.lost_after_s)
         self._guard = JobGuard(
@@ -352,7 +355,7 @@ class AgentService:
 
     # --- outputs -------------------------------------------------------------------------------
     def _publish_status(self, *, only_if_changed: bool = False) -> None:
-        status = self.runner.status()
+        status = msgspec.structs.replace(self.runner.status(), incarnation=self.incarnation)
         pending = self.reports.pending_result() if status.job_id is None else None
         if pending is not None:  # not over until the orchestrator has its result
             status = msgspec.structs.replace(status, job_id=pending)
