@@ -55,8 +55,8 @@ class VehicleView:
     incarnation: str | None = None
     """The ``incarnation`` of its latest status (a new one: its agent restarted)."""
     restarted_at_s: float | None = None
-    """Orchestrator time its agent was last seen starting: its token declared anew, or a status
-    with a new ``incarnation`` (the token's coming and going may not be seen), [s]."""
+    """Orchestrator time of its first status with a new ``incarnation`` (its agent restarted),
+    [s]."""
     checked_at_s: float | None = None
     """Orchestrator time its presence was last checked, [s]; a long gap means the orchestrator
     itself stalled, and heartbeats that queued up meanwhile are waited for once."""

@@ -72,9 +72,10 @@ class Job(msgspec.Struct, frozen=True, kw_only=True):
     assigned_at_s: float | None = None
     """Orchestrator time of the latest assignment (or of the restart that found it active), [s]."""
     attempts: int = 0
-    """Number of assignments so far, less those handed back uncounted (``handbacks``)."""
+    """Number of assignments so far."""
     handbacks: int = 0
-    """Times it was taken back without counting an attempt (``orchestrator/requeue.py``)."""
+    """Of those, how many were taken back for a reason not the job's own, not counted against
+    ``max_attempts`` (``orchestrator/requeue.py``)."""
     estimate_s: float = 30.0
     """Expected duration of writing in sim time, [s] (estimate, then the planner's)."""
     planned_duration_s: float | None = None
@@ -90,6 +91,11 @@ class Job(msgspec.Struct, frozen=True, kw_only=True):
     holder_hold_until_s: float | None = None
     """Queued after its vehicle (``vehicle_id``) was lost: only that vehicle may take it before
     this Unix time, [s] (``orchestrator/holders.py``)."""
+
+    @property
+    def counted_attempts(self) -> int:
+        """Assignments that count against ``max_attempts`` (hand-backs do not)."""
+        return self.attempts - self.handbacks
 
     @property
     def final(self) -> bool:

@@ -1,20 +1,21 @@
 """Vehicle presence decisions (pure): liveliness, status, telemetry, and the passing of time.
 
-A vehicle is present while its liveliness token is there *and* it speaks: its agent publishes
-its status or its telemetry at least every ``lost_after_s / 3`` (the heartbeat). A vehicle
-whose token has been gone for ``lost_after_s``, or that has been silent for ``lost_after_s``
-although its token remains (a frozen process, a token held by someone else), is lost and its job
-goes back to the queue; it is present again with its next status, and a job of its own that is
-still queued is its own again if that status names it (it finished writing it meanwhile, or is
-writing it still). A vehicle whose status has not mentioned the job it was given for
-``confirm_grace_s`` gives it back too (it refused silently, or gave it up on its lease under
-load): a hand-back that counts no attempt, and the vehicle gets no job for ``refuse_backoff_s``
-(``orchestrator/requeue.py``). At once if its agent started anew since the job was given (its
-token declared again, or its status's ``incarnation`` new: it restarted faster than it could be
-found lost, and its new self has no job): that counts, as a loss does (a restart may be a
-crash). After an orchestrator restart, jobs that were active wait for the same confirmation.
-Events the agents publish about their vehicles (autopilot messages, refused take-offs) join the
-show's event log here.
+A vehicle is present while its liveliness token is there *and* it speaks: its agent publishes its
+status or its telemetry at least every ``lost_after_s / 3`` (the heartbeat). A vehicle whose token
+has been gone for ``lost_after_s``, or that has been silent for ``lost_after_s`` although its token
+remains (a frozen process, a token held by someone else), is lost and its job goes back to the
+queue; it is present again with its next status, and a job of its own that is still queued is its
+own again if that status names it (it finished writing it meanwhile, or is writing it still). A
+vehicle whose status has not mentioned the job it was given for ``confirm_grace_s`` gives it back
+too (it refused silently, or gave it up on its lease under load): a hand-back that counts no
+attempt, and the vehicle gets no job for ``refuse_backoff_s`` (``orchestrator/requeue.py``). At once
+if its agent started anew since the job was given (its status's ``incarnation`` is new: it restarted
+faster than it could be found lost, and its new self has no job): that counts, as a loss does (a
+restart may be a crash). Not for a token that went and came back: the orchestrator's own session
+sees every token do that when it reconnects to the router (a router restart, or the orchestrator
+frozen past its session's lease). After an orchestrator restart, jobs that were active wait for the
+same confirmation. Events the agents publish about their vehicles (autopilot messages, refused
+take-offs) join the show's event log here.
 """
 
 from __future__ import annotations
@@ -58,7 +59,6 @@ def liveliness(book: Book, vehicle_id: str, alive: bool, now_s: float) -> Effect
     view.alive, view.last_seen_s = alive, now_s
     if alive:
         view.gone_since_s, view.token_at_s = None, now_s
-        view.restarted_at_s = now_s
         _maybe_back(book, eff, view, now_s)
     else:
         view.gone_since_s, view.message = now_s, "liveliness token gone"

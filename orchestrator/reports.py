@@ -131,9 +131,10 @@ def _handed_back(
     why = f"{rep.vehicle_id} could not start it: {reason}"
     if rep.error is not None and rep.error.code in UNCOUNTED:
         hand_back(book, eff, job, now_s, why)
-    elif job.attempts >= book.config.max_attempts:
+    elif job.counted_attempts >= book.config.max_attempts:
         message = f"{job.label} failed on {rep.vehicle_id}: {reason}"
-        return _fail(book, job, rep, eff, now_s, f"{message}; gave up after {job.attempts} tries")
+        tries = f"{message}; gave up after {job.counted_attempts} tries"
+        return _fail(book, job, rep, eff, now_s, tries)
     else:
         requeue(book, eff, job, now_s, why, lost=False)
     book.assign(eff, now_s)

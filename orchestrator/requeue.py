@@ -92,14 +92,13 @@ def requeue(
 def hand_back(book: Book, eff: Effects, job: Job, now_s: float, reason: str) -> None:
     """Take an active job back without counting its attempt (see the module docstring): queued
     again, or failed once it has been handed back ``max_handbacks`` times."""
-    counts = {"attempts": max(0, job.attempts - 1), "handbacks": job.handbacks + 1}
-    requeue(book, eff, update(job, now_s, **counts), now_s, reason, lost=False)
+    requeue(book, eff, update(job, now_s, handbacks=job.handbacks + 1), now_s, reason, lost=False)
 
 
 def _gave_up(book: Book, job: Job, lost: bool) -> str | None:
     """Why a job taken back fails instead of going back to the queue (None: it goes back)."""
-    if lost and job.attempts >= book.config.max_attempts:
-        return f"{job.attempts} attempts"
+    if lost and job.counted_attempts >= book.config.max_attempts:
+        return f"{job.counted_attempts} attempts"
     if job.handbacks >= book.config.max_handbacks:
         return f"{job.handbacks} hand-backs"
     return None

@@ -179,11 +179,11 @@ def test_vehicle_that_forgot_its_job_gives_it_back_after_the_grace() -> None:
     assert book.jobs["j1"].state == "assigned"
     eff = book.status(idle, 4.1)
     job = eff.jobs["j1"]
-    assert (job.state, job.attempts, job.handbacks) == ("queued", 0, 1)  # not the job's fault
+    assert (job.state, job.attempts, job.counted_attempts) == ("queued", 1, 0)  # not its fault
     assert "is not writing it" in eff.events[-1].message
     assert not _assigned(book.tick(5.0))  # the vehicle backs off
     eff = book.tick(4.1 + book.config.refuse_backoff_s + 0.1)
-    assert _assigned(eff) == [("uav1", "j1")] and eff.jobs["j1"].attempts == 1
+    assert _assigned(eff) == [("uav1", "j1")] and eff.jobs["j1"].attempts == 2
 
 
 def test_jobs_given_up_unconfirmed_by_present_vehicles_count_no_attempt_but_are_bounded() -> None:
@@ -214,13 +214,13 @@ def test_lost_attempts_and_hand_backs_are_bounded_apart() -> None:
     book.assignment_result("uav1", "j1", None, 0.1)  # unanswered: a hand-back
     assert _assigned(book.tick(2.2)) == [("uav1", "j1")]
     book.assignment_result("uav1", "j1", None, 2.3)
-    assert (book.jobs["j1"].attempts, book.jobs["j1"].handbacks) == (0, 2)
+    assert (book.jobs["j1"].attempts, book.jobs["j1"].handbacks) == (2, 2)
     book.tick(4.5)
     assert book.jobs["j1"].state == "assigned"
     book.liveliness("uav1", False, 4.6)
     book.tick(5.7)  # lost: a counted attempt, not a hand-back
-    assert (book.jobs["j1"].state, book.jobs["j1"].attempts) == ("queued", 1)
-    assert book.jobs["j1"].handbacks == 2
+    job = book.jobs["j1"]
+    assert (job.state, job.attempts, job.handbacks, job.counted_attempts) == ("queued", 3, 2, 1)
 
 
 def test_refused_assignment_goes_back_to_the_queue_without_an_attempt() -> None:
@@ -228,7 +228,7 @@ def test_refused_assignment_goes_back_to_the_queue_without_an_attempt() -> None:
     _online(book, "uav1", 0.0)
     _submit(book, "j1", 0.0)
     eff = book.assignment_result("uav1", "j1", CommandReply(ok=False, message="busy"), 0.1)
-    assert eff.jobs["j1"].state == "queued" and eff.jobs["j1"].attempts == 0
+    assert eff.jobs["j1"].state == "queued" and eff.jobs["j1"].counted_attempts == 0
     assert not _assigned(eff)  # backing off
     assert _assigned(book.tick(2.2)) == [("uav1", "j1")]
 
@@ -243,11 +243,11 @@ def test_refused_takeoff_requeues_the_job_and_backs_the_vehicle_off() -> None:
     )
     reply, eff = book.report(refused, 1.0)
     job = eff.jobs["j1"]
-    assert reply.ok and (job.state, job.attempts) == ("queued", 0)
+    assert reply.ok and (job.state, job.counted_attempts) == ("queued", 0)
     assert "Compass" in eff.events[-1].message and eff.events[-1].kind == "job_requeued"
     assert not _assigned(book.tick(5.9))  # the vehicle is backing off
     eff = book.tick(6.1)
-    assert _assigned(eff) == [("uav1", "j1")] and eff.jobs["j1"].attempts == 1
+    assert _assigned(eff) == [("uav1", "j1")] and eff.jobs["j1"].counted_attempts == 1
     plain = AgentReport(vehicle_id="uav1", job_id="j1", event="failed", error=error)
     assert book.report(plain, 7.0)[1].jobs["j1"].state == "failed"  # no retry: the job failed
 
@@ -601,7 +601,7 @@ class FleetMachine(RuleBasedStateMachine):
         for job_id, seen in self.final_seen.items():
             assert self.book.jobs[job_id] == seen
         for job in self.book.jobs.values():
-            assert job.attempts <= 3
+            assert job.counted_attempts <= 3
             if job.final:
                 self.final_seen.setdefault(job.job_id, job)
 

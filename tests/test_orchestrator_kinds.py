@@ -53,7 +53,7 @@ def test_a_job_one_kind_cannot_plan_waits_for_a_vehicle_of_another_kind() -> Non
     assert _assigned(_submit(book, "j1", 0.0)) == [("hex1", "j1")]
     _refuse(book, "hex1", "j1", 1.0)
     job = book.jobs["j1"]
-    assert job.state == "queued" and job.attempts == 0, job  # not lost, not counted
+    assert job.state == "queued" and job.counted_attempts == 0, job  # not lost, not counted
     for t in (2.0, 3.0, 4.0):
         assert _assigned(book.tick(t)) == []  # the hexarotor, idle again, never gets it back
     assert book.etas(4.0)["j1"] == (1, None)  # no usable vehicle may take it: no ETA

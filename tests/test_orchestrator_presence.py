@@ -19,7 +19,7 @@ def _book() -> Book:
 
 
 def _status(vid: str, job_id: str | None = None, state: str = "idle") -> VehicleStatus:
-    return VehicleStatus(vehicle_id=vid, kind="q", state=state, job_id=job_id)  # type: ignore[arg-type]
+    return VehicleStatus(vehicle_id=vid, kind="q", state=state, job_id=job_id, incarnation="a")  # type: ignore[arg-type]
 
 
 def _run(book: Book, start_s: float, end_s: float, speaking: dict[str, str | None]) -> Effects:
@@ -144,11 +144,29 @@ def test_an_agent_restarted_without_its_job_gives_it_back_at_once_a_token_flap_d
     assert book.jobs["j1"].state == "writing"
     book.liveliness("uav1", False, 5.05)  # killed, and restarted by its supervisor at once
     book.liveliness("uav1", True, 5.3)
-    eff = book.status(_status("uav1"), 5.35)  # its new self has no job
+    reborn = VehicleStatus(vehicle_id="uav1", kind="q", state="idle", incarnation="new")
+    eff = book.status(reborn, 5.35)  # its new self has no job
     assert eff.jobs["j1"].state in ("queued", "assigned") and eff.jobs["j1"].vehicle_id == "uav1"
     assert [e.message for e in eff.events if e.kind == "job_requeued"] == [
         "L: uav1 restarted without it"
     ]
+
+
+def test_tokens_flapping_with_the_orchestrators_reconnection_are_no_restart() -> None:
+    """The orchestrator frozen past its session's lease (or the router restarted) sees every
+    token go and come back; the agent, unacknowledged meanwhile, gave its job up. Its job is a
+    hand-back after the grace (no attempt counted), not a restart."""
+    book = _book()
+    _writing_j1(book)
+    same = VehicleStatus(vehicle_id="uav1", kind="q", state="writing", job_id="j1", incarnation="a")
+    book.status(same, 0.3)
+    book.liveliness("uav1", False, 2.0)
+    book.liveliness("uav1", True, 2.0)
+    gave_up = VehicleStatus(vehicle_id="uav1", kind="q", state="returning", incarnation="a")
+    assert not book.status(gave_up, 2.1).jobs
+    book.status(gave_up, 2.2 + book.config.confirm_grace_s)
+    job = book.jobs["j1"]
+    assert (job.state, job.attempts, job.handbacks) == ("queued", 1, 1)
 
 
 def test_an_agent_restarted_unseen_by_liveliness_is_known_by_its_new_incarnation() -> None:

@@ -1,9 +1,10 @@
 """A show survives its processes dying or freezing, and never writes a character twice.
 
-SIGKILL of the router, of the orchestrator and of an agent, and SIGSTOP of an agent for 20 s,
-mid-show: one show of three simulated vehicles runs for these (every process of it a supervised
-child, router included, as under ``skyquill up``; loopback, mutual TLS, sped up). SIGKILL of the
-console and of ``skyquill up`` itself: a real ``skyquill up`` each (one vehicle).
+SIGKILL of the router, of the orchestrator and of an agent, SIGSTOP of an agent for 20 s, and of the
+orchestrator for 2.5 s three times over one character, mid-show: one show of three simulated
+vehicles runs for these (every process of it a supervised child, router included, as under
+``skyquill up``; loopback, mutual TLS, sped up). SIGKILL of the console and of ``skyquill up``
+itself: a real ``skyquill up`` each (one vehicle).
 
 After each, the show's promises are checked: every acknowledged submission is ``done`` in the
 orchestrator's SQLite store and was written completely exactly once (one job folder of the agent
@@ -44,6 +45,10 @@ SHOWS = Path(__file__).resolve().parent.parent / "shows"
 TIME_SCALE = 6.0
 JOB_TIMEOUT_S = 60.0
 FREEZE_S = 20.0
+ATTEMPT_GAP_S = 2.0
+"""Pen-down telemetry of one vehicle for one job this far apart in [s] is two of its attempts
+(a pause between two strokes is a fraction of a second at ``TIME_SCALE``; another attempt needs
+the job taken back, assigned, flown to the board)."""
 
 
 @dataclass(frozen=True)
@@ -133,20 +138,28 @@ class LiveShow:
         with self.lock:
             ink = list(self.ink)
         for job_id in self.acknowledged:
-            spans = sorted(
-                (min(times), max(times), vid)
-                for vid, times in _times_by_vehicle(ink, job_id).items()
-            )
+            spans = sorted(_ink_spans(ink, job_id))
             for earlier, later in itertools.pairwise(spans):
                 assert earlier[1] < later[0], f"{job_id}: {earlier[2]} and {later[2]} both inked"
 
 
-def _times_by_vehicle(ink: list[Ink], job_id: str) -> dict[str, list[float]]:
-    out: dict[str, list[float]] = {}
+def _ink_spans(ink: list[Ink], job_id: str) -> list[tuple[float, float, str]]:
+    """(first, last arrival [s], vehicle) of each attempt's pen-down samples for ``job_id``: a
+    vehicle's samples more than ``ATTEMPT_GAP_S`` apart belong to two attempts of its."""
+    times: dict[str, list[float]] = {}
     for sample in ink:
         if sample.job_id == job_id:
-            out.setdefault(sample.vehicle_id, []).append(sample.arrived_s)
-    return out
+            times.setdefault(sample.vehicle_id, []).append(sample.arrived_s)
+    spans = []
+    for vid, arrived in times.items():
+        arrived.sort()
+        start = arrived[0]
+        for before, after in itertools.pairwise(arrived):
+            if after - before > ATTEMPT_GAP_S:
+                spans.append((start, before, vid))
+                start = after
+        spans.append((start, arrived[-1], vid))
+    return spans
 
 
 @pytest.fixture(scope="module")
@@ -273,6 +286,31 @@ def test_an_agent_frozen_20_s_is_lost_within_2_s_and_never_inks_its_old_job(
     agent_log = (live.run.show.database_path.parent / "logs" / f"{victim}.log").read_text()
     assert f"gave job {job_id} up: " in agent_log  # it stalled, or went unacknowledged
     assert live.run.supervisor.restarts(f"agent {victim}") <= 1  # not restarted for freezing
+    live.check_written_once()
+
+
+def test_a_job_given_up_unacknowledged_three_times_is_still_written(live: LiveShow) -> None:
+    """The orchestrator frozen past ``lost_after_s`` while a character is written: the writing
+    agent's lease runs out and it gives the job up (as under CPU overload). Nothing is wrong with
+    the job: three times over ``max_attempts`` (3) it goes back to the queue uncounted, and is
+    written once in the end (it failed after three such give-ups before hand-backs)."""
+    (job_id,) = live.submit(["W"])
+    pid = live.run.supervisor.pid("orchestrator")
+    assert pid is not None and live.run.show.policy.max_attempts == 3
+    for _ in range(3):
+        victim = str(live.wait_until_writing([job_id]).vehicle_id)
+        stopped_at = time.time()
+        os.kill(pid, signal.SIGSTOP)
+        try:
+            time.sleep(live.run.show.policy.lost_after_s + 1.0)
+        finally:
+            os.kill(pid, signal.SIGCONT)
+        deadline = time.monotonic() + 15.0
+        while not [e for e in live.events_of("job_requeued", victim) if e.time_s > stopped_at]:
+            assert time.monotonic() < deadline, f"{victim} kept {job_id} through the freeze"
+            time.sleep(0.05)
+    (job,) = live.wait([job_id])
+    assert job.state == "done", (job.state, job.error)
     live.check_written_once()
 
 
