@@ -222,7 +222,7 @@ def _report(res: _Results, n_chars: int) -> None:
     for name, values in res.stages.items():
         print(_row(name, values))
     if res.pairs:
-        print(f"  peer on {len(res.pairs)} characters (same 3-D waypoints, same mean speed):")
+        print(f"  peer on {len(res.pairs)} characters (same 3-D waypoints, nominal pace):")
         print(_row("  plan_strokes (everything)", [p[0] for p in res.pairs]))
         print(_row("  RotorPy MinSnap (7th order, cvxopt)", [p[1] for p in res.pairs]))
         ours = statistics.median(p[0] for p in res.pairs)
