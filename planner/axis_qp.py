@@ -1,6 +1,6 @@
 """The minimum-jerk QP solved axis by axis when none of its rows couples the axes.
 
-Why: the QP of planner.fit_qp stacks the control points of the three axes. Its cost is block
+Why: the QP of planner.qp_structure stacks the control points of the three axes. Its cost is block
 diagonal (one band matrix shared by the axes), and its equalities (the end control points), its
 acceleration rows and its floor (a box bound on z) each concern one axis: only the rows of the
 speed polytope couple them. Without those rows it is three independent QPs of a third of its size

@@ -1,18 +1,5 @@
-"""Minimum-jerk regression as a QP with acceleration and speed limits (eq. 44-54).
-
-Variables are the control points of the three axes stacked, ``x = [tau_x; tau_y; tau_z]``.
-
-- cost ``x^T (w_g G + H^T W H) x - 2 d^T W H x`` (eq. 44), block diagonal, 3 super-diagonals;
-- equalities: the six end control points per axis (eq. 54);
-- acceleration: ``lo_a <= alpha^2 L_u tau_a <= hi_a`` per axis (eq. 53). The second derivative is
-  piecewise linear with these values at the knots, so this bound is exact;
-- speed (optional): the hodograph control points ``alpha K_u tau`` (eq. 47-48) are kept inside a
-  polytope of 13 direction pairs (axes, face and body diagonals) inscribed in the ball of radius
-  ``v_max``; by the convex hull property ``||p'(t)|| <= v_max`` (sufficient, ~11 % margin);
-- floor (optional): z control points ``>= z_floor`` so that ``z(t) >= z_floor`` (convex hull).
-
-The constraint matrix never depends on ``alpha``: the bounds are divided by ``alpha^e`` instead, so
-re-solves during time re-segmentation keep one sparsity pattern (PIQP ``update``).
+"""Minimum-jerk regression under acceleration and speed limits: the QP of
+planner.qp_structure (eq. 44-54), solved on a working set of its rows (:class:`QpFitter`).
 
 Only the speed rows couple the axes. A QP without them (no speed limit, or a working set of the
 lazy strategy without speed rows, as in every default plan of the planner benchmark's 172
@@ -32,25 +19,21 @@ would have cost (a default plan solves 1 to 3 QPs; a fixed total time, 10 to 20)
 
 from __future__ import annotations
 
-import itertools
-from dataclasses import dataclass, replace
-from functools import lru_cache
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from planner.axis_qp import axis_qp, closed_form_solution, joined, row_axes
-from planner.bspline import FloatArray, IntArray, acceleration_operator, velocity_operator
-from planner.coo import CooMatrix, kron, vstack
+from planner.bspline import FloatArray, IntArray
 from planner.errors import InfeasibleTrajectoryError, PlannerError
+from planner.feasibility import AXES
 from planner.minjerk import (
     FitProblem,
     SplineFit,
     closed_form_from_normal_equations,
     evaluate_fit,
     fit_closed_form,
-    fixed_control_points,
-    fixed_indices,
     normal_equations,
 )
 from planner.qp_solvers import (
@@ -61,22 +44,16 @@ from planner.qp_solvers import (
     QpSolverError,
     make_backend,
 )
+from planner.qp_structure import (
+    Bounds,
+    QpLimits,
+    Structure,
+    qp_bounds,
+    qp_data,
+    structure,
+    violated,
+)
 
-
-def _speed_directions() -> FloatArray:
-    """13 unit directions: one of each +/- pair of the 26 neighbours of a cube cell."""
-    dirs = []
-    for v in itertools.product((-1, 0, 1), repeat=3):
-        vec = np.array(v, dtype=np.float64)
-        first = vec[np.flatnonzero(vec)[0]] if np.any(vec) else 0.0
-        if first > 0:
-            dirs.append(vec / np.linalg.norm(vec))
-    return np.array(dirs)
-
-
-SPEED_DIRECTIONS = _speed_directions()
-SPEED_POLYTOPE_APOTHEM = 1.0 / 1.1280928107595818
-"""Bound on ``|n_k . v|`` that keeps the 13-pair polytope inside the unit ball (circumradius 1)."""
 DENSE_SECONDS_PER_UNIT = 9e-10
 """Predicted time of one dense PIQP solve of these QPs per unit of ``n^3 + n^2 q`` (n variables, q
 inequality rows: the KKT factorisation and the ``G^T G`` it forms every iteration), [s]. Measured
@@ -93,135 +70,6 @@ prediction would only spend more of the budget before turning sparse."""
 def dense_qp_seconds(n_variables: int, n_rows: int) -> float:
     """Predicted time [s] of one dense PIQP solve: ``n_variables``, ``n_rows`` rows of ``G``."""
     return DENSE_SECONDS_PER_UNIT * n_variables**2 * (n_variables + n_rows)
-
-
-@dataclass(frozen=True)
-class QpLimits:
-    """Linear limits imposed by the QP, world frame ENU."""
-
-    accel_lower_mps2: tuple[float, float, float]
-    """Lowest allowed acceleration per axis in [m/s^2] (negative)."""
-    accel_upper_mps2: tuple[float, float, float]
-    """Highest allowed acceleration per axis in [m/s^2] (positive)."""
-    speed_max_mps: float | None = None
-    """Bound on the speed ``||v||`` in [m/s]; ``None`` for no velocity constraint."""
-    z_floor_m: float | None = None
-    """Lowest allowed z in [m] (via the z control points); ``None`` for none."""
-
-
-@dataclass(frozen=True)
-class _Structure:
-    G: CooMatrix
-    """All inequality rows: acceleration (3 axes x (m+1)), then speed (13 x (m+2))."""
-    exponent: FloatArray
-    """Power of alpha in each row's physical value (2 acceleration, 1 velocity)."""
-    kind: IntArray
-    """0 for an acceleration row, 1 for a speed row."""
-    position: IntArray
-    """Knot / hodograph index of each row (its place along the trajectory)."""
-    A: CooMatrix
-    P_rows: IntArray
-    P_cols: IntArray
-    """Entries of the upper band of ``P``'s three diagonal blocks, row by row."""
-    P_gather: IntArray
-    """Flat index into the banded ``ab`` (4, n) of each entry of ``P``."""
-
-
-@lru_cache(maxsize=32)
-def _structure(n_spans: int, with_speed: bool) -> _Structure:
-    n = n_spans + 3
-    acc = kron(np.eye(3), acceleration_operator(n_spans))
-    blocks = [acc]
-    exponent = [np.full(acc.shape[0], 2.0)]
-    kind = [np.zeros(acc.shape[0], dtype=np.int64)]
-    position = [np.tile(np.arange(n_spans + 1), 3)]
-    if with_speed:
-        vel = kron(SPEED_DIRECTIONS, velocity_operator(n_spans))
-        blocks.append(vel)
-        exponent.append(np.full(vel.shape[0], 1.0))
-        kind.append(np.ones(vel.shape[0], dtype=np.int64))
-        position.append(np.tile(np.arange(n - 1), SPEED_DIRECTIONS.shape[0]))
-    fixed = fixed_indices(n)
-    cols = (np.arange(3)[:, None] * n + fixed[None, :]).ravel()
-    A = CooMatrix(np.arange(18), cols, np.ones(18), (18, 3 * n))
-    # Upper band of one block, row by row: row i holds columns i .. min(i + 3, n - 1).
-    row = np.repeat(np.arange(n), 4)
-    col = row + np.tile(np.arange(4), n)
-    row, col = row[col < n], col[col < n]
-    offsets = (np.arange(3) * n)[:, None]
-    return _Structure(
-        G=vstack(blocks),
-        exponent=np.concatenate(exponent),
-        kind=np.concatenate(kind),
-        position=np.concatenate(position),
-        A=A,
-        P_rows=(offsets + row).ravel(),
-        P_cols=(offsets + col).ravel(),
-        P_gather=np.tile((3 - (col - row)) * n + col, 3),
-    )
-
-
-@dataclass(frozen=True)
-class _Bounds:
-    h_l: FloatArray
-    h_u: FloatArray
-    x_l: FloatArray
-
-
-def _bounds(problem: FitProblem, limits: QpLimits, st: _Structure) -> _Bounds:
-    """Row bounds divided by ``alpha^e`` (the rows themselves are alpha-free), box bounds."""
-    alpha = problem.alpha
-    n = problem.n_ctrl
-    rows_per_axis = problem.n_spans + 1
-    lo = np.repeat(np.asarray(limits.accel_lower_mps2), rows_per_axis) / alpha**2
-    hi = np.repeat(np.asarray(limits.accel_upper_mps2), rows_per_axis) / alpha**2
-    if limits.speed_max_mps is not None:
-        bound = limits.speed_max_mps * SPEED_POLYTOPE_APOTHEM / alpha
-        n_vel = st.G.shape[0] - lo.shape[0]
-        lo = np.concatenate([lo, np.full(n_vel, -bound)])
-        hi = np.concatenate([hi, np.full(n_vel, bound)])
-    x_l = np.full(3 * n, -np.inf)
-    if limits.z_floor_m is not None:
-        x_l[2 * n :] = limits.z_floor_m
-    return _Bounds(lo, hi, x_l)
-
-
-def _qp_data(
-    problem: FitProblem,
-    st: _Structure,
-    bounds: _Bounds,
-    ab: FloatArray,
-    rhs: FloatArray,
-    rows: IntArray | None,
-) -> QpData:
-    n = problem.n_ctrl
-    P = CooMatrix(st.P_rows, st.P_cols, 2.0 * ab.ravel()[st.P_gather], (3 * n, 3 * n))
-    G, h_l, h_u = st.G, bounds.h_l, bounds.h_u
-    if rows is not None:
-        G, h_l, h_u = G.take_rows(rows), h_l[rows], h_u[rows]
-    return QpData(
-        P_upper=P,
-        c=-2.0 * rhs.T.ravel(),
-        A=st.A,
-        b=fixed_control_points(problem).T.ravel(),
-        G=G,
-        h_l=h_l,
-        h_u=h_u,
-        x_l=bounds.x_l,
-        x_u=np.full(3 * n, np.inf),
-    )
-
-
-def build_qp(problem: FitProblem, limits: QpLimits) -> QpData:
-    """The full QP of ``problem`` under ``limits`` (objective ``J - d'Wd``), every row present."""
-    st = _structure(problem.n_spans, limits.speed_max_mps is not None)
-    ab, rhs = normal_equations(problem)
-    return _qp_data(problem, st, _bounds(problem, limits, st), ab, rhs, None)
-
-
-def _violated(g: FloatArray, bounds: _Bounds) -> NDArray[np.bool_]:
-    scale = 1e-9 * (1.0 + float(np.max(np.abs(bounds.h_u))))
-    return np.asarray((g > bounds.h_u + scale) | (g < bounds.h_l - scale))
 
 
 class QpFitter:
@@ -280,7 +128,7 @@ class QpFitter:
         n = problem.n_ctrl
         axes = row_axes(qp.G, n) if self._dense is not None else None
         if axes is not None:
-            parts = [axis_qp(qp, axis, n, axes) for axis in range(len(_AXES))]
+            parts = [axis_qp(qp, axis, n, axes) for axis in range(len(AXES))]
             free = None
             if any(part.G.shape[0] == 0 for part in parts):
                 free = closed_form_from_normal_equations(problem, ab, rhs)
@@ -305,8 +153,8 @@ class QpFitter:
 
     def fit(self, problem: FitProblem) -> SplineFit:
         """Optimal constrained fit; raises :class:`InfeasibleTrajectoryError` if none exists."""
-        st = _structure(problem.n_spans, self.limits.speed_max_mps is not None)
-        bounds = _bounds(problem, self.limits, st)
+        st = structure(problem.n_spans, self.limits.speed_max_mps is not None)
+        bounds = qp_bounds(problem, self.limits, st)
         ab, rhs = normal_equations(problem)
         if self.strategy == "full":
             return self._solve(problem, st, bounds, ab, rhs, None)
@@ -317,19 +165,19 @@ class QpFitter:
             floor_ok = self.limits.z_floor_m is None or bool(
                 np.all(free[:, 2] >= self.limits.z_floor_m - 1e-12)
             )
-            new = _violated(st.G @ free.T.ravel(), bounds)
+            new = violated(st.G @ free.T.ravel(), bounds)
             if floor_ok and not np.any(new):
                 return evaluate_fit(problem, free)
             self._grow(st, new)
         for _ in range(20):
             fit, x = self._solve_working(problem, st, bounds, ab, rhs)
-            new = _violated(st.G @ x, bounds) & ~self._working
+            new = violated(st.G @ x, bounds) & ~self._working
             if not np.any(new):
                 return fit
             self._grow(st, new)
         return self._solve(problem, st, bounds, ab, rhs, None)
 
-    def _grow(self, st: _Structure, new: NDArray[np.bool_]) -> None:
+    def _grow(self, st: Structure, new: NDArray[np.bool_]) -> None:
         assert self._working is not None
         for kind in (0, 1):
             hit = st.position[new & (st.kind == kind)]
@@ -340,8 +188,8 @@ class QpFitter:
     def _solve_working(
         self,
         problem: FitProblem,
-        st: _Structure,
-        bounds: _Bounds,
+        st: Structure,
+        bounds: Bounds,
         ab: FloatArray,
         rhs: FloatArray,
     ) -> tuple[SplineFit, FloatArray]:
@@ -353,13 +201,13 @@ class QpFitter:
     def _solve(
         self,
         problem: FitProblem,
-        st: _Structure,
-        bounds: _Bounds,
+        st: Structure,
+        bounds: Bounds,
         ab: FloatArray,
         rhs: FloatArray,
         rows: IntArray | None,
     ) -> SplineFit:
-        qp = _qp_data(problem, st, bounds, ab, rhs, rows)
+        qp = qp_data(problem, st, bounds, ab, rhs, rows)
         sol = self._solution(qp, problem, ab, rhs)
         self.solves += 1
         self.solve_ms += sol.solve_ms
@@ -380,9 +228,6 @@ class QpFitter:
         )
 
 
-_AXES = ("x", "y", "z")
-
-
 def diagnose_infeasible(problem: FitProblem, limits: QpLimits) -> InfeasibleTrajectoryError:
     """Explain an infeasible QP by the worst limit the unconstrained optimum breaks."""
     spline = fit_closed_form(problem).spline
@@ -396,10 +241,10 @@ def diagnose_infeasible(problem: FitProblem, limits: QpLimits) -> InfeasibleTraj
         value = float(accel[k, axis])
         bound = float(hi[axis] if value > 0 else lo[axis])
         return InfeasibleTrajectoryError(
-            f"acceleration limit: {_AXES[axis]} reaches {value:+.3f} m/s^2 at t={times[k]:.2f} s"
+            f"acceleration limit: {AXES[axis]} reaches {value:+.3f} m/s^2 at t={times[k]:.2f} s"
             f" (bound {bound:+.3f}); allow more time or raise a_max",
             limit="a_max",
-            axis=_AXES[axis],
+            axis=AXES[axis],
             t_s=float(times[k]),
             value=value,
             bound=bound,

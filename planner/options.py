@@ -12,7 +12,7 @@ from planner.limits import VehicleLimits
 from planner.waypoints import PathSettings
 
 if TYPE_CHECKING:  # the QP module is imported only where a job is planned
-    from planner.fit_qp import QpLimits
+    from planner.qp_structure import QpLimits
 
 PACES = ("limits", "nominal")
 """How fast a free total time flies (see ``PlanOptions.pace``)."""
@@ -117,7 +117,7 @@ class PlanOptions:
 
     def qp_limits(self, write_z_m: float) -> QpLimits:
         """Linear QP limits: acceleration bounds (eq. 13), speed, z never below writing height."""
-        from planner.fit_qp import QpLimits
+        from planner.qp_structure import QpLimits
 
         lower, upper = self.limits.accel_bounds_mps2()
         return QpLimits(lower, upper, self.limits.v_max_mps, z_floor_m=write_z_m)

@@ -35,10 +35,11 @@ from planner.board import BoardFrame
 from planner.bspline import FloatArray
 from planner.errors import PlannerError
 from planner.feasibility import FeasibilityReport, assess, check
-from planner.fit_qp import QpFitter, QpLimits
+from planner.fit_qp import QpFitter
 from planner.limits import VehicleLimits
 from planner.minjerk import FitProblem, SplineFit, fit_closed_form
 from planner.options import PlanOptions
+from planner.qp_structure import QpLimits
 from planner.refine import (
     Refinement,
     StrokeErrors,

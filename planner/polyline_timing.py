@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from planner.bspline import FloatArray
-from planner.fit_qp import SPEED_DIRECTIONS, SPEED_POLYTOPE_APOTHEM, QpLimits
+from planner.qp_structure import SPEED_DIRECTIONS, SPEED_POLYTOPE_APOTHEM, QpLimits
 
 
 def _along(limits: QpLimits, u: FloatArray) -> tuple[FloatArray, FloatArray]:

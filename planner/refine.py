@@ -26,8 +26,9 @@ from planner.board import BoardFrame
 from planner.bspline import ClampedCubicSpline, FloatArray
 from planner.errors import InfeasibleTrajectoryError
 from planner.feasibility import located_path_errors
-from planner.fit_qp import QpLimits, diagnose_infeasible
+from planner.fit_qp import diagnose_infeasible
 from planner.minjerk import FitProblem, SplineFit
+from planner.qp_structure import QpLimits
 from planner.waypoints import KIND_TURNING, WritingPath
 
 REFINE_ROUNDS = 6

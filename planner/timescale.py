@@ -4,9 +4,9 @@ With a free total time the planner flies each part of the path as fast as the ve
 allow, keeping the minimum-jerk shape: the data times are re-segmented until the unconstrained
 (closed-form, eq. 43) fit touches a limit along the whole path, not only at its worst spot.
 
-Limit usage is read where the QP imposes the limits (planner.fit_qp): acceleration at the knots
-(exact: it is linear in between) against the per-axis bounds, and the hodograph control points
-against the speed polytope. Each is turned into a *time factor*: the uniform stretch of time
+Limit usage is read where the QP imposes the limits (planner.qp_structure): acceleration at the
+knots (exact: it is linear in between) against the per-axis bounds, and the hodograph control
+points against the speed polytope. Each is turned into a *time factor*: the uniform stretch of time
 that would bring it onto its bound (``sqrt`` of the acceleration share, the speed share itself).
 Optionally the fit's distance from each written data point counts too (``point_tolerance_m``).
 
@@ -41,8 +41,8 @@ import numpy as np
 
 from planner.bspline import FloatArray, velocity_operator
 from planner.errors import PlannerError
-from planner.fit_qp import SPEED_DIRECTIONS, SPEED_POLYTOPE_APOTHEM, QpLimits
 from planner.minjerk import FitProblem, SplineFit, fit_closed_form
+from planner.qp_structure import SPEED_DIRECTIONS, SPEED_POLYTOPE_APOTHEM, QpLimits
 
 TARGET = 0.97
 """Share of its binding limit each segment aims at during the per-segment rounds."""

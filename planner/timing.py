@@ -26,10 +26,11 @@ from dataclasses import replace
 import numpy as np
 
 from planner.bspline import FloatArray
-from planner.fit_qp import QpFitter, QpLimits
+from planner.fit_qp import QpFitter
 from planner.minjerk import EndState, FitProblem, SplineFit, fit_closed_form
 from planner.options import PlanOptions
 from planner.polyline_timing import polyline_durations_s
+from planner.qp_structure import QpLimits
 from planner.timescale import Allocation, LimitSearch, stationary_time_penalty, stretch_nominal
 from planner.waypoints import KIND_DENSE, KIND_HOP, KIND_TURNING, WritingPath
 

@@ -12,9 +12,10 @@ from hypothesis import strategies as st
 from test_planner_fit import TIGHT, _problem
 
 from planner.axis_qp import axis_qp, joined, row_axes
-from planner.fit_qp import QpFitter, QpLimits, build_qp
+from planner.fit_qp import QpFitter
 from planner.minjerk import FitProblem
 from planner.qp_solvers import QpData, QpSolution
+from planner.qp_structure import QpLimits, build_qp
 
 
 def _tight_solve(qp: QpData) -> QpSolution:

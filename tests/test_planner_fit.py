@@ -7,9 +7,10 @@ import pytest
 
 from planner.bspline import basis_rows, jerk_gram
 from planner.errors import InfeasibleTrajectoryError
-from planner.fit_qp import QpFitter, QpLimits, build_qp, dense_qp_seconds
+from planner.fit_qp import QpFitter, dense_qp_seconds
 from planner.minjerk import EndState, FitProblem, fit_closed_form, fixed_indices
 from planner.qp_solvers import PiqpBackend, make_backend
+from planner.qp_structure import QpLimits, build_qp
 
 
 def _problem(
@@ -170,7 +171,7 @@ def test_infeasible_qp_names_the_limit() -> None:
 
 def test_speed_polytope_is_inscribed_in_the_ball() -> None:
     """|n_k . v| <= apothem for all 13 directions implies ||v|| <= 1 (the QP's speed rows)."""
-    from planner.fit_qp import SPEED_DIRECTIONS, SPEED_POLYTOPE_APOTHEM
+    from planner.qp_structure import SPEED_DIRECTIONS, SPEED_POLYTOPE_APOTHEM
 
     assert SPEED_DIRECTIONS.shape == (13, 3)
     u = np.random.default_rng(0).normal(size=(20000, 3))

@@ -8,8 +8,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from planner.errors import PlannerError
-from planner.fit_qp import QpFitter, QpLimits
+from planner.fit_qp import QpFitter
 from planner.minjerk import EndState, FitProblem
+from planner.qp_structure import QpLimits
 from planner.retime import SegmentCost, descend_analytic, descend_numerical
 
 

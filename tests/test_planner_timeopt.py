@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 
 from planner.errors import PlannerError
 from planner.feasibility import RELATIVE_TOLERANCE
-from planner.fit_qp import SPEED_POLYTOPE_APOTHEM
 from planner.pipeline import PlannedTrajectory, PlanOptions, plan_strokes
+from planner.qp_structure import SPEED_POLYTOPE_APOTHEM
 from planner.timeopt_reference import line_min_time_s, toppra_duration_s
 
 OPTIMAL_RATIO = 1.25
