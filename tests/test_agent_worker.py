@@ -63,6 +63,7 @@ def test_a_worker_plans_measures_and_records_a_job_and_stops_cleanly(tmp_path: P
         prepared = await work.prepare(JobAssignment(job_id="j1", text="一"))
         pid = work.pid
         assert pid is not None and pid != os.getpid() and work.starts == 1
+        assert os.sched_getscheduler(pid) == os.SCHED_IDLE  # never delays the loop's wake-up
         assert isinstance(prepared.context, SealedContext)
         assert prepared.samples.pen_down.any() and prepared.command_samples is not None
         assert work.last_cpu_s > 0.0
