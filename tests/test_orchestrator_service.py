@@ -252,8 +252,16 @@ def test_jobs_flow_through_fake_agents_and_survive_vehicle_loss(
         jobs = {j.job_id: j for j in _snapshot(client, keys).jobs}
         assert jobs[first.job_id].state == "done" and jobs[first.job_id].vehicle_id == "uav1"
         done = jobs[second.job_id]
-        assert (done.state, done.vehicle_id, done.attempts) == ("done", "uav2", 2)
-        taken = [e for e in _snapshot(client, keys).events if e.kind == "job_taken_over"]
+        assert (done.state, done.vehicle_id) == ("done", "uav2")
+        events = _snapshot(client, keys).events
+        holders = [
+            e.vehicle_id for e in events if e.kind == "job_assigned" and e.job_id == done.job_id
+        ]
+        distinct = [v for i, v in enumerate(holders) if i == 0 or holders[i - 1] != v]
+        # uav1, then uav2 (either may have had it twice: an assignment unanswered under load is
+        # handed back, and given again after the back-off)
+        assert distinct == ["uav1", "uav2"] and done.attempts == len(holders), holders
+        taken = [e for e in events if e.kind == "job_taken_over"]
         assert taken and taken[0].job_id == second.job_id  # after waiting for uav1 (1 s)
         assert done.metrics is not None and done.metrics.iou == 0.8
         vehicles = {v.vehicle_id: v for v in _snapshot(client, keys).vehicles}

@@ -123,7 +123,7 @@ def test_an_agent_killed_mid_character_is_detected_and_another_vehicle_finishes(
     os.kill(pid, signal.SIGKILL)
     (job,) = live.wait([job_id])
     assert job.state == "done" and job.vehicle_id not in (None, victim)
-    assert job.attempts == 2 and job.metrics is not None
+    assert job.attempts >= 2 and job.metrics is not None  # more if an assignment went unanswered
     # Detected: lost within 2 s (silent past lost_after_s 1.5); or, when the supervisor's restart
     # brings the vehicle back sooner than that (0.5 s plus its start), back without its job,
     # which the orchestrator takes from it after confirm_grace_s (3 s) of not hearing it named.

@@ -243,7 +243,7 @@ def test_an_agent_killed_mid_character_is_lost_within_2_s_and_another_writes_it(
     killed_at = time.time()
     os.kill(pid, signal.SIGKILL)
     (job,) = live.wait([job_id])
-    assert job.vehicle_id != victim and job.attempts == 2
+    assert job.vehicle_id != victim and job.attempts >= 2  # more: an assignment unanswered
     # lost; or restarted by the supervisor so fast that its new self says it has no job first
     taken_back = [
         e.time_s - killed_at
