@@ -1,9 +1,9 @@
 """Vehicle presence decisions (pure): liveliness, status, telemetry, and the passing of time.
 
 A vehicle is present while its liveliness token is there *and* it speaks: its agent publishes its
-status or its telemetry at least every ``lost_after_s / 3`` (the heartbeat). A vehicle whose token
-has been gone for ``lost_after_s``, or that has been silent for ``lost_after_s`` although its token
-remains (a frozen process, a token held by someone else), is lost and its job goes back to the
+status or its telemetry at least every 1.1 ``lost_after_s / 3`` (the heartbeat). A vehicle whose
+token has been gone for ``lost_after_s``, or that has been silent for ``lost_after_s`` although its
+token remains (a frozen process, a token held by someone else), is lost and its job goes back to the
 queue; it is present again with its next status, and a job of its own that is still queued is its
 own again if that status names it (it finished writing it meanwhile, or is writing it still). A
 vehicle whose status has not mentioned the job it was given for ``confirm_grace_s`` gives it back

@@ -25,7 +25,7 @@ class ServiceSettings:
     """Wall time in [s] to wait for the orchestrator's acknowledgement of one attempt."""
     status_period_s: float = 1.0
     """Wall time in [s] between status heartbeats at most (status is also sent on every change,
-    and whenever the agent said nothing else for ``lost_after_s / 3``)."""
+    and whenever the agent said nothing else for 1.1 ``lost_after_s / 3``)."""
     lost_after_s: float = 1.5
     """The show's ``policy.lost_after_s`` in [s]: the orchestrator takes a vehicle silent this
     long as lost; the heartbeat and the job lease follow from it."""
