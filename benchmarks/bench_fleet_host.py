@@ -28,9 +28,9 @@ The fleet host of the benchmark is ``fleet_host_child.py``: ``vehicle_agent.flee
 ``FleetHost`` as ``skyquill fleet`` runs it, plus a task writing its figures once a second.
 
 The latest figures (quiet 2-core machine, the show's own processes loading it to 3-6): 250
-vehicles in 2 hosts, 50 writing, real-time factor 0.98-1.00, 50/50 done, status p95 <= 0.1 s,
-fleet steps per tick 1.06-1.12. Every run so far, what it found and what changed because of it:
-``docs/fleet_host_measurements.md``.
+vehicles in 2 hosts, 50 writing, real-time factor 0.97-1.00 (1.00 in three runs of four), 50/50
+done, status p95 <= 0.1 s, fleet steps per tick 1.05-1.07. Every run so far, what it found and
+what changed because of it: ``docs/fleet_host_measurements.md``.
 
 ``--profile PATH`` writes a cProfile of each fleet host to ``PATH.<host number>``.
 """

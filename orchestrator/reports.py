@@ -119,12 +119,11 @@ def _failed(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) 
 def _handed_back(
     book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float, retry_after_s: float
 ) -> CommandReply:
-    """The vehicle gave the job back before its brush touched, and is healthy: the job goes back
-    to the queue and the vehicle gets no job for ``retry_after_s``. A take-off refusal or a plan
-    its kind cannot write (``UNCOUNTED``) does not count as an attempt (a hand-back, bounded
-    apart: ``orchestrator/requeue.py``); a safety abort
-    (``not_settled``, ``deviation`` in transit) does, so a job that no vehicle can fly fails
-    after ``max_attempts`` instead of going round for ever."""
+    """The vehicle gave the job back before its brush touched, and is healthy: the job goes back to
+    the queue and the vehicle gets no job for ``retry_after_s``. A take-off refusal or a plan its
+    kind cannot write (``UNCOUNTED``) does not count as an attempt (a hand-back, bounded apart:
+    ``orchestrator/requeue.py``); a safety abort (``not_settled``, ``deviation`` in transit) does,
+    so a job that no vehicle can fly fails after ``max_attempts`` rather than go round for ever."""
     view = book.vehicles[rep.vehicle_id]
     view.refused_until_s = max(view.refused_until_s, now_s + max(0.0, retry_after_s))
     reason = rep.error.message if rep.error else "no reason given"

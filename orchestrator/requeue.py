@@ -7,7 +7,7 @@ half-written is marked dirty (no job there until a fresh sheet), a lost vehicle'
 
 A job taken back for a reason that is not its own (:func:`hand_back`: its vehicle refused it,
 could not take off, is of a kind that cannot write it, or is present and healthy but no longer
-names it, its lease run out under load) does not count the attempt: under CPU overload or on a
+names it: its lease ran out under load) does not count the attempt: under CPU overload or on a
 poor link, jobs with nothing wrong with them failed after three such give-ups. Those hand-backs
 are bounded apart, by ``CoreConfig.max_handbacks``, so that no job goes round for ever.
 """
