@@ -316,8 +316,9 @@ class RunnerPhases:
             progress=progress,
         )
 
-    def status(self) -> VehicleStatus:
-        """The vehicle's status message as of now (publish it when it changes)."""
+    def status(self, incarnation: str | None = None) -> VehicleStatus:
+        """The vehicle's status message as of now (publish it when it changes); ``incarnation``:
+        the agent's start it goes out from (``VehicleStatus.incarnation``)."""
         return VehicleStatus(
             vehicle_id=self.config.vehicle_id,
             kind=self.config.kind,
@@ -325,4 +326,5 @@ class RunnerPhases:
             board_id=self.config.board_id,
             job_id=self.job_id,
             message=self.message,
+            incarnation=incarnation,
         )

@@ -357,7 +357,7 @@ class AgentService:
 
     # --- outputs -------------------------------------------------------------------------------
     def _publish_status(self, *, only_if_changed: bool = False) -> None:
-        status = msgspec.structs.replace(self.runner.status(), incarnation=self.incarnation)
+        status = self.runner.status(self.incarnation)
         pending = self.reports.pending_result() if status.job_id is None else None
         if pending is not None:  # not over until the orchestrator has its result
             status = msgspec.structs.replace(status, job_id=pending)
