@@ -7,7 +7,7 @@ import io
 import threading
 import time
 from collections.abc import Callable, Iterator
-from contextlib import redirect_stdout
+from contextlib import contextmanager, redirect_stdout
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -130,15 +130,20 @@ class FakeAgent:
         self.token: Token | None = declare_token(session, keys.vehicle_alive(vehicle_id))
         self.status()
         # the heartbeat every agent sends (a token alone does not keep a vehicle present)
-        threading.Thread(target=self._heartbeat, daemon=True).start()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._heartbeat, daemon=True)
+        self._thread.start()
+        LIVE_AGENTS.append(self)
 
     def _heartbeat(self, period_s: float = 0.05) -> None:
-        while True:
-            time.sleep(period_s)
-            try:
-                self.status()
-            except Exception:  # the session closed: the test is over
-                return
+        while not self._stop.wait(period_s):
+            self.status()
+
+    def stop(self) -> None:
+        """End the heartbeat (before the session closes: a publish racing the close made
+        Zenoh's close raise "Already borrowed")."""
+        self._stop.set()
+        self._thread.join()
 
     def _on(self, cmd: VehicleCommand) -> CommandReply:
         self.commands.append(cmd)
@@ -172,6 +177,21 @@ class FakeAgent:
         self.job_id = None
         self.status()
         return job_id
+
+
+LIVE_AGENTS: list[FakeAgent] = []
+"""Fake agents whose heartbeat runs (:func:`agents_bus` stops them)."""
+
+
+@contextmanager
+def agents_bus(settings: BusSettings) -> Iterator[Session]:
+    """The fake agents' session; their heartbeats stop before it closes."""
+    with open_session(settings, role="client") as session:
+        try:
+            yield session
+        finally:
+            while LIVE_AGENTS:
+                LIVE_AGENTS.pop().stop()
 
 
 @pytest.fixture(scope="module")
@@ -235,7 +255,7 @@ def test_jobs_flow_through_fake_agents_and_survive_vehicle_loss(
     _, show = make_show(tmp_path, "flow", endpoint, policy=policy)
     keys = ShowKeys(show.show_id)
     settings = BusSettings(router_listen=[], connect=[endpoint])
-    with RunningOrchestrator(show), open_session(settings, role="client") as agents:
+    with RunningOrchestrator(show), agents_bus(settings) as agents:
         eventually(lambda: query(client, keys.snapshot, None, ShowSnapshot, timeout_s=0.5))
         uav1 = FakeAgent(agents, keys, "uav1")
         first = _submit(client, keys, SubmitRequest(text="一"))
@@ -277,7 +297,7 @@ def test_operator_commands_and_moderation(tmp_path: Path, endpoint: str, client:
     def command(**kw: Any) -> CommandReply:
         return query_one(client, keys.command, OperatorCommand(**kw), CommandReply)
 
-    with RunningOrchestrator(show), open_session(settings, role="client") as agents:
+    with RunningOrchestrator(show), agents_bus(settings) as agents:
         eventually(lambda: query(client, keys.snapshot, None, ShowSnapshot, timeout_s=0.5))
         uav3 = FakeAgent(agents, keys, "uav3")
         reply = _submit(client, keys, SubmitRequest(text="L"))
@@ -308,7 +328,7 @@ def test_holds_and_a_half_written_board_survive_an_orchestrator_restart(
     _, show = make_show(tmp_path, "restarted", endpoint)
     keys = ShowKeys(show.show_id)
     settings = BusSettings(router_listen=[], connect=[endpoint])
-    with open_session(settings, role="client") as agents:
+    with agents_bus(settings) as agents:
         uav1 = FakeAgent(agents, keys, "uav1")
         with RunningOrchestrator(show):
             eventually(lambda: query(client, keys.snapshot, None, ShowSnapshot, timeout_s=0.5))
@@ -369,7 +389,7 @@ def test_bus_is_recorded_to_a_readable_mcap(tmp_path: Path, endpoint: str, clien
     _, show = make_show(tmp_path, "recorded", endpoint)
     keys = ShowKeys(show.show_id)
     settings = BusSettings(router_listen=[], connect=[endpoint])
-    with RunningOrchestrator(show), open_session(settings, role="client") as agents:
+    with RunningOrchestrator(show), agents_bus(settings) as agents:
         eventually(lambda: query(client, keys.snapshot, None, ShowSnapshot, timeout_s=0.5))
         uav4 = FakeAgent(agents, keys, "uav4")
         job_id = _submit(client, keys, SubmitRequest(text="L")).job_id
