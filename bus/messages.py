@@ -14,6 +14,7 @@ from typing import Annotated, Any, Literal
 import msgspec
 
 from bus.keys import PROTOCOL_VERSION
+from bus.public_text import MAX_CLIENT_ID_CHARS, MAX_LABEL_CHARS, text_problem
 
 JobStateName = Literal[
     "submitted",
@@ -53,6 +54,8 @@ Id = Annotated[str, msgspec.Meta(min_length=1, max_length=MAX_ID_CHARS)]
 """A job or vehicle id in a request."""
 Text = Annotated[str, msgspec.Meta(max_length=MAX_TEXT_CHARS)]
 """Free text in a request."""
+ClientId = Annotated[str, msgspec.Meta(max_length=MAX_CLIENT_ID_CHARS)]
+"""Who hands a submission in (plain text, :mod:`bus.public_text`)."""
 Priority = Annotated[int, msgspec.Meta(ge=-MAX_PRIORITY, le=MAX_PRIORITY)]
 """A job priority in a request; higher first."""
 Version = Annotated[int, msgspec.Meta(ge=0, le=1_000_000)]
@@ -99,13 +102,33 @@ class SubmitRequest(Request, frozen=True):
     """Typed text (one character or a short word); exactly one of ``text`` and ``strokes``."""
     strokes: dict[str, Any] | None = None
     """A strokes document as in docs/formats.md."""
-    client_id: Text = "anonymous"
+    client_id: ClientId = "anonymous"
     """Who handed it in (kiosk session, ``cli``); used for rate limits and status lookups."""
     priority: Priority = 0
     """Higher first; the operator may raise it."""
     idempotency_key: IdempotencyKey | None = None
     """Optional key chosen by the client (1-64 chars): a request repeating a key already accepted
     from the same ``client_id`` gets that job's reply instead of a new job (safe retries)."""
+
+    def __post_init__(self) -> None:
+        """Refuse what is not plain text (:mod:`bus.public_text`): at decode, an ``invalid``
+        naming the field, as msgspec's own errors do."""
+        checked = [("client_id", self.client_id, True), ("text", self.text, False)]
+        checked += [(f"strokes.{key}", (self.strokes or {}).get(key), True) for key in _NAMED]
+        for field, value, name in checked:
+            if not isinstance(value, str):
+                continue  # absent, or not a string: the planner's parsing refuses it
+            why = (
+                f"is longer than {MAX_LABEL_CHARS} characters"
+                if field.startswith("strokes.") and len(value) > MAX_LABEL_CHARS
+                else text_problem(value, name=name)
+            )
+            if why is not None:
+                raise ValueError(f"{field} {why}: public text is plain text - at `$.{field}`")
+
+
+_NAMED = ("label", "device")
+"""Free text of a strokes document, checked as names."""
 
 
 class SubmitReply(State, frozen=True):
@@ -304,6 +327,7 @@ class OperatorCommand(Request, frozen=True):
         "estop",
         "prioritize",
         "release",
+        "release_all",
         "clear_fault",
         "fresh_sheet",
     ]

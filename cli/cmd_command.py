@@ -4,9 +4,10 @@ Actions: ``pause [VEHICLE]``, ``resume [VEHICLE]``, ``cancel JOB``, ``approve JO
 ``reject JOB``, ``prioritize JOB --priority N``, ``land VEHICLE``, ``land-all``,
 ``estop [VEHICLE]`` (no vehicle: every vehicle), ``clear_fault VEHICLE`` (the vehicle leaves
 ``fault`` if it is landed and disarmed), ``release VEHICLE`` (a held vehicle may take jobs
-again), ``fresh-sheet BOARD`` (a half-written board got a new sheet). A vehicle may also be named
-with ``--vehicle ID``.
-``land-all`` is the bus command ``land_all``; either spelling is accepted (also ``clear-fault``).
+again), ``release-all`` (every held vehicle), ``fresh-sheet BOARD`` (a half-written board got a
+new sheet). A vehicle may also be named with ``--vehicle ID``.
+``land-all`` is the bus command ``land_all``; either spelling is accepted (also ``clear-fault``,
+``release-all``).
 """
 
 from __future__ import annotations
@@ -22,7 +23,8 @@ JOB_ACTIONS = ("cancel", "approve", "reject", "prioritize")
 VEHICLE_ACTIONS = ("pause", "resume", "land", "estop", "clear_fault", "clear-fault", "release")
 NEEDS_VEHICLE = ("land", "clear_fault", "clear-fault", "release")
 BOARD_ACTIONS = ("fresh_sheet", "fresh-sheet")
-ACTIONS = (*JOB_ACTIONS, *VEHICLE_ACTIONS, *BOARD_ACTIONS, "land-all", "land_all")
+FLEET_ACTIONS = ("land-all", "land_all", "release-all", "release_all")
+ACTIONS = (*JOB_ACTIONS, *VEHICLE_ACTIONS, *BOARD_ACTIONS, *FLEET_ACTIONS)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

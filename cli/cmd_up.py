@@ -46,6 +46,7 @@ if TYPE_CHECKING:
 
 NAME = "up"
 HELP = "Start a whole show: Zenoh router, orchestrator and one agent per vehicle, supervised."
+RED, RESET = "\033[1;31m", "\033[0m"
 DETACHED = (
     "the console is closed; the show keeps running. Enter: reopen the console; "
     "Ctrl-C here or `skyquill down {show}`: stop the show"
@@ -153,6 +154,8 @@ def run(args: argparse.Namespace) -> int:
     if args.time_scale is not None and not args.time_scale > 0.0:
         print("skyquill up: --time-scale must be positive", file=sys.stderr)
         return 2
+    if show.security.mode == "none":
+        _warn_unsecured(show.show_id)
     try:
         plan, previous, made = _prepare(args, show)
     except (RunFileError, HostError, OSError) as exc:
@@ -163,6 +166,18 @@ def run(args: argparse.Namespace) -> int:
         print(f"skyquill up: issued keys in {show.keys_dir}: {', '.join(made)}", file=sys.stderr)
     _supervise(args, show, plan, previous, tui=tui, kiosk=kiosk)
     return 0
+
+
+def _warn_unsecured(show_id: str) -> None:
+    """Say on ``up``'s terminal, in red, that the show's bus is open to anyone who reaches it
+    (plain text when stderr is not a terminal or ``NO_COLOR`` is set)."""
+    line = (
+        f"skyquill up: show {show_id} runs with security: none: anyone who reaches its bus "
+        f"can command the fleet (loopback tests only)"
+    )
+    if sys.stderr.isatty() and "NO_COLOR" not in os.environ:
+        line = f"{RED}{line}{RESET}"
+    print(line, file=sys.stderr)
 
 
 def _supervise(

@@ -13,7 +13,9 @@ Routes
     GET  /api/t/{code}              the ticket (id, token) a short code opens (rate limited)
 
 Every refusal is ``{"ok": false, "error": {"code": ..., "message": ...}}`` with a message for the
-public; nothing a visitor sends can stop the service.
+public; nothing a visitor sends can stop the service. The POST routes take ``application/json``
+only (415) from the kiosk's own page (``Origin``, when sent, is the kiosk's: 403 otherwise);
+headers are capped (431, :data:`kiosk.http.MAX_HEADER_BYTES`).
 """
 
 from __future__ import annotations
@@ -37,7 +39,15 @@ from bus.messages import JobState, SubmitReply, SubmitRequest
 from kiosk import wording
 from kiosk.addresses import proxy_networks
 from kiosk.errors import RejectedError
-from kiosk.http import Client, SecurityHeaders, identify, read_capped, remember
+from kiosk.http import (
+    Client,
+    HeaderCap,
+    SecurityHeaders,
+    check_same_origin_json,
+    identify,
+    read_capped,
+    remember,
+)
 from kiosk.jobs import KioskJob
 from kiosk.limits import Submission, check_submission, decode_json_body
 from kiosk.link import OrchestratorLink, OrchestratorUnavailableError
@@ -175,6 +185,7 @@ async def config(request: Request) -> Response:
 
 async def preview(request: Request) -> Response:
     kiosk: Kiosk = request.app.state.kiosk
+    check_same_origin_json(request)  # before the rate limit: another site spends no quota
     client = kiosk.identify(request)
     kiosk.check_rate(client, preview=True)
     submission = await kiosk.checked_body(request)
@@ -184,6 +195,7 @@ async def preview(request: Request) -> Response:
 
 async def submit(request: Request) -> Response:
     kiosk: Kiosk = request.app.state.kiosk
+    check_same_origin_json(request)
     client = kiosk.identify(request)
     kiosk.check_rate(client, preview=False)
     submission = await kiosk.checked_body(request)
@@ -331,7 +343,7 @@ def create_app(
     ]
     app = Starlette(
         routes=routes,
-        middleware=[Middleware(SecurityHeaders)],
+        middleware=[Middleware(SecurityHeaders), Middleware(HeaderCap)],
         exception_handlers={RejectedError: _refusal, Exception: _crash},
         lifespan=lifespan,
     )

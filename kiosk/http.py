@@ -1,4 +1,5 @@
-"""HTTP plumbing of the kiosk: client identity, capped body reading, security headers."""
+"""HTTP plumbing of the kiosk: client identity, capped body and headers, same-origin JSON,
+security headers."""
 
 from __future__ import annotations
 
@@ -7,9 +8,10 @@ import re
 import secrets
 from collections.abc import Sequence
 from dataclasses import dataclass
+from urllib.parse import urlsplit
 
 from starlette.requests import Request
-from starlette.responses import Response
+from starlette.responses import JSONResponse, Response
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from kiosk import wording
@@ -19,6 +21,8 @@ from kiosk.errors import RejectedError
 SESSION_COOKIE = "skyquill_kiosk"
 """Name of the cookie that identifies one browser (no personal data)."""
 _SESSION_RE = re.compile(r"^[A-Za-z0-9_-]{20,64}$")
+MAX_HEADER_BYTES = 16 * 1024
+"""Most bytes of a request's header names and values together; beyond, 431."""
 _HEADERS = [
     (b"content-security-policy",
      b"default-src 'self'; img-src 'self' data:; object-src 'none'; frame-ancestors 'none'; "
@@ -102,6 +106,43 @@ async def read_capped(request: Request, max_bytes: int) -> bytes:
             raise RejectedError("too_large", wording.TOO_LARGE, status=413)
         chunks.append(chunk)
     return b"".join(chunks)
+
+
+def check_same_origin_json(request: Request) -> None:
+    """Refuse a body that is not ``application/json`` (415) or that a page of another origin
+    sent (403: its ``Origin`` is not the kiosk's own, the host the visitor's browser asked for).
+
+    A page elsewhere can make a visitor's browser post a form or ``text/plain`` without asking;
+    a JSON body needs a CORS preflight, which the kiosk never grants.
+    """
+    media_type = request.headers.get("content-type", "").partition(";")[0].strip().lower()
+    if media_type != "application/json":
+        raise RejectedError("unsupported_media_type", wording.BAD_JSON, status=415)
+    origin = request.headers.get("origin")
+    if origin is None:
+        return
+    parts = urlsplit(origin)
+    host = request.headers.get("host", "").lower()
+    if parts.scheme not in ("http", "https") or not host or parts.netloc.lower() != host:
+        raise RejectedError("cross_origin", wording.BAD_JSON, status=403)
+
+
+class HeaderCap:
+    """ASGI middleware: a request whose headers exceed :data:`MAX_HEADER_BYTES` in all is
+    refused (431) before any route reads them."""
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] == "http":
+            size = sum(len(name) + len(value) for name, value in scope["headers"])
+            if size > MAX_HEADER_BYTES:
+                error = RejectedError("headers_too_large", wording.BAD_JSON, status=431)
+                reply = JSONResponse({"ok": False, "error": error.to_json_dict()}, error.status)
+                await reply(scope, receive, send)
+                return
+        await self.app(scope, receive, send)
 
 
 class SecurityHeaders:

@@ -6,6 +6,7 @@ Nothing here does I/O; :mod:`kiosk.app` reads the body (capped) and hands the by
 from __future__ import annotations
 
 import json
+import re
 import unicodedata
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -14,6 +15,8 @@ from typing import Any
 from kiosk import wording
 from kiosk.errors import RejectedError
 
+_SURROGATE_ESCAPE = re.compile(rb"\\u[dD][89a-fA-F]")
+"""A ``\\ud800``-``\\udfff`` escape: half of a surrogate pair, or a lone surrogate."""
 FORWARDED_STROKES_FIELDS = ("strokes", "units", "y_axis", "canvas")
 """What the kiosk passes on of a drawing: its geometry. A ``label`` or ``device`` the page never
 sets would reach the operator's screens as free text that the blocklist never saw."""
@@ -60,10 +63,13 @@ def is_blocked(text: str, blocklist: Sequence[str]) -> bool:
 
 
 def decode_json_body(raw: bytes) -> Mapping[str, Any]:
-    """The JSON object in ``raw``, or a :class:`RejectedError` (``bad_json``)."""
+    """The JSON object in ``raw``, or a :class:`RejectedError` (``bad_json``), lone surrogates
+    (``"\\ud800"``, which no UTF-8 text can hold) included."""
     try:
         data = json.loads(raw.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):
+        if _SURROGATE_ESCAPE.search(raw):  # pairs make one character; a lone half cannot encode
+            json.dumps(data, ensure_ascii=False).encode("utf-8")
+    except (ValueError, RecursionError):  # not UTF-8, not JSON, a 5000-digit integer
         raise RejectedError("bad_json", wording.BAD_JSON) from None
     if not isinstance(data, dict):
         raise RejectedError("bad_json", wording.BAD_JSON)

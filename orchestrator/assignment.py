@@ -61,6 +61,7 @@ def assign(book: Book, eff: Effects, now_s: float) -> None:
                 progress=0.0,
                 error=None,
                 holder_hold_until_s=None,
+                writing_since_s=None,
             ),
         )
         busy_boards.add(view.info.board_id)

@@ -30,7 +30,7 @@ class CoreConfig:
     """Times a job may be taken back uncounted before it fails (nothing goes round for ever)."""
     confirm_grace_s: float = 3.0
     """How long a vehicle may not mention its assigned job before it is taken back, [s]."""
-    lost_job_hold_s: float = 5.0
+    lost_job_hold_s: float = 15.0
     """A job taken back from a lost vehicle waits this long for it before another vehicle may
     take it, [s] (``policy.lost_job_hold_s``, ``orchestrator/holders.py``)."""
     refuse_backoff_s: float = 2.0

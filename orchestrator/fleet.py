@@ -67,7 +67,11 @@ class VehicleView:
     paused: bool = False
     """The operator stopped giving it jobs (pause, land, estop)."""
     held: bool = False
-    """Landed or stopped by the operator: no job until an explicit ``release`` (not ``resume``)."""
+    """Landed or stopped by the operator, found in ``fault``, or back from a loss in the air: no
+    job until an explicit ``release`` (not ``resume``); stored, so no restart sheds it."""
+    lost_in_state: VehicleStateName | None = None
+    """The airborne state it was lost in (None: not lost in the air): back without its job, it is
+    held (``orchestrator/presence.py``)."""
     refused_until_s: float = 0.0
     """No new assignment before this time, [s] (after a refused or unanswered assignment)."""
     mismatch_since_s: float | None = None

@@ -91,6 +91,11 @@ class Job(msgspec.Struct, frozen=True, kw_only=True):
     holder_hold_until_s: float | None = None
     """Queued after its vehicle (``vehicle_id``) was lost: only that vehicle may take it before
     this Unix time, [s] (``orchestrator/holders.py``)."""
+    writing_since_s: float | None = None
+    """Unix time, [s], the orchestrator learnt that ``vehicle_id`` began writing this attempt
+    (its ``started`` report, or its first ``progress``); None before, and once another attempt
+    begins. With ``planned_duration_s`` it bounds how long that vehicle may write it unheard
+    (``orchestrator/holders.py``, ``writing_fence_s``)."""
 
     @property
     def counted_attempts(self) -> int:

@@ -6,6 +6,7 @@ reject         job awaiting approval -> rejected (``reason`` kept)
 pause          no new assignments: the whole queue, or one vehicle (``vehicle_id``)
 resume         undo pause: the queue and every vehicle not held, or one vehicle
 release        a vehicle held by land / estop may take jobs again (``vehicle_id``)
+release_all    every held vehicle may take jobs again (the queue stays as it is: ``resume``)
 cancel         job -> cancelled; a vehicle writing it is told to stop
 land           vehicle lands and is held (no new job until ``release``); its job is requeued
 land_all       every vehicle lands and is held; the queue is paused; jobs go back to the queue
@@ -149,6 +150,18 @@ def _release(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandReply:
     return CommandReply(ok=True, message=f"{cmd.vehicle_id} released")
 
 
+def _release_all(book: Book, eff: Effects) -> CommandReply:
+    """Every held vehicle may take jobs again (after an e-stop or a land of the whole fleet)."""
+    held = sorted(vid for vid, view in book.vehicles.items() if view.held)
+    if not held:
+        return _error("bad_state", "no vehicle is held", "vehicle_id")
+    for vid in held:
+        book.vehicles[vid].held = book.vehicles[vid].paused = False
+    eff.settings_changed = eff.fleet_changed = True
+    note = " (the queue is still paused: resume to fly)" if book.queue_paused else ""
+    return CommandReply(ok=True, message=f"released {', '.join(held)}{note}")
+
+
 def _clear_fault(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandReply:
     """Forward to the agent, which alone knows whether its vehicle is safe (it answers in the
     event log: ``fault_cleared``, or ``fault_kept`` with the reason)."""
@@ -191,6 +204,8 @@ def apply_operator(book: Book, command: object, eff: Effects, now_s: float) -> C
         reply = _pause_resume(book, cmd, eff)
     elif cmd.command == "release":
         reply = _release(book, cmd, eff)
+    elif cmd.command == "release_all":
+        reply = _release_all(book, eff)
     elif cmd.command == "clear_fault":
         reply = _clear_fault(book, cmd, eff)
     elif cmd.command == "fresh_sheet":

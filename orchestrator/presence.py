@@ -11,7 +11,10 @@ too (it refused silently, or gave it up on its lease under load): a hand-back th
 attempt, and the vehicle gets no job for ``refuse_backoff_s`` (``orchestrator/requeue.py``). At once
 if its agent started anew since the job was given (its status's ``incarnation`` is new: it restarted
 faster than it could be found lost, and its new self has no job): that counts, as a loss does (a
-restart may be a crash). Not for a token that went and came back: the orchestrator's own session
+restart may be a crash). A vehicle that says it is in ``fault``, and one lost in the air that comes
+back without its job, is held (``vehicle_held``, an alert naming why) until the operator releases
+it: the hold is the orchestrator's and stored, so an agent restart, which forgets its fault, does
+not shed it. Not for a token that went and came back: the orchestrator's own session
 sees every token do that when it reconnects to the router (a router restart, or the orchestrator
 frozen past its session's lease). After an orchestrator restart, jobs that were active wait for the
 same confirmation. Events the agents publish about their vehicles (autopilot messages, refused
@@ -28,6 +31,8 @@ from orchestrator.core_types import Effects
 from orchestrator.fleet import VehicleView
 from orchestrator.requeue import hand_back, requeue
 
+AIRBORNE_STATES = ("taking_off", "writing", "returning", "landing")
+"""States of a vehicle in the air (or moving, for a ground vehicle)."""
 RELAY_BURST = 10.0
 """Events of one vehicle relayed at once before the rate limit applies."""
 RELAY_RATE_PER_S = 1.0
@@ -89,6 +94,7 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
         if named is not None:
             holders.reclaim(book, eff, named, view.info.vehicle_id, now_s)
         holders.heard_without(book, eff, view.info.vehicle_id, status.job_id, now_s)
+        _hold_if_unsafe(book, eff, view, status, now_s)
     job = book.active_job_of(status.vehicle_id)
     if job is not None and status.job_id != job.job_id:
         view.mismatch_since_s = view.mismatch_since_s or now_s
@@ -104,6 +110,26 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
     if changed or eff.jobs or eff.events:
         book.assign(eff, now_s)
     return eff
+
+
+def _hold_if_unsafe(
+    book: Book, eff: Effects, view: VehicleView, status: VehicleStatus, now_s: float
+) -> None:
+    """Hold a vehicle in ``fault``, or back from a loss in the air without a job of its own."""
+    lost_in, view.lost_in_state = view.lost_in_state, None
+    if view.held:
+        return
+    vid = view.info.vehicle_id
+    if status.state == "fault":
+        why = f"in fault ({status.message or 'no reason given'})"
+    elif lost_in is not None and book.active_job_of(vid) is None:
+        why = f"lost while {lost_in.replace('_', ' ')}, back without a job"
+    else:
+        return
+    view.held = view.paused = True
+    eff.settings_changed = eff.fleet_changed = True
+    message = f"{vid} held: {why}; check it, then release it"
+    book.event(eff, now_s, "alert", "vehicle_held", message, vehicle_id=vid)
 
 
 def _restarted_since(view: VehicleView, assigned_at_s: float | None) -> bool:
@@ -212,6 +238,8 @@ def check_vehicle(book: Book, eff: Effects, view: VehicleView, now_s: float) -> 
     why = _why_lost(book, view, now_s)
     if why is not None:
         if not view.lost:
+            if view.state in AIRBORNE_STATES and view.was_seen:
+                view.lost_in_state = view.state
             view.lost, view.reported_job_id = True, None
             view.message = why
             eff.fleet_changed = True

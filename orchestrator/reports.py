@@ -171,6 +171,7 @@ def _writing(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float)
         now_s,
         planned_duration_s=rep.planned_duration_s or job.planned_duration_s,
         progress=max(job.progress, min(1.0, rep.progress)),
+        writing_since_s=job.writing_since_s if job.writing_since_s is not None else now_s,
     )
     book.put(eff, writing)  # progress alone (twice a second per writer) is not stored
     return CommandReply(ok=True, message=f"{rep.event} recorded")

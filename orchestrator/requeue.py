@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 
 from bus.messages import ErrorInfo
 from orchestrator.core_types import Effects
+from orchestrator.holders import hold_until_s, left_half_written
 from orchestrator.jobs import Job, transition, update
 
 if TYPE_CHECKING:
@@ -39,19 +40,10 @@ def requeue(
     ``wait_for_holder``: its vehicle was lost, and the job waits for it a while
     (``orchestrator/holders.py``)."""
     info = ErrorInfo(code="vehicle_lost" if lost else "requeued", message=reason)
-    if job.board_id is not None and (job.state == "writing" or job.progress > 0):
-        book.dirty_boards.add(job.board_id)
-        eff.settings_changed = True
-        book.event(
-            eff,
-            now_s,
-            "alert",
-            "board_dirty",
-            f"{job.board_id} half-written by {job.label}: fresh sheet needed",
-            vehicle_id=job.vehicle_id,
-            job_id=job.job_id,
-        )
-    gave_up = _gave_up(book, job, lost)
+    begun = job.state == "writing" or job.progress > 0
+    if begun and not wait_for_holder:  # a lost holder may be writing on: see holders.py
+        left_half_written(book, eff, job, now_s)
+    gave_up = _gave_up(book, job, lost and not (wait_for_holder and begun))
     if gave_up is not None:
         book.put(eff, transition(job, "failed", now_s, error=info, progress=0.0))
         book.event(
@@ -64,17 +56,18 @@ def requeue(
             job_id=job.job_id,
         )
         return
-    hold_until_s = now_s + book.config.lost_job_hold_s if wait_for_holder else None
-    if hold_until_s is not None:
-        reason = f"{reason}; waits {book.config.lost_job_hold_s:.0f} s for it to come back"
+    until_s = hold_until_s(book.config, job, now_s) if wait_for_holder else None
+    if until_s is not None:
+        reason = f"{reason}; waits {until_s - now_s:.0f} s for it to come back"
     queued = transition(
         job,
         "queued",
         now_s,
         error=info,
-        progress=0.0,
+        progress=job.progress if until_s is not None else 0.0,
         assigned_at_s=None,
-        holder_hold_until_s=hold_until_s,
+        holder_hold_until_s=until_s,
+        writing_since_s=job.writing_since_s if until_s is not None else None,
     )
     book.put(eff, queued)
     book.event(

@@ -103,8 +103,8 @@ def validate_submission(request: SubmitRequest, show: Show) -> Accepted:
     if request.text is not None:
         label = request.text.strip()
     else:
-        named = glyph.label if glyph.label and glyph.label != "submission" else ""
-        label = named or f"drawing ({len(glyph.strokes)} strokes)"
+        count = len(glyph.strokes)  # docs/protocol.md: never the document's own label
+        label = f"drawing ({count} stroke{'' if count == 1 else 's'})"
     return Accepted(label=label[:80], glyph=glyph, estimate_s=rough_duration_s(glyph, show))
 
 

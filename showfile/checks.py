@@ -14,6 +14,7 @@ from collections.abc import Callable, Iterator
 from typing import cast
 
 from showfile.models import Board, Show, Vehicle
+from showfile.security import on_loopback
 from vehicles import ROOMS
 
 Loc = tuple[str | int, ...]
@@ -118,6 +119,7 @@ def cross_check(show: Show) -> list[Problem]:
                 problems.append((("vehicles", i, "board"), why))
         problems += _homes_overlap(show, i)
     problems += _mavlink_problems(show)
+    problems += _unsecured_listen(show)
     if show.zenoh.multicast_scouting is False and not show.zenoh.connect:
         problems.append((("zenoh", "connect"), "no connect endpoint and multicast scouting off"))
     return problems
@@ -141,6 +143,29 @@ def _homes_overlap(show: Show, i: int) -> list[Problem]:
                 )
             )
     return problems
+
+
+def _unsecured_listen(show: Show) -> list[Problem]:
+    """With ``security: none`` every listen endpoint of the bus on loopback: anyone who reaches
+    a plain bus may command the fleet."""
+    if show.security.mode != "none":
+        return []
+    listening: list[tuple[Loc, tuple[str, ...]]] = [
+        (("zenoh", "router_listen"), show.zenoh.router_listen),
+        (("zenoh", "peer_listen"), show.zenoh.peer_listen),
+    ]
+    for name, host in show.zenoh.hosts.items():
+        listening.append((("zenoh", "hosts", name, "router_listen"), host.router_listen))
+    return [
+        (
+            (*loc, i),
+            f"{endpoint} reaches beyond this machine and security is none (anyone there could "
+            f"command the fleet): listen on 127.0.0.1 or use security: mtls",
+        )
+        for loc, endpoints in listening
+        for i, endpoint in enumerate(endpoints)
+        if not on_loopback(endpoint)
+    ]
 
 
 def _mavlink_problems(show: Show) -> list[Problem]:

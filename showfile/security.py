@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ipaddress
 from pathlib import Path
 from typing import Literal
 
@@ -22,6 +23,7 @@ __all__ = [
     "ClientRole",
     "SecuritySettings",
     "ServiceRole",
+    "on_loopback",
 ]
 
 
@@ -32,8 +34,22 @@ class SecuritySettings(BaseModel):
 
     mode: Literal["mtls", "none"] = "mtls"
     """``mtls``: Zenoh mutual TLS with one certificate per process from the show's own CA, and
-    access control generated from the show (default deny); ``none``: plain TCP, anyone on the
-    network may do anything (throwaway loopback tests only; a warning is printed)."""
+    access control generated from the show (default deny); ``none``: plain TCP, anyone who
+    reaches the bus may do anything: throwaway loopback tests only (a show whose bus listens
+    beyond loopback is refused; ``skyquill up`` says it in red)."""
     keys_dir: Path | None = None
     """Where the CA, the certificates and their keys live; default ``out/<show_id>/keys``.
     Never commit it: the private keys are the show's authority."""
+
+
+def on_loopback(endpoint: str) -> bool:
+    """Whether a Zenoh endpoint (``tcp/127.0.0.1:7447``, ``tcp/[::1]:7447#iface=lo``) listens on
+    this machine only: a loopback address or ``localhost``; any other name may reach a network."""
+    address = endpoint.partition("/")[2].split("?", 1)[0].split("#", 1)[0]
+    host = address.rpartition(":")[0].strip("[]")
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False

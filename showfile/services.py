@@ -125,12 +125,15 @@ class PolicySettings(ShowModel):
     """Submissions wait for an operator's approval before they are queued."""
     lost_after_s: float = Field(default=1.5, gt=0.0)
     """A vehicle whose liveliness token is gone this long is lost; its job is requeued, in [s]."""
-    lost_job_hold_s: float = Field(default=5.0, ge=0.0)
-    """A lost vehicle's job waits this long for that vehicle before another may take it, in [s]:
-    it may have finished the character with its report held up (a router restart, a Wi-Fi drop);
-    it cannot still be writing (its lease ran out). 5 s covers a router restart (back within 2 s,
-    every client within a second more). Longer: fewer characters written twice after a long
-    outage; shorter: a vehicle that died delays its job less."""
+    lost_job_hold_s: float = Field(default=15.0, ge=0.0)
+    """A lost vehicle's job waits for that vehicle this long in [s] past the end of its write
+    fence (``bus/fence.py``: while it may still be writing the job unheard; now, if it had not
+    begun) before another may take it: it may have finished the character with its report held
+    up (a router restart, a Wi-Fi drop, a cut cable). 15 s covers a vehicle cut off for 10 s
+    whatever the moment of the cut (the fence runs at least ``lost_after_s`` past it), and a
+    restart of the router or the orchestrator many times over. Longer: fewer characters written
+    twice after a long outage; shorter: a vehicle that died for good delays its job less (one
+    whose agent restarted frees its job at once)."""
     tracking_error_alert_m: float = Field(default=0.05, gt=0.0)
     """Tracking error that raises an alert event, in [m]."""
     max_queue: int = Field(default=200, ge=1)

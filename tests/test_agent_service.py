@@ -202,20 +202,47 @@ def test_a_landed_idle_vehicle_rests_and_wakes_at_once_on_an_assignment(
     asyncio.run(scenario())
 
 
-def test_orchestrator_loss_abandons_the_job_and_hovers_until_it_returns(
+def test_a_vehicle_writes_on_while_the_orchestrator_is_away_and_reports_when_it_is_back(
     free_tcp_port: Callable[[], int],
 ) -> None:
+    """The orchestrator's token and its report queryable go (it restarts) right after it has
+    acknowledged ``started``: the vehicle finishes the character on its write fence
+    (``bus/fence.py``) and its ``done`` reaches the orchestrator once it is back."""
+
     async def scenario() -> None:
         async with show(free_tcp_port) as (service, orch):
             assert (await orch.command(assign("j1"))).ok
-            await wait_for(lambda: service.runner.state == "writing")
+            await wait_for(lambda: service.runner.phase == "write" and "started" in orch.events())
+            await asyncio.sleep(0.3)  # the acknowledgement is back at the agent
             orch.token.undeclare()
-            await wait_for(lambda: service.runner.phase == "hover")
-            await wait_for(lambda: orch.statuses[-1].job_id is None)
-            assert orch.statuses[-1].state == "returning"
+            orch.queryable.undeclare()  # type: ignore[no-untyped-call]
+            await wait_for(lambda: service.runner.phase == "ground")
+            assert service.runner.state == "idle"
+            assert orch.events() == ["started"]  # its status names j1: the result is on its way
             orch.token = declare_token(orch.session, KEYS.orchestrator_alive)
-            await wait_for(lambda: service.runner.state == "idle")
-            assert orch.events() == ["started"]
+            orch.queryable = serve(orch.session, KEYS.report("uav1"), AgentReport, orch._on_report)
+            await wait_for(lambda: orch.events() == ["started", "done"])
+            done = orch.reports[-1]
+            assert done.metrics is not None and done.metrics.rmse_pen_down_m < 0.01
+
+    asyncio.run(scenario())
+
+
+def test_without_an_acknowledged_start_the_vehicle_writes_unheard_for_lost_after_s_only(
+    free_tcp_port: Callable[[], int],
+) -> None:
+    """The orchestrator goes before it acknowledged ``started``: nobody holds the job for the
+    vehicle past ``lost_after_s``, so it gives the job up then (brush lifted, home)."""
+
+    async def scenario() -> None:
+        async with show(free_tcp_port) as (service, orch):
+            assert (await orch.command(assign("j1"))).ok
+            await wait_for(lambda: service.runner.phase in ("transit", "settle"))
+            orch.token.undeclare()
+            orch.queryable.undeclare()  # type: ignore[no-untyped-call]
+            await wait_for(lambda: service.runner.job_id is None)
+            assert service.runner.state in ("returning", "landing", "idle")
+            assert "gave j1 up" in service.runner.message or service.runner.state == "idle"
 
     asyncio.run(scenario())
 

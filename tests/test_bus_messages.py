@@ -125,8 +125,8 @@ def test_nesting_within_the_limit_and_brackets_inside_strings_are_fine() -> None
     payload = b'{"text": "A", "strokes": {"x": ' + b"[" * depth + b"]" * depth + b"}}"
     assert decode(payload, SubmitRequest).strokes is not None
     brackets = b"[" * 5000 + b'\\"{' * 100 + b"\\\\"
-    request = decode(b'{"text": "A", "strokes": {"label": "' + brackets + b'"}}', SubmitRequest)
-    assert request.strokes is not None and request.strokes["label"].startswith("[[[")
+    request = decode(b'{"text": "A", "strokes": {"note": "' + brackets + b'"}}', SubmitRequest)
+    assert request.strokes is not None and request.strokes["note"].startswith("[[[")
     # an escaped backslash ends before the quote: the brackets after it are real nesting
     payload = b'{"text": "\\\\", "strokes": {"x": ' + b"[" * 40 + b"]" * 40 + b"}}"
     assert _code(payload) == "too_deep"

@@ -21,6 +21,7 @@ from test_kiosk_support import (
     FakeOrchestrator,
     done_metrics,
     drawing,
+    fresh_address,
     sse_events,
 )
 
@@ -248,6 +249,66 @@ def test_text_too_long_or_without_glyph_is_refused(visitor: Browser) -> None:
     )
     message = assert_refused(visitor.post("/api/preview", {"text": "\U0001f600"}), 422, "no_glyph")
     assert "\U0001f600" in message
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        b'{"text": "\\ud800"}',  # a lone surrogate: no UTF-8 text holds it
+        b'{"text": "A\\udc00"}',
+        b'{"strokes": {"\\ud800": 1, "strokes": [[[0, 0], [9, 9]]]}}',
+        b'{"text": ' + b"9" * 5_000 + b"}",  # beyond Python's integer conversion limit
+    ],
+)
+def test_bodies_no_text_can_hold_are_bad_json_not_a_crash(
+    visitor: Browser, fake: FakeOrchestrator, body: bytes
+) -> None:
+    n_before = len(fake.requests)
+    for path in ("/api/preview", "/api/submit"):
+        assert_refused(visitor.post(path, body), 400, "bad_json")
+    assert len(fake.requests) == n_before
+
+
+def post_raw(kiosk: str, path: str, headers: dict[str, str]) -> tuple[int, str]:
+    """POST ``{"text": "A"}`` with exactly ``headers``: the status and the error code."""
+    host = kiosk.split("//")[1].rstrip("/")
+    conn = http.client.HTTPConnection(host, timeout=WAIT_S, source_address=(fresh_address(), 0))
+    try:
+        conn.request("POST", path, body=b'{"text": "A"}', headers=headers)
+        resp = conn.getresponse()
+        reply = json.loads(resp.read())
+    finally:
+        conn.close()
+    return resp.status, reply["error"]["code"] if not reply["ok"] else ""
+
+
+def test_only_json_from_the_kiosks_own_page_is_taken(kiosk: str, fake: FakeOrchestrator) -> None:
+    """Another web page can make a visitor's browser post a form or text/plain to the kiosk
+    without asking: refused, as is any page of another origin."""
+    own = "http://" + kiosk.split("//")[1].rstrip("/")
+    n_before = len(fake.requests)
+    for content_type in ("text/plain", "application/x-www-form-urlencoded", "text/json", None):
+        headers = {"Content-Type": content_type} if content_type else {}
+        for path in ("/api/preview", "/api/submit"):
+            assert post_raw(kiosk, path, headers) == (415, "unsupported_media_type")
+    for origin in ("https://evil.example", "null", own + ".evil.example", "http://127.0.0.1:1"):
+        headers = {"Content-Type": "application/json", "Origin": origin}
+        for path in ("/api/preview", "/api/submit"):
+            assert post_raw(kiosk, path, headers) == (403, "cross_origin")
+    assert len(fake.requests) == n_before
+    same = {"Content-Type": "application/json; charset=utf-8", "Origin": own}
+    assert post_raw(kiosk, "/api/submit", same) == (200, "")
+    assert post_raw(kiosk, "/api/preview", {"Content-Type": "application/json"}) == (200, "")
+
+
+def test_request_headers_are_capped(kiosk: str) -> None:
+    json_type = {"Content-Type": "application/json"}
+    for padding_bytes in (17_000, 100_000):
+        headers = {**json_type, "X-Padding": "a" * padding_bytes}
+        assert post_raw(kiosk, "/api/preview", headers) == (431, "headers_too_large")
+    many = {**json_type, **{f"X-Pad-{i}": "a" * 1_000 for i in range(20)}}
+    assert post_raw(kiosk, "/api/preview", many) == (431, "headers_too_large")
+    assert post_raw(kiosk, "/api/preview", {**json_type, "X-Padding": "a" * 8_000}) == (200, "")
 
 
 def test_rate_limit_per_client(kiosk: str, fake: FakeOrchestrator) -> None:

@@ -9,9 +9,11 @@ the generated access control. The test's client lives on the ground station: thi
 ``observe`` submits, answers snapshots and records events and ink, over pipes and files.
 
 Checked: the show writes through delay and loss; a 10 s partition of the companion host whose
-vehicle is writing gets that job requeued within ``lost_after_s`` and finished on the other
-host; the vehicle, healed, comes back and never inks the reassigned job; every acknowledged
-submission is done, written completely exactly once; every host stops with no SIGKILL. Skipped
+vehicle is writing has that vehicle taken as lost within ``lost_after_s``, but its job waits for
+it (the write fence, ``bus/fence.py``): cut off, it finishes the character, and once healed its
+report makes the job ``done``, written by it alone; nobody else is given the job meanwhile;
+every acknowledged submission is done, written completely exactly once; every host stops with
+no SIGKILL. Skipped
 with the reason where namespaces are unavailable.
 """
 
@@ -296,19 +298,16 @@ def test_one_show_across_three_hosts_writes_through_loss_and_a_partition(
         time.sleep(max(0.0, cut_at + PARTITION_S - time.time()))
         venue.partition(cut_host, cut=False)
         healed_at = time.time()
-        _wait("马 written elsewhere", JOB_TIMEOUT_S, lambda: _all_done(observer, [job_id]))
+        _wait("马 done", JOB_TIMEOUT_S, lambda: _all_done(observer, [job_id]))
+        print(f"马 done {time.time() - healed_at:.2f} s after the partition healed")
         job = _jobs(observer)[job_id]
-        assert host_of[str(job["vehicle_id"])] != cut_host and job["attempts"] >= 2, job
+        assert job["vehicle_id"] == victim and job["attempts"] == 1, job  # nobody else had it
         _wait(f"{victim} back", 30.0, lambda: _ready(observer, [victim]))
-        late_ink = [
-            i
-            for i in observer.records("ink")
-            if i["vehicle_id"] == victim and i["job_id"] == job_id and i["at_s"] >= healed_at
-        ]
-        assert late_ink == []
+        kinds = [e["kind"] for e in observer.records("events") if e.get("job_id") == job_id]
+        assert "board_dirty" not in kinds and "job_taken_over" not in kinds, kinds
         _check_written_once(show, observer)
         victim_log = (tmp_path / "logs" / cut_host / f"{victim}.log").read_text()
-        assert f"gave job {job_id} up: " in victim_log
+        assert f"gave job {job_id} up: " not in victim_log
         for host in ("rack1", "rack2", "ground"):  # companions first: the ground router last
             log = hosts.down(host)
             assert "SIGKILLed: none" in log, log

@@ -126,18 +126,23 @@ def test_a_board_half_written_by_a_lost_vehicle_waits_for_a_fresh_sheet() -> Non
     _writing(book, "uav1", "j1", 2.0)
     assert book.jobs["j1"].state == "writing"
     book.liveliness("uav1", False, 3.0)
-    book.tick(30.0)  # past the grace period: lost, j1 requeued
-    assert book.jobs["j1"].state == "queued" and book.dirty_boards == {"b1"}
-    assert book.snapshot(30.0).dirty_boards == ["b1"]
-    assert any(e.kind == "board_dirty" for e in book.recent_events)
+    book.tick(4.6)  # past the grace period: lost, j1 requeued for it (it may be writing on)
+    assert book.jobs["j1"].state == "queued" and book.dirty_boards == set()
     book.liveliness("uav1", True, 31.0)
-    assert _assigned(_idle(book, "uav1", 31.0)) == []  # back, but the sheet is spoilt
+    assert _assigned(_idle(book, "uav1", 31.0)) == []  # back without it: the sheet is spoilt
+    assert book.jobs["j1"].state == "queued" and book.dirty_boards == {"b1"}
+    assert book.snapshot(31.0).dirty_boards == ["b1"]
+    assert any(e.kind == "board_dirty" for e in book.recent_events)
+    held = [e.message for e in book.recent_events if e.kind == "vehicle_held"]
+    assert held == ["uav1 held: lost while writing, back without a job; check it, then release it"]
     ok, message, _ = _op(book, 32.0, "fresh_sheet")
     assert not ok and "board_id" in message
     ok, message, _ = _op(book, 32.0, "fresh_sheet", board_id="b9")
     assert not ok and "b1" in message  # the valid boards are listed
     ok, message, eff = _op(book, 33.0, "fresh_sheet", board_id="b1")
-    assert ok and _assigned(eff) == [("uav1", "j1")] and not book.dirty_boards
+    assert ok and _assigned(eff) == [] and not book.dirty_boards  # held still
+    ok, message, eff = _op(book, 33.5, "release", vehicle_id="uav1")
+    assert ok and _assigned(eff) == [("uav1", "j1")]
     ok, message, _ = _op(book, 34.0, "fresh_sheet", board_id="b1")
     assert not ok and "not waiting" in message
 
@@ -150,3 +155,15 @@ def test_a_job_requeued_before_writing_started_leaves_the_board_clean() -> None:
     assert book.jobs["j1"].state == "assigned"
     _op(book, 2.0, "land", vehicle_id="uav1")
     assert book.jobs["j1"].state == "queued" and not book.dirty_boards
+
+
+def test_release_all_frees_every_held_vehicle_and_leaves_the_queue_paused() -> None:
+    book = _book()
+    ok, message, _ = _op(book, 1.0, "release_all")
+    assert not ok and "no vehicle is held" in message
+    ok, _, _ = _op(book, 2.0, "estop")  # every vehicle: held, the queue paused
+    assert ok and all(v.held for v in book.vehicles.values()) and book.queue_paused
+    ok, message, eff = _op(book, 3.0, "release_all")
+    assert ok and message.startswith("released uav1, uav2") and "resume" in message
+    assert not any(v.held or v.paused for v in book.vehicles.values()) and book.queue_paused
+    assert eff.settings_changed  # stored: a restarted orchestrator holds nobody

@@ -67,8 +67,11 @@ def test_a_silent_vehicle_is_lost_although_its_token_remains_and_back_when_it_sp
     requeued = book.jobs["j1"]
     assert requeued.state == "queued" and requeued.error is not None
     assert requeued.error.code == "vehicle_lost"
+    assert book.dirty_boards == set()  # it may be writing on, unheard
     eff = book.status(_status("uav1"), 4.1)  # it speaks again (without the job: it gave it up)
-    assert [e.kind for e in eff.events] == ["vehicle_appeared", "job_released"]
+    kinds = ["vehicle_appeared", "board_dirty", "job_released", "vehicle_held"]
+    assert [e.kind for e in eff.events] == kinds  # lost in the air: held until released
+    assert book.dirty_boards == {"b1"}
     assert not book.vehicles["uav1"].lost
 
 

@@ -49,5 +49,14 @@ def test_a_drawing_too_small_to_lay_out_is_refused_at_submit(show: Show) -> None
 
 def test_drawings_at_the_coordinate_bound_and_texts_are_accepted(show: Show) -> None:
     at_bound = validate_submission(SubmitRequest(strokes=_doc([[-1e6, 1e6], [1e6, -1e6]])), show)
-    assert at_bound.label == "drawing (1 strokes)" and at_bound.estimate_s > 0
+    assert at_bound.label == "drawing (1 stroke)" and at_bound.estimate_s > 0
     assert validate_submission(SubmitRequest(text="永"), show).label == "永"
+
+
+def test_a_drawings_label_is_its_stroke_count_never_the_documents_own(show: Show) -> None:
+    """docs/protocol.md: a drawing's label is ``drawing (N strokes)``, whatever its document
+    calls itself (public text the operator never asked to read)."""
+    doc = {"units": "m", "y_axis": "up", "label": "my tick"}
+    doc["strokes"] = [[[0, 0], [1, 0]], [[0, 0], [0, 1]]]  # type: ignore[assignment]
+    accepted = validate_submission(SubmitRequest(strokes=doc), show)
+    assert accepted.label == "drawing (2 strokes)"

@@ -29,9 +29,9 @@ from pathlib import Path
 import pytest
 
 from bus.keys import ShowKeys
-from bus.messages import Event, JobState, ShowSnapshot, Telemetry
+from bus.messages import CommandReply, Event, JobState, OperatorCommand, ShowSnapshot, Telemetry
 from bus.pubsub import subscribe
-from bus.rpc import NoReplyError
+from bus.rpc import NoReplyError, query_one
 from bus.session import Session, open_session
 from cli.runstate import RunFile, run_file_path
 from cli.showrun import ShowRun, Stagehand, derived_show, snapshot, submit_texts, wait_for_jobs
@@ -91,6 +91,24 @@ class LiveShow:
             time.sleep(0.1)
         raise AssertionError(f"none of {job_ids} started writing")
 
+    def wait_until_all_writing(self, job_ids: list[str]) -> dict[str, str | None]:
+        """Every job in ``job_ids`` flown by its vehicle (planned, in transit or being written),
+        at least one being written, none half done: job -> vehicle."""
+        deadline = time.monotonic() + JOB_TIMEOUT_S
+        while time.monotonic() < deadline:
+            jobs = {j.job_id: j for j in self.snapshot().jobs}
+            mine = [j for j in (jobs.get(job_id) for job_id in job_ids) if j is not None]
+            active = [j for j in mine if j.state in ("assigned", "writing") and j.progress < 0.5]
+            writing = [j for j in active if j.state == "writing" and j.progress > 0.0]
+            if len(active) == len(job_ids) and writing:
+                return {j.job_id: j.vehicle_id for j in active}
+            time.sleep(0.05)
+        raise AssertionError(f"{job_ids} were not all being written at once")
+
+    def events_since(self, kind: str, since_s: float) -> list[Event]:
+        with self.lock:
+            return [e for e in self.events if e.kind == kind and e.time_s >= since_s]
+
     def snapshot(self) -> ShowSnapshot:
         """The orchestrator's view; empty while it does not answer (starting, restarting)."""
         try:
@@ -111,14 +129,23 @@ class LiveShow:
             ]
 
     def wait_ready(self, vehicle_id: str, timeout_s: float = 30.0) -> None:
+        """The vehicle present and on the ground; held (lost in the air, or in fault), it is
+        released as the operator would after checking it."""
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
             vehicles = {v.vehicle_id: v for v in self.snapshot().vehicles}
             view = vehicles.get(vehicle_id)
             if view is not None and view.alive and view.state in ("idle", "landed"):
-                return
+                if not view.held:
+                    return
+                self.command(OperatorCommand(command="release", vehicle_id=vehicle_id))
             time.sleep(0.2)
         raise AssertionError(f"{vehicle_id} did not come back")
+
+    def command(self, command: OperatorCommand) -> CommandReply:
+        reply = query_one(self.session, self.keys.command, command, CommandReply, timeout_s=5.0)
+        assert reply.ok, reply
+        return reply
 
     def check_written_once(self) -> None:
         """Every acknowledged job done once, completely written once, never by two at once."""
@@ -210,27 +237,38 @@ def _new_pid(run: ShowRun, name: str, old: int, within_s: float) -> float:
     return time.monotonic() - started
 
 
-def test_the_router_killed_mid_show_is_back_within_2_s_and_every_job_finishes(
-    live: LiveShow,
-) -> None:
-    job_ids = live.submit(["一", "L", "十"])
-    live.wait_until_writing(job_ids)
-    pid = live.run.supervisor.pid("router")
-    assert pid is not None
-    os.kill(pid, signal.SIGKILL)
-    back_s = _new_pid(live.run, "router", pid, within_s=2.0)
-    print(f"\nrouter restarted after {back_s:.2f} s")
+def _strike_while_all_write(live: LiveShow, texts: list[str], victims: list[str]) -> None:
+    """Kill ``victims`` (supervised processes) one after the other with every vehicle writing:
+    each character is finished by the vehicle that was writing it, on its own board, with no
+    board left half-written and nothing asked of the operator."""
+    job_ids = live.submit(texts)
+    writers = live.wait_until_all_writing(job_ids)
+    struck_at = time.time()
+    for name in victims:
+        pid = live.run.supervisor.pid(name)
+        assert pid is not None
+        os.kill(pid, signal.SIGKILL)
+        back_s = _new_pid(live.run, name, pid, within_s=10.0)
+        print(f"\n{name} restarted after {back_s:.2f} s")
+    jobs = live.wait(job_ids)
+    with live.lock:
+        said = [f"{e.kind}: {e.message}" for e in live.events if e.job_id in writers]
+    assert {j.job_id: j.vehicle_id for j in jobs} == writers, said
+    dirty = [e.message for e in live.events_since("board_dirty", struck_at)]
+    assert dirty == [], dirty
     live.check_written_once()  # every client reconnected by itself and re-declared everything
 
 
-def test_the_orchestrator_killed_mid_show_loses_no_job(live: LiveShow) -> None:
-    job_ids = live.submit(["二", "I", "T"])
-    live.wait_until_writing(job_ids)
-    pid = live.run.supervisor.pid("orchestrator")
-    assert pid is not None
-    os.kill(pid, signal.SIGKILL)
-    _new_pid(live.run, "orchestrator", pid, within_s=10.0)
-    live.check_written_once()
+def test_the_router_killed_while_all_write_costs_no_character(live: LiveShow) -> None:
+    _strike_while_all_write(live, ["永", "光", "马"], ["router"])
+
+
+def test_the_orchestrator_killed_while_all_write_costs_no_character(live: LiveShow) -> None:
+    _strike_while_all_write(live, ["东", "风", "雨"], ["orchestrator"])
+
+
+def test_router_and_orchestrator_killed_while_all_write_cost_no_character(live: LiveShow) -> None:
+    _strike_while_all_write(live, ["书", "画", "龙"], ["router", "orchestrator"])
 
 
 def test_an_agent_killed_mid_character_is_lost_within_2_s_and_another_writes_it(
@@ -286,31 +324,35 @@ def test_an_agent_frozen_20_s_is_lost_within_2_s_and_never_inks_its_old_job(
     agent_log = (live.run.show.database_path.parent / "logs" / f"{victim}.log").read_text()
     assert f"gave job {job_id} up: " in agent_log  # it stalled, or went unacknowledged
     assert live.run.supervisor.restarts(f"agent {victim}") <= 1  # not restarted for freezing
+    held = [e.message for e in live.events_of("vehicle_held", victim) if e.time_s > stopped_at]
+    assert held and "lost while writing" in held[0], held  # released above, as an operator would
     live.check_written_once()
 
 
-def test_a_job_given_up_unacknowledged_three_times_is_still_written(live: LiveShow) -> None:
-    """The orchestrator frozen past ``lost_after_s`` while a character is written: the writing
-    agent's lease runs out and it gives the job up (as under CPU overload). Nothing is wrong with
-    the job: three times over ``max_attempts`` (3) it goes back to the queue uncounted, and is
-    written once in the end (it failed after three such give-ups before hand-backs)."""
-    (job_id,) = live.submit(["W"])
+def test_the_orchestrator_frozen_three_times_over_a_character_costs_it_nothing(
+    live: LiveShow,
+) -> None:
+    """The orchestrator frozen past ``lost_after_s`` three times while a character is written
+    (SIGSTOP 2.5 s; a laptop under load, a debugger): its writer goes on, on its write fence
+    (``bus/fence.py``; before, it gave the job up each time and another vehicle began it again),
+    and the character is written once, by it, at the first attempt."""
+    (job_id,) = live.submit(["永"])
     pid = live.run.supervisor.pid("orchestrator")
-    assert pid is not None and live.run.show.policy.max_attempts == 3
+    assert pid is not None
+    writer = live.wait_until_writing([job_id]).vehicle_id
+    stopped_at = time.time()
     for _ in range(3):
-        victim = str(live.wait_until_writing([job_id]).vehicle_id)
-        stopped_at = time.time()
         os.kill(pid, signal.SIGSTOP)
         try:
             time.sleep(live.run.show.policy.lost_after_s + 1.0)
         finally:
             os.kill(pid, signal.SIGCONT)
-        deadline = time.monotonic() + 15.0
-        while not [e for e in live.events_of("job_requeued", victim) if e.time_s > stopped_at]:
-            assert time.monotonic() < deadline, f"{victim} kept {job_id} through the freeze"
-            time.sleep(0.05)
+        time.sleep(0.3)
     (job,) = live.wait([job_id])
-    assert job.state == "done", (job.state, job.error)
+    assert (job.state, job.vehicle_id, job.attempts) == ("done", writer, 1), job
+    with live.lock:
+        said = [e.kind for e in live.events if e.job_id == job_id and e.time_s >= stopped_at]
+    assert "job_requeued" not in said and "board_dirty" not in said, said
     live.check_written_once()
 
 
@@ -439,3 +481,32 @@ def test_a_killed_up_leaves_the_show_running_and_a_new_up_adopts_it(tmp_path: Pa
     assert second.returncode == 0, stderr
     assert "adopted router" in stderr and "killing" not in stderr
     assert not [r for r in before.values() if r.alive()]
+
+
+def test_an_estop_of_the_whole_fleet_is_undone_by_the_consoles_path(live: LiveShow) -> None:
+    """E-STOP of every vehicle while they write, then the console's documented way back (reset
+    every fault, release all, resume; the crew's fresh sheets): every vehicle writes again
+    (before, each faulted at its next take-off: its backend stayed in ``estop``)."""
+    vehicles = [v.id for v in live.run.show.vehicles]
+    job_ids = live.submit(["大", "木", "人"])
+    live.wait_until_all_writing(job_ids)
+    live.command(OperatorCommand(command="estop", reason="test"))
+
+    def states() -> dict[str, tuple[str, bool]]:
+        return {v.vehicle_id: (v.state, v.held) for v in live.snapshot().vehicles}
+
+    deadline = time.monotonic() + 20.0
+    while set(states().values()) != {("fault", True)}:
+        assert time.monotonic() < deadline, states()
+        time.sleep(0.1)
+    for vid in vehicles:
+        live.command(OperatorCommand(command="clear_fault", vehicle_id=vid))
+    while set(states().values()) != {("landed", True)}:
+        assert time.monotonic() < deadline + 20.0, states()
+        time.sleep(0.1)
+    live.command(OperatorCommand(command="release_all"))
+    live.command(OperatorCommand(command="resume"))
+    assert [j.state for j in live.wait(job_ids)] == ["done"] * 3  # back in the queue, written
+    again = live.submit(["上", "下", "中"])
+    assert {j.vehicle_id for j in live.wait(again)} == set(vehicles)  # each flies again
+    live.check_written_once()

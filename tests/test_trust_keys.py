@@ -13,18 +13,20 @@ from pathlib import Path
 import pytest
 import zenoh
 from cryptography import x509
-from cryptography.x509.oid import NameOID
+from cryptography.hazmat.primitives import hashes, serialization
+from cryptography.hazmat.primitives.asymmetric import ec
+from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from bus.keys import ShowKeys
 from bus.rpc import JSON
-from bus.session import free_tcp_endpoint, open_session
+from bus.session import SessionOpenError, free_tcp_endpoint, open_session
 from cli.main import main
 from showfile import Show, ShowError, dump_show, load_show
 from trust.acl import access_control
-from trust.pki import identity_files, is_valid
-from trust.settings import ensure_show_keys, identities, session_settings
+from trust.pki import KeysError, client_files, identity_files, is_valid, issue
+from trust.settings import ensure_show_keys, identities, secured, session_settings, show_hosts
 
 SOLO = Path(__file__).resolve().parents[1] / "shows" / "solo.yaml"
 AIRSHOW = Path(__file__).resolve().parents[1] / "shows" / "airshow-2014.yaml"
@@ -215,3 +217,69 @@ def test_cli_issues_a_client_whose_config_file_joins_the_show(
     assert got == [b"{}"]
     assert refused == []
     assert answered.stdout.strip() == "{}", answered.stderr[-500:]
+
+
+def _usages(path: Path) -> set[x509.ObjectIdentifier]:
+    cert = x509.load_pem_x509_certificate(path.read_bytes())
+    return set(cert.extensions.get_extension_for_class(x509.ExtendedKeyUsage).value)
+
+
+CLIENT_AUTH, SERVER_AUTH = ExtendedKeyUsageOID.CLIENT_AUTH, ExtendedKeyUsageOID.SERVER_AUTH
+
+
+@pytest.mark.timeout(60)
+def test_only_the_routers_certificate_can_serve(tmp_path: Path) -> None:
+    """A router started with any other certificate of the show (a submitter's) is refused by a
+    vehicle's session, name checking on; the real router's certificate is accepted."""
+    _, show = _show(tmp_path)
+    ensure_show_keys(show)
+    submitter = issue(
+        show.keys_dir,
+        client_files(show.keys_dir, "booth", "submitter"),
+        show_id=show.show_id,
+        hosts=show_hosts(show),  # as `skyquill keys --client` passes them: not used
+        holder="booth",
+    )
+    assert _usages(submitter.cert) == {CLIENT_AUTH}
+    assert _usages(identity_files(show.keys_dir, "uav1").cert) == {CLIENT_AUTH}
+    assert _usages(identity_files(show.keys_dir, "router").cert) == {SERVER_AUTH, CLIENT_AUTH}
+    rogue = secured(show, submitter, router=True)
+    with open_session(rogue, role="router"), pytest.raises(SessionOpenError):
+        open_session(session_settings(show, "uav1"), role="client", open_timeout_s=2.0)
+    with (
+        open_session(session_settings(show, "router"), role="router"),
+        open_session(session_settings(show, "uav1"), role="client", open_timeout_s=5.0),
+    ):
+        pass
+
+
+def test_a_keys_folder_of_an_older_version_is_refused_with_what_to_do(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A CA without the by-role mark issued certificates that all could serve: copies of them
+    are out of reach, so the folder is refused (never silently kept nor patched)."""
+    path, show = _show(tmp_path)
+    ensure_show_keys(show)
+    ca_path = show.keys_dir / "ca.pem"
+    ca = x509.load_pem_x509_certificate(ca_path.read_bytes())
+    key = serialization.load_pem_private_key((show.keys_dir / "ca.key").read_bytes(), None)
+    assert isinstance(key, ec.EllipticCurvePrivateKey)
+    old_name = x509.Name([a for a in ca.subject if a.oid != NameOID.ORGANIZATIONAL_UNIT_NAME])
+    builder = (
+        x509.CertificateBuilder()
+        .subject_name(old_name)
+        .issuer_name(old_name)
+        .public_key(key.public_key())
+        .serial_number(x509.random_serial_number())
+        .not_valid_before(ca.not_valid_before_utc)
+        .not_valid_after(ca.not_valid_after_utc)
+    )
+    for extension in ca.extensions:
+        builder = builder.add_extension(extension.value, extension.critical)
+    old = builder.sign(key, hashes.SHA256())
+    ca_path.write_bytes(old.public_bytes(serialization.Encoding.PEM))
+    with pytest.raises(KeysError, match=r"older skyquill.*move the folder away.*skyquill keys"):
+        ensure_show_keys(show)
+    assert main(["keys", str(path)]) == 1
+    said = capsys.readouterr().err
+    assert said.count("\n") == 1 and "any of its certificates can pose as the router" in said

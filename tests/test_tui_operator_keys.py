@@ -123,6 +123,37 @@ def test_land_is_confirmed_and_the_held_vehicle_shows_in_the_fleet() -> None:
     play(scenario)
 
 
+def test_release_all_asks_once_and_releases_every_held_vehicle() -> None:
+    """After an E-STOP or a land of the whole fleet: ``U`` names the held vehicles, says the
+    paused queue stays paused, and sends one ``release_all``."""
+
+    async def scenario(app: ConsoleApp, pilot: Any) -> None:
+        await pilot.press("U")  # nothing held: refused without a question
+        await settle(pilot)
+        assert not isinstance(app.screen, ConfirmScreen) and sent(app) is None
+        held = [
+            VehicleSummary(
+                vehicle_id=v, kind="quadrotor-brush", state="landed", alive=True, held=True
+            )
+            for v in ("uav1", "uav2")
+        ]
+        fleet = ShowSnapshot(
+            show_id="demo-show", time_s=0, queue_paused=True, jobs=[], vehicles=held
+        )
+        app.model.apply(fleet, DEMO_TIME_S + 100)
+        await pilot.pause(0.3)
+        await pilot.press("U")
+        await settle(pilot)
+        assert isinstance(app.screen, ConfirmScreen)
+        question = app.screen.question
+        assert "uav1" in question and "uav2" in question and "paused" in question
+        await pilot.press("y")
+        await settle(pilot)
+        assert sent(app) == OperatorCommand(command="release_all")
+
+    play(scenario)
+
+
 def test_job_keys_act_only_on_the_visible_selection_of_the_focused_queue() -> None:
     async def scenario(app: ConsoleApp, pilot: Any) -> None:
         assert app.focused is app._fleet

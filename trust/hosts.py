@@ -43,6 +43,11 @@ def _where(show: ShowBus) -> str:
     return str(show.source_path) if show.source_path else f"show {show.show_id}"
 
 
+def is_router(identity: str) -> bool:
+    """Whether ``identity`` is a router's (the ground router or a companion host's)."""
+    return identity == GROUND_ROUTER or identity.startswith(f"{GROUND_ROUTER}@")
+
+
 def ground_host(show: ShowBus) -> str | None:
     """Name of the ground station (None: a one-machine show)."""
     return next((name for name, host in show.zenoh.hosts.items() if host.services), None)

@@ -6,8 +6,17 @@ Layout of a show's keys folder (``show.keys_dir``; private keys 0600, folders 07
     <identity>/cert.pem  key.pem    one per service and per vehicle (common name = identity)
     clients/<name>/cert.pem key.pem ca.pem   outside clients (common name = their role)
 
-Certificates carry the router's host names (from the show's endpoints) so that clients verify
-the router they connect to; every certificate is signed by the CA and valid for one year.
+Certificates by role: only a router's certificate may serve. It carries server and client
+authentication (a companion router also joins the ground router) and the routers' host names
+(from the show's endpoints), which clients verify on connecting. Every other identity's
+certificate is for client authentication only, without names: rustls (Zenoh's TLS) refuses it
+as a server's, so a stolen vehicle's or client's key cannot pose as the router. Every
+certificate is signed by the CA and valid for one year.
+
+A CA is marked (:data:`CA_PROFILE`) as issuing by role. A keys folder whose CA lacks the mark was
+made by an older skyquill, whose every certificate could serve: re-issuing its own files would
+leave copies of the old ones (outside clients, companion hosts) able to pose as the router, so
+it is refused with what to do (a new CA) rather than used.
 """
 
 from __future__ import annotations
@@ -25,8 +34,10 @@ from cryptography.hazmat.primitives.asymmetric import ec
 from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 
 from trust.files import IdentityFiles, KeysError, identity_files
+from trust.hosts import is_router
 
 __all__ = [
+    "CA_PROFILE",
     "IdentityFiles",
     "KeysError",
     "client_files",
@@ -39,6 +50,10 @@ __all__ = [
 CA_LIFETIME = datetime.timedelta(days=5 * 365)
 CERT_LIFETIME = datetime.timedelta(days=365)
 CLOCK_SKEW = datetime.timedelta(minutes=10)
+CA_PROFILE = "certificates by role"
+"""Organisational unit of a show CA that gives server authentication to routers only."""
+_ROUTER_USAGES = (ExtendedKeyUsageOID.SERVER_AUTH, ExtendedKeyUsageOID.CLIENT_AUTH)
+_CLIENT_USAGES = (ExtendedKeyUsageOID.CLIENT_AUTH,)
 
 
 def client_files(keys_dir: Path, name: str, role: str) -> IdentityFiles:
@@ -82,8 +97,14 @@ def _alt_names(hosts: Iterable[str]) -> list[x509.GeneralName]:
     return names
 
 
+def issues_by_role(ca: x509.Certificate) -> bool:
+    """Whether ``ca`` was made to give server authentication to routers only (its mark)."""
+    units = ca.subject.get_attributes_for_oid(NameOID.ORGANIZATIONAL_UNIT_NAME)
+    return any(unit.value == CA_PROFILE for unit in units)
+
+
 def ensure_ca(keys_dir: Path, show_id: str) -> tuple[x509.Certificate, ec.EllipticCurvePrivateKey]:
-    """The show CA, created when the folder has none."""
+    """The show CA, created when the folder has none; :class:`KeysError` for an older CA."""
     cert_path, key_path = Path(keys_dir) / "ca.pem", Path(keys_dir) / "ca.key"
     if cert_path.exists() and key_path.exists():
         try:
@@ -93,11 +114,19 @@ def ensure_ca(keys_dir: Path, show_id: str) -> tuple[x509.Certificate, ec.Ellipt
             raise KeysError(f"{keys_dir}: cannot read the show CA: {exc}") from exc
         if not isinstance(key, ec.EllipticCurvePrivateKey):
             raise KeysError(f"{key_path}: not an ECDSA key")
+        if not issues_by_role(cert):
+            raise KeysError(
+                f"{keys_dir} was made by an older skyquill: any of its certificates can pose as "
+                f"the router; move the folder away and run `skyquill keys` (or `up`) with the "
+                f"show file for a new CA, then issue outside clients again (--client) and copy "
+                f"the new folders to companion hosts"
+            )
         return cert, key
     key = ec.generate_private_key(ec.SECP256R1())
     name = x509.Name(
         [
             x509.NameAttribute(NameOID.ORGANIZATION_NAME, "skyquill"),
+            x509.NameAttribute(NameOID.ORGANIZATIONAL_UNIT_NAME, CA_PROFILE),
             x509.NameAttribute(NameOID.COMMON_NAME, f"skyquill show CA {show_id}"),
         ]
     )
@@ -143,8 +172,10 @@ def issue(
 ) -> IdentityFiles:
     """Sign a new key pair for ``files.common_name`` (replacing any there); returns ``files``.
 
-    ``holder`` is a person's or device's name kept in the subject (organisational unit), apart
-    from the common name the access control matches.
+    A router's identity gets a server certificate naming ``hosts`` (and loopback); any other
+    gets a client-only certificate, and ``hosts`` is not used. ``holder`` is a person's or
+    device's name kept in the subject (organisational unit), apart from the common name the
+    access control matches.
     """
     ca_cert, ca_key = ensure_ca(keys_dir, show_id)
     key = ec.generate_private_key(ec.SECP256R1())
@@ -153,8 +184,8 @@ def issue(
         attributes.append(x509.NameAttribute(NameOID.ORGANIZATIONAL_UNIT_NAME, holder))
     attributes.append(x509.NameAttribute(NameOID.COMMON_NAME, files.common_name))
     now = _now()
-    usages = [ExtendedKeyUsageOID.SERVER_AUTH, ExtendedKeyUsageOID.CLIENT_AUTH]
-    cert = (
+    router = is_router(files.common_name)
+    builder = (
         x509.CertificateBuilder()
         .subject_name(x509.Name(attributes))
         .issuer_name(ca_cert.subject)
@@ -163,13 +194,18 @@ def issue(
         .not_valid_before(now - CLOCK_SKEW)
         .not_valid_after(now + CERT_LIFETIME)
         .add_extension(x509.BasicConstraints(ca=False, path_length=None), critical=True)
-        .add_extension(x509.SubjectAlternativeName(_alt_names(hosts)), critical=False)
-        .add_extension(x509.ExtendedKeyUsage(usages), critical=False)
+        .add_extension(
+            x509.ExtendedKeyUsage(_ROUTER_USAGES if router else _CLIENT_USAGES), critical=False
+        )
         .add_extension(
             x509.AuthorityKeyIdentifier.from_issuer_public_key(ca_key.public_key()), critical=False
         )
-        .sign(ca_key, hashes.SHA256())
     )
+    if router:
+        builder = builder.add_extension(
+            x509.SubjectAlternativeName(_alt_names(hosts)), critical=False
+        )
+    cert = builder.sign(ca_key, hashes.SHA256())
     _write_private(files.key, _key_pem(key))
     _write_public(files.cert, cert)
     if files.ca != Path(keys_dir) / "ca.pem":
@@ -177,9 +213,24 @@ def issue(
     return files
 
 
+def _fits_role(cert: x509.Certificate, common_name: str, hosts: Iterable[str]) -> bool:
+    """A router's certificate serves and names ``hosts``; any other is a client's, nameless."""
+    try:
+        usages = tuple(cert.extensions.get_extension_for_class(x509.ExtendedKeyUsage).value)
+    except x509.ExtensionNotFound:
+        return False
+    try:
+        alt = cert.extensions.get_extension_for_class(x509.SubjectAlternativeName).value
+    except x509.ExtensionNotFound:
+        alt = None
+    if not is_router(common_name):
+        return usages == _CLIENT_USAGES and alt is None
+    return usages == _ROUTER_USAGES and alt is not None and set(_alt_names(hosts)) <= set(alt)
+
+
 def is_valid(files: IdentityFiles, hosts: Iterable[str] = ()) -> bool:
-    """Whether the identity's files exist, match the CA, name ``hosts`` and are not about to
-    expire."""
+    """Whether the identity's files exist, match a CA that issues by role, fit the identity's
+    role (a router's naming ``hosts``) and are not about to expire."""
     try:
         cert = x509.load_pem_x509_certificate(files.cert.read_bytes())
         ca = x509.load_pem_x509_certificate(files.ca.read_bytes())
@@ -188,6 +239,8 @@ def is_valid(files: IdentityFiles, hosts: Iterable[str] = ()) -> bool:
         return False
     if cert.public_key() != key.public_key() or cert.issuer != ca.subject:
         return False
+    if not issues_by_role(ca):
+        return False
     try:
         cert.verify_directly_issued_by(ca)
     except (InvalidSignature, ValueError, TypeError):
@@ -195,10 +248,6 @@ def is_valid(files: IdentityFiles, hosts: Iterable[str] = ()) -> bool:
     common_names = cert.subject.get_attributes_for_oid(NameOID.COMMON_NAME)
     if not common_names or common_names[0].value != files.common_name:
         return False
-    try:
-        alt = cert.extensions.get_extension_for_class(x509.SubjectAlternativeName).value
-    except x509.ExtensionNotFound:
-        return False
-    if not set(_alt_names(hosts)) <= set(alt):
+    if not _fits_role(cert, files.common_name, hosts):
         return False
     return cert.not_valid_after_utc - _now() > datetime.timedelta(days=7)

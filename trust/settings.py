@@ -17,7 +17,7 @@ from showfile.bus_view import ShowBus
 from showfile.roles import SERVICE_ROLES
 from trust.acl import access_control
 from trust.files import IdentityFiles, KeysError, identity_files
-from trust.hosts import GROUND_ROUTER, all_endpoints, companion_routers, endpoints
+from trust.hosts import all_endpoints, companion_routers, endpoints, is_router
 
 log = logging.getLogger(__name__)
 
@@ -94,11 +94,6 @@ def tls_section(files: IdentityFiles, *, router: bool) -> dict[str, Any]:
         section["listen_private_key"] = str(files.key)
         section["listen_certificate"] = str(files.cert)
     return section
-
-
-def is_router(identity: str) -> bool:
-    """Whether ``identity`` is a router's (the ground router or a companion host's)."""
-    return identity == GROUND_ROUTER or identity.startswith(f"{GROUND_ROUTER}@")
 
 
 def secured(show: ShowBus, files: IdentityFiles, *, router: bool) -> BusSettings:

@@ -71,6 +71,7 @@ class ConsoleApp(App[None]):
         Binding("u", "vehicle('release')", "release"),
         Binding("f", "vehicle('clear_fault')", "reset fault"),
         Binding("F", "clear_all", "reset all", show=False),
+        Binding("U", "release_all", "release all", show=False),
         Binding("s", "fresh_sheet", "fresh sheet", show=False),
         Binding("d", "detail", "detail", show=False),
         Binding("p", "toggle_pause", "pause"),
@@ -349,6 +350,9 @@ class ConsoleApp(App[None]):
 
     def action_clear_all(self) -> None:
         self._request(cmd.clear_all_request(self.model.fault_ids()))
+
+    def action_release_all(self) -> None:
+        self._request(cmd.release_all_request(self.model.held_ids(), self.model.queue_paused))
 
     def action_land_all(self) -> None:
         self._request(cmd.LAND_ALL)

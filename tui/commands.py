@@ -139,8 +139,21 @@ def clear_all_request(fault_ids: list[str]) -> Request:
     )
 
 
+def release_all_request(held_ids: list[str], queue_paused: bool) -> Request:
+    """``U``: every held vehicle may fly again (after land all or E-STOP of all)."""
+    if not held_ids:
+        return Refusal("release all: no vehicle is held")
+    names = ", ".join(_name(v) for v in held_ids[:6]) + (" …" if len(held_ids) > 6 else "")
+    after = "\nThe queue stays paused: resume it with p." if queue_paused else ""
+    return Ask(
+        f"Release {len(held_ids)} held vehicle(s)?\n{names}\nThey may take jobs again.{after}",
+        "Release all",
+        (OperatorCommand(command="release_all"),),
+    )
+
+
 LAND_ALL = Ask(
-    "Land ALL vehicles now?\nThey stay held until released one by one (u).",
+    "Land ALL vehicles now?\nThey stay held until released (u, or U for all).",
     "Land all",
     (OperatorCommand(command="land_all"),),
 )

@@ -161,6 +161,11 @@ class ConsoleModel:
         vehicles = self._vehicles
         return [vid for vid in self.vehicle_ids() if vehicles[vid].state == "fault"]
 
+    def held_ids(self) -> list[str]:
+        """Vehicles held by the operator (land, estop), in display order."""
+        vehicles = self._vehicles
+        return [vid for vid in self.vehicle_ids() if vehicles[vid].held]
+
     def awaiting_count(self) -> int:
         return sum(1 for j in self._jobs.values() if j.state in AWAITING_JOB_STATES)
 

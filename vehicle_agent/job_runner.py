@@ -15,9 +15,11 @@ the vehicle must hold the start of the plan (``safety.settle_*``); if it cannot 
 approaches the job goes back to the queue (code ``not_settled``) and the brush never goes down.
 
 Interruptions while a job is running lift the brush first (straight up to the pen-up height), then:
-cancel -> return and land -> idle; operator land -> return and land -> landed; orchestrator lost ->
-hover in place, and when it comes back, or after ``loss_land_after_s``, return and land; estop ->
-motors off, ``fault``. A vehicle fault reported by the backend ends in ``fault`` as well.
+cancel -> return and land -> idle; operator land -> return and land -> landed; estop -> motors off,
+``fault``. Losing the orchestrator interrupts nothing: only it assigns jobs and it keeps them, so
+the vehicle flies its job on, and the job lease (``vehicle_agent/lease.py``, applied by the
+service) decides how long it may write unheard; the brush goes down only while the lease is fresh
+(``may_begin_writing``). A vehicle fault reported by the backend ends in ``fault`` as well.
 
 Safety aborts (:class:`vehicle_agent.safety.guard.SafetyGuard`), with an alert event each: a
 tracking error above the bound for longer than its window (``deviation``) lifts the brush from
@@ -89,19 +91,13 @@ class JobRunner(RunnerPhases):
         return refuse("invalid", f"the job runner does not take {command.command!r}")
 
     def set_orchestrator_alive(self, alive: bool, now_s: float) -> None:
-        """The orchestrator's liveliness token appeared (True) or disappeared (False)."""
+        """The orchestrator's liveliness token appeared (True) or disappeared (False): said in
+        the status message; the job goes on (see the module docstring)."""
         if alive == self._orchestrator_alive:
             return
         self._orchestrator_alive = alive
-        if not alive:
-            self._lost_since_s = now_s
-            if self.phase in ACTIVE_PHASES:
-                self._interrupt("orchestrator_lost", "orchestrator lost: brush lifted, hovering")
-            return
-        self._lost_since_s = None
-        if self.phase == "hover" and self._abort == "orchestrator_lost":
-            self.message = "orchestrator back: returning home"
-            self._start_return(self._current_reference())
+        if self.phase in ACTIVE_PHASES:
+            self.message = "orchestrator back" if alive else "orchestrator away: flying on"
 
     def plan_ready(self, prepared: PreparedJob) -> None:
         """The planner finished the current job's trajectory: checked against the geofence, then
@@ -167,7 +163,6 @@ class JobRunner(RunnerPhases):
             reason = f"{self._retry_reason}; {wait_s:.0f} s to wait"
             return refuse(self._retry_code, reason, field="job")
         self._orchestrator_alive = True
-        self._lost_since_s = None
         self._job = RunningJob(assignment=job)
         self._abort = None
         self._after_landing = "idle"

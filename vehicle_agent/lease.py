@@ -10,12 +10,17 @@ itself on what it can see:
   may be someone else's. Checked before the next tick, before another setpoint is sent. (A
   shorter stall may or may not have cost it the job: the next report's answer, ``not_assigned``,
   says so within a second; a new holder needs far longer to take off and reach its board.)
-- an **unconfirmed write**: the brush may touch only within ``lost_after_s`` of the sending of a
-  report of this job that the orchestrator acknowledged (or of the assignment's arrival). While
-  the job is active and none came for a third of that, the service asks for one (a ``holding``
-  report before writing, ``progress`` while writing), so the confirmation is fresh when writing
-  begins. The orchestrator acknowledged after the report was sent, so from its own last
-  acknowledgement it can tell when this agent stopped writing, whatever happened in between;
+- an **unconfirmed write**: writing may begin only within ``lost_after_s`` of the sending of a
+  report of this job that the orchestrator acknowledged (or of the assignment's arrival); until
+  then the vehicle holds the start (:meth:`JobLease.may_begin_writing`). While the job is active
+  and none came for a third of that, the service asks for one (a ``holding`` report before
+  writing, ``progress`` while writing). Once its ``started`` report is acknowledged, the vehicle
+  writes on unheard until the write fence (``bus/fence.py``: the planned writing, with room for a
+  slow host, after that report was sent), through a restart of the orchestrator or the router;
+  the orchestrator holds the job for it until later than that (``orchestrator/holders.py``).
+  Without that acknowledgement it may write unheard for ``lost_after_s`` only;
+- an **unheard flight**: a job flown ``unheard_before_writing_s`` without any acknowledgement
+  before its writing began (the orchestrator is gone for good) is given up;
 - a **refusal**: the orchestrator answered a report of this job with ``not_assigned``.
 
 A fenced agent lifts the brush, gives the job up and flies home (the orchestrator puts the job
@@ -28,6 +33,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from bus.fence import unheard_writing_s
+
 
 @dataclass
 class JobLease:
@@ -35,6 +42,10 @@ class JobLease:
 
     lost_after_s: float
     """The show's ``policy.lost_after_s``, [s]."""
+    time_scale: float = 1.0
+    """Show (agent) seconds per wall second."""
+    unheard_before_writing_s: float = 10.0
+    """Give a job up that has gone this long in [s] unacknowledged before its writing began."""
     job_id: str | None = None
     """The job held (None: none)."""
     confirmed_at_s: float = -math.inf
@@ -44,6 +55,9 @@ class JobLease:
     """The job is being flown (from preflight to the end of writing): confirmations are asked."""
     writing: bool = False
     """The job is being written: the brush may touch."""
+    fence_at_s: float | None = None
+    """Until when the job may be written unheard, [s] (its ``started`` report acknowledged);
+    None: only ``lost_after_s`` after the last confirmation."""
     _last_tick_s: float | None = field(default=None, repr=False)
     _next_probe_s: float = field(default=-math.inf, repr=False)
 
@@ -60,15 +74,27 @@ class JobLease:
     def hold(self, job_id: str | None, *, active: bool, writing: bool, now_s: float) -> None:
         """The runner's job, whether it is being flown and whether written, at this tick."""
         if job_id != self.job_id:
-            self.job_id, self.confirmed_at_s = job_id, now_s
+            self.job_id, self.confirmed_at_s, self.fence_at_s = job_id, now_s, None
             self._next_probe_s = -math.inf
         held = job_id is not None
         self.active, self.writing = held and active, held and writing
 
-    def acknowledged(self, job_id: str, sent_at_s: float) -> None:
-        """The orchestrator acknowledged a report of ``job_id`` sent at ``sent_at_s``."""
-        if job_id == self.job_id:
-            self.confirmed_at_s = max(self.confirmed_at_s, sent_at_s)
+    def acknowledged(
+        self, job_id: str, sent_at_s: float, started_writing_s: float | None = None
+    ) -> None:
+        """The orchestrator acknowledged a report of ``job_id`` sent at ``sent_at_s``;
+        ``started_writing_s``: it was the ``started`` report, with this planned writing in show
+        [s]."""
+        if job_id != self.job_id:
+            return
+        self.confirmed_at_s = max(self.confirmed_at_s, sent_at_s)
+        if started_writing_s is not None and self.fence_at_s is None:
+            unheard_s = unheard_writing_s(started_writing_s, self.time_scale, self.lost_after_s)
+            self.fence_at_s = sent_at_s + unheard_s
+
+    def may_begin_writing(self, now_s: float) -> bool:
+        """Whether the brush may go down for the job now: confirmed within ``lost_after_s``."""
+        return now_s - self.confirmed_at_s < self.lost_after_s
 
     def tick(self, now_s: float) -> float:
         """The control loop starts a tick now; returns how long it did not run, [s]: since the
@@ -88,7 +114,11 @@ class JobLease:
         if gap_s >= self.stall_limit_s:
             return f"this agent stalled for {gap_s:.1f} s"
         unconfirmed_s = now_s - self.confirmed_at_s
-        if self.writing and unconfirmed_s >= self.lost_after_s:
+        fenced = self.fence_at_s is not None and now_s < self.fence_at_s
+        if self.writing and unconfirmed_s >= self.lost_after_s and not fenced:
+            past = "" if self.fence_at_s is None else " and past its write fence"
+            return f"no acknowledgement from the orchestrator for {unconfirmed_s:.1f} s{past}"
+        if self.active and not self.writing and unconfirmed_s >= self.unheard_before_writing_s:
             return f"no acknowledgement from the orchestrator for {unconfirmed_s:.1f} s"
         return None
 

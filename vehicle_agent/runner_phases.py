@@ -57,7 +57,11 @@ class RunnerPhases:
         self._reports: list[AgentReport] = []
         self._events: list[RunnerEvent] = []
         self._orchestrator_alive = False
-        self._lost_since_s: float | None = None
+        self.may_begin_writing = True
+        """Whether the job lease lets the brush go down now (set by the service before each
+        tick): a vehicle that has settled at the start holds it until then, and while the
+        orchestrator's token is gone (its ``started`` report would go unacknowledged, and
+        without that it may write unheard for ``lost_after_s`` only)."""
         self._next_telemetry_s = -math.inf
         self._last_setpoint: Setpoint | None = None
         """The last setpoint given (phases with a reference), where interruptions start from."""
@@ -142,14 +146,17 @@ class RunnerPhases:
         """Phases where the backend's own mode flies: on the ground, climbing, landing."""
         airborne_hold = snap.mode == "hold" and not snap.on_ground
         if self.phase == "climb" and airborne_hold and self._backend_command is None:
-            self._hold_m_enu = self.config.hover_home_m_enu
+            # where it climbed: above home, or above where an emergency stop dropped it
+            x_m, y_m, _ = snap.position_m_enu
+            top = (x_m, y_m, self.config.hover_home_m_enu[2])
+            self._hold_m_enu = top
             self._retry_backoff_s = self.config.takeoff_retry_s  # it flies: forget refusals
             if self._abort is not None:
-                self._start_return(self.config.hover_home_m_enu)
+                self._start_return(top)
             else:
                 self.phase = "wait_plan"
                 if self._job is not None and self._job.prepared is not None:
-                    self._start_transit(self.config.hover_home_m_enu)
+                    self._start_transit(top)
             return self._reference_now(self._now_s)
         if self.phase == "land" and snap.on_ground and snap.mode == "idle":
             stopped = self._after_landing == "fault"
@@ -168,9 +175,6 @@ class RunnerPhases:
                 self.phase, self.state = "land", "landing"
                 return None  # the backend's landing mode flies from here
             else:
-                if self._abort == "orchestrator_lost":
-                    self._after_landing = "landed"
-                    self.message = "orchestrator lost: landing"
                 self._start_return(self._current_reference())
         return self._hold()
 
@@ -187,6 +191,9 @@ class RunnerPhases:
             self._settled_since_s = now_s
         held_s = -math.inf if self._settled_since_s is None else now_s - self._settled_since_s
         if held_s >= safety.settle_hold_s:
+            if not (self.may_begin_writing and self._orchestrator_alive):  # wait for it
+                self._settle_until_s = max(self._settle_until_s, now_s + safety.settle_hold_s)
+                return self._hold()
             self._begin_writing(job)
             return job.setpoint(now_s)
         if now_s < self._settle_until_s:
@@ -254,11 +261,7 @@ class RunnerPhases:
             self.phase, self.state = "land", "landing"
 
     def _after_lift(self) -> None:
-        if self._abort == "orchestrator_lost" and not self._orchestrator_alive:
-            lost_since = self._lost_since_s if self._lost_since_s is not None else self._now_s
-            self._hover_until_s = lost_since + self.config.loss_land_after_s
-            self.phase, self.state = "hover", "returning"
-        elif self._abort in POLICY_ABORTS and self.safety.abort_policy == "hold":
+        if self._abort in POLICY_ABORTS and self.safety.abort_policy == "hold":
             self._hover_until_s = self._now_s + self.safety.abort_hold_s
             self.phase, self.state = "hover", "returning"
         else:

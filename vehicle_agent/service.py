@@ -110,7 +110,11 @@ class AgentService:
         self.incarnation = secrets.token_hex(8)
         """This start of the vehicle's agent, on its statuses (``bus.messages.VehicleStatus``)."""
         self._tasks: set[asyncio.Task[None]] = set()
-        self._lease = JobLease(settings.lost_after_s)
+        self._lease = JobLease(
+            settings.lost_after_s,
+            time_scale=settings.time_scale,
+            unheard_before_writing_s=runner.config.loss_land_after_s,
+        )
         self._guard = JobGuard(
             self._lease, runner, self.events, self.vehicle_id, lambda: self.clock.now_s
         )
@@ -210,7 +214,7 @@ class AgentService:
     async def _handle(self, command: VehicleCommand) -> CommandReply:
         self._wake_up()
         if command.command == "clear_fault":
-            return self._clear_fault()
+            return await self._clear_fault()
         reply = self.runner.handle_command(command, self.clock.now_s)
         log.info("%s %s -> %s", self.vehicle_id, command.command, reply.message)
         self._publish_status()
@@ -223,12 +227,12 @@ class AgentService:
             self.runner.set_orchestrator_alive(alive, self.clock.now_s)
             self._publish_status()
 
-    def _clear_fault(self) -> CommandReply:
+    async def _clear_fault(self) -> CommandReply:
         """The operator's ``clear_fault``: leave ``fault`` only when the vehicle is at rest."""
         if self._snapshot is None:
             reply = CommandReply(ok=False, message="the vehicle has not reported its state yet")
         else:
-            reply = clear_fault(self.runner, self._snapshot)
+            reply = await clear_fault(self.runner, self._snapshot, self.backend)
         if reply.ok:
             self.events.push("info", "fault_cleared", reply.message)
         else:
@@ -251,6 +255,7 @@ class AgentService:
             self._stalled_s = 0.0
             if probe is not None:
                 self.reports.queue(probe)
+            self.runner.may_begin_writing = self._lease.may_begin_writing(time.monotonic())
             actions = self.runner.step(snapshot, now_s)
             snapshot = await self._fly(actions, snapshot, now_s)
             self._snapshot = snapshot

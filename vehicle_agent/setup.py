@@ -18,7 +18,8 @@ from vehicles.registry import vehicle_kind
 from vehicles.surface import Surface
 
 LOSS_LAND_AFTER_S = 10.0
-"""Agent time in [s] a vehicle hovers after losing the orchestrator before it lands."""
+"""Wall time in [s] a job may be flown unheard before its writing begins (the orchestrator
+restarts in 1-3 s under ``skyquill up``'s supervisor); then it is given up."""
 TELEMETRY_RATE_HZ = 20.0
 """Telemetry messages per second of wall time."""
 PROGRESS_PERIOD_S = 1.0

@@ -24,6 +24,7 @@ HELP: tuple[tuple[str, str, str], ...] = (
     ("u", "release a held vehicle: it may fly again (confirmed)", "selected vehicle"),
     ("f", "reset a vehicle in fault after an E-STOP (confirmed)", "selected vehicle"),
     ("F", "reset every vehicle in fault (confirmed)", "whole fleet"),
+    ("U", "release every held vehicle (confirmed)", "whole fleet"),
     ("s", "fresh sheet: a half-written board may be written again", "selected vehicle's board"),
     ("Enter / d", "details of the vehicle", "selected vehicle (fleet focused)"),
     ("p", "pause / resume the queue (held vehicles stay held)", "queue"),

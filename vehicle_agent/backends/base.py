@@ -18,6 +18,8 @@ call                    what the backend does, seen through ``VehicleSnapshot.mo
 ``tick(None)``          continue the current mode; after ``offboard`` it holds the last point
 ``land()``              descend at the current horizontal position; ``landing`` then ``idle``
 ``estop()``             motors off at once; ``estop`` (the vehicle drops; sim: comes to rest)
+``recover()``           after ``estop`` or a fault, once it rests disarmed on the ground: ``idle``
+                        again, so that the next ``takeoff`` goes through its normal checks
 ``close()``             release the connection / the simulated vehicle
 ======================  ===============================================================
 
@@ -135,6 +137,12 @@ class VehicleBackend(Protocol):
         """Cut the motors now; mode ``estop``."""
         ...
 
+    async def recover(self) -> None:
+        """Leave ``estop`` (or a fault the backend found) for ``idle``: only a vehicle resting
+        disarmed on the ground, with a live link, may; raises :class:`BackendError` saying why
+        not. The next take-off then goes through all its usual checks (an autopilot re-arms)."""
+        ...
+
     async def close(self) -> None:
         """Release the vehicle; safe to call twice."""
         ...
@@ -155,6 +163,8 @@ class SynchronousVehicle(Protocol):
     def land(self) -> None: ...
 
     def estop(self) -> None: ...
+
+    def recover(self) -> None: ...
 
 
 V = TypeVar("V", bound=SynchronousVehicle)
@@ -185,6 +195,9 @@ class SynchronousBackend(Generic[V]):
 
     async def estop(self) -> None:
         self.vehicle.estop()
+
+    async def recover(self) -> None:
+        self.vehicle.recover()
 
     async def close(self) -> None:
         return None

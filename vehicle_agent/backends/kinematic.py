@@ -71,6 +71,12 @@ class KinematicVehicle:
         self.position_m_enu = (x, y, self.home_m_enu[2])
         self.velocity_mps_enu = (0.0, 0.0, 0.0)
 
+    def recover(self) -> None:
+        """After ``estop``: ``idle`` where it stands, ready to take off again."""
+        if self.mode not in ("idle", "estop"):
+            raise BackendError(f"cannot recover in mode {self.mode}: it is not at rest")
+        self.mode = "idle"
+
     def tick(self, setpoint: Setpoint | None) -> VehicleSnapshot:
         """Advance one period."""
         self.t_s += self.dt_s

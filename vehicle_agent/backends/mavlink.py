@@ -8,7 +8,8 @@ read back; if they do not hold, the vehicle is in fault).
 (param 7: metres above home); PX4 -> stream setpoints for a second, OFFBOARD, arm, then our own
 climb ramp. ``tick`` streams SET_POSITION_TARGET_LOCAL_NED (p, v, a and the take-off heading) or
 SET_ATTITUDE_TARGET at ``setpoint_rate_hz``; ``land`` switches to the autopilot's landing mode;
-``estop`` force-disarms. ENU inside, LOCAL_NED on the wire (origin ``origin_m_enu``).
+``estop`` force-disarms; ``recover`` makes a vehicle at rest ``idle`` again. ENU inside,
+LOCAL_NED on the wire (origin ``origin_m_enu``).
 
 Failsafe, never fighting the pilot (:mod:`~vehicle_agent.backends.mavlink_watchdog`): a lost
 heartbeat, a mode or arming change we did not command, a STATUSTEXT naming a failsafe, or a gap in
@@ -274,6 +275,26 @@ class MavlinkBackend:
             await self.commands.run(CMD_ARM_DISARM, 0.0, FORCE_DISARM)
         except BackendError as exc:
             log.error("estop of vehicle %s not confirmed: %s", self.state.system_id, exc)
+
+    async def recover(self) -> None:
+        """After an e-stop (a force-disarm) or a fault: ``idle`` again once the autopilot, heard
+        within its heartbeat timeout, says it is disarmed on the ground. Nothing is sent: the
+        next take-off sets the mode and arms through the autopilot's own pre-arm checks."""
+        st = self.state
+        if self._link is None or not st.connected:
+            raise LinkLostError("no link to the autopilot: it cannot be recovered")
+        silent_s = self.watchdog.link_silent_s(self._now_s)
+        if not silent_s <= self.settings.heartbeat_timeout_s:
+            raise LinkLostError(f"no heartbeat from the autopilot for {silent_s:.1f} s")
+        if st.armed:
+            raise BackendError("its motors are still armed")
+        if st.landed_state is not None and st.landed_state != 1:
+            raise BackendError("the autopilot does not say it is on the ground")
+        if self.fault is not None:
+            log.warning("vehicle %s: fault cleared by the operator: %s", st.system_id, self.fault)
+        self.fault, self._hold, self._climb, self._climb_to = None, None, None, None
+        self._commanded_at = st.heartbeats
+        self._set_backend_mode("idle")
 
     def close_link(self) -> None:
         self._mocap.stop()

@@ -84,8 +84,12 @@ class Watchdog:
                 return reason
         return None
 
+    def link_silent_s(self, now_s: float) -> float:
+        """How long in [s] the autopilot has sent no heartbeat, as of the last tick."""
+        return now_s - self._hb_at_s
+
     def _link(self, now_s: float, *_: object) -> str | None:
-        silent_s = now_s - self._hb_at_s
+        silent_s = self.link_silent_s(now_s)
         if silent_s > self.limits.heartbeat_timeout_s:
             return f"lost link: no heartbeat from the autopilot for {silent_s:.1f} s"
         return None

@@ -117,6 +117,12 @@ class SimVehicle:
         self._drop_vehicle()
         self.mode = "estop"
 
+    def recover(self) -> None:
+        """After ``estop``: the vehicle rests where it fell, ``idle``, ready to take off again."""
+        if self.mode not in ("idle", "estop"):
+            raise BackendError(f"cannot recover in mode {self.mode}: it is not at rest")
+        self.mode = "idle"
+
     def close(self) -> None:
         """Leave the fleet, if in flight in one (the agent stops)."""
         self._drop_vehicle()

@@ -1,0 +1,36 @@
+"""How long a vehicle may go on writing a job while nobody acknowledges it (the write fence).
+
+Only the orchestrator assigns jobs, and it keeps its jobs in SQLite; but while it restarts, or
+while the router does, or while a vehicle is cut off, the vehicle writing a job hears nothing.
+Both sides bound that time with the same figures, each on its own clock (only durations are
+compared, so the two clocks need not agree; a Unix clock stepped back by NTP shortens the
+orchestrator's margin by the step):
+
+- the **agent** (``vehicle_agent/lease.py``) writes on unheard until :func:`unheard_writing_s`
+  after it *sent* the ``started`` report of the job that the orchestrator acknowledged (writing
+  began right after it); without that acknowledgement, only ``lost_after_s`` after its last
+  acknowledged report, as before;
+- the **orchestrator** (``orchestrator/holders.py``) gives the job to nobody else until
+  :func:`unheard_writing_s` plus ``lost_job_hold_s`` after it *received* that report
+  (``Job.writing_since_s``, stored), which was after it was sent.
+
+So every moment the old holder may still ink lies before the moment anyone else may be given the
+job, by at least ``lost_job_hold_s``, under any interleaving of restarts, losses and delays;
+and a new holder needs tens of seconds more to take off and reach its board.
+"""
+
+from __future__ import annotations
+
+WRITING_SLOWDOWN = 0.5
+"""How much longer than planned, as a fraction, writing may take in wall time: the agent's loop
+follows the plan in its own time, which falls behind the wall clock when its host is loaded (the
+fleet host benchmark measured real-time factors 0.965-1.0 on 2 cores, ``docs/
+fleet_host_measurements.md``); 0.5 leaves room for far worse. Not from the papers."""
+
+
+def unheard_writing_s(planned_writing_s: float, time_scale: float, lost_after_s: float) -> float:
+    """How long in wall [s] after its ``started`` report a vehicle may write a job unheard.
+
+    ``planned_writing_s``: the planned writing in show time [s]; ``time_scale``: show seconds per
+    wall second; ``lost_after_s``: the show's ``policy.lost_after_s`` [s]."""
+    return lost_after_s + (1.0 + WRITING_SLOWDOWN) * planned_writing_s / time_scale

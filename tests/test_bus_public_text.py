@@ -1,0 +1,112 @@
+"""Public text is plain text (issue 30): a submission's ``client_id``, its strokes document's
+``label`` and ``device`` and its typed ``text`` are checked when the request is decoded, so no
+escape, bidirectional override or markup from the public reaches the orchestrator."""
+
+from __future__ import annotations
+
+import json
+import re
+from typing import Any
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from bus.codec import MessageError, decode
+from bus.keys import ShowKeys
+from bus.messages import SubmitReply, SubmitRequest
+from bus.public_text import MAX_CLIENT_ID_CHARS, MAX_LABEL_CHARS
+from bus.rpc import RemoteError, query_one, serve
+from bus.session import loopback_settings, open_session
+
+KEYS = ShowKeys("public-text-test")
+DRAWING = {"units": "px", "y_axis": "down", "strokes": [[[0, 0], [10, 10]]]}
+ESCAPES = "\x1b[2J\x1b]8;;http://e.vil\x07"
+MARKUP = "[blink]x[/]"
+BIDI = "\u202eevil\u2066"
+UNSAFE = re.compile(r"[\x00-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069\u200e\u200f\u2028\u2029]")
+
+
+def _payload(**fields: Any) -> bytes:
+    return json.dumps(fields).encode()
+
+
+@pytest.mark.timeout(60)
+def test_escapes_and_markup_over_the_bus_never_reach_the_orchestrator() -> None:
+    hostile = [
+        (_payload(strokes={**DRAWING, "label": ESCAPES + MARKUP}), "$.strokes.label"),
+        (_payload(strokes={**DRAWING, "label": MARKUP}), "$.strokes.label"),
+        (_payload(strokes={**DRAWING, "device": BIDI}), "$.strokes.device"),
+        (_payload(text="A", client_id=MARKUP + ESCAPES), "$.client_id"),
+        (_payload(text="A", client_id="c" + BIDI), "$.client_id"),
+        (_payload(text="A\x1b[2J"), "$.text"),
+        (_payload(strokes={**DRAWING, "label": "x" * (MAX_LABEL_CHARS + 1)}), "$.strokes.label"),
+        (_payload(text="A", client_id="c" * (MAX_CLIENT_ID_CHARS + 1)), "$.client_id"),
+    ]
+    received: list[SubmitRequest] = []
+
+    def on_submit(request: SubmitRequest) -> SubmitReply:
+        received.append(request)
+        return SubmitReply(ok=True, job_id=f"j{len(received)}", state="queued")
+
+    bus = loopback_settings()
+    with (
+        open_session(bus, role="router"),
+        open_session(bus, role="client") as orchestrator,
+        open_session(bus, role="client") as submitter,
+    ):
+        serve(orchestrator, KEYS.submit, SubmitRequest, on_submit)
+        for payload, field in hostile:
+            with pytest.raises(RemoteError) as refused:
+                query_one(submitter, KEYS.submit, payload, SubmitReply, timeout_s=5.0)
+            assert (refused.value.info.code, refused.value.info.field) == ("invalid", field)
+            assert not UNSAFE.search(refused.value.info.message)  # the answer echoes none
+        plain = _payload(strokes={**DRAWING, "label": "tick (v2)"}, client_id="booth-3")
+        assert query_one(submitter, KEYS.submit, plain, SubmitReply, timeout_s=5.0).ok
+        typed = SubmitRequest(text="[b]x", client_id="cli")  # brackets are written, not markup
+        assert query_one(submitter, KEYS.submit, typed, SubmitReply, timeout_s=5.0).ok
+    assert [(r.client_id, r.text) for r in received] == [("booth-3", None), ("cli", "[b]x")]
+
+
+def _clean_name(value: str) -> bool:
+    return not UNSAFE.search(value) and not re.search(r"\[[^\[\]]*\]", value)
+
+
+hostile_text = st.one_of(
+    st.text(max_size=120),
+    st.text(st.sampled_from(list("[]/@#ab \x1b\x07\x9b\x7f\u202e\u2066\u200e\u2028")), max_size=40),
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(hostile_text, hostile_text)
+def test_any_text_is_refused_or_decodes_plain(name: str, typed: str) -> None:
+    """Whatever a submitter puts in a name or a text (lone surrogates, C1 controls, isolates,
+    markup, long strings), the decoded request holds plain text or is refused as such."""
+    for raw in (
+        _payload(strokes={**DRAWING, "label": name, "device": name}, client_id=name),
+        _payload(text=typed or "A", client_id="c"),
+    ):
+        try:
+            request = decode(raw, SubmitRequest)
+        except MessageError as exc:
+            assert exc.info.code in ("invalid", "bad_json"), exc.info
+            continue
+        assert request.strokes is None or _clean_name(request.strokes["label"])
+        assert _clean_name(request.client_id) and len(request.client_id) <= MAX_CLIENT_ID_CHARS
+        assert request.text is None or not UNSAFE.search(request.text)
+
+
+plain_names = st.text(
+    st.characters(exclude_categories=("Cc", "Cf", "Cs", "Zl", "Zp"), exclude_characters="[]"),
+    max_size=MAX_CLIENT_ID_CHARS,
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(plain_names)
+def test_plain_text_passes_unchanged(name: str) -> None:
+    raw = _payload(strokes={**DRAWING, "label": name}, client_id=name)
+    request = decode(raw, SubmitRequest)
+    assert request.client_id == name and request.strokes is not None
+    assert request.strokes["label"] == name
