@@ -66,6 +66,8 @@ class LiveShow:
     events: list[Event] = field(default_factory=list)
     ink: list[Ink] = field(default_factory=list)
     acknowledged: list[str] = field(default_factory=list)
+    heard_at_s: dict[str, float] = field(default_factory=dict)
+    """Monotonic time of each vehicle's latest telemetry here."""
     lock: threading.Lock = field(default_factory=threading.Lock)
 
     @property
@@ -104,6 +106,19 @@ class LiveShow:
                 return {j.job_id: j.vehicle_id for j in active}
             time.sleep(0.05)
         raise AssertionError(f"{job_ids} were not all being written at once")
+
+    def heard_from_every_vehicle(self, since_s: float, within_s: float) -> float:
+        """Seconds from ``since_s`` (monotonic) until telemetry of every vehicle arrived here."""
+        vehicles = {v.id for v in self.run.show.vehicles}
+        deadline = since_s + within_s
+        while time.monotonic() < deadline:
+            with self.lock:
+                heard = {vid for vid, at_s in self.heard_at_s.items() if at_s >= since_s}
+            if heard == vehicles:
+                with self.lock:
+                    return max(self.heard_at_s[v] for v in vehicles) - since_s
+            time.sleep(0.01)
+        raise AssertionError(f"not every vehicle heard within {within_s} s")
 
     def events_since(self, kind: str, since_s: float) -> list[Event]:
         with self.lock:
@@ -212,8 +227,9 @@ def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveShow]:
                 live.events.append(event)
 
         def on_telemetry(_key: str, t: Telemetry) -> None:
-            if t.pen_down and t.job_id is not None:
-                with live.lock:
+            with live.lock:
+                live.heard_at_s[t.vehicle_id] = time.monotonic()
+                if t.pen_down and t.job_id is not None:
                     live.ink.append(Ink(time.monotonic(), t.vehicle_id, t.job_id))
 
         subs = [
@@ -250,12 +266,17 @@ def _strike_while_all_write(live: LiveShow, texts: list[str], victims: list[str]
         os.kill(pid, signal.SIGKILL)
         back_s = _new_pid(live.run, name, pid, within_s=10.0)
         print(f"\n{name} restarted after {back_s:.2f} s")
+        if name == "router":
+            heard_s = live.heard_from_every_vehicle(since_s=time.monotonic(), within_s=5.0)
+            print(f"every vehicle heard again {heard_s:.2f} s after the new router started")
     jobs = live.wait(job_ids)
     with live.lock:
         said = [f"{e.kind}: {e.message}" for e in live.events if e.job_id in writers]
     assert {j.job_id: j.vehicle_id for j in jobs} == writers, said
     dirty = [e.message for e in live.events_since("board_dirty", struck_at)]
     assert dirty == [], dirty
+    if victims == ["router"]:  # repaired by the supervisor before anyone was taken as lost
+        assert live.events_since("vehicle_lost", struck_at) == []
     live.check_written_once()  # every client reconnected by itself and re-declared everything
 
 
