@@ -80,8 +80,15 @@ FAULTS = (
 )
 SCRIPTED_HOLDS = ("estop_one", "land_all")
 """Faults whose holds the operator's documented recovery releases (not counted as extra)."""
-HALF_WRITE_ALLOWED = ("kill_agent_writing", "kill_agent_taking_off", "estop_one", "stop_agent")
-"""Faults that may leave a board half-written (a vehicle stopped with its brush on it)."""
+HALF_WRITE_ALLOWED = (
+    "kill_agent_writing",
+    "kill_agent_taking_off",
+    "stop_agent",
+    "estop_one",
+    "land_all",
+)
+"""Faults that may leave a board half-written: an agent killed or frozen past its lease with the
+brush on the board, and the operator's own stops (the brush is lifted where it is)."""
 NOT_INJECTED = {
     "network_cut": "needs a show across network namespaces (tests/test_multihost_show.py)",
     "disk_full": "needs a filesystem of the orchestrator's own",
@@ -117,7 +124,9 @@ class Operator:
 
     def command(self, command: OperatorCommand) -> CommandReply | None:
         try:
-            return query_one(self.session, self.run.keys.command, command, CommandReply, 5.0)
+            return query_one(
+                self.session, self.run.keys.command, command, CommandReply, timeout_s=5.0
+            )
         except (NoReplyError, RemoteError):
             return None
 
@@ -138,12 +147,18 @@ class Operator:
         present = [v for v in self.fleet() if v.alive]
         return random.choice(present) if present else None
 
-    def until(self, done: Callable[[list[VehicleSummary]], bool], timeout_s: float) -> bool:
+    def until(
+        self,
+        done: Callable[[list[VehicleSummary]], bool],
+        timeout_s: float,
+        meanwhile: Callable[[], None] = lambda: None,
+    ) -> bool:
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
             fleet = self.fleet()
             if fleet and done(fleet):
                 return True
+            meanwhile()
             time.sleep(0.2)
         return False
 
@@ -260,7 +275,8 @@ def run_show(args: argparse.Namespace, out: Path, chaos: bool) -> Result:
             log.faults.append((struck, kind))
             print(f"  {time.monotonic() - start:6.0f} s  {kind}", flush=True)
             inject(kind, op, run)
-            if op.until(lambda f: recovered(f, vehicles), 120.0):
+            released = lambda: release_holds(op, log)  # noqa: E731 - the operator watches on
+            if op.until(lambda f: recovered(f, vehicles), 120.0, released):
                 log.recovered_s[kind].append(time.time() - struck)
             next_fault = time.monotonic() + rng.uniform(120.0, 240.0) / args.time_scale
         done = jobs.counts()["done"] - done_at_start
