@@ -39,6 +39,10 @@ VehicleStateName = Literal[
     "fault",
     "lost",
 ]
+AIRBORNE_STATES: frozenset[VehicleStateName] = frozenset(
+    {"taking_off", "writing", "returning", "landing"}
+)
+"""Vehicle states in which it is in the air (or moving, for a ground vehicle)."""
 
 MAX_ID_CHARS = 128
 """Longest job or vehicle id a request may carry."""

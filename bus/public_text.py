@@ -32,6 +32,11 @@ _REFUSED_CATEGORIES = frozenset(("Cc", "Cf", "Cs", "Zl", "Zp"))
 _MARKUP = re.compile(r"\[[^\[\]]*\]")
 
 
+def drawing_label(strokes: int) -> str:
+    """The label of a drawing (``docs/protocol.md``): its stroke count, never its own words."""
+    return f"drawing ({strokes} stroke{'' if strokes == 1 else 's'})"
+
+
 def _refused(ch: str) -> bool:
     return unicodedata.category(ch) in _REFUSED_CATEGORIES and ch not in _JOINERS
 

@@ -140,10 +140,11 @@ LINK_KEEP_ALIVES = 4
 """Keep-alive messages per lease on an idle link (one every 500 ms)."""
 RECONNECT_RETRY = {"period_init_ms": 100, "period_max_ms": 250, "period_increase_factor": 1.5}
 """How clients and peers retry a lost router: after 0.1 s, then every 0.15 s and 0.25 s, so a
-router restarted by the supervisor (back in about 0.3-0.7 s) is reached again well within
-``policy.lost_after_s`` (at most every 1 s before: clients came back 3.6-7 s after a router
-restart). Zenoh replays the session's subscribers, queryables and liveliness tokens on the new
-link."""
+router restarted by the supervisor is reached again at most 0.25 s after it listens, well
+within ``policy.lost_after_s`` (1 s before). Measured, 3 vehicles: every vehicle heard again
+0.42-0.65 s after the new router process started (0.61-0.63 s with the old retry: the router
+listened early enough for both). Zenoh replays the session's subscribers, queryables and
+liveliness tokens on the new link."""
 
 
 def _insert_resilience(conf: zenoh.Config) -> None:

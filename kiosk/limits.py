@@ -12,6 +12,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from bus.public_text import drawing_label
 from kiosk import wording
 from kiosk.errors import RejectedError
 
@@ -134,7 +135,6 @@ def _check_strokes(doc: Any, limits: SubmissionLimits) -> Submission:
             raise RejectedError("too_many_points", wording.TOO_MANY_POINTS, stroke_index=i)
         if len(stroke) < 2:
             raise RejectedError("short_stroke", wording.SHORT_STROKE, stroke_index=i)
-    n = len(strokes)
-    label = f"drawing ({n} stroke{'s' if n != 1 else ''})"
+    label = drawing_label(len(strokes))
     drawn = {key: doc[key] for key in FORWARDED_STROKES_FIELDS if key in doc}
     return Submission(text=None, strokes=drawn, label=label)

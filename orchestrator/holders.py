@@ -41,7 +41,7 @@ def writing_fence_s(config: CoreConfig, job: Job) -> float | None:
 def hold_until_s(config: CoreConfig, job: Job, now_s: float) -> float:
     """Until when a job taken back from its lost vehicle waits for it, Unix time [s]."""
     fence = writing_fence_s(config, job)
-    return max(now_s, fence if fence is not None else now_s) + config.lost_job_hold_s
+    return max(now_s, fence or now_s) + config.lost_job_hold_s
 
 
 def left_half_written(book: Book, eff: Effects, job: Job, now_s: float) -> None:

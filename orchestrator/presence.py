@@ -25,14 +25,12 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from bus.messages import Event, VehicleStatus
+from bus.messages import AIRBORNE_STATES, Event, VehicleStatus
 from orchestrator import holders
 from orchestrator.core_types import Effects
 from orchestrator.fleet import VehicleView
 from orchestrator.requeue import hand_back, requeue
 
-AIRBORNE_STATES = ("taking_off", "writing", "returning", "landing")
-"""States of a vehicle in the air (or moving, for a ground vehicle)."""
 RELAY_BURST = 10.0
 """Events of one vehicle relayed at once before the rate limit applies."""
 RELAY_RATE_PER_S = 1.0

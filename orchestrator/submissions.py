@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bus.messages import ErrorInfo, SubmitRequest
+from bus.public_text import drawing_label
 from orchestrator.kinds import KindPlans
 from planner.errors import PlannerError
 from planner.glyphs import Glyph, parse_strokes_json, text_glyph
@@ -100,11 +101,8 @@ def validate_submission(request: SubmitRequest, show: Show) -> Accepted:
         )
     glyph = _glyph(request)
     _check_fits(glyph, request, show)
-    if request.text is not None:
-        label = request.text.strip()
-    else:
-        count = len(glyph.strokes)  # docs/protocol.md: never the document's own label
-        label = f"drawing ({count} stroke{'' if count == 1 else 's'})"
+    text = request.text
+    label = text.strip() if text is not None else drawing_label(len(glyph.strokes))
     return Accepted(label=label[:80], glyph=glyph, estimate_s=rough_duration_s(glyph, show))
 
 

@@ -24,7 +24,7 @@ WRITE_Z = 0.35
 
 
 def config(**overrides: float) -> RunnerConfig:
-    values: dict[str, float] = {"loss_land_after_s": 3.0, "v_max_mps": 0.6, "a_max_mps2": 0.8}
+    values: dict[str, float] = {"v_max_mps": 0.6, "a_max_mps2": 0.8}
     values.update(overrides)
     return RunnerConfig(
         vehicle_id="uav1",

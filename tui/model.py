@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import Literal
 
 from bus.messages import (
+    AIRBORNE_STATES,
     CommandReply,
     Event,
     JobState,
@@ -38,8 +39,6 @@ from tui.rows import Alert, QueueRow, VehicleRow
 from tui.settings import ConsoleSettings
 from tui.tracks import Track, TrackPoint
 
-AIRBORNE_STATES = frozenset({"taking_off", "writing", "returning", "landing"})
-"""Vehicle states in which it is in the air."""
 GROUNDED_STATES = frozenset({"fault", "lost", "unknown"})
 """Vehicle states in which it cannot take a job whatever the operator does to the queue."""
 OrchestratorStatus = Literal["unknown", "online", "offline"]

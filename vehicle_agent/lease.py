@@ -45,7 +45,8 @@ class JobLease:
     time_scale: float = 1.0
     """Show (agent) seconds per wall second."""
     unheard_before_writing_s: float = 10.0
-    """Give a job up that has gone this long in [s] unacknowledged before its writing began."""
+    """Give a job up that has gone this long in wall [s] unacknowledged before its writing began:
+    the orchestrator is gone for good (under ``skyquill up``'s supervisor it is back in 1-3 s)."""
     job_id: str | None = None
     """The job held (None: none)."""
     confirmed_at_s: float = -math.inf

@@ -57,9 +57,6 @@ class RunnerConfig:
     transit_wait_m: float | None = None
     """The pen-up reference waits while the vehicle is this far behind in [m]
     (``vehicles.kind.JobPhases.transit_wait_m``); None: it never waits."""
-    loss_land_after_s: float = 10.0
-    """A job flown this long in wall [s] without any acknowledgement from the orchestrator before
-    its writing began is given up (``vehicle_agent/lease.py``): it is gone for good."""
     telemetry_period_s: float = 0.05
     """Agent time in [s] between telemetry messages (20 Hz at time scale 1)."""
     progress_period_s: float = 1.0

@@ -110,11 +110,7 @@ class AgentService:
         self.incarnation = secrets.token_hex(8)
         """This start of the vehicle's agent, on its statuses (``bus.messages.VehicleStatus``)."""
         self._tasks: set[asyncio.Task[None]] = set()
-        self._lease = JobLease(
-            settings.lost_after_s,
-            time_scale=settings.time_scale,
-            unheard_before_writing_s=runner.config.loss_land_after_s,
-        )
+        self._lease = JobLease(settings.lost_after_s, time_scale=settings.time_scale)
         self._guard = JobGuard(
             self._lease, runner, self.events, self.vehicle_id, lambda: self.clock.now_s
         )
@@ -251,11 +247,12 @@ class AgentService:
                 await self.pacer.wait_until(time.monotonic() + self.clock.delay_s())
             self.tick_starts_s.append(time.monotonic())
             now_s = self.clock.now_s
-            probe = self._guard.before_tick(time.monotonic(), self._stalled_s, self._progress)
+            wall_s = time.monotonic()
+            probe = self._guard.before_tick(wall_s, self._stalled_s, self._progress)
             self._stalled_s = 0.0
             if probe is not None:
                 self.reports.queue(probe)
-            self.runner.may_begin_writing = self._lease.may_begin_writing(time.monotonic())
+            self.runner.may_begin_writing = self._lease.may_begin_writing(wall_s)
             actions = self.runner.step(snapshot, now_s)
             snapshot = await self._fly(actions, snapshot, now_s)
             self._snapshot = snapshot

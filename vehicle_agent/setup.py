@@ -17,9 +17,6 @@ from vehicles.kind import AutopilotWorld, JobPhases, VehicleKind
 from vehicles.registry import vehicle_kind
 from vehicles.surface import Surface
 
-LOSS_LAND_AFTER_S = 10.0
-"""Wall time in [s] a job may be flown unheard before its writing begins (the orchestrator
-restarts in 1-3 s under ``skyquill up``'s supervisor); then it is given up."""
 TELEMETRY_RATE_HZ = 20.0
 """Telemetry messages per second of wall time."""
 PROGRESS_PERIOD_S = 1.0
@@ -76,7 +73,6 @@ def vehicle_setup(show: Show, vehicle_id: str, *, time_scale: float | None = Non
         airborne=phases.airborne,
         route=phases.route,
         transit_wait_m=phases.transit_wait_m,
-        loss_land_after_s=LOSS_LAND_AFTER_S,
         telemetry_period_s=scale / TELEMETRY_RATE_HZ,
         progress_period_s=scale * PROGRESS_PERIOD_S,
         safety=safety_limits(show, vehicle_id, cruise_z_m, route=phases.route),
