@@ -3,16 +3,16 @@
 Losing a vehicle (its token gone, or silent, for ``lost_after_s``: a router restart, a Wi-Fi
 drop, a crash), or restarting the orchestrator, does not say whether the vehicle is still writing
 its job. Its lease (``vehicle_agent/lease.py``) lets it write unheard until the write fence
-(``bus/fence.py``): ``lost_after_s`` after its last acknowledged report before it began writing,
-and once its ``started`` report was acknowledged, the planned writing time (with room for a slow
-host) after that. So the job goes back to the queue for its last holder alone, for
-``CoreConfig.lost_job_hold_s`` past the later of now and that fence (:func:`hold_until_s`), and
-its board is left as it is: back with the job (its status or a report names it), the vehicle has
-it again (``job_reclaimed``) and writes on; back without it (it gave the job up, or its agent
-restarted), the job is free at once, for another vehicle first (that one takes no job for
-``refuse_backoff_s``), and a board it had begun is marked half-written then. After the hold
-anyone may take it, with a warning: the old holder can no longer be writing it, but if it had
-finished it and could not say so since, the character is written twice.
+(``bus/fence.py``): only after a *ready* report this orchestrator stored and acknowledged, and
+then for the planned writing time (with room for a slow host) after the latest such report. So
+the job goes back to the queue for its last holder alone, for ``CoreConfig.lost_job_hold_s`` past
+the later of now and that fence (:func:`hold_until_s`), and its board is left as it is: back with
+the job (its status or a report names it), the vehicle has it again (``job_reclaimed``) and
+writes on; back without it (it gave the job up, or its agent restarted), the job is free at once,
+for another vehicle first (that one takes no job for ``refuse_backoff_s``), and a board it may
+have begun (a ready report was stored) is marked half-written then. After the hold anyone may
+take it, with a warning: the old holder can no longer be writing it, but if it had finished it
+and could not say so since, the character is written twice.
 """
 
 from __future__ import annotations

@@ -7,7 +7,9 @@ even after a requeue (the character is written) and whoever took the job over is
 ``holding``/``started``/``progress`` from the last holder reclaim a job that is back in the queue
 and not yet given to another vehicle (a liveliness flap; ``orchestrator/holders.py`` keeps it from
 others a while), otherwise the vehicle is told to stop (``not_assigned``); ``holding`` (before
-writing: the vehicle renews its lease, ``vehicle_agent/lease.py``) changes nothing else;
+writing: the vehicle renews its lease, ``vehicle_agent/lease.py``) changes nothing else, unless it
+carries the planned writing (a *ready* report: the brush goes down once it is acknowledged), whose
+receipt is stored as the start of the write fence (``Job.writing_since_s``);
 ``failed`` is acknowledged and ignored. A ``failed`` report with ``retry_after_s`` hands the job
 back to the queue instead of failing it, and so does a ``plan_failed`` one while a vehicle of
 another kind may still write the job (the vehicle's kind cannot write it: a width outside the
@@ -21,7 +23,7 @@ from typing import TYPE_CHECKING
 from bus.messages import AgentReport, CommandReply, ErrorInfo, VehicleCommand
 from orchestrator import holders
 from orchestrator.core_types import Effects
-from orchestrator.jobs import Job, transition
+from orchestrator.jobs import Job, transition, update
 from orchestrator.requeue import hand_back, requeue
 from orchestrator.written import split_written
 
@@ -59,6 +61,8 @@ def apply_report(book: Book, rep: AgentReport, eff: Effects, now_s: float) -> Co
         return _failed(book, job, rep, eff, now_s)
     if rep.event == "holding":
         book.vehicles[rep.vehicle_id].mismatch_since_s = None
+        if rep.planned_duration_s is not None:
+            _ready(book, job, rep, eff, now_s)
         return CommandReply(ok=True, message="still yours")
     return _writing(book, job, rep, eff, now_s)
 
@@ -150,6 +154,16 @@ def _fail(
     eff.fleet_changed = True
     book.assign(eff, now_s)
     return CommandReply(ok=True, message="failure recorded")
+
+
+def _ready(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> None:
+    """The vehicle is at the start of its writing and asks to write (a *ready* report): from
+    the acknowledgement on it may write unheard until the write fence (``bus/fence.py``), so the
+    fence's start is stored before the answer, the latest receipt (``Job.writing_since_s``)."""
+    since_s = max(job.writing_since_s or now_s, now_s)
+    book.put(
+        eff, update(job, now_s, writing_since_s=since_s, planned_duration_s=rep.planned_duration_s)
+    )
 
 
 def _writing(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:

@@ -65,3 +65,22 @@ def test_a_later_job_starts_with_a_fresh_lease() -> None:
     lease.hold("j1", active=True, writing=True, now_s=0.0)
     lease.hold("j2", active=True, writing=True, now_s=10.0)
     assert lease.breach(0.0, 11.0) is None and lease.confirmed_at_s == 10.0
+
+
+def test_the_brush_goes_down_only_soon_after_an_acknowledged_ready_report() -> None:
+    lease = JobLease(LOST_AFTER_S, time_scale=2.0)
+    lease.hold("j1", active=True, writing=False, now_s=0.0)
+    lease.acknowledged("j1", sent_at_s=4.0)  # a probe: the job is still ours, but no ready
+    assert not lease.may_begin_writing(4.1) and lease.fence_at_s is None
+    assert lease.ready_due(4.1) and not lease.ready_due(4.2)  # sent; again after 0.5 s
+    assert lease.ready_due(4.6)  # still unacknowledged: sent again
+    lease.acknowledged("j1", sent_at_s=4.6, ready_writing_s=10.0)
+    assert lease.may_begin_writing(6.0) and not lease.may_begin_writing(6.1)
+    assert lease.fence_at_s == 4.6 + LOST_AFTER_S + 1.5 * 10.0 / 2.0
+    assert not lease.ready_due(5.0) and lease.ready_due(5.1)  # fresh for a third of the lease
+    lease.acknowledged("j1", sent_at_s=5.1, ready_writing_s=10.0)
+    assert lease.fence_at_s == 5.1 + LOST_AFTER_S + 7.5  # the latest one counts
+    lease.acknowledged("j1", sent_at_s=4.8, ready_writing_s=10.0)  # an older one's late answer
+    assert lease.fence_at_s == 5.1 + LOST_AFTER_S + 7.5 and lease.ready_at_s == 5.1
+    lease.hold("j2", active=True, writing=False, now_s=6.0)  # the next job: nothing carried over
+    assert not lease.may_begin_writing(6.0) and lease.fence_at_s is None and lease.ready_due(6.0)

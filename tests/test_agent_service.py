@@ -206,7 +206,7 @@ def test_a_vehicle_writes_on_while_the_orchestrator_is_away_and_reports_when_it_
     free_tcp_port: Callable[[], int],
 ) -> None:
     """The orchestrator's token and its report queryable go (it restarts) right after it has
-    acknowledged ``started``: the vehicle finishes the character on its write fence
+    acknowledged the ready report and ``started``: the vehicle finishes the character on its write fence
     (``bus/fence.py``) and its ``done`` reaches the orchestrator once it is back."""
 
     async def scenario() -> None:
@@ -228,11 +228,12 @@ def test_a_vehicle_writes_on_while_the_orchestrator_is_away_and_reports_when_it_
     asyncio.run(scenario())
 
 
-def test_without_an_acknowledged_start_the_vehicle_writes_unheard_for_lost_after_s_only(
+def test_without_an_acknowledged_ready_report_the_vehicle_never_writes_and_gives_up(
     free_tcp_port: Callable[[], int],
 ) -> None:
-    """The orchestrator goes before it acknowledged ``started``: nobody holds the job for the
-    vehicle past ``lost_after_s``, so it gives the job up then (brush lifted, home)."""
+    """The orchestrator goes before the vehicle reached the start of its writing: nobody
+    acknowledges its ready report, so the brush never goes down and the vehicle gives the job
+    up (brush lifted, home) once unheard for ``unheard_before_writing_s``."""
 
     async def scenario() -> None:
         async with show(free_tcp_port) as (service, orch):

@@ -1,12 +1,13 @@
 """The write fence (``bus/fence.py``): no character is written by two vehicles, under any
 interleaving of delays, restarts and losses.
 
-A property over random schedules: the agent's real lease (``vehicle_agent/lease.py``) decides
-tick by tick whether its vehicle may still ink; the orchestrator's real ``Book`` (restarted from
-what it stored, or not) decides when another vehicle may be given the job. The last instant the
-old holder inks must come before the first instant anyone else may have it. Both run on one time
-line here (the agent's monotonic clock and the orchestrator's Unix clock differ by a constant,
-and only durations are compared).
+A property over random schedules, a restart of the orchestrator or a loss striking anywhere
+from before the vehicle's ready report to the end of its writing: the agent's real lease
+(``vehicle_agent/lease.py``) decides tick by tick whether its vehicle may still ink; the
+orchestrator's real ``Book`` (restarted from what it stored, or not) decides when another vehicle
+may be given the job. The last instant the old holder inks must come before the first instant
+anyone else may have it. Both run on one time line here (the agent's monotonic clock and the
+orchestrator's Unix clock differ by a constant, and only durations are compared).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import math
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from bus.fence import WRITING_SLOWDOWN
 from bus.messages import AgentReport, SubmitRequest, VehicleStatus
 from orchestrator.core import Book, CoreConfig
 from orchestrator.fleet import EtaModel, VehicleInfo
@@ -55,7 +57,24 @@ def _last_ink_s(lease: JobLease, begin_s: float, writing_wall_s: float) -> float
     return end
 
 
-@settings(max_examples=300, deadline=None)
+def _first_free_s(book: Book, from_s: float, until_s: float) -> float:
+    """The first instant from ``from_s`` at which another vehicle may be given j1."""
+    book.liveliness("uav2", True, from_s)
+    book.status(_status("uav2", None), from_s)
+    t = from_s
+    while t < until_s:
+        book.tick(t)
+        job = book.jobs["j1"]
+        if job.state != "queued" or job.holder_hold_until_s is None:
+            if job.vehicle_id == "uav2" or job.state == "queued":
+                return t
+        elif t >= job.holder_hold_until_s:
+            return t
+        t += 0.25
+    return math.inf
+
+
+@settings(max_examples=400, deadline=None)
 @given(
     planned_s=st.floats(2.0, 120.0),
     time_scale=st.sampled_from([1.0, 2.0, 4.0, 6.0]),
@@ -63,6 +82,7 @@ def _last_ink_s(lease: JobLease, begin_s: float, writing_wall_s: float) -> float
     delay_to_orch_s=st.floats(0.0, 1.0),
     ack_back=st.booleans(),
     delay_back_s=st.floats(0.0, 1.0),
+    settle_s=st.floats(0.0, 2.0),
     outage_after_s=st.floats(0.0, 30.0),
     restart=st.booleans(),
 )
@@ -73,14 +93,19 @@ def test_the_old_holder_never_inks_once_another_vehicle_may_have_the_job(
     delay_to_orch_s: float,
     ack_back: bool,
     delay_back_s: float,
+    settle_s: float,
     outage_after_s: float,
     restart: bool,
 ) -> None:
-    """``started`` is sent at 10 s, reaches the orchestrator after ``delay_to_orch_s``; its
-    acknowledgement reaches the agent after ``delay_back_s`` (or never). After
-    ``outage_after_s`` nothing more is heard either way (the router, the orchestrator or the
-    link died); the orchestrator is restarted from its store or goes on, loses the vehicle, and
-    holds the job. The writing takes ``slowdown`` times its plan (a loaded host)."""
+    """The vehicle reaches the start of its writing at 10 s and sends its ready report, which
+    reaches the orchestrator after ``delay_to_orch_s``; the acknowledgement comes back after
+    ``delay_back_s`` (or never); the brush would go down ``settle_s`` after the ready report.
+    ``outage_after_s`` after the ready report nothing more is heard either way (the router, the
+    orchestrator or the link died, maybe before the report arrived); the orchestrator is
+    restarted from its store or goes on, loses the vehicle, and holds the job. The writing takes
+    ``slowdown`` times its plan (a loaded host). Then: the old holder inks only before anyone
+    else may have the job; and a writer that began keeps writing through the outage to its end
+    unless its host is slower than the fence allows for (no board left half-written)."""
     config = _config(time_scale)
     book = Book(config, now_s=0.0)
     book.liveliness("uav1", True, 0.0)
@@ -90,63 +115,60 @@ def test_the_old_holder_never_inks_once_another_vehicle_may_have_the_job(
 
     lease = JobLease(LOST_AFTER_S, time_scale=time_scale)
     lease.hold("j1", active=True, writing=False, now_s=1.0)
-    lease.acknowledged("j1", 9.5)  # a holding report just before writing
-    sent_s = 10.0
-    assert lease.may_begin_writing(sent_s)
-    lease.hold("j1", active=True, writing=True, now_s=sent_s)
-    received_s = sent_s + delay_to_orch_s
-    started = AgentReport(
-        vehicle_id="uav1", job_id="j1", event="started", planned_duration_s=planned_s
+    ready_s = 10.0
+    outage_s = ready_s + outage_after_s
+    received_s = ready_s + delay_to_orch_s
+    ready = AgentReport(
+        vehicle_id="uav1", job_id="j1", event="holding", planned_duration_s=planned_s
     )
-    book.status(_status("uav1", "j1"), received_s)
-    assert book.report(started, received_s)[0].ok
-    if ack_back:
-        lease.acknowledged("j1", sent_s, planned_s)
-    outage_s = received_s + outage_after_s
-    # confirmations keep coming until the outage (progress reports every 0.5 s)
-    t = sent_s
-    while t + 0.5 < outage_s and ack_back:
-        t += 0.5
-        book.status(_status("uav1", "j1"), t)
-        book.report(AgentReport(vehicle_id="uav1", job_id="j1", event="progress"), t)
-        lease.acknowledged("j1", t - delay_back_s)
-    last_ink_s = _last_ink_s(lease, sent_s, slowdown * planned_s / time_scale)
+    if received_s < outage_s:
+        book.status(_status("uav1", "j1"), received_s)
+        assert book.report(ready, received_s)[0].ok
+        if ack_back and received_s + delay_back_s < outage_s:
+            lease.acknowledged("j1", ready_s, planned_s)
+    begin_s = max(ready_s + settle_s, received_s + delay_back_s)
+    writing_wall_s = slowdown * planned_s / time_scale
+    if lease.may_begin_writing(begin_s):
+        lease.hold("j1", active=True, writing=True, now_s=begin_s)
+        t = begin_s
+        while t + 0.5 < outage_s:  # started, then progress every 0.5 s, until the outage
+            t += 0.5
+            book.status(_status("uav1", "j1"), t)
+            book.report(AgentReport(vehicle_id="uav1", job_id="j1", event="progress"), t)
+            lease.acknowledged("j1", t - delay_back_s)
+        last_ink_s = _last_ink_s(lease, begin_s, writing_wall_s)
+        if slowdown <= 1.0 + WRITING_SLOWDOWN:
+            assert last_ink_s == begin_s + writing_wall_s  # written to its end, unheard
+    else:
+        last_ink_s = -math.inf  # the brush never went down
 
     if restart:
         book = Book(config, list(book.jobs.values()), now_s=outage_s + 0.5)
     else:
         book.liveliness("uav1", False, outage_s)
-    book.liveliness("uav2", True, outage_s + 0.5)
-    book.status(_status("uav2", None), outage_s + 0.5)
-    first_free_s = math.inf
-    t = outage_s + 0.5
-    while t < last_ink_s + 60.0:
-        book.tick(t)
-        job = book.jobs["j1"]
-        if job.state != "queued" or job.holder_hold_until_s is None:
-            if job.vehicle_id == "uav2" or job.state == "queued":
-                first_free_s = t
-                break
-        elif t >= job.holder_hold_until_s:
-            first_free_s = t
-            break
-        t += 0.25
+    first_free_s = _first_free_s(book, outage_s + 0.5, max(last_ink_s, outage_s) + 60.0)
     assert last_ink_s < first_free_s, (last_ink_s, first_free_s)
 
 
-def test_the_fence_is_the_planned_writing_with_room_after_the_start() -> None:
+def test_the_fence_is_the_planned_writing_with_room_after_the_latest_ready_report() -> None:
     config = _config(time_scale=2.0)
     book = Book(config, now_s=0.0)
     book.liveliness("uav1", True, 0.0)
     book.status(_status("uav1", None), 0.0)
     book.submit("j1", SubmitRequest(text="L"), label="L", estimate_s=9.0, now_s=1.0)
-    rep = AgentReport(vehicle_id="uav1", job_id="j1", event="started", planned_duration_s=20.0)
-    book.report(rep, 10.0)
+    ready = AgentReport(vehicle_id="uav1", job_id="j1", event="holding", planned_duration_s=20.0)
+    book.report(ready, 10.0)
+    book.report(AgentReport(vehicle_id="uav1", job_id="j1", event="holding"), 11.0)  # a probe
     fence = writing_fence_s(config, book.jobs["j1"])
     assert fence == 10.0 + LOST_AFTER_S + 1.5 * 20.0 / 2.0  # 10 s of wall writing, +50 %
+    book.report(ready, 12.0)  # sent again while the vehicle settled: later
+    assert writing_fence_s(config, book.jobs["j1"]) == fence + 2.0
     lease = JobLease(LOST_AFTER_S, time_scale=2.0)
-    lease.hold("j1", active=True, writing=True, now_s=9.9)
+    lease.hold("j1", active=True, writing=False, now_s=9.9)
+    assert not lease.may_begin_writing(9.9)  # no ready report acknowledged: no ink
     lease.acknowledged("j1", 9.9, 20.0)
+    assert lease.may_begin_writing(9.9 + 1.4) and not lease.may_begin_writing(9.9 + 1.5)
+    lease.hold("j1", active=True, writing=True, now_s=10.5)
     assert lease.breach(0.0, 9.9 + 16.4) is None and lease.breach(0.0, 9.9 + 16.6) is not None
     unacknowledged = JobLease(LOST_AFTER_S, time_scale=2.0)
     unacknowledged.hold("j1", active=True, writing=True, now_s=9.9)

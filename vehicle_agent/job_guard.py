@@ -3,8 +3,10 @@
 Before each tick the service asks :meth:`JobGuard.before_tick`: a job that may have been given to
 another vehicle by now (this agent stalled, or its writing went unacknowledged) is given up at
 once, brush lifted, back home (:meth:`JobGuard.give_up`, also what the report outbox calls when the
-orchestrator answers ``not_assigned``); a flown job unacknowledged for a while gets a report that
-asks the orchestrator to confirm it, which the service queues.
+orchestrator answers ``not_assigned``); a vehicle waiting at the start of its writing sends a
+*ready* report (``holding`` with the planned writing: the brush goes down only once one is
+acknowledged); a flown job unacknowledged for a while gets a report that asks the orchestrator
+to confirm it, which the service queues.
 """
 
 from __future__ import annotations
@@ -51,9 +53,19 @@ class JobGuard:
             runner.job_id, active=runner.phase in ACTIVE_PHASES, writing=writing, now_s=wall_s
         )
         why = lease.breach(gap_s, wall_s)
+        ready_writing_s = runner.ready_to_write_s
         if why is not None:
             self.give_up(why)
-        elif lease.job_id is not None and lease.probe_due(wall_s):
+        elif lease.job_id is None:
+            return None
+        elif ready_writing_s is not None and lease.ready_due(wall_s):
+            return AgentReport(
+                vehicle_id=self.vehicle_id,
+                job_id=lease.job_id,
+                event="holding",
+                planned_duration_s=ready_writing_s,
+            )
+        elif lease.probe_due(wall_s):
             return AgentReport(
                 vehicle_id=self.vehicle_id,
                 job_id=lease.job_id,

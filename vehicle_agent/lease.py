@@ -10,15 +10,17 @@ itself on what it can see:
   may be someone else's. Checked before the next tick, before another setpoint is sent. (A
   shorter stall may or may not have cost it the job: the next report's answer, ``not_assigned``,
   says so within a second; a new holder needs far longer to take off and reach its board.)
-- an **unconfirmed write**: writing may begin only within ``lost_after_s`` of the sending of a
-  report of this job that the orchestrator acknowledged (or of the assignment's arrival); until
-  then the vehicle holds the start (:meth:`JobLease.may_begin_writing`). While the job is active
-  and none came for a third of that, the service asks for one (a ``holding`` report before
-  writing, ``progress`` while writing). Once its ``started`` report is acknowledged, the vehicle
-  writes on unheard until the write fence (``bus/fence.py``: the planned writing, with room for a
-  slow host, after that report was sent), through a restart of the orchestrator or the router;
-  the orchestrator holds the job for it until later than that (``orchestrator/holders.py``).
-  Without that acknowledgement it may write unheard for ``lost_after_s`` only;
+- an **unconfirmed write**: the brush goes down only within ``lost_after_s`` of the sending of a
+  *ready* report (``holding`` with the planned writing) that the orchestrator acknowledged: it
+  stored the receipt (``Job.writing_since_s``) before answering, so both sides know that writing
+  may have begun before either can be cut off (:meth:`JobLease.may_begin_writing`). The vehicle
+  sends one when it reaches the start of its writing, again while it settles there, and writes
+  on unheard until the write fence (``bus/fence.py``: the planned writing, with room for a slow
+  host, after that report was sent), through a restart of the orchestrator or the router; the
+  orchestrator holds the job for it until later than that (``orchestrator/holders.py``). While
+  the job is flown and no acknowledgement came for a third of ``lost_after_s``, the service asks
+  for one (``holding`` before writing, ``progress`` while writing); past the fence, writing
+  needs one younger than ``lost_after_s``;
 - an **unheard flight**: a job flown ``unheard_before_writing_s`` without any acknowledgement
   before its writing began (the orchestrator is gone for good) is given up;
 - a **refusal**: the orchestrator answered a report of this job with ``not_assigned``.
@@ -56,11 +58,14 @@ class JobLease:
     """The job is being flown (from preflight to the end of writing): confirmations are asked."""
     writing: bool = False
     """The job is being written: the brush may touch."""
+    ready_at_s: float = -math.inf
+    """When the latest *ready* report of the job the orchestrator acknowledged was sent, [s]."""
     fence_at_s: float | None = None
-    """Until when the job may be written unheard, [s] (its ``started`` report acknowledged);
-    None: only ``lost_after_s`` after the last confirmation."""
+    """Until when the job may be written unheard, [s] (a ready report acknowledged); None: only
+    ``lost_after_s`` after the last confirmation."""
     _last_tick_s: float | None = field(default=None, repr=False)
     _next_probe_s: float = field(default=-math.inf, repr=False)
+    _next_ready_s: float = field(default=-math.inf, repr=False)
 
     @property
     def stall_limit_s(self) -> float:
@@ -76,26 +81,36 @@ class JobLease:
         """The runner's job, whether it is being flown and whether written, at this tick."""
         if job_id != self.job_id:
             self.job_id, self.confirmed_at_s, self.fence_at_s = job_id, now_s, None
-            self._next_probe_s = -math.inf
+            self.ready_at_s = self._next_probe_s = self._next_ready_s = -math.inf
         held = job_id is not None
         self.active, self.writing = held and active, held and writing
 
     def acknowledged(
-        self, job_id: str, sent_at_s: float, started_writing_s: float | None = None
+        self, job_id: str, sent_at_s: float, ready_writing_s: float | None = None
     ) -> None:
         """The orchestrator acknowledged a report of ``job_id`` sent at ``sent_at_s``;
-        ``started_writing_s``: it was the ``started`` report, with this planned writing in show
-        [s]."""
+        ``ready_writing_s``: it was a ready report, with this planned writing in show [s] (the
+        orchestrator stored its receipt, later than ``sent_at_s``, as its own fence's start)."""
         if job_id != self.job_id:
             return
         self.confirmed_at_s = max(self.confirmed_at_s, sent_at_s)
-        if started_writing_s is not None and self.fence_at_s is None:
-            unheard_s = unheard_writing_s(started_writing_s, self.time_scale, self.lost_after_s)
-            self.fence_at_s = sent_at_s + unheard_s
+        if ready_writing_s is not None:
+            self.ready_at_s = max(self.ready_at_s, sent_at_s)
+            unheard_s = unheard_writing_s(ready_writing_s, self.time_scale, self.lost_after_s)
+            self.fence_at_s = max(self.fence_at_s or -math.inf, sent_at_s + unheard_s)
 
     def may_begin_writing(self, now_s: float) -> bool:
-        """Whether the brush may go down for the job now: confirmed within ``lost_after_s``."""
-        return now_s - self.confirmed_at_s < self.lost_after_s
+        """Whether the brush may go down for the job now: a ready report sent less than
+        ``lost_after_s`` ago was acknowledged."""
+        return now_s - self.ready_at_s < self.lost_after_s
+
+    def ready_due(self, now_s: float) -> bool:
+        """While the vehicle waits at the start of its writing: whether to send a ready report
+        now (none acknowledged for a third of ``lost_after_s``; at most that often)."""
+        if now_s - self.ready_at_s < self.probe_after_s or now_s < self._next_ready_s:
+            return False
+        self._next_ready_s = now_s + self.probe_after_s
+        return True
 
     def tick(self, now_s: float) -> float:
         """The control loop starts a tick now; returns how long it did not run, [s]: since the

@@ -96,8 +96,8 @@ class ReportOutbox:
             log.warning("%s: report %s refused: %s", vid, report.event, exc)
             return True  # the orchestrator answered: it has seen the report
         if reply.ok:
-            started = report.planned_duration_s if report.event == "started" else None
-            self._lease.acknowledged(report.job_id, sent_at_s, started)
+            ready = report.planned_duration_s if report.event == "holding" else None
+            self._lease.acknowledged(report.job_id, sent_at_s, ready)
         else:
             log.warning("%s: report %s not accepted: %s", vid, report.event, reply.message)
             refused = reply.error is not None and reply.error.code == "not_assigned"

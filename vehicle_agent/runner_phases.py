@@ -59,9 +59,8 @@ class RunnerPhases:
         self._orchestrator_alive = False
         self.may_begin_writing = True
         """Whether the job lease lets the brush go down now (set by the service before each
-        tick): a vehicle that has settled at the start holds it until then, and while the
-        orchestrator's token is gone (its ``started`` report would go unacknowledged, and
-        without that it may write unheard for ``lost_after_s`` only)."""
+        tick): a vehicle that has settled at the start holds it until its *ready* report is
+        acknowledged (``vehicle_agent/lease.py``), and while the orchestrator's token is gone."""
         self._next_telemetry_s = -math.inf
         self._last_setpoint: Setpoint | None = None
         """The last setpoint given (phases with a reference), where interruptions start from."""
@@ -83,6 +82,15 @@ class RunnerPhases:
     def job_id(self) -> str | None:
         """The job this vehicle is working on (until it has landed after it)."""
         return None if self._job is None else self._job.job_id
+
+    @property
+    def ready_to_write_s(self) -> float | None:
+        """While the vehicle settles at the start of its writing: the planned writing in show
+        [s], which its *ready* report carries (None otherwise)."""
+        job = self._job
+        if self.phase != "settle" or job is None or job.prepared is None:
+            return None
+        return job.prepared.samples.duration_s
 
     def _abort_job(
         self, code: str, message: str, lift_from: Vec3, *, level: Level = "alert"
