@@ -2,7 +2,8 @@
 
 A payload is refused before the parser sees it when it is too large, not UTF-8 or nested too
 deep; every failure becomes a :class:`MessageError` carrying an :class:`~bus.messages.ErrorInfo`,
-so a service can always answer. docs/protocol.md lists the limits and codes.
+so a service can always answer. A request is held to :func:`request_limit`, a reply or a
+publication to :data:`MAX_PAYLOAD_BYTES`. docs/protocol.md lists the limits and codes.
 """
 
 from __future__ import annotations
@@ -18,10 +19,19 @@ if TYPE_CHECKING:
     import numpy as np
     from numpy.typing import NDArray
 
-from bus.messages import ErrorInfo
+from bus.messages import ErrorInfo, VehicleCommand
 
 MAX_PAYLOAD_BYTES = 1_000_000
-"""Largest JSON payload any queryable accepts."""
+"""Largest JSON payload of a reply, a publication or an assignment. A snapshot of a 250-vehicle
+show needs most: 700 jobs and 250 vehicles with every field at its longest, 540 kB, and the
+orchestrator's budgets for strokes and pictures (400 kB) on top."""
+MAX_REQUEST_BYTES = 262_144
+"""Largest request a queryable accepts, assignments apart (:func:`request_limit`). A character
+needs far less: the Chinese character with the longest ink in the glyph store (鬮, 27 strokes)
+drawn at the kiosk's spacing on a 400 px pad is 1,378 points, a 36 kB submission (61 kB with
+widths); the kiosk's largest drawing (5,000 points, 4-digit coordinates) 139 kB, 229 kB with
+widths. Parsing is what a large request costs its service: 1 MB of strokes took 45-60 ms, a
+request at this limit 28 ms."""
 MAX_DEPTH = 32
 """Deepest nesting of JSON arrays and objects in any payload (a request with a strokes document
 needs 5); checked before parsing."""
@@ -107,9 +117,25 @@ def _refuse(code: str, message: str, field: str | None = None) -> MessageError:
     return MessageError(ErrorInfo(code=code, message=message, field=field))
 
 
-def _check_raw(raw: bytes) -> None:
-    if len(raw) > MAX_PAYLOAD_BYTES:
-        raise _refuse("too_large", f"payload of {len(raw)} bytes exceeds {MAX_PAYLOAD_BYTES} bytes")
+def request_limit(request_type: type[msgspec.Struct] | None) -> int:
+    """Largest payload of a request of ``request_type`` (None: a key that takes no request).
+
+    An assignment (:class:`~bus.messages.VehicleCommand`, which only the orchestrator may send)
+    carries a whole job's strokes as the orchestrator re-encoded them, so it may be a little
+    larger than the submission it came from: :data:`MAX_PAYLOAD_BYTES`. Every other request,
+    a submission first, :data:`MAX_REQUEST_BYTES`.
+    """
+    return MAX_PAYLOAD_BYTES if request_type is VehicleCommand else MAX_REQUEST_BYTES
+
+
+def check_size(size: int, max_bytes: int) -> None:
+    """Raise ``too_large`` when a payload of ``size`` bytes exceeds ``max_bytes``."""
+    if size > max_bytes:
+        raise _refuse("too_large", f"payload of {size} bytes exceeds {max_bytes} bytes")
+
+
+def _check_raw(raw: bytes, max_bytes: int) -> None:
+    check_size(len(raw), max_bytes)
     if not raw.isascii():
         try:
             raw.decode("utf-8")
@@ -119,15 +145,20 @@ def _check_raw(raw: bytes) -> None:
         raise _refuse("too_deep", f"JSON nested {depth} deep; at most {MAX_DEPTH} levels")
 
 
-def decode(payload: bytes | bytearray | memoryview | str, message_type: type[M]) -> M:
+def decode(
+    payload: bytes | bytearray | memoryview | str,
+    message_type: type[M],
+    *,
+    max_bytes: int = MAX_PAYLOAD_BYTES,
+) -> M:
     """Parse and validate a payload; raises :class:`MessageError` naming the problem.
 
-    Checked before parsing: size (``too_large``), UTF-8 (``bad_json``), nesting depth
-    (``too_deep``). Any failure of the parser itself becomes ``bad_json`` too: nothing else
-    escapes, so a service can always answer.
+    Checked before parsing: size (``too_large`` beyond ``max_bytes``), UTF-8 (``bad_json``),
+    nesting depth (``too_deep``). Any failure of the parser itself becomes ``bad_json`` too:
+    nothing else escapes, so a service can always answer.
     """
     raw = payload.encode("utf-8", "surrogatepass") if isinstance(payload, str) else bytes(payload)
-    _check_raw(raw)
+    _check_raw(raw, max_bytes)
     try:
         return msgspec.json.decode(raw, type=message_type)
     except msgspec.ValidationError as exc:

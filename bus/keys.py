@@ -35,8 +35,20 @@ class ShowKeys:
     # --- orchestrator -------------------------------------------------------------------------
     @property
     def submit(self) -> str:
-        """Queryable (orchestrator): SubmitRequest -> SubmitReply."""
+        """Queryable (orchestrator): SubmitRequest -> SubmitReply from the show's own operator
+        (identity ``operator``: the console and the CLI); access control lets only it query."""
         return f"{self.prefix}/orchestrator/submit"
+
+    def submit_as(self, identity: str) -> str:
+        """Queryable (orchestrator): SubmitRequest -> SubmitReply from ``identity`` (its
+        certificate's common name); access control lets only that identity query it, so the
+        orchestrator counts its quotas by the key, not by the self-declared ``client_id``."""
+        return f"{self.submit}/{_check_chunk(identity, 'identity')}"
+
+    @property
+    def submits_all(self) -> str:
+        """What the orchestrator declares to answer every identity's submissions."""
+        return f"{self.submit}/*"
 
     @property
     def command(self) -> str:
@@ -134,3 +146,12 @@ def vehicle_id_from_key(key: str) -> str:
         return parts[parts.index("vehicles") + 1]
     except (ValueError, IndexError):
         raise ValueError(f"not a vehicle key: {key!r}") from None
+
+
+def identity_from_submit_key(keys: ShowKeys, key: str) -> str | None:
+    """The identity of a ``submit/<identity>`` key, or None if ``key`` is not one (a wildcard
+    or anything else: only a literal key names who submits)."""
+    identity = key.removeprefix(keys.submit + "/")
+    if identity == key or not identity or any(c in identity for c in "/*$?#"):
+        return None
+    return identity

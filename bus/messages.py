@@ -53,6 +53,10 @@ MAX_PRIORITY = 1000
 """Largest priority magnitude a request may carry (submissions allow -10..10)."""
 MAX_DURATION_S = 1e6
 """Longest duration a request may state, [s]."""
+MAX_BULK_JOBS = 1000
+"""Most jobs one operator command may name (``job_ids``)."""
+MAX_SNAPSHOT_ALERTS = 50
+"""Most open alerts a :class:`ShowSnapshot` carries (the newest)."""
 
 Id = Annotated[str, msgspec.Meta(min_length=1, max_length=MAX_ID_CHARS)]
 """A job or vehicle id in a request."""
@@ -70,6 +74,8 @@ Fraction = Annotated[float, msgspec.Meta(ge=0.0, le=1.0)]
 """A fraction 0..1."""
 Duration = Annotated[float, msgspec.Meta(ge=0.0, le=MAX_DURATION_S)]
 """A duration in a request, [s]."""
+JobIds = Annotated[list[Id], msgspec.Meta(min_length=1, max_length=MAX_BULK_JOBS)]
+"""Several job ids in a request (1..``MAX_BULK_JOBS``)."""
 
 
 class Request(msgspec.Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
@@ -342,12 +348,38 @@ class OperatorCommand(Request, frozen=True):
     priority: Priority | None = None
     reason: Text = ""
     operator: Text = "operator"
+    job_ids: JobIds | None = None
+    """``reject`` / ``cancel`` of these jobs at once, instead of ``job_id`` (v1 addition)."""
+    client_id: ClientId | None = None
+    """``reject`` / ``cancel`` of every waiting job this client handed in, instead of ``job_id``
+    (v1 addition)."""
 
 
 class CommandReply(State, frozen=True):
     ok: bool
     message: str = ""
     error: ErrorInfo | None = None
+
+
+class SkippedJob(State, frozen=True):
+    """A job a bulk ``reject`` / ``cancel`` left as it was, and why."""
+
+    job_id: str
+    state: JobStateName | None
+    """Its state (None: no such job)."""
+    reason: str
+    """One line, e.g. ``writing on uav1``."""
+
+
+class OperatorReply(CommandReply, frozen=True):
+    """The reply of the ``command`` queryable: a :class:`CommandReply` which, for a bulk
+    ``reject`` / ``cancel`` (``job_ids`` or ``client_id``), names what it did (v1 addition)."""
+
+    job_ids: list[str] = []
+    """The jobs rejected or cancelled, in submission order."""
+    skipped: list[SkippedJob] = []
+    """Named jobs (``job_ids``), or unfinished jobs of the client (``client_id``), left as they
+    were: not waiting, being written, or unknown."""
 
 
 class VehicleSummary(State, frozen=True):
@@ -375,7 +407,12 @@ class ShowSnapshot(State, frozen=True):
     jobs: list[JobState]
     vehicles: list[VehicleSummary]
     events: list[Event] = []
-    """The latest lines of the event log, oldest first (``snapshot`` replies only; v1 addition)."""
+    """The latest lines of the event log, oldest first, read from the orchestrator's database so
+    a restart keeps them (``snapshot`` replies only; v1 addition)."""
+    alerts: list[Event] = []
+    """The open alerts: those whose cause lasts (a vehicle held, lost or in fault, a board
+    half-written; docs/protocol.md), oldest first, the newest ``MAX_SNAPSHOT_ALERTS`` at most,
+    however long ago they were raised (v1 addition)."""
     dirty_boards: list[str] = []
     """Boards left half-written (a job requeued after writing started): no job is assigned there
     until the operator confirms a fresh sheet (``fresh_sheet``; v1 addition)."""

@@ -11,11 +11,17 @@ A recording is cut into parts of about ``max_file_bytes`` (``<stem>-001.mcap``, 
 is a whole MCAP file, readable on its own, and the writer's index (one channel per ``jobs/<id>``
 key, one entry per chunk) starts afresh with it, so a show running for days records with bounded
 memory, and old parts can be removed to keep the disk within budget (``on_part_done``).
+
+A disk that fills stops the recording, never the process that records: the part being written
+is closed where it stands (readable up to its last whole chunk), messages are dropped (counted
+in ``dropped``) and a new part is tried every ``RETRY_AFTER_FULL_S``.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
+import logging
 import queue
 import threading
 import time
@@ -44,6 +50,14 @@ from bus.messages import (
 
 CHUNK_SIZE_BYTES = 64 * 1024
 """Small chunks: a killed process loses at most this much of the recording."""
+MAX_CHUNKS_PER_PART = 10_000
+"""A part is also finished past this many chunks: the writer keeps 0.4-0.75 KiB of index a chunk
+until its part ends (measured, ``benchmarks/bench_bus_memory.py``), and a large message is a chunk
+of its own that compresses 450 times (hostile strokes), so a part bounded by bytes alone could
+hold 45,000 of them and 30 MiB of index. 10,000: under 8 MiB."""
+MAX_QUEUED_BYTES = 64 * 1024**2
+"""Payload bytes waiting for the writer thread, [B]; past it new messages are dropped (counted
+in ``dropped``): a burst must not grow the recording process without bound (798 MiB seen)."""
 
 
 class LivelinessChange(msgspec.Struct, frozen=True):
@@ -72,6 +86,8 @@ def message_type_for_topic(keys: ShowKeys, topic: str) -> type[msgspec.Struct] |
         return table[(key, suffix)]
     if len(parts) == 3 and parts[:2] == ["orchestrator", "report"] and suffix:
         return AgentReport if suffix == "request" else CommandReply
+    if len(parts) == 3 and parts[:2] == ["orchestrator", "submit"] and suffix:
+        return SubmitRequest if suffix == "request" else SubmitReply  # submit/<identity>
     if len(parts) == 2 and parts[0] == "jobs" and not suffix:
         return JobState
     if len(parts) == 3 and parts[0] == "vehicles":
@@ -87,6 +103,10 @@ def message_type_for_topic(keys: ShowKeys, topic: str) -> type[msgspec.Struct] |
     return None
 
 
+log = logging.getLogger(__name__)
+
+RETRY_AFTER_FULL_S = 10.0
+"""After a write failed (a full disk), a new part is tried this often, [s]."""
 _FLUSH = "flush"
 _JSON = msgspec.json.Decoder()
 """Checks that a payload is JSON before it is recorded (the value is not kept)."""
@@ -128,6 +148,12 @@ class McapRecorder:
         """Messages written so far."""
         self.skipped = 0
         """Payloads dropped because they were not JSON."""
+        self.dropped = 0
+        """Messages dropped: the disk could not take them, or too many were waiting."""
+        self._queued_bytes = 0
+        self._queued_lock = threading.Lock()
+        self._failed_at_s: float | None = None
+        """When writing last failed (monotonic [s]); None: the recording runs."""
         self._thread = threading.Thread(
             target=self._write_queued, name="mcap-recorder", daemon=True
         )
@@ -141,22 +167,53 @@ class McapRecorder:
             self._file, chunk_size=self._chunk_size_bytes, compression=CompressionType.ZSTD
         )
         self._writer.start(profile="", library="skyquill")
+        self._size = self._file.tell()
+        self._chunks = 0
+        """Chunks written to this part (each write of the writer to the file is one)."""
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, int] = {}
 
     def _finish(self) -> None:
-        self._writer.finish()  # type: ignore[no-untyped-call]
+        if self._failed_at_s is None:
+            self._writer.finish()  # type: ignore[no-untyped-call]
         self._file.close()
+
+    def _failed(self, exc: OSError) -> None:
+        """Writing failed: close the part where it stands, drop messages until a retry."""
+        if self._failed_at_s is None:
+            log.error("recording stopped at %s: %s; retried every %.0f s", self.path, exc,
+                      RETRY_AFTER_FULL_S)  # fmt: skip
+        self._failed_at_s = time.monotonic()
+        with contextlib.suppress(OSError):
+            self._file.close()
+
+    def _resume(self) -> bool:
+        """After a failure: whether a new part could be begun (tried every
+        ``RETRY_AFTER_FULL_S``)."""
+        assert self._failed_at_s is not None
+        if time.monotonic() - self._failed_at_s < RETRY_AFTER_FULL_S:
+            return False
+        try:
+            self._begin_next()
+        except OSError as exc:
+            self._failed(exc)
+            return False
+        self._failed_at_s = None
+        log.info("recording again, to %s", self.path)
+        return True
 
     def _next_part(self) -> None:
         """Finish this file and begin the next part (on the writer thread)."""
         done = self.path
         self._finish()
+        self._begin_next()
+        if self._on_part_done is not None:
+            self._on_part_done(done, self.path)
+
+    def _begin_next(self) -> None:
         self.parts += 1
         stem = self.first_path.with_suffix("")
         self._open(stem.with_name(f"{stem.name}-{self.parts:03d}{self.first_path.suffix}"))
-        if self._on_part_done is not None:
-            self._on_part_done(done, self.path)
 
     def _schema_id(self, message_type: type[msgspec.Struct] | None) -> int:
         name = message_type.__name__ if message_type is not None else "unknown"
@@ -180,17 +237,36 @@ class McapRecorder:
 
     def record(self, topic: str, payload: bytes, *, time_ns: int | None = None) -> None:
         """Queue one JSON payload for ``topic``; non-JSON payloads are counted in ``skipped``."""
-        if not self._closed:
-            self._queue.put((topic, payload, time_ns if time_ns is not None else time.time_ns()))
+        if self._closed:
+            return
+        with self._queued_lock:
+            if self._queued_bytes + len(payload) > MAX_QUEUED_BYTES:
+                self.dropped += 1
+                return
+            self._queued_bytes += len(payload)
+        self._queue.put((topic, payload, time_ns if time_ns is not None else time.time_ns()))
 
     def _write_queued(self) -> None:
         while (item := self._queue.get()) is not None:
-            if item == _FLUSH:
-                self._file.flush()
-            elif isinstance(item, tuple):
-                self._write(*item)
-                if self.max_file_bytes is not None and self._file.tell() >= self.max_file_bytes:
-                    self._next_part()
+            if isinstance(item, tuple):
+                with self._queued_lock:
+                    self._queued_bytes -= len(item[1])
+            if self._failed_at_s is not None and not self._resume():
+                self.dropped += isinstance(item, tuple)
+                continue
+            try:
+                if item == _FLUSH:
+                    self._file.flush()
+                elif isinstance(item, tuple):
+                    self._write(*item)
+                    size = self._file.tell()
+                    self._chunks += size != self._size
+                    self._size = size
+                    full = self.max_file_bytes is not None and size >= self.max_file_bytes
+                    if full or self._chunks >= MAX_CHUNKS_PER_PART:
+                        self._next_part()
+            except OSError as exc:
+                self._failed(exc)
 
     def _write(self, topic: str, payload: bytes, stamp_ns: int) -> None:
         try:
@@ -224,7 +300,10 @@ class McapRecorder:
         self._closed = True
         self._queue.put(None)
         self._thread.join()
-        self._finish()
+        try:
+            self._finish()
+        except OSError as exc:
+            self._failed(exc)
 
     def __enter__(self) -> McapRecorder:
         return self

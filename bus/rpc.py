@@ -2,11 +2,11 @@
 
 A service declares a queryable with :func:`serve` (handler on Zenoh's thread) or
 :func:`serve_async` (handler in the asyncio loop). The request is decoded before the handler sees
-it; a payload that is not a valid request (whatever its bytes: bad JSON or UTF-8, too large, too
-deep, wrong types) gets an error reply (``on_error(info)`` when given, otherwise a Zenoh error
-reply whose payload is an ErrorInfo) and the handler never runs. A handler that raises, or whose
-reply cannot be encoded, produces an ``internal`` error reply. Every query gets exactly one reply
-and the queryable keeps serving.
+it; a payload that is not a valid request (whatever its bytes: bad JSON or UTF-8, larger than
+:func:`bus.codec.request_limit`, too deep, wrong types) gets an error reply (``on_error(info)``
+when given, otherwise a Zenoh error reply whose payload is an ErrorInfo) and the handler never
+runs. A handler that raises, or whose reply cannot be encoded, produces an ``internal`` error
+reply. Every query gets exactly one reply and the queryable keeps serving.
 
 Clients call :func:`query` / :func:`aquery` (all replies, decoded) or :func:`query_one` /
 :func:`aquery_one` (first good reply or an exception).
@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar, overload
 import msgspec
 import zenoh
 
-from bus.codec import MessageError, decode, encode
+from bus.codec import MessageError, check_size, decode, encode, request_limit
 from bus.messages import ErrorInfo, Request
 from bus.session import BusError
 
@@ -234,15 +234,19 @@ def _decode_request(query: zenoh.Query, request_type: type[Any] | None) -> Any:
     """The request of a query; raises :class:`MessageError` only (whatever the payload).
 
     ``request_type=None``: the key takes no request; no payload, ``{}`` or ``{"v": 1}`` only.
+    A payload over :func:`~bus.codec.request_limit` is refused before it is copied out of Zenoh.
     """
+    limit = request_limit(request_type)
     try:
         payload = query.payload
+        if payload is not None:
+            check_size(len(payload), limit)
         raw = payload.to_bytes() if payload is not None else b""
         if request_type is None:
             if raw.strip():
-                decode(raw, Request)
+                decode(raw, Request, max_bytes=limit)
             return None
-        return decode(raw, request_type)
+        return decode(raw, request_type, max_bytes=limit)
     except MessageError:
         raise
     except Exception as exc:
@@ -331,29 +335,49 @@ def serve_async(
 
     Requests are decoded on Zenoh's thread; valid ones are scheduled on the loop in arrival order.
     """
+    return serve_async_keyed(
+        session, key, request_type, lambda _asked, request: handler(request), loop=loop,
+        on_error=on_error, reply_on_asked=False,
+    )  # fmt: skip
+
+
+def serve_async_keyed(
+    session: zenoh.Session,
+    key: str,
+    request_type: type[Any] | None,
+    handler: Callable[[str, Any], Awaitable[msgspec.Struct]],
+    *,
+    loop: asyncio.AbstractEventLoop | None = None,
+    on_error: ErrorReply | None = None,
+    reply_on_asked: bool = True,
+) -> zenoh.Queryable[None]:
+    """Like :func:`serve_async`, but ``key`` is a wildcard whose literal key says who asks
+    (``orchestrator/submit/<identity>``: access control lets each identity query only its own):
+    ``handler(asked_key, request)``, and the reply goes out on the key asked (the handler refuses
+    a wildcard one itself)."""
     import asyncio
 
     target_loop = loop or asyncio.get_running_loop()
 
-    async def run(query: zenoh.Query, request: Any) -> None:
+    async def run(query: zenoh.Query, asked: str, request: Any) -> None:
         try:
-            reply = await handler(request)
+            reply = await handler(asked, request)
         except Exception as exc:
-            _send_error_and_drop(query, key, _internal(key, exc), on_error)
+            _send_error_and_drop(query, asked, _internal(asked, exc), on_error)
             return
-        _reply(query, key, reply, on_error)
+        _reply(query, asked, reply, on_error)
 
     def callback(query: zenoh.Query) -> None:
+        asked = str(query.key_expr) if reply_on_asked else key
         try:
             request = _decode_request(query, request_type)
         except MessageError as exc:
-            _send_error_and_drop(query, key, exc.info, on_error)
+            _send_error_and_drop(query, asked, exc.info, on_error)
             return
         try:
-            asyncio.run_coroutine_threadsafe(run(query, request), target_loop)
+            asyncio.run_coroutine_threadsafe(run(query, asked, request), target_loop)
         except RuntimeError:  # loop closed: the service is stopping
-            _send_error_and_drop(
-                query, key, ErrorInfo(code="unavailable", message="service stopping"), on_error
-            )
+            info = ErrorInfo(code="unavailable", message="service stopping")
+            _send_error_and_drop(query, asked, info, on_error)
 
     return session.declare_queryable(key, callback, complete=True)

@@ -125,6 +125,7 @@ def build_config(
     if acl:
         conf.insert_json5("access_control", json.dumps(dict(acl)))
     _insert_resilience(conf)
+    _insert_size_bounds(conf)
     for path, value in dict(_opt(settings, "extra", {})).items():
         conf.insert_json5(path, json.dumps(value))
     return conf
@@ -151,6 +152,27 @@ def _insert_resilience(conf: zenoh.Config) -> None:
     conf.insert_json5("transport/link/tx/lease", json.dumps(LINK_LEASE_MS))
     conf.insert_json5("transport/link/tx/keep_alive", json.dumps(LINK_KEEP_ALIVES))
     conf.insert_json5("connect/retry", json.dumps(RECONNECT_RETRY))
+
+
+# --- size bounds (every process, so the router drops what nobody would accept) -----------------
+
+MAX_MESSAGE_BYTES = 2 * 1024 * 1024
+"""Largest Zenoh message a session of the show takes in (``transport/link/rx/max_message_size``;
+Zenoh's default: 1 GiB), [bytes]: twice the largest payload the bus accepts
+(``bus.codec.MAX_PAYLOAD_BYTES``), so a request too large for its queryable up to this size still
+gets its ``too_large`` reply. A larger message is dropped by the first process it reaches, the
+router, before anyone else holds it; its querier hears no reply."""
+
+
+def _insert_size_bounds(conf: zenoh.Config) -> None:
+    """The message size bound, and Zenoh's shared memory off: with it on, a payload over 3 kB
+    from a process on the same host travels as a reference into the sender's 16 MiB pool, which
+    the router and the receiver map, so the bound above does not apply (a 5 MB query reached its
+    queryable), and under a flood of large submissions the pools added 17-35 MiB to the
+    resident set of the router and of the orchestrator (``benchmarks/bench_bus_memory.py``).
+    The bus's messages are small (a request at most 256 KiB); copying them costs less."""
+    conf.insert_json5("transport/link/rx/max_message_size", json.dumps(MAX_MESSAGE_BYTES))
+    conf.insert_json5("transport/shared_memory/enabled", json.dumps(False))
 
 
 def open_session(

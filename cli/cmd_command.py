@@ -8,6 +8,10 @@ again), ``release-all`` (every held vehicle), ``fresh-sheet BOARD`` (a half-writ
 new sheet). A vehicle may also be named with ``--vehicle ID``.
 ``land-all`` is the bus command ``land_all``; either spelling is accepted (also ``clear-fault``,
 ``release-all``).
+
+``reject`` and ``cancel`` also take many waiting jobs at once, in one command: ``--client ID``
+(every waiting job that client handed in) or ``--job ID`` repeated (a selection). Jobs a vehicle
+has are left alone; the one-line answer says how many were taken and which were skipped, and why.
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ VEHICLE_ACTIONS = ("pause", "resume", "land", "estop", "clear_fault", "clear-fau
 NEEDS_VEHICLE = ("land", "clear_fault", "clear-fault", "release")
 BOARD_ACTIONS = ("fresh_sheet", "fresh-sheet")
 FLEET_ACTIONS = ("land-all", "land_all", "release-all", "release_all")
+BULK_ACTIONS = ("reject", "cancel")
 ACTIONS = (*JOB_ACTIONS, *VEHICLE_ACTIONS, *BOARD_ACTIONS, *FLEET_ACTIONS)
 
 
@@ -33,6 +38,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("target", nargs="?", help="job id, vehicle id or board id (fresh-sheet)")
     parser.add_argument("--vehicle", metavar="ID", help="the vehicle (vehicle actions)")
     parser.add_argument("--priority", type=int, help="new priority (prioritize)")
+    parser.add_argument(
+        "--job",
+        dest="jobs",
+        action="append",
+        metavar="ID",
+        help="reject/cancel: a job of a selection (repeat it for more)",
+    )
+    parser.add_argument(
+        "--client", metavar="ID", help="reject/cancel: every waiting job of this client"
+    )
     parser.add_argument("--reason", default="", help="why (kept in the event log)")
     parser.add_argument("--operator", default="operator", help="name recorded in the event log")
 
@@ -61,9 +76,24 @@ def send(show_path: Path, command: str, **fields: object) -> int:
     return 0
 
 
+def _bulk_fields(args: argparse.Namespace) -> dict[str, object] | str:
+    """``job_ids`` or ``client_id`` of a bulk reject/cancel, or what is wrong with them."""
+    if args.action not in BULK_ACTIONS:
+        return f"--job and --client go with {' or '.join(BULK_ACTIONS)}, not {args.action}"
+    if sum(1 for given in (args.target, args.jobs, args.client) if given) > 1:
+        return f"{args.action} takes one of a job id, --job or --client"
+    return {"job_ids": args.jobs} if args.jobs else {"client_id": args.client}
+
+
 def run(args: argparse.Namespace) -> int:
     action = args.action.replace("-", "_")
     fields: dict[str, object] = {"reason": args.reason, "operator": args.operator}
+    if args.jobs or args.client is not None:
+        bulk = _bulk_fields(args)
+        if isinstance(bulk, str):
+            print(f"skyquill command: {bulk}", file=sys.stderr)
+            return 2
+        return send(args.show, action, **fields, **bulk)
     if args.action in JOB_ACTIONS:
         if not args.target:
             print(f"skyquill command: {args.action} needs a job id", file=sys.stderr)

@@ -1,5 +1,7 @@
 """``skyquill keys SHOW.yaml``: the show's CA and one certificate per process; ``--client NAME
---role R`` issues a certificate for an outside client and writes a Zenoh config that uses it."""
+--role R`` issues a certificate for an outside client and writes a Zenoh config that uses it;
+``--revoke NAME`` shuts an issued client out: the show's router drops it from its access control
+within a second, no other certificate changes and no vehicle restarts (``trust/clients.py``)."""
 
 from __future__ import annotations
 
@@ -7,14 +9,22 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from showfile import Show
 
 NAME = "keys"
-HELP = "Create the show's certificates (CA, one per process) or issue one to an outside client."
+HELP = "Create the show's certificates, issue one to an outside client, or revoke a client."
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("show", type=Path, help="show file (YAML)")
-    parser.add_argument("--client", metavar="NAME", help="issue a certificate to an outside client")
+    which = parser.add_mutually_exclusive_group()
+    which.add_argument("--client", metavar="NAME", help="issue a certificate to an outside client")
+    which.add_argument(
+        "--revoke", metavar="NAME", help="shut an issued client out (its name is not reissued)"
+    )
     parser.add_argument(
         "--role",
         choices=("watcher", "operator", "submitter"),
@@ -42,12 +52,29 @@ def _client_config(endpoints: list[str], folder: Path) -> dict[str, object]:
     }
 
 
+def _issue_client(show: Show, name: str, role: str) -> Path:
+    """Issue ``name``'s certificate, admit it, write its Zenoh config; returns its folder."""
+    from trust.clients import record_client
+    from trust.hosts import endpoints
+    from trust.pki import client_files, issue
+    from trust.settings import as_tls, show_hosts
+
+    files = client_files(show.keys_dir, name, role)
+    record_client(show.keys_dir, name, role)  # refuses a revoked name before anything is made
+    issue(show.keys_dir, files, show_id=show.show_id, hosts=show_hosts(show), holder=name)
+    folder = files.cert.parent
+    connect = list(as_tls(endpoints(show, files.common_name).connect))
+    config_path = folder / "zenoh-client.json5"
+    config_path.write_text(json.dumps(_client_config(connect, folder), indent=2) + "\n")
+    return folder
+
+
 def run(args: argparse.Namespace) -> int:
     from showfile import ShowError, load_show
     from showfile.security import RESERVED_IDS
-    from trust.hosts import endpoints
-    from trust.pki import KeysError, client_files, issue
-    from trust.settings import as_tls, ensure_show_keys, show_hosts
+    from trust.clients import revoke_client
+    from trust.pki import KeysError
+    from trust.settings import ensure_show_keys
 
     try:
         show = load_show(args.show)
@@ -57,27 +84,31 @@ def run(args: argparse.Namespace) -> int:
     if show.security.mode == "none":
         print(f"skyquill keys: {args.show}: security is none: this show uses no keys")
         return 0
+    name = args.client or args.revoke
+    if name is not None and (
+        not str(name).replace("-", "").replace("_", "").isalnum() or name in RESERVED_IDS
+    ):
+        option = "--client" if args.client else "--revoke"
+        print(f"skyquill keys: {option} {name!r}: use letters, digits, - and _", file=sys.stderr)
+        return 2
     try:
         made = ensure_show_keys(show)
+        if args.revoke is not None:
+            role = revoke_client(show.keys_dir, name)
+            print(
+                f"revoked client {name} ({role}) of {show.show_id}: the show's router shuts it "
+                f"out within a second; no other certificate changes"
+            )
+            return 0
         if args.client is None:
             print(f"keys of {show.show_id} in {show.keys_dir}: " + (
                 f"issued {', '.join(made)}" if made else "all present and valid"
             ))  # fmt: skip
             return 0
-        name = str(args.client)
-        if not name.replace("-", "").replace("_", "").isalnum() or name in RESERVED_IDS:
-            print(
-                f"skyquill keys: --client {name!r}: use letters, digits, - and _", file=sys.stderr
-            )
-            return 2
-        files = client_files(show.keys_dir, name, args.role)
-        issue(show.keys_dir, files, show_id=show.show_id, hosts=show_hosts(show), holder=name)
+        folder = _issue_client(show, name, args.role)
     except (KeysError, OSError) as exc:
         print(f"skyquill keys: {exc}", file=sys.stderr)
         return 1
-    config_path = files.cert.parent / "zenoh-client.json5"
-    config = _client_config(list(as_tls(endpoints(show, "operator").connect)), files.cert.parent)
-    config_path.write_text(json.dumps(config, indent=2) + "\n", encoding="utf-8")
-    print(f"client {name} ({args.role}) of {show.show_id}: {files.cert.parent}")
-    print(f"Zenoh config: {config_path} (copy the folder; the key is secret)")
+    print(f"client {name} ({args.role}) of {show.show_id}: {folder}")
+    print(f"Zenoh config: {folder / 'zenoh-client.json5'} (copy the folder; the key is secret)")
     return 0

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -27,7 +28,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--json",
         action="store_true",
-        help="print JSON: jobs (older finished ones left out), vehicles, job_counts (all jobs)",
+        help="print JSON: jobs (older finished ones left out), vehicles, job_counts (all jobs), "
+        "open alerts",
     )
     parser.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for a reply")
 
@@ -72,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
                     "jobs": data["jobs"],
                     "vehicles": data["vehicles"],
                     "job_counts": snap.job_counts,
+                    "alerts": data["alerts"],
                     "queue_paused": snap.queue_paused,
                     "time_s": snap.time_s,
                 },
@@ -93,4 +96,7 @@ def run(args: argparse.Namespace) -> int:
         where = f"#{j.queue_position}" if j.queue_position else (j.vehicle_id or "")
         eta = f" eta {j.eta_s:.0f}s" if j.eta_s is not None else ""
         print(f"  {j.job_id} {j.state:17} {where:6} {j.label}{eta}")
+    for alert in snap.alerts:  # open: their cause lasts, however long ago they were raised
+        raised = time.strftime("%H:%M:%S", time.localtime(alert.time_s))
+        print(f"  alert {raised} {alert.kind}: {alert.message}")
     return 0

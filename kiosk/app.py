@@ -36,6 +36,7 @@ from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
 from bus.messages import JobState, SubmitReply, SubmitRequest
+from bus.ratelimit import SlidingWindowLimiter
 from kiosk import wording
 from kiosk.addresses import proxy_networks
 from kiosk.errors import RejectedError
@@ -52,7 +53,6 @@ from kiosk.jobs import KioskJob
 from kiosk.limits import Submission, check_submission, decode_json_body
 from kiosk.link import OrchestratorLink, OrchestratorUnavailableError
 from kiosk.qr import qr_svg
-from kiosk.ratelimit import SlidingWindowLimiter
 from kiosk.settings import KioskSettings
 from kiosk.sse import job_events
 
@@ -156,7 +156,7 @@ def _crash(request: Request, exc: Exception) -> Response:
 
 def _reply_rejection(reply: SubmitReply) -> RejectedError:
     code = reply.error.code if reply.error is not None else "refused"
-    if code in ("queue_full", "paused", "unavailable"):
+    if code in ("queue_full", "paused", "unavailable", "storage_full"):
         return RejectedError(code, wording.QUEUE_FULL, status=503, retry_after_s=60.0)
     return RejectedError(code, wording.ORCHESTRATOR_REFUSED, status=422)
 

@@ -30,6 +30,8 @@ from kiosk.jobs import JobBook
 
 log = logging.getLogger(__name__)
 
+KIOSK_IDENTITY = "kiosk"
+"""The kiosk's certificate's common name (``trust/acl.py``)."""
 RETRY_DELAYS_S = (0.5, 1.0, 2.0, 4.0, 8.0)
 """Pauses between tries of a pending submission; the last one repeats until an answer."""
 
@@ -39,7 +41,7 @@ class OrchestratorUnavailableError(KioskError):
 
 
 class OrchestratorLink:
-    """Submits to the orchestrator's ``submit`` queryable and follows ``jobs/<id>``."""
+    """Submits to the orchestrator's ``submit/kiosk`` queryable and follows ``jobs/<id>``."""
 
     def __init__(
         self,
@@ -52,6 +54,8 @@ class OrchestratorLink:
     ) -> None:
         self._session = session
         self._keys = keys
+        self._submit_key = keys.submit_as(KIOSK_IDENTITY)
+        """The kiosk's own submit key: the orchestrator counts the kiosk's quota by it."""
         self.book = book
         """Tickets of this kiosk and the newest state seen of each job."""
         self._timeout_s = timeout_s
@@ -155,7 +159,7 @@ class OrchestratorLink:
         """The orchestrator's answer; :class:`OrchestratorUnavailableError` if nobody answers."""
         try:
             return await aquery_one(
-                self._session, self._keys.submit, request, SubmitReply, timeout_s=self._timeout_s
+                self._session, self._submit_key, request, SubmitReply, timeout_s=self._timeout_s
             )
         except NoReplyError as exc:
             raise OrchestratorUnavailableError(str(exc)) from exc

@@ -13,6 +13,7 @@ from pathlib import Path
 from bus.keys import ShowKeys
 from bus.recorder import McapRecorder
 from bus.session import Role, open_session
+from orchestrator.disk_room import DiskReserve
 from orchestrator.recordings import prune_recordings
 from orchestrator.service import OrchestratorService, recording_path
 from orchestrator.store import JobStore
@@ -38,7 +39,10 @@ async def serve_show(
     with contextlib.ExitStack() as stack:
         identity = "router" if role == "router" else "orchestrator"
         session = stack.enter_context(open_session(session_settings(show, identity), role=role))
-        store = stack.enter_context(JobStore(show.database_path))
+        reserve = DiskReserve(show.database_path)
+        if not reserve.make(show.storage.min_free_mb * 1e6):
+            log.warning("no room for the disk reserve beside %s", show.database_path)
+        store = stack.enter_context(JobStore(show.database_path, reserve))
         recorder = None
         if show.storage.record:
             path = recording_path(show, time.time())

@@ -5,13 +5,18 @@ Each call opens a Zenoh client session to the show's router endpoints as the sho
 (:class:`showfile.bus_view.ShowBus`: a loaded show, or the light view one-off commands read), so
 importing this module loads neither pydantic nor numpy.
 Errors: :class:`bus.rpc.NoReplyError` (no orchestrator answered), :class:`bus.rpc.RemoteError`
-(it answered with an error), :class:`bus.session.SessionOpenError` (no router).
+(it answered with an error), :class:`bus.session.SessionOpenError` (no router),
+:class:`bus.codec.MessageError` (a ``ValueError``: a request the orchestrator would refuse to
+decode, e.g. a ``client_id`` with a control character; nothing is sent).
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+import msgspec
+
+from bus.codec import decode
 from bus.keys import ShowKeys
 from bus.messages import (
     CommandReply,
@@ -37,12 +42,21 @@ def submit(
     priority: int = 0,
     timeout_s: float = DEFAULT_TIMEOUT_S,
 ) -> SubmitReply:
-    """Hand in a character (text or a strokes document); the reply carries the job id or error."""
-    request = SubmitRequest(text=text, strokes=strokes, client_id=client_id, priority=priority)
+    """Hand in a character (text or a strokes document) as the show's operator (on the plain
+    ``submit`` key: never refused for quota); the reply carries the job id or error."""
+    request = _checked(
+        {"text": text, "strokes": strokes, "client_id": client_id, "priority": priority}
+    )
     with open_session(session_settings(show, "operator"), role="client") as session:
         return query_one(
             session, ShowKeys(show.show_id).submit, request, SubmitReply, timeout_s=timeout_s
         )
+
+
+def _checked(fields: dict[str, Any]) -> SubmitRequest:
+    """The request as the orchestrator will decode it (field types, lengths, plain text);
+    :class:`MessageError` naming the field, in one line, otherwise."""
+    return decode(msgspec.json.encode(fields), SubmitRequest)
 
 
 def command(

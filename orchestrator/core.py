@@ -13,12 +13,13 @@ duplicated; at most one active job per vehicle and per board; jobs are assigned 
 
 from __future__ import annotations
 
-from collections import Counter, deque
+from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
 
 import msgspec
 
 from bus.messages import (
+    MAX_SNAPSHOT_ALERTS,
     AgentReport,
     CommandReply,
     ErrorInfo,
@@ -29,17 +30,16 @@ from bus.messages import (
     VehicleStatus,
 )
 from orchestrator import assignment, positions, presence, reports
+from orchestrator.alerts import OpenAlerts
 from orchestrator.core_types import CoreConfig, Effects, Level
 from orchestrator.finished import MAX_FINAL_JOBS, FinishedJobs
 from orchestrator.fleet import VehicleView, queue_etas
 from orchestrator.jobs import WAITING_STATES, Job, to_state, transition, update
 from orchestrator.kinds import KindMatch, KindPlans
 from orchestrator.operator import apply_operator
+from orchestrator.quotas import is_operator
 
 __all__ = ["MAX_FINAL_JOBS", "Book", "CoreConfig", "Effects", "Level"]
-
-RECENT_EVENTS = 50
-"""Events kept in memory for the ``snapshot`` reply."""
 
 
 class Book:
@@ -57,9 +57,11 @@ class Book:
         dirty_boards: Iterable[str] = (),
         job_counts: Mapping[str, int] | None = None,
         max_final_jobs: int = MAX_FINAL_JOBS,
+        open_alerts: Iterable[Event] = (),
     ) -> None:
         """``jobs``: the stored ones (every unfinished job and at least the latest finished);
-        ``job_counts``: jobs per state in the database (default: counted from ``jobs``)."""
+        ``job_counts``: jobs per state in the database (default: counted from ``jobs``);
+        ``open_alerts``: the alerts open when the orchestrator stopped."""
         self.config = config
         self.queue_paused = queue_paused
         self.vehicles = {v.vehicle_id: VehicleView(v, gone_since_s=now_s) for v in config.vehicles}
@@ -89,8 +91,9 @@ class Book:
         """(client_id, idempotency_key) -> job id of every keyed submission in memory."""
         self._forget(self.finished.overflow())
         self._announced: positions.Announced = {}
-        self.recent_events: deque[Event] = deque(maxlen=RECENT_EVENTS)
-        """The latest events, for the ``snapshot`` reply (a late console shows recent history)."""
+        self.alerts = OpenAlerts(open_alerts, self.vehicles)
+        """Alerts whose cause lasts, for snapshots (``orchestrator/alerts.py``); kept with the
+        settings, so a restart keeps them."""
         self.kinds = KindMatch({v.vehicle_id: v.kind for v in config.vehicles})
         """Which kind may take a job and how long it would write it (``orchestrator/kinds.py``)."""
         boards = {v.board_id for v in config.vehicles}
@@ -165,6 +168,10 @@ class Book:
         )
         return {j.job_id: (i + 1, etas.get(j.job_id)) for i, j in enumerate(queue)}
 
+    def open_alerts(self) -> list[Event]:
+        """The alerts whose cause lasts, oldest first (``orchestrator/alerts.py``)."""
+        return self.alerts.current(self.vehicles, self.dirty_boards)
+
     def snapshot(
         self,
         now_s: float,
@@ -172,11 +179,13 @@ class Book:
         include_final: bool = True,
         max_final: int = MAX_FINAL_JOBS,
         strokes_budget_bytes: int = 0,
+        events: Sequence[Event] = (),
     ) -> ShowSnapshot:
-        """Everything a late joiner needs: jobs (in submission order) and vehicles.
+        """Everything a late joiner needs: jobs (in submission order), vehicles, open alerts.
 
         With ``include_final`` the latest ``max_final`` finished jobs are included too. Waiting
         drawn jobs carry their strokes, oldest first, while their JSON fits the budget.
+        ``events``: the latest lines of the event log (the service reads them from its store).
         """
         etas = self.etas(now_s)
         finals = sorted((j.seq for j in self.jobs.values() if j.final), reverse=True)
@@ -202,7 +211,8 @@ class Book:
             queue_paused=self.queue_paused,
             jobs=jobs,
             vehicles=vehicles,
-            events=list(self.recent_events) if include_final else [],
+            events=list(events),
+            alerts=self.open_alerts()[-MAX_SNAPSHOT_ALERTS:],
             dirty_boards=sorted(self.dirty_boards),
             job_counts={state: n for state, n in sorted(self.job_counts.items()) if n > 0},
         )
@@ -228,7 +238,8 @@ class Book:
             job_id=job_id,
         )
         eff.events.append(event)
-        self.recent_events.append(event)
+        if self.alerts.saw(event, self.vehicles):
+            eff.settings_changed = True  # stored with the settings
 
     def settle(self, eff: Effects, now_s: float) -> Effects:
         """Add to ``eff.moved`` every other queued job whose position or ETA the decision changed
@@ -275,11 +286,39 @@ class Book:
             self._awaited[job.vehicle_id] = job.job_id
 
     # --- submissions --------------------------------------------------------------------------
-    def submit(
-        self, job_id: str, request: SubmitRequest, *, label: str, estimate_s: float, now_s: float
-    ) -> tuple[SubmitReply, Effects]:
-        """Accept a validated submission (the caller parsed its glyph); refuse when full.
+    def waiting_of(self, identity: str) -> int:
+        """Jobs that ``identity`` submitted on the bus awaiting approval or queued."""
+        jobs = self.jobs.values()
+        return sum(1 for j in jobs if j.submitted_by == identity and j.state in WAITING_STATES)
 
+    def _full(self, submitted_by: str | None) -> ErrorInfo | None:
+        """Why the state a new job enters takes no more (None: there is room). Jobs awaiting
+        approval count apart from the queue (``max_awaiting``): unmoderated jobs never block
+        approved ones. The operator's own submissions are never refused."""
+        if submitted_by is not None and is_operator(submitted_by):
+            return None
+        moderated = self.config.moderation
+        state = "awaiting_approval" if moderated else "queued"
+        limit = self.config.max_awaiting if moderated else self.config.max_queue
+        if self.job_counts[state] < limit:
+            return None
+        waiting = "jobs awaiting approval" if moderated else "jobs queued"
+        return ErrorInfo(code="queue_full", message=f"the queue is full ({limit} {waiting})")
+
+    def submit(
+        self,
+        job_id: str,
+        request: SubmitRequest,
+        *,
+        label: str,
+        estimate_s: float,
+        now_s: float,
+        submitted_by: str | None = None,
+    ) -> tuple[SubmitReply, Effects]:
+        """Accept a validated submission (the caller parsed its glyph and checked its
+        identity's quotas, ``orchestrator/quotas.py``); refuse when full.
+
+        ``submitted_by``: the identity on the bus (None: not known, capped as any client).
         A repeated ``idempotency_key`` of the same client answers with the job it made first
         (and ``job_id`` is not used)."""
         eff = Effects()
@@ -289,12 +328,9 @@ class Book:
             return self.submit_reply(first, now_s), eff
         if job_id in self.jobs:
             raise ValueError(f"duplicate job id {job_id}")
-        if self.waiting_count() >= self.config.max_queue:
-            info = ErrorInfo(
-                code="queue_full",
-                message=f"the queue is full ({self.config.max_queue} jobs waiting)",
-            )
-            return SubmitReply(ok=False, error=info), eff
+        full = self._full(submitted_by)
+        if full is not None:
+            return SubmitReply(ok=False, error=full), eff
         job = Job(
             job_id=job_id,
             seq=self.next_seq,
@@ -309,6 +345,7 @@ class Book:
             updated_at_s=now_s,
             estimate_s=estimate_s,
             idempotency_key=key,
+            submitted_by=submitted_by,
         )
         self.next_seq += 1
         if key is not None:

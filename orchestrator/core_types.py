@@ -23,7 +23,10 @@ class CoreConfig:
     lost_after_s: float = 1.5
     """Grace after a liveliness token disappears before the vehicle is lost, [s]."""
     max_queue: int = 200
-    """Most waiting jobs (awaiting approval + queued)."""
+    """Most queued jobs (the operator's own submissions are never refused)."""
+    max_awaiting: int = 100
+    """Most jobs awaiting approval, counted apart from the queue (the operator's own
+    submissions are never refused)."""
     max_attempts: int = 3
     """Assignments lost before the job fails."""
     max_handbacks: int = 10

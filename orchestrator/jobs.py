@@ -92,10 +92,13 @@ class Job(msgspec.Struct, frozen=True, kw_only=True):
     """Queued after its vehicle (``vehicle_id``) was lost: only that vehicle may take it before
     this Unix time, [s] (``orchestrator/holders.py``)."""
     writing_since_s: float | None = None
-    """Unix time, [s], the orchestrator learnt that ``vehicle_id`` began writing this attempt
-    (its ``started`` report, or its first ``progress``); None before, and once another attempt
-    begins. With ``planned_duration_s`` it bounds how long that vehicle may write it unheard
-    (``orchestrator/holders.py``, ``writing_fence_s``)."""
+    """Unix time, [s], the orchestrator last heard ``vehicle_id`` ask to write this attempt (its
+    latest *ready* report, or its ``started`` one if none came); None before, and once another
+    attempt begins. With ``planned_duration_s`` it bounds how long that vehicle may write it
+    unheard (``orchestrator/holders.py``, ``writing_fence_s``)."""
+    submitted_by: str | None = None
+    """The identity that submitted it on the bus (its certificate's common name, read from the
+    submit key: ``orchestrator/quotas.py``); None for jobs stored before it was kept."""
 
     @property
     def counted_attempts(self) -> int:

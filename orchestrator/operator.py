@@ -2,12 +2,14 @@
 
 =============  ===========================================================================
 approve        job awaiting approval -> queued
-reject         job awaiting approval -> rejected (``reason`` kept)
+reject         job awaiting approval -> rejected (``reason`` kept); with ``job_ids`` or
+               ``client_id`` many at once (``orchestrator/moderation.py``)
 pause          no new assignments: the whole queue, or one vehicle (``vehicle_id``)
 resume         undo pause: the queue and every vehicle not held, or one vehicle
 release        a vehicle held by land / estop may take jobs again (``vehicle_id``)
 release_all    every held vehicle may take jobs again (the queue stays as it is: ``resume``)
-cancel         job -> cancelled; a vehicle writing it is told to stop
+cancel         job -> cancelled; a vehicle writing it is told to stop; with ``job_ids`` or
+               ``client_id`` every waiting one named (``orchestrator/moderation.py``)
 land           vehicle lands and is held (no new job until ``release``); its job is requeued
 land_all       every vehicle lands and is held; the queue is paused; jobs go back to the queue
 estop          motors off at once, vehicles held: one, or all (then the queue is paused too);
@@ -31,6 +33,7 @@ if TYPE_CHECKING:
     from orchestrator.jobs import Job
 
 from orchestrator.jobs import transition, update
+from orchestrator.moderation import apply_bulk, is_bulk
 from orchestrator.requeue import requeue
 
 
@@ -194,6 +197,10 @@ def apply_operator(book: Book, command: object, eff: Effects, now_s: float) -> C
     needs_vehicle = cmd.command in ("land", "release", "clear_fault")
     if bad := _vehicle_ok(book, cmd, needs_vehicle):
         return bad
+    if is_bulk(cmd):
+        if cmd.command in ("reject", "cancel"):
+            return apply_bulk(book, cmd, eff, now_s)  # an event line per job
+        return _error("invalid", "job_ids and client_id go with reject or cancel only", "job_ids")
     if cmd.command in ("approve", "reject"):
         reply = _moderate(book, cmd, eff, now_s)
     elif cmd.command == "cancel":

@@ -52,6 +52,7 @@ def core_config(show: Show) -> CoreConfig:
         lost_after_s=show.policy.lost_after_s,
         lost_job_hold_s=show.policy.lost_job_hold_s,
         max_queue=show.policy.max_queue,
+        max_awaiting=show.policy.max_awaiting,
         max_attempts=show.policy.max_attempts,
         max_handbacks=show.policy.max_handbacks,
         tracking_error_alert_m=show.policy.tracking_error_alert_m,
@@ -93,6 +94,7 @@ class BookOutputs:
             paused_vehicles=stored.paused_vehicles,
             held_vehicles=stored.held_vehicles,
             dirty_boards=stored.dirty_boards,
+            open_alerts=stored.open_alerts,
         )
         self.estimates = DurationEstimates(show)
         """Planned durations for queue ETAs (``orchestrator/estimates.py``)."""
@@ -107,6 +109,8 @@ class BookOutputs:
         """The fleet snapshot changed since it was last published (every ``TICK_PERIOD_S`` at
         most: 250 vehicles coming or going were as many 50 kB snapshots, each encoded, sent
         and recorded)."""
+        self._disk_alerted = False
+        """The disk-full alert was raised for the reserve given up last."""
         self.statuses: LatestByKey[str, VehicleStatus] | None = None
         """The newest undecided status of each vehicle (made in the loop by
         :meth:`~orchestrator.service.OrchestratorService.run`)."""
@@ -124,6 +128,7 @@ class BookOutputs:
                 "paused_vehicles": [v for v, view in self.book.vehicles.items() if view.paused],
                 "held_vehicles": [v for v, view in self.book.vehicles.items() if view.held],
                 "dirty_boards": self.book.dirty_boards,
+                "open_alerts": self.book.open_alerts(),
             }
         try:
             changed = [job for job_id, job in eff.jobs.items() if job_id not in eff.progressed]
@@ -195,6 +200,27 @@ class BookOutputs:
     def _record(self, topic: str, message: msgspec.Struct) -> None:
         if self.recorder is not None:
             self.recorder.record_message(topic, message)
+
+    def watch_disk(self, now_s: float) -> None:
+        """Say when a write gave the disk reserve up (``orchestrator/disk_room.py``), and make
+        the reserve again once the disk has room."""
+        reserve = self.store.reserve
+        if reserve is None or not self.store.reserve_given_up:
+            return
+        eff = Effects()
+        if not self._disk_alerted:
+            self._disk_alerted = True
+            reserve_mb = reserve.size_bytes / 1e6
+            message = (
+                f"the show's disk is full: the orchestrator writes on its {reserve_mb:.0f} MB"
+                " reserve; no new character is taken until room is made"
+            )
+            self.book.event(eff, now_s, "alert", "disk_full", message)
+        elif reserve.make(self.show.storage.min_free_mb * 1e6):
+            self.store.reserve_given_up = self._disk_alerted = False
+            message = "the show's disk has room again: new characters are taken"
+            self.book.event(eff, now_s, "info", "disk_room", message)
+        self.apply(eff)
 
     def compact_history(self, now_s: float) -> None:
         """Keep the database within the show's history policy when due (small transactions;

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from bus.bridge import FifoChannel, LatestByKey, RingChannel
-from bus.keys import vehicle_id_from_key
+from bus.keys import identity_from_submit_key, vehicle_id_from_key
 from bus.messages import (
     AgentReport,
     CommandReply,
@@ -39,8 +39,10 @@ from bus.messages import (
     VehicleStatus,
 )
 from bus.pubsub import declare_token, subscribe, subscribe_raw, watch_liveliness
-from bus.rpc import serve_async
+from bus.rpc import serve_async, serve_async_keyed
+from orchestrator.disk_room import storage_full
 from orchestrator.outputs import BookOutputs
+from orchestrator.quotas import OPERATOR, SubmitQuotas, quota_policy
 from orchestrator.submissions import SubmissionError, validate_submission
 from orchestrator.written import attach_written
 from showfile import Show
@@ -58,6 +60,9 @@ STATUS_MERGE_S = 0.05
 STATUS_CHUNK = 32
 """Statuses decided between two turns of the event loop: a query waits for one chunk at most
 (about 1 ms), not for every status that arrived before it."""
+SNAPSHOT_EVENTS = 50
+"""Latest lines of the event log a ``snapshot`` reply carries: a few hundred bytes each, at most
+about 115 kB (an operator's name and reason of 1000 characters each); the open alerts as much."""
 SNAPSHOT_WRITTEN_BYTES = 100_000
 """JSON bytes of done jobs' ink pictures a ``snapshot`` reply carries at most, newest first
 (about 25 jobs); strokes and pictures together stay under half the payload limit."""
@@ -87,38 +92,69 @@ class OrchestratorService(BookOutputs):
     """One show's orchestrator on an open session; :meth:`run` until ``stop`` is set."""
 
     # --- queryables ---------------------------------------------------------------------------
-    async def on_submit(self, request: SubmitRequest) -> SubmitReply:
-        self._record(self.keys.submit + "#request", request)
+    @functools.cached_property
+    def quotas(self) -> SubmitQuotas:
+        """Each identity's submission quotas (``orchestrator/quotas.py``)."""
+        return SubmitQuotas(quota_policy(self.show))
+
+    async def on_submit_as(self, asked_key: str, request: SubmitRequest) -> SubmitReply:
+        """A submission on ``submit/<identity>``: the key says who (access control lets each
+        certificate query only its own)."""
+        identity = identity_from_submit_key(self.keys, asked_key)
+        if identity is None:
+            message = f"submit on {self.keys.submit}/<your certificate's name>, not {asked_key}"
+            return SubmitReply(ok=False, error=ErrorInfo(code="forbidden", message=message))
+        return await self.on_submit(request, identity)
+
+    async def on_submit(self, request: SubmitRequest, identity: str = OPERATOR) -> SubmitReply:
+        """A submission from ``identity`` (the operator's on the plain ``submit`` key): a repeat
+        gets its job; then the identity's quotas; then validation and the Book."""
+        key = self.keys.submit if identity == OPERATOR else self.keys.submit_as(identity)
+        self._record(key + "#request", request)
+        reply = self._repeated_submission(request)
+        if reply is None:
+            refusal = self.quotas.refusal(identity, self.book.waiting_of(identity), self.clock())
+            if refusal is None:
+                reply = self._take_submission(request, identity)
+            else:  # debug: a flood must not flood the log too
+                log.debug("submission of %s refused: %s", identity, refusal.message)
+                reply = SubmitReply(ok=False, error=refusal)
+        self._record(key + "#reply", reply)
+        return reply
+
+    def _take_submission(self, request: SubmitRequest, identity: str) -> SubmitReply:
+        full = storage_full(self.show.database_path, self.show.storage.min_free_mb * 1e6)
+        if full is not None:
+            log.warning("submission refused: %s", full.message)
+            return SubmitReply(ok=False, error=full)
         try:
             accepted = validate_submission(request, self.show)
         except SubmissionError as exc:
-            reply = SubmitReply(ok=False, error=exc.info)
-        else:
-            forgotten = self._forgotten_submission(request)
-            if forgotten is not None:
-                self._record(self.keys.submit + "#reply", forgotten)
-                return forgotten
-            job_id = new_job_id()
-            reply, eff = self.book.submit(
-                job_id,
-                request,
-                label=accepted.label,
-                estimate_s=accepted.estimate_s,
-                now_s=self.clock(),
-            )
-            self.apply(eff)  # committed to SQLite before the reply below is sent
-            if reply.ok:
-                key = f"text:{request.text}" if request.text is not None else None
-                self._spawn(self._refine_estimate(job_id, accepted.glyph, key))
-        self._record(self.keys.submit + "#reply", reply)
+            return SubmitReply(ok=False, error=exc.info)
+        job_id = new_job_id()
+        reply, eff = self.book.submit(
+            job_id,
+            request,
+            label=accepted.label,
+            estimate_s=accepted.estimate_s,
+            now_s=self.clock(),
+            submitted_by=identity,
+        )
+        self.apply(eff)  # committed to SQLite before the reply is sent
+        if reply.ok:
+            key = f"text:{request.text}" if request.text is not None else None
+            self._spawn(self._refine_estimate(job_id, accepted.glyph, key))
         return reply
 
-    def _forgotten_submission(self, request: SubmitRequest) -> SubmitReply | None:
-        """The reply to a repeated idempotency key whose job finished long ago (the Book forgot
-        it; the database still has it), or None."""
+    def _repeated_submission(self, request: SubmitRequest) -> SubmitReply | None:
+        """The reply to a repeated idempotency key (its job, held by the Book or, finished long
+        ago, in the database), or None: a retry is answered before any quota counts it."""
         key = request.idempotency_key
-        if key is None or (request.client_id, key) in self.book.by_key:
+        if key is None:
             return None
+        first = self.book.by_key.get((request.client_id, key))
+        if first is not None and first in self.book.jobs:
+            return self.book.submit_reply(first, self.clock())
         job = self.store.job_by_key(request.client_id, key)
         return None if job is None else SubmitReply(ok=True, job_id=job.job_id, state=job.state)
 
@@ -154,7 +190,12 @@ class OrchestratorService(BookOutputs):
         return reply
 
     async def on_snapshot(self, _: None) -> ShowSnapshot:
-        snapshot = self.book.snapshot(self.clock(), strokes_budget_bytes=SNAPSHOT_STROKES_BYTES)
+        """The whole show; its latest events come from the database (a restart keeps them)."""
+        snapshot = self.book.snapshot(
+            self.clock(),
+            strokes_budget_bytes=SNAPSHOT_STROKES_BYTES,
+            events=self.store.events(SNAPSHOT_EVENTS),
+        )
         return attach_written(snapshot, self.store.written, SNAPSHOT_WRITTEN_BYTES)
 
     # --- subscriptions ------------------------------------------------------------------------
@@ -209,6 +250,7 @@ class OrchestratorService(BookOutputs):
             now = self.clock()
             self.apply(self.book.tick(now))
             self.compact_history(now)
+            self.watch_disk(now)
             if self.fleet_changed or now >= next_fleet:
                 self._publish_fleet()
             if now >= next_fleet:
@@ -245,6 +287,13 @@ class OrchestratorService(BookOutputs):
                 keys.submit,
                 SubmitRequest,
                 self.on_submit,
+                on_error=lambda e: SubmitReply(ok=False, error=e),
+            ),
+            serve_async_keyed(
+                s,
+                keys.submits_all,
+                SubmitRequest,
+                self.on_submit_as,
                 on_error=lambda e: SubmitReply(ok=False, error=e),
             ),
             serve_async(

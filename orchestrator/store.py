@@ -1,4 +1,4 @@
-"""Durable state of the orchestrator in SQLite: jobs, the event log, queue settings.
+"""Durable state of the orchestrator in SQLite: jobs, the event log, queue settings, open alerts.
 
 Durability choice: WAL journal with ``synchronous=FULL``. In WAL mode ``NORMAL`` already survives
 a crash of the process (kill -9): a committed transaction is in the WAL file. It does not survive
@@ -8,7 +8,9 @@ per minute), so every commit is fsynced (FULL). Frequent, replaceable data (job 
 telemetry) is never written here; only state changes are.
 
 One transaction per decision (:meth:`JobStore.save`): the jobs it changed, its events and the
-queue settings commit together, before the service replies or publishes.
+queue settings commit together, before the service replies or publishes. Every event is stored,
+so the latest ones (:meth:`JobStore.events`, a ``snapshot`` reply's) outlive a restart; so do the
+open alerts (``orchestrator/alerts.py``), kept with the settings.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from orchestrator.compaction import (
     HistoryPolicy,
     compact,
 )
+from orchestrator.disk_room import DiskReserve
 from orchestrator.jobs import FINAL_STATES, Job
 
 SCHEMA_VERSION = 4
@@ -70,6 +73,7 @@ _INCREMENTAL = 2
 
 _job_decoder = msgspec.json.Decoder(Job)
 _event_decoder = msgspec.json.Decoder(Event)
+_events_decoder = msgspec.json.Decoder(list[Event])
 _ink_decoder = msgspec.json.Decoder(WrittenInk)
 
 
@@ -94,6 +98,8 @@ class StoredState:
     """Vehicles held by the operator's land or estop (no job until ``release``)."""
     dirty_boards: list[str]
     """Boards left half-written (no job until ``fresh_sheet``)."""
+    open_alerts: list[Event]
+    """Alerts whose cause lasted when they were last stored, oldest first."""
 
 
 @dataclass(frozen=True)
@@ -107,9 +113,14 @@ class KeyedJob:
 class JobStore:
     """The orchestrator's SQLite database; use as a context manager."""
 
-    def __init__(self, path: str | Path) -> None:
+    def __init__(self, path: str | Path, reserve: DiskReserve | None = None) -> None:
+        """``reserve``: given up to write on when the disk is full (``orchestrator/disk_room``)."""
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.reserve = reserve
+        self.reserve_given_up = False
+        """A write found the disk full and the reserve was given up for it (the service says so
+        and makes the reserve again once there is room)."""
         try:
             self._db = sqlite3.connect(self.path, isolation_level=None)
             self._db.execute("PRAGMA journal_mode=WAL")
@@ -165,10 +176,12 @@ class JobStore:
         paused_vehicles: Iterable[str] | None = None,
         held_vehicles: Iterable[str] | None = None,
         dirty_boards: Iterable[str] | None = None,
+        open_alerts: Iterable[Event] | None = None,
         written: Mapping[str, WrittenInk] | None = None,
     ) -> None:
-        """Write changed jobs, new events, settings and ink pictures (job id -> picture of a job
-        in ``jobs`` or stored before) in one durable transaction."""
+        """Write changed jobs, new events, settings (``open_alerts`` replaces those stored) and
+        ink pictures (job id -> picture of a job in ``jobs`` or stored before) in one durable
+        transaction."""
         job_rows = [
             (j.job_id, j.seq, j.state, msgspec.json.encode(j), _scoped_key(j)) for j in jobs
         ]
@@ -184,10 +197,20 @@ class JobStore:
         ):
             if names is not None:
                 settings.append((key, json.dumps(sorted(names))))
+        if open_alerts is not None:
+            settings.append(("open_alerts", msgspec.json.encode(list(open_alerts)).decode()))
         if not (job_rows or event_rows or settings or ink_rows):
             return
         try:
-            self._write(job_rows, event_rows, settings, ink_rows)
+            try:
+                self._write(job_rows, event_rows, settings, ink_rows)
+            except sqlite3.Error as exc:
+                if not (_disk_full(exc) and self.reserve is not None and self.reserve.release()):
+                    raise
+                if self._db.in_transaction:  # a COMMIT that failed leaves it open
+                    self._db.execute("ROLLBACK")
+                self.reserve_given_up = True
+                self._write(job_rows, event_rows, settings, ink_rows)
         except sqlite3.Error as exc:
             raise StoreError(f"{self.path}: {exc}") from exc
 
@@ -237,6 +260,7 @@ class JobStore:
             paused_vehicles=list(json.loads(settings.get("paused_vehicles", "[]"))),
             held_vehicles=list(json.loads(settings.get("held_vehicles", "[]"))),
             dirty_boards=list(json.loads(settings.get("dirty_boards", "[]"))),
+            open_alerts=_events_decoder.decode(settings.get("open_alerts", "[]")),
         )
 
     def job(self, job_id: str) -> Job | None:
@@ -293,6 +317,13 @@ def _scoped_key(job: Job) -> str | None:
 
 def _scope(client_id: str, idempotency_key: str) -> str:
     return f"{client_id}\x1f{idempotency_key}"
+
+
+def _disk_full(exc: sqlite3.Error) -> bool:
+    """Whether SQLite found the disk full (``SQLITE_FULL``; an I/O error on writing, extended
+    codes included, is what a full disk gives in WAL mode as often)."""
+    primary = getattr(exc, "sqlite_errorcode", 0) & 0xFF
+    return primary in (sqlite3.SQLITE_FULL, sqlite3.SQLITE_IOERR)
 
 
 class _Transaction:

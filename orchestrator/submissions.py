@@ -21,7 +21,6 @@ from planner.glyphs import Glyph, parse_strokes_json, text_glyph
 from showfile import Show
 from vehicles.jobs import kind_writers, lay_out, plan_job
 
-MAX_CLIENT_ID_CHARS = 100
 PRIORITY_RANGE = (-10, 10)
 PEN_UP_OVERHEAD_S = 1.5
 """Rough time per stroke for lifting, moving and lowering the brush, [s]."""
@@ -83,15 +82,8 @@ def _glyph(request: SubmitRequest) -> Glyph:
 
 
 def validate_submission(request: SubmitRequest, show: Show) -> Accepted:
-    """Check a submission fully (glyph parsing included); raises :class:`SubmissionError`."""
-    if len(request.client_id) > MAX_CLIENT_ID_CHARS:
-        raise SubmissionError(
-            ErrorInfo(
-                code="invalid",
-                message=f"client_id longer than {MAX_CLIENT_ID_CHARS} characters",
-                field="client_id",
-            )
-        )
+    """Check a submission fully (glyph parsing included); raises :class:`SubmissionError`.
+    Its names and length were checked when it was decoded (``bus.public_text``)."""
     low, high = PRIORITY_RANGE
     if not low <= request.priority <= high:
         raise SubmissionError(

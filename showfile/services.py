@@ -116,6 +116,11 @@ class StorageSettings(ShowModel):
     job_history_max_age_h: float | None = Field(default=None, gt=0.0)
     """Finished jobs older than this are compacted and older events deleted, in [h], whatever
     the database's size; None: only the budget limits them."""
+    min_free_mb: float = Field(default=64.0, ge=0.0)
+    """New characters are refused (``storage_full``) while the database's disk has less than
+    this free, in [MB]: room for what the jobs already taken still write (a compact job folder
+    is ~100 kB, a recording part ``recording_part_mb``), before SQLite finds the disk full and
+    the orchestrator has to stop. 0: never refused."""
 
 
 class PolicySettings(ShowModel):
@@ -137,7 +142,25 @@ class PolicySettings(ShowModel):
     tracking_error_alert_m: float = Field(default=0.05, gt=0.0)
     """Tracking error that raises an alert event, in [m]."""
     max_queue: int = Field(default=200, ge=1)
-    """Submissions beyond this many waiting jobs are refused."""
+    """Submissions beyond this many queued jobs are refused (``queue_full``); jobs awaiting
+    approval count apart (``max_awaiting``). The operator's own are never refused."""
+    max_awaiting: int = Field(default=100, ge=1)
+    """With moderation, submissions beyond this many jobs awaiting approval are refused
+    (``queue_full``): unmoderated jobs never fill the queue of approved ones. The operator's own
+    are never refused."""
+    client_submits_per_minute: int = Field(default=6, ge=1)
+    """Submissions per sliding minute from each outside client's certificate (``skyquill keys
+    --client``), refused past it (``rate_limited``): the kiosk's rule and default for one address
+    (``kiosk.rate_limit_per_minute``), since an outside client is one submitter. The operator's
+    own are never limited (``orchestrator/quotas.py``)."""
+    kiosk_submits_per_minute: int = Field(default=60, ge=1)
+    """Submissions per sliding minute from the kiosk, all its visitors together (the kiosk limits
+    each address itself): one a second, ten visitors at the kiosk's per-address default at once,
+    more than a busy kiosk's few tablets hand in (a visitor takes tens of seconds to draw) and
+    than a fleet writes, yet a bound if the kiosk is abused from many addresses."""
+    client_max_waiting: int = Field(default=10, ge=1)
+    """Jobs of one outside client that may wait (awaiting approval or queued) at once; past it
+    its submissions are refused (``rate_limited``) until one is approved, rejected or written."""
     max_attempts: int = Field(default=3, ge=1)
     """A job fails instead of being requeued again after this many attempts that may have been
     its own fault: its vehicle lost or restarted with it, or a safety abort (``not_settled``)."""

@@ -206,8 +206,8 @@ def test_a_vehicle_writes_on_while_the_orchestrator_is_away_and_reports_when_it_
     free_tcp_port: Callable[[], int],
 ) -> None:
     """The orchestrator's token and its report queryable go (it restarts) right after it has
-    acknowledged the ready report and ``started``: the vehicle finishes the character on its write fence
-    (``bus/fence.py``) and its ``done`` reaches the orchestrator once it is back."""
+    acknowledged the ready report and ``started``: the vehicle finishes the character on its
+    write fence (``bus/fence.py``) and its ``done`` reaches the orchestrator once it is back."""
 
     async def scenario() -> None:
         async with show(free_tcp_port) as (service, orch):

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import re
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -18,8 +19,10 @@ from bus.messages import SubmitReply, SubmitRequest
 from bus.public_text import MAX_CLIENT_ID_CHARS, MAX_LABEL_CHARS
 from bus.rpc import RemoteError, query_one, serve
 from bus.session import loopback_settings, open_session
+from cli.main import main as skyquill
 
 KEYS = ShowKeys("public-text-test")
+SOLO = Path(__file__).resolve().parents[1] / "shows" / "solo.yaml"
 DRAWING = {"units": "px", "y_axis": "down", "strokes": [[[0, 0], [10, 10]]]}
 ESCAPES = "\x1b[2J\x1b]8;;http://e.vil\x07"
 MARKUP = "[blink]x[/]"
@@ -110,3 +113,16 @@ def test_plain_text_passes_unchanged(name: str) -> None:
     request = decode(raw, SubmitRequest)
     assert request.client_id == name and request.strokes is not None
     assert request.strokes["label"] == name
+
+
+@pytest.mark.parametrize(
+    ("client_id", "said"),
+    [(f"a{ESCAPES}", "client_id holds U+001B"), ("c" * (MAX_CLIENT_ID_CHARS + 1), "<= 100")],
+)
+def test_the_submit_command_refuses_a_client_id_the_bus_would_in_one_line(
+    capsys: pytest.CaptureFixture[str], client_id: str, said: str
+) -> None:
+    """Checked before any session opens (no router here): one line, no traceback."""
+    assert skyquill(["submit", str(SOLO), "--text", "A", "--client-id", client_id]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and said in err and "\x1b" not in err, err

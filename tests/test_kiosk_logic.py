@@ -10,6 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from bus.messages import JobMetrics, JobState, JobStateName, WrittenInk
+from bus.ratelimit import SlidingWindowLimiter
 from kiosk import wording
 from kiosk.addresses import (
     BadProxySettingError,
@@ -21,7 +22,6 @@ from kiosk.addresses import (
 from kiosk.errors import RejectedError
 from kiosk.jobs import JobBook, job_view
 from kiosk.limits import SubmissionLimits, check_submission, decode_json_body, is_blocked
-from kiosk.ratelimit import SlidingWindowLimiter
 
 
 def state(job_id: str, name: JobStateName, updated_at_s: float, **kw: object) -> JobState:

@@ -56,7 +56,7 @@ class FakeOrchestrator:
     def start(self) -> FakeOrchestrator:
         self.thawed.set()
         self._queryables = [
-            serve(self.session, self.keys.submit, SubmitRequest, self._on_submit),
+            serve(self.session, self.keys.submit_as("kiosk"), SubmitRequest, self._on_submit),
             serve(self.session, self.keys.snapshot, None, self._on_snapshot),
         ]
         self._stop.clear()

@@ -29,9 +29,10 @@ from bus.messages import (
 from bus.pubsub import publish
 from bus.rpc import NoReplyError, RemoteError, query, query_one
 from bus.session import BusSettings, Session, SessionOpenError, open_session
+from cli.main import main as skyquill
 from cli.showrun import ShowRun, derived_show, snapshot, wait_for_jobs
 from showfile import Show, load_show
-from trust.pki import client_files, identity_files, issue
+from trust.pki import identity_files, issue
 from trust.settings import client_session_settings, secured, session_settings
 
 pytestmark = [pytest.mark.multiprocess, pytest.mark.slow, pytest.mark.timeout(240)]
@@ -52,6 +53,8 @@ def show_run(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ShowRun]:
         policy=base.policy.model_copy(update={"moderation": True}),
     )
     assert show.security.mode == "mtls"
+    for name, role in OUTSIDE_CLIENTS.items():  # before the router starts: it admits them
+        assert skyquill(["keys", str(path), "--client", name, "--role", role]) == 0
     with ShowRun(path, show, log_dir=out / "logs") as run:
         with run.client() as operator:
             _wait_ready(operator, run.keys)
@@ -76,15 +79,22 @@ def as_identity(show: Show, identity: str) -> Session:
     return open_session(session_settings(show, identity), role="client", open_timeout_s=10.0)
 
 
-def as_client(show: Show, tmp: Path, name: str, role: str) -> Session:
-    files = client_files(show.keys_dir, name, role)
-    issue(show.keys_dir, files, show_id=show.show_id, hosts=["127.0.0.1"], holder=name)
-    settings = client_session_settings(show, files.cert.parent)
+OUTSIDE_CLIENTS = {
+    "outsider-submitter": "submitter",
+    "outsider-watcher": "watcher",
+    "press": "watcher",
+    "booth": "submitter",
+}
+"""Issued with ``skyquill keys --client`` before the show starts (name -> role)."""
+
+
+def as_client(show: Show, name: str) -> Session:
+    settings = client_session_settings(show, show.keys_dir / "clients" / name)
     return open_session(settings, role="client", open_timeout_s=10.0)
 
 
-def _submit(session: Session, keys: ShowKeys, text: str) -> str:
-    reply = query_one(session, keys.submit, SubmitRequest(text=text), SubmitReply, timeout_s=5)
+def _submit(session: Session, key: str, text: str) -> str:
+    reply = query_one(session, key, SubmitRequest(text=text), SubmitReply, timeout_s=5)
     assert reply.ok and reply.job_id
     return reply.job_id
 
@@ -98,16 +108,16 @@ def _no_answer(session: Session, key: str, request: object, reply_type: type) ->
 ROLES_WITHOUT_COMMAND = ("kiosk", "submitter", "watcher", "uav2")
 
 
-def _session_for(show_run: ShowRun, tmp_path: Path, who: str) -> Session:
+def _session_for(show_run: ShowRun, who: str) -> Session:
     if who in ("kiosk", "uav2", "operator"):
         return as_identity(show_run.show, who)
-    return as_client(show_run.show, tmp_path, f"outsider-{who}", who)
+    return as_client(show_run.show, f"outsider-{who}")
 
 
 @pytest.mark.parametrize("who", ROLES_WITHOUT_COMMAND)
-def test_only_operators_command_vehicles(show_run: ShowRun, tmp_path: Path, who: str) -> None:
+def test_only_operators_command_vehicles(show_run: ShowRun, who: str) -> None:
     keys = show_run.keys
-    with _session_for(show_run, tmp_path, who) as attacker:
+    with _session_for(show_run, who) as attacker:
         for command in ("estop", "land"):
             _no_answer(
                 attacker,
@@ -124,11 +134,11 @@ def test_only_operators_command_vehicles(show_run: ShowRun, tmp_path: Path, who:
 
 
 @pytest.mark.parametrize("who", ROLES_WITHOUT_COMMAND)
-def test_nobody_but_the_operator_moderates(show_run: ShowRun, tmp_path: Path, who: str) -> None:
+def test_nobody_but_the_operator_moderates(show_run: ShowRun, who: str) -> None:
     keys = show_run.keys
     with show_run.client() as operator:
-        job_id = _submit(operator, keys, "A")
-        with _session_for(show_run, tmp_path, who) as attacker:
+        job_id = _submit(operator, keys.submit, "A")
+        with _session_for(show_run, who) as attacker:
             for command in ("approve", "cancel", "reject"):
                 _no_answer(
                     attacker,
@@ -144,7 +154,7 @@ def test_nobody_but_the_operator_moderates(show_run: ShowRun, tmp_path: Path, wh
         assert reply.ok
 
 
-def test_nobody_assigns_but_the_orchestrator(show_run: ShowRun, tmp_path: Path) -> None:
+def test_nobody_assigns_but_the_orchestrator(show_run: ShowRun) -> None:
     """The paused-queue attack: a made-up job sent straight to an agent is never flown."""
     keys = show_run.keys
     made_up = VehicleCommand(command="assign", job=JobAssignment(job_id="jfake", text="X"))
@@ -252,12 +262,12 @@ def test_no_certificate_or_another_shows_certificate_cannot_join(
         open_session(stolen_ca, role="client", open_timeout_s=1.0).close()
 
 
-def test_watcher_sees_the_show_and_the_show_still_writes(show_run: ShowRun, tmp_path: Path) -> None:
+def test_watcher_sees_the_show_and_the_show_still_writes(show_run: ShowRun) -> None:
     keys = show_run.keys
-    with as_client(show_run.show, tmp_path, "press", "watcher") as watcher:
+    with as_client(show_run.show, "press") as watcher:
         assert snapshot(watcher, keys).show_id == show_run.show.show_id
-    with as_client(show_run.show, tmp_path, "booth", "submitter") as submitter:
-        job_id = _submit(submitter, keys, "T")
+    with as_client(show_run.show, "booth") as submitter:
+        job_id = _submit(submitter, keys.submit_as("submitter@booth"), "T")
     with show_run.client() as operator:
         reply = query_one(
             operator, keys.command, OperatorCommand(command="approve", job_id=job_id), CommandReply

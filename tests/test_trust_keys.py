@@ -100,7 +100,12 @@ def _may(acl: dict[str, object], common_name: str, message: str, key: str) -> bo
 
 
 def test_access_control_gives_each_identity_only_its_part() -> None:
-    acl = access_control("s", ["uav1", "uav2"])
+    clients = {
+        "submitter@booth": "submitter",
+        "watcher@press": "watcher",
+        "operator@al": "operator",
+    }
+    acl = access_control("s", ["uav1", "uav2"], clients=clients)
     k = ShowKeys("s")
     assert acl["default_permission"] == "deny" and acl["enabled"] is True
     assert _may(acl, "uav1", "put", k.telemetry("uav1"))
@@ -111,17 +116,25 @@ def test_access_control_gives_each_identity_only_its_part() -> None:
     assert _may(acl, "uav1", "query", k.report("uav1"))
     assert not _may(acl, "uav1", "query", k.report("uav2"))
     assert not _may(acl, "uav1", "query", k.command)
-    for role in ("kiosk", "submitter"):
-        assert _may(acl, role, "query", k.submit)
-        assert not _may(acl, role, "query", k.command)
-        assert not _may(acl, role, "query", k.vehicle_command("uav1"))
-        assert not _may(acl, role, "declare_subscriber", k.telemetry("uav1"))
-    assert _may(acl, "operator", "query", k.command)
-    assert _may(acl, "operator", "query", k.vehicle_command("uav2"))
-    assert not _may(acl, "operator", "query", k.vehicle_assign("uav2"))
-    assert not _may(acl, "operator", "put", k.job("j1"))
-    assert _may(acl, "watcher", "declare_subscriber", k.telemetry("uav1"))
-    assert not _may(acl, "watcher", "query", k.command)
+    for identity in ("kiosk", "submitter@booth"):
+        assert _may(acl, identity, "query", k.submit_as(identity))  # its own submit key only
+        assert not _may(acl, identity, "query", k.submit)
+        assert not _may(acl, identity, "query", k.submit_as("operator@al"))
+        assert not _may(acl, identity, "query", k.command)
+        assert not _may(acl, identity, "query", k.vehicle_command("uav1"))
+        assert not _may(acl, identity, "declare_subscriber", k.telemetry("uav1"))
+    assert _may(acl, "operator", "query", k.submit)
+    assert _may(acl, "operator@al", "query", k.submit_as("operator@al"))
+    assert not _may(acl, "operator@al", "query", k.submit)
+    for identity in ("operator", "operator@al"):
+        assert _may(acl, identity, "query", k.command)
+        assert _may(acl, identity, "query", k.vehicle_command("uav2"))
+        assert not _may(acl, identity, "query", k.vehicle_assign("uav2"))
+        assert not _may(acl, identity, "put", k.job("j1"))
+    assert _may(acl, "watcher@press", "declare_subscriber", k.telemetry("uav1"))
+    assert not _may(acl, "watcher@press", "query", k.command)
+    subjects = {name for s in acl["subjects"] for name in s["cert_common_names"]}
+    assert not subjects & {"submitter", "watcher"}  # no rule for a role's bare name any more
     assert _may(acl, "orchestrator", "query", k.vehicle_assign("uav2"))
     assert _may(acl, "orchestrator", "put", k.fleet)
 

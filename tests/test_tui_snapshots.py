@@ -89,6 +89,24 @@ def test_reject_asks_with_a_reason_80x24(snap_compare: SnapCompare) -> None:
     assert snap_compare(demo_app(), terminal_size=(80, 24), run_before=ask)
 
 
+def test_marked_jobs_of_a_client_100x30(snap_compare: SnapCompare) -> None:
+    async def mark(pilot: Any) -> None:
+        await settle(pilot)
+        await pilot.press("tab", "M")  # every waiting job of kiosk-7
+        await pilot.pause()
+
+    assert snap_compare(demo_app(), terminal_size=(100, 30), run_before=mark)
+
+
+def test_bulk_reject_asks_once_80x24(snap_compare: SnapCompare) -> None:
+    async def ask(pilot: Any) -> None:
+        await settle(pilot)
+        await pilot.press("tab", "M", "R")
+        await pilot.pause()
+
+    assert snap_compare(demo_app(), terminal_size=(80, 24), run_before=ask)
+
+
 def mixed_app() -> ConsoleApp:
     """A brush quadrotor on a table, the hexarotor on a wall (with its force), a ground writer."""
     settings = demo_mixed_settings()

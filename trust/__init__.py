@@ -4,8 +4,10 @@
 - ``trust.acl``: the Zenoh ``access_control`` section of a show, default deny (pure).
 - ``trust.settings``: the bus settings of one identity (TLS files, endpoints, ACL on the router).
 - ``trust.hosts``: a show across machines: the host each identity runs on, its endpoints there.
+- ``trust.clients``: the outside clients issued and revoked (the router re-reads it live).
 
 Identities are certificate common names: ``router``, ``orchestrator``, ``kiosk``, ``operator``
-(console and CLI), ``watcher`` and ``submitter`` (outside clients), each vehicle's id, and
-``router@<host>`` for the router of each companion host of a show across machines.
+(console and CLI), each vehicle's id, ``router@<host>`` for the router of each companion host of
+a show across machines, and ``<role>@<name>`` for each outside client (``operator@alice``,
+``submitter@booth``, ``watcher@press``).
 """

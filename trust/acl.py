@@ -11,13 +11,19 @@ What each identity may send:
 - ``orchestrator``: anything under ``skyquill/<show>/**``;
 - each vehicle: telemetry, status, events and its liveliness token under its own keys; replies
   of its own ``command`` and ``assign`` queryables; reports on its own report key;
-- ``kiosk`` and ``submitter``: submit and snapshot queries; they follow jobs and the fleet;
-- ``operator``: operator commands, submissions, snapshots and vehicle commands (never an
-  assignment); it watches everything;
-- ``watcher``: snapshot queries; it watches everything;
+- ``kiosk`` and each outside ``submitter``: submissions on their own submit key
+  (``orchestrator/submit/<identity>``, so the orchestrator's quotas count by certificate), and
+  snapshot queries; they follow jobs and the fleet;
+- ``operator`` (the console, the CLI) and each outside ``operator``: operator commands,
+  submissions (the console's on ``orchestrator/submit``, an outside one's on its own key),
+  snapshots and vehicle commands (never an assignment); they watch everything;
+- each outside ``watcher``: snapshot queries; it watches everything;
 - ``router``: anything (the ground station's router, as a companion host's router sees it);
 - ``router@<host>``, a companion host's router: what the vehicles on that host may send, and
   nothing else (``trust/hosts.py``).
+
+Outside clients are subjects one by one (``<role>@<name>``, ``trust/clients.py``): a client not
+listed, or revoked, matches no subject, and default deny leaves it nothing to send or receive.
 """
 
 from __future__ import annotations
@@ -56,10 +62,27 @@ def _watch_all(keys: ShowKeys, name: str) -> list[dict[str, Any]]:
 
 def _follow_jobs(keys: ShowKeys, name: str) -> list[dict[str, Any]]:
     return [
-        _rule(f"{name}: submit", QUERY, [keys.submit, keys.snapshot]),
+        _rule(f"{name}: submit", QUERY, [keys.submit_as(name), keys.snapshot]),
         _rule(f"{name}: follow", SUBSCRIBE, [keys.jobs_all, keys.fleet]),
         _rule(f"{name}: presence", WATCH_PRESENCE, [keys.orchestrator_alive]),
     ]
+
+
+def _operator(keys: ShowKeys, name: str, submit_key: str) -> list[dict[str, Any]]:
+    return [
+        *_watch_all(keys, name),
+        _rule(f"{name}: command", QUERY, [keys.command, submit_key]),
+        _rule(f"{name}: vehicles", QUERY, [f"{keys.prefix}/vehicles/*/command"]),
+    ]
+
+
+def _client(keys: ShowKeys, common_name: str, role: str) -> list[dict[str, Any]]:
+    """An outside client's rules: its role's, submitting on its own key."""
+    if role == "operator":
+        return _operator(keys, common_name, keys.submit_as(common_name))
+    if role == "submitter":
+        return _follow_jobs(keys, common_name)
+    return _watch_all(keys, common_name)
 
 
 def _vehicle(keys: ShowKeys, vehicle_id: str) -> list[dict[str, Any]]:
@@ -94,9 +117,11 @@ def access_control(
     show_id: str,
     vehicle_ids: Sequence[str],
     companion_routers: Mapping[str, Sequence[str]] | None = None,
+    clients: Mapping[str, str] | None = None,
 ) -> dict[str, Any]:
     """The ``access_control`` section for the show's routers (default deny);
-    ``companion_routers``: each companion host's router identity and its vehicles."""
+    ``companion_routers``: each companion host's router identity and its vehicles;
+    ``clients``: each admitted outside client's common name and role."""
     keys = ShowKeys(show_id)
     everything = [f"{keys.prefix}/**"]
     egress = _egress(keys)
@@ -104,14 +129,10 @@ def access_control(
         "router": [_rule("router: anything", ALL_MESSAGES, ["**"])],
         "orchestrator": [_rule("orchestrator: anything in the show", ALL_MESSAGES, everything)],
         "kiosk": _follow_jobs(keys, "kiosk"),
-        "submitter": _follow_jobs(keys, "submitter"),
-        "operator": [
-            *_watch_all(keys, "operator"),
-            _rule("operator: command", QUERY, [keys.command, keys.submit]),
-            _rule("operator: vehicles", QUERY, [f"{keys.prefix}/vehicles/*/command"]),
-        ],
-        "watcher": _watch_all(keys, "watcher"),
+        "operator": _operator(keys, "operator", keys.submit),
     }
+    for common_name, role in (clients or {}).items():
+        per_subject[common_name] = _client(keys, common_name, role)
     for vehicle_id in vehicle_ids:
         per_subject[vehicle_id] = _vehicle(keys, vehicle_id)
     for router, carried in (companion_routers or {}).items():

@@ -4,7 +4,8 @@ Layout of a show's keys folder (``show.keys_dir``; private keys 0600, folders 07
 
     ca.pem  ca.key                  the show CA (ECDSA P-256, 5 years)
     <identity>/cert.pem  key.pem    one per service and per vehicle (common name = identity)
-    clients/<name>/cert.pem key.pem ca.pem   outside clients (common name = their role)
+    clients/<name>/cert.pem key.pem ca.pem   outside clients (common name = <role>@<name>)
+    clients.json                    the outside clients admitted and revoked (trust/clients.py)
 
 Certificates by role: only a router's certificate may serve. It carries server and client
 authentication (a companion router also joins the ground router) and the routers' host names
@@ -16,7 +17,11 @@ certificate is signed by the CA and valid for one year.
 A CA is marked (:data:`CA_PROFILE`) as issuing by role. A keys folder whose CA lacks the mark was
 made by an older skyquill, whose every certificate could serve: re-issuing its own files would
 leave copies of the old ones (outside clients, companion hosts) able to pose as the router, so
-it is refused with what to do (a new CA) rather than used.
+it is refused with what to do (a new CA) rather than used. Likewise an outside client issued
+before clients had names of their own (its common name was its role): an operator's was then the
+console's own identity, and can be shut out by no access rule, so a keys folder holding one is
+refused (:func:`check_old_clients`); a client holding an old folder is told to have it issued
+again (:func:`client_identity`).
 """
 
 from __future__ import annotations
@@ -33,6 +38,7 @@ from cryptography.hazmat.primitives import hashes, serialization
 from cryptography.hazmat.primitives.asymmetric import ec
 from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 
+from trust.clients import client_common_name
 from trust.files import IdentityFiles, KeysError, identity_files
 from trust.hosts import is_router
 
@@ -40,7 +46,9 @@ __all__ = [
     "CA_PROFILE",
     "IdentityFiles",
     "KeysError",
+    "check_old_clients",
     "client_files",
+    "client_identity",
     "ensure_ca",
     "identity_files",
     "is_valid",
@@ -59,7 +67,48 @@ _CLIENT_USAGES = (ExtendedKeyUsageOID.CLIENT_AUTH,)
 def client_files(keys_dir: Path, name: str, role: str) -> IdentityFiles:
     """Paths of an outside client's identity: a folder it can carry away (with the CA cert)."""
     folder = Path(keys_dir) / "clients" / name
-    return IdentityFiles(role, folder / "cert.pem", folder / "key.pem", folder / "ca.pem")
+    return IdentityFiles(
+        client_common_name(name, role), folder / "cert.pem", folder / "key.pem", folder / "ca.pem"
+    )
+
+
+def _common_name(cert_path: Path) -> str:
+    try:
+        cert = x509.load_pem_x509_certificate(cert_path.read_bytes())
+    except (OSError, ValueError) as exc:
+        raise KeysError(f"{cert_path}: cannot read the certificate: {exc}") from exc
+    names = cert.subject.get_attributes_for_oid(NameOID.COMMON_NAME)
+    return str(names[0].value) if names else ""
+
+
+def client_identity(folder: Path) -> str:
+    """The identity in an outside client's folder; :class:`KeysError` for one issued before
+    clients had names of their own."""
+    common_name = _common_name(Path(folder) / "cert.pem")
+    if "@" not in common_name:
+        raise KeysError(
+            f"{folder} was issued before clients had names of their own: ask the show's "
+            f"operator to issue it again (`skyquill keys SHOW --client NAME --role ROLE`)"
+        )
+    return common_name
+
+
+def check_old_clients(keys_dir: Path) -> None:
+    """:class:`KeysError` if the keys folder issued an outside operator before clients had names
+    (its certificate says ``operator``, as the console's does, and no rule can shut it out).
+    Old watchers and submitters need nothing: no rule admits their common names any more."""
+    old = sorted(
+        cert.parent.name
+        for cert in (Path(keys_dir) / "clients").glob("*/cert.pem")
+        if _common_name(cert) == "operator"
+    )
+    if old:
+        raise KeysError(
+            f"{keys_dir} issued outside operators before clients had names ({', '.join(old)}): "
+            f"they act as the console and cannot be revoked; move the folder away and run "
+            f"`skyquill keys` (or `up`) with the show file for a new CA, then issue outside "
+            f"clients again (--client) and copy the new folders to companion hosts"
+        )
 
 
 def _now() -> datetime.datetime:

@@ -16,6 +16,7 @@ from bus.session import BusSettings
 from showfile.bus_view import ShowBus
 from showfile.roles import SERVICE_ROLES
 from trust.acl import access_control
+from trust.clients import load_clients
 from trust.files import IdentityFiles, KeysError, identity_files
 from trust.hosts import all_endpoints, companion_routers, endpoints, is_router
 
@@ -52,8 +53,9 @@ def ensure_show_keys(show: ShowBus) -> list[str]:
     """Create the show CA and any missing or stale identity; returns the identities (re)issued."""
     if show.security.mode == "none":
         return []
-    from trust.pki import is_valid, issue  # cryptography: only where keys are made or checked
+    from trust.pki import check_old_clients, is_valid, issue  # cryptography: where keys are made
 
+    check_old_clients(show.keys_dir)
     issued = []
     hosts = show_hosts(show)
     for identity in identities(show):
@@ -106,7 +108,11 @@ def secured(show: ShowBus, files: IdentityFiles, *, router: bool) -> BusSettings
             )
     z = show.zenoh
     where = endpoints(show, files.common_name)
-    acl = access_control(show.show_id, [v.id for v in show.vehicles], companion_routers(show))
+    acl = None
+    if router:
+        clients = load_clients(show.keys_dir).common_names
+        vehicle_ids = [v.id for v in show.vehicles]
+        acl = access_control(show.show_id, vehicle_ids, companion_routers(show), clients)
     return BusSettings(
         router_listen=as_tls(where.router_listen),
         connect=as_tls(where.connect),
@@ -114,7 +120,7 @@ def secured(show: ShowBus, files: IdentityFiles, *, router: bool) -> BusSettings
         router_connect=as_tls(where.router_connect),
         peer_listen=as_tls(z.peer_listen),
         tls=tls_section(files, router=router),
-        access_control=acl if router else None,
+        access_control=acl,
         extra=dict(z.extra),
         open_timeout_s=z.open_timeout_s,
     )
@@ -154,8 +160,11 @@ def session_settings(show: ShowBus, identity: str) -> Any:
 
 
 def client_session_settings(show: ShowBus, client_dir: Path) -> BusSettings:
-    """Settings for an outside client holding the folder ``skyquill keys --client`` made (its
-    certificate's common name is its role)."""
+    """Settings for an outside client holding the folder ``skyquill keys --client`` made;
+    :class:`KeysError` for a folder issued before clients had names of their own."""
+    from trust.pki import client_identity  # cryptography: reads the certificate's name
+
     folder = Path(client_dir)
-    files = IdentityFiles("client", folder / "cert.pem", folder / "key.pem", folder / "ca.pem")
+    identity = client_identity(folder)
+    files = IdentityFiles(identity, folder / "cert.pem", folder / "key.pem", folder / "ca.pem")
     return secured(show, files, router=False)

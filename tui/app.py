@@ -44,7 +44,9 @@ from tui.widgets.preview_screen import PreviewScreen
 from tui.widgets.queue_table import QueueTable
 from tui.widgets.vehicle_detail_screen import VehicleDetailScreen
 
-JOB_ACTIONS = frozenset({"approve", "reject", "cancel_job", "priority", "preview"})
+JOB_ACTIONS = frozenset(
+    {"approve", "reject", "cancel_job", "priority", "preview", "mark", "reject_marked"}
+)
 """Act on the job selected in the queue: only while the queue has the focus."""
 VEHICLE_ACTIONS = frozenset({"vehicle", "detail", "fresh_sheet"})
 """Act on the vehicle selected in the fleet table: only while the fleet has the focus."""
@@ -67,6 +69,9 @@ class ConsoleApp(App[None]):
         Binding("plus", "priority('raise')", "prio+"),
         Binding("minus", "priority('lower')", "prio-"),
         Binding("v", "preview", "view"),
+        Binding("space", "mark", "mark", show=False),
+        Binding("M", "mark(True)", "mark client", show=False),
+        Binding("R", "reject_marked", "reject marked", show=False),
         Binding("l", "vehicle('land')", "land"),
         Binding("u", "vehicle('release')", "release"),
         Binding("f", "vehicle('clear_fault')", "reset fault"),
@@ -320,6 +325,15 @@ class ConsoleApp(App[None]):
 
     def action_cancel_job(self) -> None:
         self._request(cmd.job_request("cancel", self._selected_job()))
+
+    def action_mark(self, whole_client: bool = False) -> None:
+        """Mark the selected job, or every waiting job of its client, for ``R``."""
+        note = self._queue.mark_client() if whole_client else self._queue.toggle_mark()
+        if note is not None:
+            self.notify(note, markup=False)
+
+    def action_reject_marked(self) -> None:
+        self._request(cmd.bulk_request(self._queue.marked_jobs()))
 
     def action_priority(self, direction: str) -> None:
         self._request(cmd.job_request(direction, self._selected_job()))

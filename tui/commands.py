@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from bus.messages import MAX_PRIORITY, JobState, OperatorCommand
+from bus.messages import MAX_BULK_JOBS, MAX_PRIORITY, JobState, OperatorCommand
 from tui.records import ACTIVE_JOB_STATES, AWAITING_JOB_STATES, FINAL_JOB_STATES
 from tui.rows import VehicleRow
 from tui.safe_text import clean
@@ -69,6 +69,33 @@ def job_request(command: str, job: JobState | None) -> Request:
             reason_prompt="reason (optional)",
         )
     return _prioritize(command, job, what)
+
+
+def bulk_request(marked: list[JobState]) -> Request:
+    """``R``: the marked jobs, awaiting approval ones rejected and queued ones cancelled, after one
+    question naming how many and whose (a job a vehicle has is never marked)."""
+    awaiting = [j.job_id for j in marked if j.state in AWAITING_JOB_STATES]
+    queued = [j.job_id for j in marked if j.state == "queued"]
+    if not awaiting and not queued:
+        return Refusal("reject marked: no waiting job marked (space marks one, M a client's)")
+    clients = sorted({j.client_id for j in marked})
+    whose = ", ".join(_name(c) for c in clients[:3]) + (" …" if len(clients) > 3 else "")
+    what = [f"{len(awaiting)} awaiting approval are rejected"] if awaiting else []
+    what += [f"{len(queued)} queued are cancelled"] if queued else []
+    commands = [
+        OperatorCommand(command="reject", job_ids=awaiting[i : i + MAX_BULK_JOBS])
+        for i in range(0, len(awaiting), MAX_BULK_JOBS)
+    ] + [
+        OperatorCommand(command="cancel", job_ids=queued[i : i + MAX_BULK_JOBS])
+        for i in range(0, len(queued), MAX_BULK_JOBS)
+    ]
+    return Ask(
+        f"Reject {len(awaiting) + len(queued)} marked job(s) from {whose}?\n"
+        f"{' and '.join(what)}; none of them will be written.",
+        "Reject marked",
+        tuple(commands),
+        reason_prompt="reason (optional, shown to the visitors)",
+    )
 
 
 def _prioritize(command: str, job: JobState, what: str) -> Request:

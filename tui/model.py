@@ -5,7 +5,8 @@ console's own presence/command records) with the time it arrived; widgets read r
 Telemetry of many vehicles is merged here, so widgets redraw at a bounded rate whatever the
 message rate. Each area has a version counter so a view can tell whether it has to redraw.
 The event log is :class:`tui.event_history.EventHistory` (``ConsoleModel.events``); the alerts
-are raised by :func:`tui.records.current_alerts`, the model keeps which ones were acknowledged.
+are raised by :func:`tui.records.current_alerts` (with the orchestrator's open alerts, so a
+console that reconnects sees those it missed), the model keeps which ones were acknowledged.
 """
 
 from __future__ import annotations
@@ -75,6 +76,9 @@ class ConsoleModel:
         list keeps only the latest ``max_finished`` finished ones)."""
         self.dirty_boards: frozenset[str] = frozenset()
         """Boards left half-written: the orchestrator waits for the operator's fresh sheet."""
+        self.open_alerts: tuple[Event, ...] = ()
+        """The orchestrator's open alerts, as its latest snapshot or fleet said: those raised
+        while the console was away too."""
         self.last_reply: tuple[OperatorCommand, CommandReply] | None = None
         self.fleet_version = 0
         self.queue_version = 0
@@ -200,7 +204,9 @@ class ConsoleModel:
         vehicles = [self._vehicles[vid] for vid in self.vehicle_ids()]
         offline = self.orchestrator == "offline"
         jobs = self._jobs.values()
-        return current_alerts(offline, vehicles, jobs, self.dirty_boards, self.settings)
+        return current_alerts(
+            offline, vehicles, jobs, self.dirty_boards, self.settings, self.open_alerts
+        )
 
     # --- writing ---------------------------------------------------------------------------------
     def apply(self, item: BusInput, now_s: float) -> None:
@@ -251,6 +257,9 @@ class ConsoleModel:
             self.dirty_boards = frozenset(snapshot.dirty_boards)
             self.status_version += 1
             self.tracks_version += 1  # board titles say it
+        if self.open_alerts != tuple(snapshot.alerts):
+            self.open_alerts = tuple(snapshot.alerts)
+            self.status_version += 1
         if self.queue_paused != snapshot.queue_paused:
             self.queue_paused = snapshot.queue_paused
             self.status_version += 1

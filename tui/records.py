@@ -6,7 +6,7 @@ from collections.abc import Iterable
 
 import msgspec
 
-from bus.messages import JobState
+from bus.messages import Event, JobState
 from tui.rows import Alert, QueueRow, QueueSection
 from tui.settings import ConsoleSettings
 from tui.tracks import Track
@@ -76,9 +76,12 @@ def current_alerts(
     jobs: Iterable[JobState],
     dirty_boards: Iterable[str],
     settings: ConsoleSettings,
+    open_alerts: Iterable[Event] = (),
 ) -> list[Alert]:
     """Every alert raised now: the orchestrator gone, then each vehicle's (in ``vehicles``'
-    order), then the boards' and jobs' (:func:`job_alerts`)."""
+    order), then the boards' and jobs' (:func:`job_alerts`), then the orchestrator's open alerts
+    of causes not said already (:func:`show_alert`)."""
+    vehicles = list(vehicles)
     alerts: list[Alert] = []
     if orchestrator_offline:
         alerts.append(
@@ -96,7 +99,30 @@ def current_alerts(
         if alert is not None:
             alerts.append(alert)
     alerts.extend(job_alerts(jobs, dirty_boards))
+    boards = {v.vehicle_id: v.board_id for v in vehicles}
+    said = {a.key for a in alerts}
+    for event in open_alerts:
+        alert = show_alert(event, boards)
+        if alert.key not in said:
+            said.add(alert.key)
+            alerts.append(alert)
     return alerts
+
+
+def show_alert(event: Event, boards: dict[str, str | None]) -> Alert:
+    """One of the orchestrator's open alerts (ShowSnapshot ``alerts``: it may have been raised
+    while the console was away), keyed by its cause as the console's own alerts are."""
+    vid = event.vehicle_id
+    if event.kind == "vehicle_lost" and vid is not None:
+        return Alert(f"lost:{vid}", "vehicle_lost", event.message)
+    if event.kind == "vehicle_fault" and vid is not None:
+        return Alert(f"fault:{vid}", "vehicle_fault", event.message)
+    if event.kind in ("vehicle_held", "operator"):  # held by the orchestrator, or an estop
+        return Alert(f"held:{vid or '*'}", "vehicle_held", event.message)
+    board = boards.get(vid) if vid is not None else None
+    if event.kind == "board_dirty" and board is not None:
+        return Alert(f"sheet:{board}", "fresh_sheet", event.message)
+    return Alert(f"show:{event.kind}:{vid}:{event.time_s}", "show_alert", event.message)
 
 
 def vehicle_alert(

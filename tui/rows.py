@@ -72,5 +72,8 @@ class Alert:
         "awaiting_approval",
         "fresh_sheet",
         "orchestrator_lost",
+        "vehicle_held",
+        "show_alert",
     ]
+    """``vehicle_held`` and ``show_alert`` (any other) come from the orchestrator's open alerts."""
     message: str

@@ -52,7 +52,7 @@
     if (code === "text_too_long" && config.max_text_chars === 1) return ["err_text_one_char", args];
     if (code === "unknown_job" && context.byCode) return ["err_unknown_code", args];
     if (code === "no_glyph" && !context.text) return ["err_unplannable", args];
-    if (code === "paused") return ["err_queue_full", args];
+    if (code === "paused" || code === "storage_full") return ["err_queue_full", args];
     const key = `err_${code}`;
     return [t(key) === key ? "err_refused" : key, args];
   }

@@ -1,4 +1,8 @@
-"""The queue: awaiting approval, queued with ETA, active, done with metrics, failed with reason."""
+"""The queue: awaiting approval, queued with ETA, active, done with metrics, failed with reason.
+
+The operator marks waiting jobs here (``space`` one, ``M`` every waiting job of a client) for one
+bulk reject; a mark lasts while its job waits.
+"""
 
 from __future__ import annotations
 
@@ -6,19 +10,25 @@ from rich.text import Text
 from textual.message import Message
 from textual.widgets import DataTable
 
+from bus.messages import JobState
 from tui import format as fmt
 from tui.rows import QueueRow
+from tui.safe_text import clean
 
 COLUMNS = (("section", "State"), ("char", "Char"), ("job", "Job"), ("detail", "Detail"))
 """Job ids before the details, which are the widest: a narrow queue still shows every id."""
 
 Cells = tuple[Text, ...]
+MARKABLE = frozenset({"awaiting", "queued"})
+"""Sections whose jobs may be marked: those a bulk reject or cancel takes."""
+MARK = Text("● ", style="bold magenta")
+"""Before the state of a marked job."""
 
 
-def row_cells(row: QueueRow) -> Cells:
+def row_cells(row: QueueRow, marked: bool = False) -> Cells:
     """The cells of one job: Text only, as DataTable reads a ``str`` cell as markup."""
     return (
-        fmt.section_text(row),
+        MARK + fmt.section_text(row) if marked else fmt.section_text(row),
         Text(fmt.short_id(row.job.label, 12), style="bold"),
         Text(fmt.short_id(row.job.job_id)),
         Text(fmt.job_detail(row)),
@@ -39,6 +49,8 @@ class QueueTable(DataTable[Text]):
         super().__init__(cursor_type="row", **kwargs)  # type: ignore[arg-type]
         self._keys: list[str] = []
         self._shown: dict[str, Cells] = {}
+        self._rows: dict[str, QueueRow] = {}
+        self._marked: set[str] = set()
 
     def on_mount(self) -> None:
         for key, label in COLUMNS:
@@ -52,10 +64,59 @@ class QueueTable(DataTable[Text]):
         row_key, _ = self.coordinate_to_cell_key(self.cursor_coordinate)
         return row_key.value
 
+    def marked_jobs(self) -> list[JobState]:
+        """The marked jobs, in the table's order."""
+        return [self._rows[key].job for key in self._keys if key in self._marked]
+
+    def toggle_mark(self) -> str | None:
+        """Mark the job under the cursor, or unmark it; None, or why it cannot be marked."""
+        row = self._rows.get(self.selected_job or "")
+        if row is None or row.section not in MARKABLE:
+            what = "no job" if row is None else f"{clean(row.job.job_id, 40)} is {row.job.state}"
+            return f"mark: {what}; only waiting jobs can be marked"
+        self._set_marks({row.job.job_id}, row.job.job_id not in self._marked)
+        return None
+
+    def mark_client(self) -> str:
+        """Mark every waiting job of the selected job's client (unmark them if all were)."""
+        row = self._rows.get(self.selected_job or "")
+        if row is None:
+            return "mark: no job selected"
+        client = row.job.client_id
+        waiting = {
+            key
+            for key, r in self._rows.items()
+            if r.section in MARKABLE and r.job.client_id == client
+        }
+        if not waiting:
+            return f"mark: no waiting job from {clean(client, 40)}"
+        mark = not waiting <= self._marked
+        self._set_marks(waiting, mark)
+        done = "marked" if mark else "unmarked"
+        return f"{done} {len(waiting)} waiting job(s) from {clean(client, 40)}"
+
+    def _set_marks(self, job_ids: set[str], mark: bool) -> None:
+        self._marked = self._marked | job_ids if mark else self._marked - job_ids
+        for key in job_ids:
+            cell = row_cells(self._rows[key], mark)[0]
+            self._shown[key] = (cell, *self._shown[key][1:])
+            self.update_cell(key, "section", cell, update_width=True)
+        self._say_marks()
+
+    def _say_marks(self) -> None:
+        count = len(self._marked)
+        self.border_subtitle = f"{count} marked · R: reject" if count else ""
+
     def show_rows(self, rows: list[QueueRow]) -> None:
-        """Bring the table in line with ``rows``; the cursor stays on the same job if it can."""
+        """Bring the table in line with ``rows``; the cursor stays on the same job if it can.
+        Marks of jobs that no longer wait are dropped."""
         keys = [row.job.job_id for row in rows]
-        cells = {row.job.job_id: row_cells(row) for row in rows}
+        self._rows = {row.job.job_id: row for row in rows}
+        self._marked = {
+            k for k in self._marked if k in self._rows and self._rows[k].section in MARKABLE
+        }
+        self._say_marks()
+        cells = {row.job.job_id: row_cells(row, row.job.job_id in self._marked) for row in rows}
         if keys == self._keys:
             for key in keys:
                 for (column, _), before, after in zip(

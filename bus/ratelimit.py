@@ -1,4 +1,7 @@
-"""A sliding-window rate limiter, pure: the caller passes the time."""
+"""A sliding-window rate limiter, pure: the caller passes the time.
+
+The one rule of every service that takes submissions: the kiosk per visitor's address, the
+orchestrator per identity on the bus (``rate_limited`` in docs/protocol.md)."""
 
 from __future__ import annotations
 
@@ -10,8 +13,9 @@ from dataclasses import dataclass, field
 class SlidingWindowLimiter:
     """At most ``limit`` events per ``window_s`` seconds for each key.
 
-    Keys are client identities (address and session cookie). Memory stays bounded: once more than
-    ``max_keys`` keys are tracked, keys with no event inside the window are forgotten.
+    Keys are client identities (an address, a certificate's common name). Memory stays bounded:
+    once more than ``max_keys`` keys are tracked, keys with no event inside the window are
+    forgotten.
     """
 
     limit: int

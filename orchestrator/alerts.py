@@ -1,0 +1,94 @@
+"""Open alerts (pure): the show's alerts whose cause lasts, kept until it is gone.
+
+A console that was not connected when an alert was raised must still see it while it matters.
+An alert is *open* while the state it reported holds; each cause keeps its newest alert:
+
+==================  ===================================  ===================================
+alert (kind)        cause                                closes when
+==================  ===================================  ===================================
+``vehicle_held``    the vehicle is held (fault, lost in  ``release`` / ``release_all``
+                    the air and back without its job)
+``operator``        ``estop`` of one vehicle: it is      ``release`` of it; of all: every
+(``estop``)         held; of all: every vehicle is       vehicle released
+``vehicle_lost``    the vehicle is lost                  it is heard again
+``vehicle_fault``   its agent reported a backend fault   a later status not in ``fault``
+``board_dirty``     the board is half-written            ``fresh_sheet``
+==================  ===================================  ===================================
+
+Other alerts (``limit``, ``job_failed``, safety aborts, autopilot messages) tell of a moment, not
+of a lasting state: they are in the event log only. After an orchestrator restart the open
+alerts come back from the database (``orchestrator/store.py``) and stay open until their
+vehicle says otherwise: a vehicle not heard since is still lost, and its fault still stands.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+
+from bus.messages import Event
+from orchestrator.fleet import VehicleView
+
+EVERY_VEHICLE = "*"
+"""The vehicle of a cause that concerns the whole fleet (an ``estop`` of all)."""
+
+
+def cause_of(event: Event, vehicles: Mapping[str, VehicleView]) -> tuple[str, str] | None:
+    """The lasting cause an alert reports, as (what, vehicle or board id); None: none lasts."""
+    vid = event.vehicle_id
+    if event.level != "alert":
+        return None
+    if event.kind == "operator":  # the only operator alert is estop's
+        return ("held", vid or EVERY_VEHICLE)
+    view = vehicles.get(vid) if vid is not None else None
+    if view is None:
+        return None
+    if event.kind == "board_dirty":
+        return ("dirty", view.info.board_id)
+    what = {"vehicle_held": "held", "vehicle_lost": "lost", "vehicle_fault": "fault"}
+    return (what[event.kind], view.info.vehicle_id) if event.kind in what else None
+
+
+class OpenAlerts:
+    """The newest alert of each lasting cause, until that cause is gone."""
+
+    def __init__(self, alerts: Iterable[Event], vehicles: Mapping[str, VehicleView]) -> None:
+        """``alerts``: those open when the orchestrator stopped (as stored)."""
+        self._open: dict[tuple[str, str], Event] = {}
+        for event in alerts:
+            self.saw(event, vehicles)
+
+    def saw(self, event: Event, vehicles: Mapping[str, VehicleView]) -> bool:
+        """Keep ``event`` if it is an alert of a lasting cause; whether it was kept."""
+        cause = cause_of(event, vehicles)
+        if cause is not None:
+            self._open[cause] = event
+        return cause is not None
+
+    def current(self, vehicles: Mapping[str, VehicleView], dirty_boards: set[str]) -> list[Event]:
+        """The alerts still open, oldest first (those whose cause is gone are dropped)."""
+        for cause, event in list(self._open.items()):
+            if not _lasts(cause, event, vehicles, dirty_boards):
+                del self._open[cause]
+        return sorted(self._open.values(), key=lambda e: e.time_s)
+
+
+def _lasts(
+    cause: tuple[str, str],
+    event: Event,
+    vehicles: Mapping[str, VehicleView],
+    dirty_boards: set[str],
+) -> bool:
+    what, name = cause
+    if what == "dirty":
+        return name in dirty_boards
+    if name == EVERY_VEHICLE:
+        return any(view.held for view in vehicles.values())
+    view = vehicles.get(name)
+    if view is None:
+        return False
+    if what == "held":
+        return view.held
+    if what == "lost":
+        return view.lost
+    heard_after = view.status_at_s is not None and view.status_at_s > event.time_s
+    return not (heard_after and view.state != "fault")

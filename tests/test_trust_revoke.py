@@ -1,0 +1,181 @@
+"""Revocation without re-keying (issue 30): ``skyquill keys SHOW --revoke NAME``.
+
+A show runs as real processes (its router is ``skyquill router``, which watches the keys folder's
+list of clients), with two outside clients issued by ``skyquill keys --client``: an operator's
+laptop and a watcher. The operator is revoked while connected; within 5 s it can do nothing (no
+command, no submission, no snapshot, no data on its subscriptions, nothing after reconnecting)
+while the watcher and the vehicle go on and the show still writes.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from test_orchestrator_service import make_show
+
+from bus.keys import ShowKeys
+from bus.messages import (
+    CommandReply,
+    OperatorCommand,
+    ShowSnapshot,
+    SubmitReply,
+    SubmitRequest,
+    VehicleCommand,
+)
+from bus.rpc import NoReplyError, query, query_one
+from bus.session import Session, SessionOpenError, free_tcp_endpoint, open_session
+from cli.main import main as skyquill
+from cli.showrun import ShowRun, derived_show, snapshot, wait_for_jobs
+from showfile import SecuritySettings, Show, load_show
+from trust.files import IdentityFiles, KeysError
+from trust.pki import issue
+from trust.settings import client_session_settings, ensure_show_keys
+
+AIRSHOW = Path(__file__).resolve().parent.parent / "shows" / "airshow-2014.yaml"
+SHUT_OUT_WITHIN_S = 5.0
+
+
+def _keys_show(tmp_path: Path) -> tuple[Path, Show]:
+    return make_show(
+        tmp_path,
+        "revoke",
+        free_tcp_endpoint(),
+        security=SecuritySettings(mode="mtls", keys_dir=tmp_path / "keys"),
+    )
+
+
+def test_revoking_is_for_issued_names_and_a_revoked_name_is_never_issued_again(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path, _ = _keys_show(tmp_path)
+    assert skyquill(["keys", str(path), "--client", "alice", "--role", "operator"]) == 0
+    assert skyquill(["keys", str(path), "--revoke", "bob"]) == 1
+    assert "no client 'bob'; the show's clients: alice" in capsys.readouterr().err
+    assert skyquill(["keys", str(path), "--revoke", "alice"]) == 0
+    assert "revoked client alice (operator)" in capsys.readouterr().out
+    assert skyquill(["keys", str(path), "--client", "alice", "--role", "watcher"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "was revoked" in err and "another name" in err
+    assert skyquill(["keys", str(path), "--revoke", "../x"]) == 2
+
+
+def _old_client(show: Show, name: str, role: str) -> Path:
+    """A client folder as skyquill issued it before clients had names (common name = role)."""
+    folder = show.keys_dir / "clients" / name
+    files = IdentityFiles(role, folder / "cert.pem", folder / "key.pem", folder / "ca.pem")
+    issue(show.keys_dir, files, show_id=show.show_id, holder=name)
+    return folder
+
+
+def test_client_folders_issued_before_names_are_refused_with_what_to_do(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path, show = _keys_show(tmp_path)
+    ensure_show_keys(show)
+    folder = _old_client(show, "press", "watcher")
+    with pytest.raises(KeysError, match=r"issued before clients had names.*--client NAME"):
+        client_session_settings(show, folder)
+    assert skyquill(["keys", str(path)]) == 0  # an old watcher is shut out by default deny
+    _old_client(show, "laptop", "operator")
+    assert skyquill(["keys", str(path), "--client", "laptop", "--role", "operator"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "(laptop): they act as the console" in err
+    assert "new CA" in err
+
+
+@pytest.fixture(scope="module")
+def show_run(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[ShowRun, Path]]:
+    out = tmp_path_factory.mktemp("revoke")
+    base = load_show(AIRSHOW)
+    path, show = derived_show(AIRSHOW, out, time_scale=6.0, vehicles=base.vehicles[:1])
+    for name, role in (("alice", "operator"), ("press", "watcher")):
+        assert skyquill(["keys", str(path), "--client", name, "--role", role]) == 0
+    with ShowRun(path, show, log_dir=out / "logs") as run:
+        with run.client() as operator:
+            deadline = time.monotonic() + 60.0
+            while not _ready(operator, run.keys):
+                assert time.monotonic() < deadline, "the show did not become ready"
+                time.sleep(0.2)
+        yield run, path
+
+
+def _ready(session: Session, keys: ShowKeys) -> bool:
+    try:
+        return all(v.alive for v in snapshot(session, keys, timeout_s=2.0).vehicles)
+    except NoReplyError:  # the orchestrator is starting
+        return False
+
+
+def _client(show: Show, name: str) -> Session:
+    settings = client_session_settings(show, show.keys_dir / "clients" / name)
+    return open_session(settings, role="client", open_timeout_s=10.0)
+
+
+class Received:
+    """Times [s, monotonic] at which a session's subscription got a ``fleet`` sample."""
+
+    def __init__(self, session: Session, keys: ShowKeys) -> None:
+        self.times_s: list[float] = []
+        self._lock = threading.Lock()
+        self.subscriber = session.declare_subscriber(keys.fleet, self._on_sample)
+
+    def _on_sample(self, _: object) -> None:
+        with self._lock:
+            self.times_s.append(time.monotonic())
+
+    def since(self, start_s: float) -> int:
+        with self._lock:
+            return sum(1 for t in self.times_s if t > start_s)
+
+
+def _answers(session: Session, keys: ShowKeys) -> bool:
+    return bool(query(session, keys.snapshot, None, ShowSnapshot, timeout_s=0.5))
+
+
+@pytest.mark.multiprocess
+@pytest.mark.slow
+@pytest.mark.timeout(240)
+def test_a_revoked_operator_is_shut_out_and_the_show_goes_on(
+    show_run: tuple[ShowRun, Path], capsys: pytest.CaptureFixture[str]
+) -> None:
+    run, path = show_run
+    keys, show = run.keys, run.show
+    alice_key = keys.submit_as("operator@alice")
+    with _client(show, "alice") as alice, _client(show, "press") as press:
+        alice_sees, press_sees = Received(alice, keys), Received(press, keys)
+        assert _answers(alice, keys)
+        job = query_one(alice, alice_key, SubmitRequest(text="A"), SubmitReply, timeout_s=5.0)
+        assert job.ok and job.job_id
+        revoked_s = time.monotonic()
+        assert skyquill(["keys", str(path), "--revoke", "alice"]) == 0
+        while _answers(alice, keys) or not _answers(press, keys):  # not a router gap: press is
+            assert time.monotonic() - revoked_s < SHUT_OUT_WITHIN_S, "alice was not shut out"
+        shut_out_s = time.monotonic() - revoked_s
+        quiet_from_s = time.monotonic() + 0.5
+        for command in ("pause", "land_all"):
+            refused = OperatorCommand(command=command)
+            assert query(alice, keys.command, refused, CommandReply, timeout_s=1.0) == []
+        estop = VehicleCommand(command="estop")
+        assert query(alice, keys.vehicle_command("uav1"), estop, CommandReply, timeout_s=1.0) == []
+        assert query(alice, alice_key, SubmitRequest(text="B"), SubmitReply, timeout_s=1.0) == []
+        time.sleep(2.5)  # the fleet is published every second
+        assert alice_sees.since(quiet_from_s) == 0
+        assert press_sees.since(quiet_from_s) >= 2
+        try:
+            with _client(show, "alice") as again:  # its TLS is the CA's: the link opens...
+                assert not _answers(again, keys)  # ...and carries nothing
+        except SessionOpenError:
+            pass
+    with run.client() as operator:
+        snap = snapshot(operator, keys)
+        assert not snap.queue_paused and all(v.alive for v in snap.vehicles), snap.vehicles
+        reply = query_one(operator, keys.submit, SubmitRequest(text="L"), SubmitReply)
+        assert reply.ok and reply.job_id
+        done = wait_for_jobs(operator, keys, [job.job_id, reply.job_id], timeout_s=180.0)
+    assert [j.state for j in done] == ["done", "done"], done
+    with capsys.disabled():
+        print(f"\nrevoked operator shut out {shut_out_s:.2f} s after `skyquill keys --revoke`")
