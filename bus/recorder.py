@@ -50,11 +50,12 @@ from bus.messages import (
 
 CHUNK_SIZE_BYTES = 64 * 1024
 """Small chunks: a killed process loses at most this much of the recording."""
-MAX_CHUNKS_PER_PART = 10_000
+MAX_CHUNKS_PER_PART = 2_000
 """A part is also finished past this many chunks: the writer keeps 0.4-0.75 KiB of index a chunk
 until its part ends (measured, ``benchmarks/bench_bus_memory.py``), and a large message is a chunk
 of its own that compresses 450 times (hostile strokes), so a part bounded by bytes alone could
-hold 45,000 of them and 30 MiB of index. 10,000: under 8 MiB."""
+hold 45,000 of them and 30 MiB of index. 2,000: under 1.5 MiB; a show's ordinary traffic fills
+``recording_part_mb`` (25 MB) first, its chunks compressing to 10-20 kB."""
 MAX_QUEUED_BYTES = 64 * 1024**2
 """Payload bytes waiting for the writer thread, [B]; past it new messages are dropped (counted
 in ``dropped``): a burst must not grow the recording process without bound (798 MiB seen)."""
