@@ -52,8 +52,20 @@ class ShowKeys:
 
     @property
     def command(self) -> str:
-        """Queryable (orchestrator): OperatorCommand -> CommandReply."""
+        """Queryable (orchestrator): OperatorCommand -> CommandReply from the show's own
+        operator (identity ``operator``: the console and the CLI)."""
         return f"{self.prefix}/orchestrator/command"
+
+    def command_as(self, identity: str) -> str:
+        """Queryable (orchestrator): OperatorCommand -> CommandReply from ``identity`` (an
+        outside operator's certificate); access control lets only that identity query it, so
+        the event log names who sent each command by the key, not by a self-declared name."""
+        return f"{self.command}/{_check_chunk(identity, 'identity')}"
+
+    @property
+    def commands_all(self) -> str:
+        """What the orchestrator declares to answer every outside operator's commands."""
+        return f"{self.command}/*"
 
     def report(self, vehicle_id: str) -> str:
         """Queryable (orchestrator): AgentReport -> CommandReply from one vehicle's agent; the
@@ -148,10 +160,10 @@ def vehicle_id_from_key(key: str) -> str:
         raise ValueError(f"not a vehicle key: {key!r}") from None
 
 
-def identity_from_submit_key(keys: ShowKeys, key: str) -> str | None:
-    """The identity of a ``submit/<identity>`` key, or None if ``key`` is not one (a wildcard
-    or anything else: only a literal key names who submits)."""
-    identity = key.removeprefix(keys.submit + "/")
+def identity_under(base: str, key: str) -> str | None:
+    """The identity of a ``<base>/<identity>`` key (``submit_as``, ``command_as``), or None if
+    ``key`` is not one (a wildcard or anything else: only a literal key names who sent it)."""
+    identity = key.removeprefix(base + "/")
     if identity == key or not identity or any(c in identity for c in "/*$?#"):
         return None
     return identity

@@ -351,8 +351,8 @@ class OperatorCommand(Request, frozen=True):
     job_ids: JobIds | None = None
     """``reject`` / ``cancel`` of these jobs at once, instead of ``job_id`` (v1 addition)."""
     client_id: ClientId | None = None
-    """``reject`` / ``cancel`` of every waiting job this client handed in, instead of ``job_id``
-    (v1 addition)."""
+    """``reject`` / ``cancel`` of every waiting job this client handed in (the ``client_id`` it
+    declared, or the certificate it submitted with), instead of ``job_id`` (v1 addition)."""
 
 
 class CommandReply(State, frozen=True):

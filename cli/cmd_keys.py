@@ -1,7 +1,8 @@
 """``skyquill keys SHOW.yaml``: the show's CA and one certificate per process; ``--client NAME
 --role R`` issues a certificate for an outside client and writes a Zenoh config that uses it;
-``--revoke NAME`` shuts an issued client out: the show's router drops it from its access control
-within a second, no other certificate changes and no vehicle restarts (``trust/clients.py``)."""
+``--revoke NAME`` shuts an issued client out: within a second the show's router no longer
+accepts its certificate at connection nor admits it in its access control; no other certificate
+changes and no vehicle restarts (``trust/clients.py``)."""
 
 from __future__ import annotations
 
@@ -56,12 +57,11 @@ def _issue_client(show: Show, name: str, role: str) -> Path:
     """Issue ``name``'s certificate, admit it, write its Zenoh config; returns its folder."""
     from trust.clients import record_client
     from trust.hosts import endpoints
-    from trust.pki import client_files, issue
-    from trust.settings import as_tls, show_hosts
+    from trust.pki import issue_client
+    from trust.settings import as_tls
 
-    files = client_files(show.keys_dir, name, role)
-    record_client(show.keys_dir, name, role)  # refuses a revoked name before anything is made
-    issue(show.keys_dir, files, show_id=show.show_id, hosts=show_hosts(show), holder=name)
+    files = issue_client(show.keys_dir, name, role, show_id=show.show_id)
+    record_client(show.keys_dir, name, role)  # last: the router reloads with the issuer there
     folder = files.cert.parent
     connect = list(as_tls(endpoints(show, files.common_name).connect))
     config_path = folder / "zenoh-client.json5"

@@ -11,9 +11,10 @@ declares its subscribers, queryables and liveliness tokens again) and stops it l
 
 A secured router watches the show's list of outside clients (``trust/clients.py``): when
 ``skyquill keys --client`` or ``--revoke`` changes it, the router closes its session and opens
-it again at once with the access control made anew (Zenoh reads access control only when a
-session opens), so a revoked client is shut out within a second (``CLIENTS_POLL_S`` plus the
-reopening, about 0.1 s) while every other client reconnects by itself, as after a restart.
+it again at once with its trusted issuers and access control made anew (Zenoh reads both only
+when a session opens), so a revoked client can no longer connect within a second
+(``CLIENTS_POLL_S`` plus the reopening, about 0.1 s) while every other client reconnects by
+itself, as after a restart.
 """
 
 from __future__ import annotations
@@ -81,8 +82,8 @@ def run(args: argparse.Namespace) -> int:
             else:
                 renewed_s = time.monotonic() - renewing_since_s
                 print(
-                    f"skyquill router: outside clients changed: access control renewed in "
-                    f"{renewed_s:.2f} s",
+                    f"skyquill router: outside clients changed: trust and access control "
+                    f"renewed in {renewed_s:.2f} s",
                     file=sys.stderr,
                     flush=True,
                 )

@@ -27,7 +27,7 @@ sets would reach the operator's screens as free text that the blocklist never sa
 class SubmissionLimits:
     """Bounds on one submission (from the show file's ``kiosk`` section)."""
 
-    max_payload_bytes: int = 200_000
+    max_payload_bytes: int = 250_000
     """Largest request body in bytes."""
     max_strokes: int = 60
     """Most strokes in one drawing."""

@@ -13,6 +13,9 @@ alert (kind)        cause                                closes when
 ``vehicle_lost``    the vehicle is lost                  it is heard again
 ``vehicle_fault``   its agent reported a backend fault   a later status not in ``fault``
 ``board_dirty``     the board is half-written            ``fresh_sheet``
+``disk_full``       the orchestrator writes on its disk  ``disk_room``: room made again (not
+                    reserve (``orchestrator/disk_room``)  kept over a restart: the new process
+                                                         checks its disk and says it again)
 ==================  ===================================  ===================================
 
 Other alerts (``limit``, ``job_failed``, safety aborts, autopilot messages) tell of a moment, not
@@ -30,6 +33,8 @@ from orchestrator.fleet import VehicleView
 
 EVERY_VEHICLE = "*"
 """The vehicle of a cause that concerns the whole fleet (an ``estop`` of all)."""
+DISK_CAUSE = ("disk", "show")
+"""The cause of ``disk_full``: the show's disk, until a ``disk_room`` event."""
 
 
 def cause_of(event: Event, vehicles: Mapping[str, VehicleView]) -> tuple[str, str] | None:
@@ -39,6 +44,8 @@ def cause_of(event: Event, vehicles: Mapping[str, VehicleView]) -> tuple[str, st
         return None
     if event.kind == "operator":  # the only operator alert is estop's
         return ("held", vid or EVERY_VEHICLE)
+    if event.kind == "disk_full":
+        return DISK_CAUSE
     view = vehicles.get(vid) if vid is not None else None
     if view is None:
         return None
@@ -55,10 +62,14 @@ class OpenAlerts:
         """``alerts``: those open when the orchestrator stopped (as stored)."""
         self._open: dict[tuple[str, str], Event] = {}
         for event in alerts:
-            self.saw(event, vehicles)
+            if cause_of(event, vehicles) != DISK_CAUSE:
+                self.saw(event, vehicles)
 
     def saw(self, event: Event, vehicles: Mapping[str, VehicleView]) -> bool:
-        """Keep ``event`` if it is an alert of a lasting cause; whether it was kept."""
+        """Keep ``event`` if it is an alert of a lasting cause (or close the disk's on
+        ``disk_room``); whether the open alerts changed."""
+        if event.kind == "disk_room":
+            return self._open.pop(DISK_CAUSE, None) is not None
         cause = cause_of(event, vehicles)
         if cause is not None:
             self._open[cause] = event
@@ -79,6 +90,8 @@ def _lasts(
     dirty_boards: set[str],
 ) -> bool:
     what, name = cause
+    if cause == DISK_CAUSE:
+        return True  # until ``disk_room``
     if what == "dirty":
         return name in dirty_boards
     if name == EVERY_VEHICLE:

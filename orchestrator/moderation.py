@@ -1,7 +1,9 @@
 """Bulk moderation (pure): ``reject`` or ``cancel`` of many waiting jobs in one operator command.
 
 A flood of submissions (one client handing in hundreds of junk characters) is undone with one
-command: every waiting job of a client (``client_id``), or a selection (``job_ids``). Only jobs
+command: every waiting job of a client (``client_id``: the id a submission declared, or the
+certificate it came with, e.g. ``submitter@booth``, whatever ids that one declared), or a
+selection (``job_ids``). Only jobs
 that no vehicle has are touched, so a bulk command never stops a flight:
 
 - ``reject`` takes jobs awaiting approval (a queued job was approved already: ``cancel`` it);
@@ -56,7 +58,8 @@ def _chosen(book: Book, cmd: OperatorCommand) -> list[tuple[str, Job | None]] | 
     if cmd.job_id is not None or (cmd.job_ids is not None and cmd.client_id is not None):
         return _refused("invalid", f"{cmd.command} takes one of job_id, job_ids, client_id")
     if cmd.client_id is not None:
-        mine = [j for j in book.jobs.values() if j.client_id == cmd.client_id]
+        whose = cmd.client_id
+        mine = [j for j in book.jobs.values() if whose in (j.client_id, j.submitted_by)]
         if not mine:
             return _refused("unknown_client", f"no job of client {cmd.client_id!r}", "client_id")
         return [(j.job_id, j) for j in sorted(mine, key=lambda j: j.seq) if not j.final]

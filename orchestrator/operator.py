@@ -36,6 +36,18 @@ from orchestrator.jobs import transition, update
 from orchestrator.moderation import apply_bulk, is_bulk
 from orchestrator.requeue import requeue
 
+DEFAULT_NAME = "operator"
+"""``OperatorCommand.operator`` when the sender names no one."""
+
+
+def signed_by(identity: str, declared: str) -> str:
+    """Who the event log says sent a command: the certificate's identity (as the key it came
+    on proves), and the name the sender declared beside it when that says more (the shared
+    console's ``operator`` certificate, used by whoever sits at it: ``operator (ana)``)."""
+    if declared in ("", DEFAULT_NAME, identity):
+        return identity
+    return f"{identity} ({declared})"
+
 
 def _error(code: str, message: str, field: str | None = None) -> CommandReply:
     return CommandReply(
@@ -230,6 +242,8 @@ def apply_operator(book: Book, command: object, eff: Effects, now_s: float) -> C
     if reply.ok:
         level: Level = "alert" if cmd.command == "estop" else "info"
         target = cmd.job_id or cmd.vehicle_id or cmd.board_id or ""
+        if cmd.command == "prioritize":  # the new value, for the record
+            target += f" to {cmd.priority}"
         book.event(
             eff,
             now_s,

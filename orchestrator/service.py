@@ -24,8 +24,10 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+import msgspec
+
 from bus.bridge import FifoChannel, LatestByKey, RingChannel
-from bus.keys import identity_from_submit_key, vehicle_id_from_key
+from bus.keys import identity_under, vehicle_id_from_key
 from bus.messages import (
     AgentReport,
     CommandReply,
@@ -41,6 +43,7 @@ from bus.messages import (
 from bus.pubsub import declare_token, subscribe, subscribe_raw, watch_liveliness
 from bus.rpc import serve_async, serve_async_keyed
 from orchestrator.disk_room import storage_full
+from orchestrator.operator import signed_by
 from orchestrator.outputs import BookOutputs
 from orchestrator.quotas import OPERATOR, SubmitQuotas, quota_policy
 from orchestrator.submissions import SubmissionError, validate_submission
@@ -100,7 +103,7 @@ class OrchestratorService(BookOutputs):
     async def on_submit_as(self, asked_key: str, request: SubmitRequest) -> SubmitReply:
         """A submission on ``submit/<identity>``: the key says who (access control lets each
         certificate query only its own)."""
-        identity = identity_from_submit_key(self.keys, asked_key)
+        identity = identity_under(self.keys.submit, asked_key)
         if identity is None:
             message = f"submit on {self.keys.submit}/<your certificate's name>, not {asked_key}"
             return SubmitReply(ok=False, error=ErrorInfo(code="forbidden", message=message))
@@ -164,12 +167,28 @@ class OrchestratorService(BookOutputs):
         if plans.known:
             self.apply(self.book.set_estimate(job_id, plans, self.clock()))
 
-    async def on_command(self, command: OperatorCommand) -> CommandReply:
-        self._record(self.keys.command + "#request", command)
+    async def on_command_as(self, asked_key: str, command: OperatorCommand) -> CommandReply:
+        """A command on ``command/<identity>``: the key says who (access control lets each
+        outside operator query only its own)."""
+        identity = identity_under(self.keys.command, asked_key)
+        if identity is None:
+            message = f"command on {self.keys.command}/<your certificate's name>, not {asked_key}"
+            info = ErrorInfo(code="forbidden", message=message)
+            return CommandReply(ok=False, message=message, error=info)
+        return await self.on_command(command, identity)
+
+    async def on_command(self, command: OperatorCommand, identity: str = OPERATOR) -> CommandReply:
+        """A command from ``identity`` (the console's and the CLI's on the plain ``command``
+        key). The event log names the identity, with the name the sender declared beside it
+        when that differs (:func:`orchestrator.operator.signed_by`)."""
+        key = self.keys.command if identity == OPERATOR else self.keys.command_as(identity)
+        self._record(key + "#request", command)
+        who = signed_by(identity, command.operator)
+        command = msgspec.structs.replace(command, operator=who)
         reply, eff = self.book.operator(command, self.clock())
         self.apply(eff)
-        log.info("operator %s -> %s", command.command, reply.message)
-        self._record(self.keys.command + "#reply", reply)
+        log.info("%s %s -> %s", command.operator, command.command, reply.message)
+        self._record(key + "#reply", reply)
         return reply
 
     async def on_report(self, vehicle_id: str, report: AgentReport) -> CommandReply:
@@ -301,6 +320,13 @@ class OrchestratorService(BookOutputs):
                 keys.command,
                 OperatorCommand,
                 self.on_command,
+                on_error=lambda e: CommandReply(ok=False, message=e.message, error=e),
+            ),
+            serve_async_keyed(
+                s,
+                keys.commands_all,
+                OperatorCommand,
+                self.on_command_as,
                 on_error=lambda e: CommandReply(ok=False, message=e.message, error=e),
             ),
             *(

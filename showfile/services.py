@@ -8,7 +8,7 @@ import re
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import Field, field_validator
+from pydantic import Field, field_validator, model_validator
 from pydantic.networks import IPvAnyNetwork
 
 from showfile.model_base import ID_PATTERN, Identifier, ShowModel
@@ -173,6 +173,16 @@ class PolicySettings(ShowModel):
     """Period of the fleet snapshot publication, in [s]."""
 
 
+KIOSK_BODY_MAX_BYTES = 256_000
+"""Largest kiosk body a show may allow: the kiosk passes a drawing on in one bus request, which
+carries at most 256 KiB (``bus/codec.py``, docs/protocol.md), less room for its other fields."""
+DRAWN_POINT_BYTES = 48
+"""JSON bytes of one point as the drawing pad sends it with a width at most
+(``{"x":1920.5,"y":1080.5,"t":600.123,"w":0.01234},``, ``kiosk/static/widths.js``)."""
+BODY_ENVELOPE_BYTES = 2_000
+"""A drawing's body beyond its points: brackets, canvas, units, language."""
+
+
 class KioskSettings(ShowModel):
     """The public web kiosk."""
 
@@ -185,8 +195,9 @@ class KioskSettings(ShowModel):
     trusted_proxies: tuple[IPvAnyNetwork, ...] = ()
     """Reverse proxies (addresses or networks, e.g. ``["127.0.0.1"]``) whose ``X-Forwarded-For``
     names the client; none by default: the header is then ignored."""
-    max_payload_bytes: int = Field(default=200_000, ge=1)
-    """Largest request body, in bytes."""
+    max_payload_bytes: int = Field(default=250_000, ge=1, le=KIOSK_BODY_MAX_BYTES)
+    """Largest request body, in bytes: room for ``max_points`` drawn with widths
+    (:data:`DRAWN_POINT_BYTES` each), within what one bus request carries."""
     max_strokes: int = Field(default=60, ge=1)
     """Most strokes in one drawing."""
     max_points: int = Field(default=5000, ge=2)
@@ -200,3 +211,16 @@ class KioskSettings(ShowModel):
     the reason before they are sent."""
     idle_reset_s: float = Field(default=60.0, ge=0.0)
     """A page left alone this long goes back to the start (shared tablets), in [s]; 0: never."""
+
+    @model_validator(mode="after")
+    def _room_for_the_points(self) -> KioskSettings:
+        """A drawing of ``max_points`` must fit in a body, or the biggest drawings a visitor
+        may make would be refused as too large."""
+        needed = self.max_points * DRAWN_POINT_BYTES + BODY_ENVELOPE_BYTES
+        if needed > self.max_payload_bytes:
+            raise ValueError(
+                f"max_payload_bytes {self.max_payload_bytes} cannot carry max_points "
+                f"{self.max_points} drawn with widths ({needed} bytes): raise it or lower "
+                f"max_points"
+            )
+        return self

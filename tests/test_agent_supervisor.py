@@ -43,6 +43,19 @@ def python(code: str) -> tuple[str, ...]:
     return (sys.executable, "-c", code)
 
 
+def ready_line(folder: Path, name: str) -> str:
+    """Code a child runs once its handlers are in place: it says so in ``folder``."""
+    return f"open({str(folder / 'ready')!r}, 'a').write('{name}\\n')\n"
+
+
+def wait_ready(folder: Path, count: int) -> None:
+    """Until ``count`` children said they are ready (a loaded machine starts Python slowly)."""
+    deadline = time.monotonic() + 60.0
+    while not (ready := folder / "ready").exists() or len(ready.read_text().splitlines()) < count:
+        assert time.monotonic() < deadline, "the children did not start"
+        time.sleep(0.05)
+
+
 def test_the_router_starts_first_and_stops_last_and_restarts_fast() -> None:
     specs = show_children(Path("r.yaml"), ["uav1"], time_scale=2.0, mavlink_sim=True, kiosk=True)
     names = [spec.name for spec in specs]
@@ -94,8 +107,7 @@ def test_each_child_gets_its_own_grace_and_only_a_stubborn_one_is_killed(tmp_pat
             "import signal, sys, time\n"
             f"def bye(*_):\n    time.sleep({linger_s})\n"
             f"    open({str(record)!r}, 'a').write('{name}\\n')\n    sys.exit(0)\n"
-            "signal.signal(signal.SIGTERM, bye)\n"
-            "time.sleep(60)\n"
+            "signal.signal(signal.SIGTERM, bye)\n" + ready_line(tmp_path, name) + "time.sleep(60)\n"
         )
 
     specs = [
@@ -105,7 +117,7 @@ def test_each_child_gets_its_own_grace_and_only_a_stubborn_one_is_killed(tmp_pat
     ]
     supervisor = Supervisor(specs, say=said.append)
     supervisor.start()
-    time.sleep(1.0)  # let the children install their handlers
+    wait_ready(tmp_path, 3)
     started = time.monotonic()
     supervisor.stop()
     elapsed = time.monotonic() - started
@@ -115,7 +127,9 @@ def test_each_child_gets_its_own_grace_and_only_a_stubborn_one_is_killed(tmp_pat
 
 
 @pytest.mark.multiprocess
-def test_a_child_busy_stopping_outlives_its_grace_and_only_its_limit_ends_it() -> None:
+def test_a_child_busy_stopping_outlives_its_grace_and_only_its_limit_ends_it(
+    tmp_path: Path,
+) -> None:
     """Past its grace, a child still using CPU is slow (a busy machine), not stuck."""
     said: list[str] = []
 
@@ -125,7 +139,8 @@ def test_a_child_busy_stopping_outlives_its_grace_and_only_its_limit_ends_it() -
             f"def bye(*_):\n    end = time.monotonic() + {seconds}\n"
             "    while time.monotonic() < end:\n        pass\n    sys.exit(0)\n"
             "signal.signal(signal.SIGTERM, bye)\n"
-            "time.sleep(60)\n"
+            + ready_line(tmp_path, "busy")
+            + "time.sleep(60)\n"
         )
 
     specs = [
@@ -134,7 +149,7 @@ def test_a_child_busy_stopping_outlives_its_grace_and_only_its_limit_ends_it() -
     ]
     supervisor = Supervisor(specs, say=said.append)
     supervisor.start()
-    time.sleep(1.0)  # let the children install their handlers
+    wait_ready(tmp_path, 2)
     report = supervisor.stop()
     assert said == ["agent spinning was still stopping after 3 s; killing it"]
     assert report.killed == ["agent spinning"] and 2.0 <= report.stop_s["agent busy"] < 20.0
@@ -181,17 +196,17 @@ def test_the_run_file_round_trips_and_refuses_garbage(tmp_path: Path) -> None:
 
 
 @pytest.mark.multiprocess
-def test_stop_kills_a_child_that_ignores_sigterm() -> None:
+def test_stop_kills_a_child_that_ignores_sigterm(tmp_path: Path) -> None:
     code = (
         "import signal, sys, time\n"
         "signal.signal(signal.SIGTERM, signal.SIG_IGN)\n"
-        "print('ready', flush=True)\n"
-        "time.sleep(60)\n"
+        + ready_line(tmp_path, "stubborn")
+        + "time.sleep(60)\n"
     )
     said: list[str] = []
     supervisor = Supervisor([ChildSpec("stubborn", python(code))], say=said.append)
     supervisor.start()
-    time.sleep(0.5)
+    wait_ready(tmp_path, 1)
     started = time.monotonic()
     supervisor.stop(grace_s=0.5)
     assert time.monotonic() - started < 5.0

@@ -121,7 +121,11 @@ def test_a_vehicle_of_the_fleet_cannot_speak_or_live_for_another(live: LiveFleet
     uav1 = live.host.sessions["uav1"]
     publish(uav1, live.keys.vehicle_status("uav2"), forged)
     token = uav1.liveliness().declare_token(live.keys.vehicle_alive("ghost"))
-    time.sleep(1.0)
+    deadline = time.monotonic() + 30.0
+    while not seen:  # uav2's own statuses arrive (a loaded machine is slow)...
+        assert time.monotonic() < deadline, "uav2's statuses did not arrive"
+        time.sleep(0.1)
+    time.sleep(1.0)  # ...and the forged one would have by now
     alive = alive_keys(live.operator, live.keys.vehicles_alive_all, timeout_s=2.0)
     token.undeclare()  # type: ignore[no-untyped-call]
     subscriber.undeclare()  # type: ignore[no-untyped-call]

@@ -58,7 +58,7 @@ def kiosk(bus: tuple[BusSettings, FakeOrchestrator]) -> Iterator[str]:
         show_id=KEYS.show_id,
         port=0,
         limits=SubmissionLimits(
-            max_payload_bytes=200_000, max_strokes=60, max_points=5_000, max_text_chars=4,
+            max_payload_bytes=250_000, max_strokes=60, max_points=5_000, max_text_chars=4,
             blocklist=BLOCKLIST,
         ),
         rate_limit_per_minute=6,
@@ -209,6 +209,32 @@ def test_too_many_points_is_refused(visitor: Browser, fake: FakeOrchestrator) ->
     stroke = [[float(i % 300), float(i // 300), 0.001 * i] for i in range(5_001)]
     assert_refused(visitor.post("/api/submit", drawing([stroke])), 400, "too_many_points")
     assert len(fake.requests) == n_before
+
+
+def test_the_biggest_drawing_the_pad_may_send_fits_the_body_and_the_bus(
+    visitor: Browser, fake: FakeOrchestrator
+) -> None:
+    """5,000 points with widths at their longest digits (``showfile/services.py``: the show's
+    limits must hold them; 200 kB did not)."""
+    strokes = [
+        [
+            {
+                "x": 1000.5 + 2 * i,
+                "y": 1000.5 + 5 * k,
+                "t": round(100.123 + 0.011 * (100 * k + i), 3),
+                "w": 0.01234,
+            }
+            for i in range(100)
+        ]
+        for k in range(50)
+    ]
+    body = drawing(strokes)  # type: ignore[arg-type]
+    body["strokes"]["canvas"] = {"width": 1920, "height": 1400}
+    sent = json.dumps(body, separators=(",", ":")).encode()  # as JSON.stringify sends it
+    assert len(sent) > 220_000
+    reply = visitor.post("/api/submit", sent)
+    assert reply.status == 200, reply.body
+    assert len(fake.requests[-1].strokes["strokes"]) == 50
 
 
 def test_too_many_strokes_is_refused(visitor: Browser) -> None:

@@ -336,6 +336,7 @@ def test_positions_of_other_jobs_are_published_after_prioritize_cancel_and_assig
         assert eff.jobs.keys() == {f"j{i}"} and not eff.moved  # appended: nobody else moved
     reply, eff = book.operator(OperatorCommand(command="prioritize", job_id="j3", priority=5), 5)
     assert reply.ok and eff.jobs.keys() == {"j3"}
+    assert [e.message for e in eff.events] == ["operator: prioritize j3 to 5"]  # the new value
     assert eff.moved == {"j1", "j2"}  # j4 stays 4th
     assert [j.job_id for j in book.queue()] == ["j3", "j1", "j2", "j4"]
     reply, eff = book.operator(OperatorCommand(command="cancel", job_id="j1"), 6.0)

@@ -86,6 +86,20 @@ def test_one_command_rejects_a_flood_of_200_and_leaves_the_other_client_alone() 
     assert again.ok and again.job_ids == [] and not eff.jobs  # nothing left to do
 
 
+def test_a_certificate_that_declares_a_new_client_id_each_time_is_rejected_by_its_name() -> None:
+    book = _book(moderation=True)
+    for i in range(6):  # one certificate, six made-up client ids
+        request = SubmitRequest(text="L", client_id=f"visitor-{i}")
+        reply, _ = book.submit(
+            f"f{i}", request, label="L", estimate_s=20.0, now_s=1.0, submitted_by="submitter@x"
+        )
+        assert reply.ok
+    _submit(book, "k1", "visitor-0")  # a visitor of the kiosk who happens to share an id
+    reply, _ = _bulk(book, 2.0, command="reject", client_id="submitter@x")
+    assert reply.ok and reply.job_ids == [f"f{i}" for i in range(6)]
+    assert book.jobs["k1"].state == "awaiting_approval"
+
+
 def test_bulk_cancel_takes_waiting_jobs_and_never_one_a_vehicle_has() -> None:
     book = _book(moderation=False)
     _present(book, "uav1", 0.0, state="idle")

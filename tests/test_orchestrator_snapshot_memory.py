@@ -27,6 +27,7 @@ from bus.rpc import query, query_one
 from bus.session import BusSettings, Session, free_tcp_endpoint, open_session
 from cli.main import main as skyquill
 from orchestrator.core import Book, CoreConfig
+from orchestrator.core_types import Effects
 from orchestrator.fleet import VehicleInfo
 from orchestrator.store import JobStore
 
@@ -100,6 +101,20 @@ def test_lost_fault_and_half_written_board_alerts_close_with_their_cause() -> No
     assert ("board_dirty", job.vehicle_id) not in _open(book)
 
 
+def test_a_full_disk_alerts_until_room_is_made_and_a_restart_checks_again() -> None:
+    book = _book()
+    eff = Effects()
+    book.event(eff, 1.0, "alert", "disk_full", "the show's disk is full")
+    assert eff.settings_changed and _open(book) == [("disk_full", None)]
+    book.tick(50.0)
+    assert _open(book) == [("disk_full", None)]  # it lasts: nothing else closes it
+    restarted = Book(book.config, now_s=60.0, open_alerts=book.open_alerts())
+    assert _open(restarted) == []  # the new orchestrator's own disk check says it again
+    eff = Effects()
+    book.event(eff, 70.0, "info", "disk_room", "room again")
+    assert eff.settings_changed and _open(book) == []
+
+
 def test_the_snapshot_carries_the_newest_open_alerts_only() -> None:
     vehicles = tuple(VehicleInfo(f"v{i}", "quadrotor-brush", f"b{i}") for i in range(80))
     book = Book(CoreConfig(show_id="t", vehicles=vehicles), now_s=0.0)
@@ -153,14 +168,14 @@ def test_a_restarted_orchestrator_serves_earlier_events_and_open_alerts(
             messages = [e.message for e in after.events]
             assert messages[: len(before.events)] == [e.message for e in before.events]
             assert any(e.job_id == reply.job_id for e in after.events)  # job_submitted
-            assert "ana: estop uav3" in messages
+            assert "operator (ana): estop uav3" in messages  # the key's identity, then the name
             assert [(e.kind, e.vehicle_id, e.message) for e in after.alerts] == [
-                ("operator", "uav3", "ana: estop uav3")
+                ("operator", "uav3", "operator (ana): estop uav3")
             ]
             out = io.StringIO()
             with redirect_stdout(out):
                 assert skyquill(["status", str(path)]) == 0
-            assert "operator: ana: estop uav3" in out.getvalue().splitlines()[-1]
+            assert "operator: operator (ana): estop uav3" in out.getvalue().splitlines()[-1]
             release = OperatorCommand(command="release", vehicle_id="uav3")
             assert query_one(client, keys.command, release, CommandReply).ok
             assert eventually(lambda: snapshot(client)).alerts == []

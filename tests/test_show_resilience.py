@@ -29,7 +29,15 @@ from pathlib import Path
 import pytest
 
 from bus.keys import ShowKeys
-from bus.messages import CommandReply, Event, JobState, OperatorCommand, ShowSnapshot, Telemetry
+from bus.messages import (
+    AIRBORNE_STATES,
+    CommandReply,
+    Event,
+    JobState,
+    OperatorCommand,
+    ShowSnapshot,
+    Telemetry,
+)
 from bus.pubsub import subscribe
 from bus.rpc import NoReplyError, query_one
 from bus.session import Session, open_session
@@ -409,6 +417,14 @@ def _write_one(session: Session, show: Show, text: str) -> JobState:
     return job
 
 
+def _wait_landed(session: Session, show: Show, timeout_s: float = 60.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    keys = ShowKeys(show.show_id)
+    while any(v.state in AIRBORNE_STATES for v in snapshot(session, keys).vehicles):
+        assert time.monotonic() < deadline, "the vehicle did not land"
+        time.sleep(0.2)
+
+
 def _down(path: Path) -> str:
     done = subprocess.run(
         skyquill_argv("down", str(path)),
@@ -432,15 +448,19 @@ def test_the_console_is_a_viewer_killed_it_reopens_quit_the_show_runs_on(tmp_pat
         stderr=tty,
         start_new_session=True,
     )
-    reader = threading.Thread(target=_drain, args=(main,), daemon=True)
+    screen = _Screen()
+    reader = threading.Thread(target=screen.drain, args=(main,), daemon=True)
     reader.start()
     try:
         with _operator(show) as session, Stagehand(session, ShowKeys(show.show_id)):
             first = _run_file(show, lambda r: "console" in r.children).children["console"]
+            shown_before = screen.size()
             os.kill(first.pid, signal.SIGKILL)
             again = _run_file(show, lambda r: r.children["console"].pid != first.pid)
             assert _write_one(session, show, "一").state == "done"  # the show never noticed
-            time.sleep(3.0)  # let the new console draw, then quit it with its key
+            _wait_landed(session, show)  # else `q` asks first (a vehicle flies)
+            screen.wait_for(MOUSE_ON, after=shown_before)  # the new console took the terminal...
+            time.sleep(1.0)  # ...and reads its keys: quit it with its own
             os.write(main, b"q")
             deadline = time.monotonic() + 20.0
             while again.children["console"].alive():
@@ -462,12 +482,39 @@ def test_the_console_is_a_viewer_killed_it_reopens_quit_the_show_runs_on(tmp_pat
     assert not [r for name, r in children.children.items() if r.alive()]
 
 
-def _drain(fd: int) -> None:
-    try:
-        while os.read(fd, 65536):
+MOUSE_ON = b"\x1b[?1000h"
+"""What a console (Textual) writes when it takes the terminal's input (mouse reporting on; a
+console reopened in the same terminal does not switch to the alternate screen again)."""
+
+
+class _Screen:
+    """What ``up``'s terminal showed (its pseudo-terminal, drained so nothing blocks)."""
+
+    def __init__(self) -> None:
+        self.shown = bytearray()
+        self._lock = threading.Lock()
+
+    def drain(self, fd: int) -> None:
+        try:
+            while chunk := os.read(fd, 65536):
+                with self._lock:
+                    self.shown += chunk
+        except OSError:
             pass
-    except OSError:
-        pass
+
+    def size(self) -> int:
+        with self._lock:
+            return len(self.shown)
+
+    def wait_for(self, marker: bytes, *, after: int, timeout_s: float = 60.0) -> None:
+        """Until ``marker`` is shown past the first ``after`` bytes."""
+        deadline = time.monotonic() + timeout_s
+        while True:
+            with self._lock:
+                if marker in self.shown[after:]:
+                    return
+            assert time.monotonic() < deadline, f"{marker!r} was not shown"
+            time.sleep(0.1)
 
 
 def test_a_killed_up_leaves_the_show_running_and_a_new_up_adopts_it(tmp_path: Path) -> None:

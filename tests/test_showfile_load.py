@@ -222,6 +222,15 @@ def test_mavlink_sim_flag_needs_mavlink_vehicles_and_kiosk_text_length_is_bounde
     assert _problem(SOLO + "kiosk: {max_text_chars: 0}\n").field == "kiosk.max_text_chars"
 
 
+def test_the_kiosks_body_limit_holds_its_most_points_and_fits_a_bus_request() -> None:
+    err = _problem(SOLO + "kiosk: {max_payload_bytes: 200000, max_points: 5000}\n")
+    assert err.field == "kiosk" and "cannot carry max_points 5000" in str(err)
+    assert "bad.yaml:11: kiosk:" in str(err) and "(242000 bytes)" in str(err)
+    err = _problem(SOLO + "kiosk: {max_payload_bytes: 300000}\n")
+    assert err.field == "kiosk.max_payload_bytes"
+    assert parse_show(SOLO + "kiosk: {max_payload_bytes: 100000, max_points: 2000}\n")
+
+
 def test_shipped_shows_fly_the_default_controller_and_the_rehearsal_simulates_its_vehicles() -> (
     None
 ):

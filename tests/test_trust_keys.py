@@ -25,8 +25,8 @@ from bus.session import SessionOpenError, free_tcp_endpoint, open_session
 from cli.main import main
 from showfile import Show, ShowError, dump_show, load_show
 from trust.acl import access_control
-from trust.pki import KeysError, client_files, identity_files, is_valid, issue
-from trust.settings import ensure_show_keys, identities, secured, session_settings, show_hosts
+from trust.pki import KeysError, identity_files, is_valid, issue_client
+from trust.settings import ensure_show_keys, identities, secured, session_settings
 
 SOLO = Path(__file__).resolve().parents[1] / "shows" / "solo.yaml"
 AIRSHOW = Path(__file__).resolve().parents[1] / "shows" / "airshow-2014.yaml"
@@ -123,11 +123,13 @@ def test_access_control_gives_each_identity_only_its_part() -> None:
         assert not _may(acl, identity, "query", k.command)
         assert not _may(acl, identity, "query", k.vehicle_command("uav1"))
         assert not _may(acl, identity, "declare_subscriber", k.telemetry("uav1"))
-    assert _may(acl, "operator", "query", k.submit)
-    assert _may(acl, "operator@al", "query", k.submit_as("operator@al"))
-    assert not _may(acl, "operator@al", "query", k.submit)
+    assert _may(acl, "operator", "query", k.submit) and _may(acl, "operator", "query", k.command)
+    for key in (k.submit_as("operator@al"), k.command_as("operator@al")):  # its own keys only:
+        assert _may(acl, "operator@al", "query", key)
+        assert not _may(acl, "operator", "query", key)
+    for key in (k.submit, k.command, k.command_as("operator@bo")):  # the log names who sent it
+        assert not _may(acl, "operator@al", "query", key)
     for identity in ("operator", "operator@al"):
-        assert _may(acl, identity, "query", k.command)
         assert _may(acl, identity, "query", k.vehicle_command("uav2"))
         assert not _may(acl, identity, "query", k.vehicle_assign("uav2"))
         assert not _may(acl, identity, "put", k.job("j1"))
@@ -246,13 +248,7 @@ def test_only_the_routers_certificate_can_serve(tmp_path: Path) -> None:
     vehicle's session, name checking on; the real router's certificate is accepted."""
     _, show = _show(tmp_path)
     ensure_show_keys(show)
-    submitter = issue(
-        show.keys_dir,
-        client_files(show.keys_dir, "booth", "submitter"),
-        show_id=show.show_id,
-        hosts=show_hosts(show),  # as `skyquill keys --client` passes them: not used
-        holder="booth",
-    )
+    submitter = issue_client(show.keys_dir, "booth", "submitter", show_id=show.show_id)
     assert _usages(submitter.cert) == {CLIENT_AUTH}
     assert _usages(identity_files(show.keys_dir, "uav1").cert) == {CLIENT_AUTH}
     assert _usages(identity_files(show.keys_dir, "router").cert) == {SERVER_AUTH, CLIENT_AUTH}
@@ -266,18 +262,28 @@ def test_only_the_routers_certificate_can_serve(tmp_path: Path) -> None:
         pass
 
 
+@pytest.mark.parametrize("old_mark", [None, "certificates by role"])
 def test_a_keys_folder_of_an_older_version_is_refused_with_what_to_do(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], old_mark: str | None
 ) -> None:
-    """A CA without the by-role mark issued certificates that all could serve: copies of them
-    are out of reach, so the folder is refused (never silently kept nor patched)."""
+    """A CA without today's mark issued certificates that all could serve (no mark), or signed
+    outside clients itself, which no router could then refuse at connection: copies of them are
+    out of reach, so the folder is refused (never silently kept nor patched)."""
     path, show = _show(tmp_path)
     ensure_show_keys(show)
     ca_path = show.keys_dir / "ca.pem"
     ca = x509.load_pem_x509_certificate(ca_path.read_bytes())
     key = serialization.load_pem_private_key((show.keys_dir / "ca.key").read_bytes(), None)
     assert isinstance(key, ec.EllipticCurvePrivateKey)
-    old_name = x509.Name([a for a in ca.subject if a.oid != NameOID.ORGANIZATIONAL_UNIT_NAME])
+    old_name = x509.Name(
+        [
+            a
+            if a.oid != NameOID.ORGANIZATIONAL_UNIT_NAME or old_mark is None
+            else x509.NameAttribute(NameOID.ORGANIZATIONAL_UNIT_NAME, old_mark)
+            for a in ca.subject
+            if a.oid != NameOID.ORGANIZATIONAL_UNIT_NAME or old_mark is not None
+        ]
+    )
     builder = (
         x509.CertificateBuilder()
         .subject_name(old_name)
@@ -295,4 +301,7 @@ def test_a_keys_folder_of_an_older_version_is_refused_with_what_to_do(
         ensure_show_keys(show)
     assert main(["keys", str(path)]) == 1
     said = capsys.readouterr().err
-    assert said.count("\n") == 1 and "any of its certificates can pose as the router" in said
+    assert (
+        said.count("\n") == 1
+        and "could pose as the router or its outside clients could not be shut out" in said
+    )

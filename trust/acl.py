@@ -14,9 +14,11 @@ What each identity may send:
 - ``kiosk`` and each outside ``submitter``: submissions on their own submit key
   (``orchestrator/submit/<identity>``, so the orchestrator's quotas count by certificate), and
   snapshot queries; they follow jobs and the fleet;
-- ``operator`` (the console, the CLI) and each outside ``operator``: operator commands,
-  submissions (the console's on ``orchestrator/submit``, an outside one's on its own key),
-  snapshots and vehicle commands (never an assignment); they watch everything;
+- ``operator`` (the console, the CLI) and each outside ``operator``: operator commands and
+  submissions (the console's on ``orchestrator/command`` and ``orchestrator/submit``, an outside
+  one's on its own keys, ``command/<identity>`` and ``submit/<identity>``, so the event log names
+  who sent each command), snapshots and vehicle commands (never an assignment); they watch
+  everything;
 - each outside ``watcher``: snapshot queries; it watches everything;
 - ``router``: anything (the ground station's router, as a companion host's router sees it);
 - ``router@<host>``, a companion host's router: what the vehicles on that host may send, and
@@ -68,10 +70,10 @@ def _follow_jobs(keys: ShowKeys, name: str) -> list[dict[str, Any]]:
     ]
 
 
-def _operator(keys: ShowKeys, name: str, submit_key: str) -> list[dict[str, Any]]:
+def _operator(keys: ShowKeys, name: str, command_key: str, submit_key: str) -> list[dict[str, Any]]:
     return [
         *_watch_all(keys, name),
-        _rule(f"{name}: command", QUERY, [keys.command, submit_key]),
+        _rule(f"{name}: command", QUERY, [command_key, submit_key]),
         _rule(f"{name}: vehicles", QUERY, [f"{keys.prefix}/vehicles/*/command"]),
     ]
 
@@ -79,7 +81,9 @@ def _operator(keys: ShowKeys, name: str, submit_key: str) -> list[dict[str, Any]
 def _client(keys: ShowKeys, common_name: str, role: str) -> list[dict[str, Any]]:
     """An outside client's rules: its role's, submitting on its own key."""
     if role == "operator":
-        return _operator(keys, common_name, keys.submit_as(common_name))
+        return _operator(
+            keys, common_name, keys.command_as(common_name), keys.submit_as(common_name)
+        )
     if role == "submitter":
         return _follow_jobs(keys, common_name)
     return _watch_all(keys, common_name)
@@ -129,7 +133,7 @@ def access_control(
         "router": [_rule("router: anything", ALL_MESSAGES, ["**"])],
         "orchestrator": [_rule("orchestrator: anything in the show", ALL_MESSAGES, everything)],
         "kiosk": _follow_jobs(keys, "kiosk"),
-        "operator": _operator(keys, "operator", keys.submit),
+        "operator": _operator(keys, "operator", keys.command, keys.submit),
     }
     for common_name, role in (clients or {}).items():
         per_subject[common_name] = _client(keys, common_name, role)

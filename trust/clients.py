@@ -1,13 +1,15 @@
 """The outside clients a show has issued and those it revoked: ``<keys_dir>/clients.json``.
 
 An outside client (``skyquill keys SHOW --client NAME --role R``) has a certificate of its own,
-whose common name is ``<role>@<name>`` (:func:`client_common_name`): the access control gives
-each issued client a subject of its own with its role's rules, so two operators' laptops are two
-identities, and one can be shut out alone. The router admits only the clients listed here, and
-re-reads the file when it changes (``cli/cmd_router.py``): revoking a client removes it from the
-list (default deny: it can send and receive nothing) and keeps its name, which is never issued
-again (its certificate would be admitted with it). Light (no ``cryptography``): the router reads
-it on every start.
+whose common name is ``<role>@<name>`` (:func:`client_common_name`), signed by an issuer of its
+own (``trust.pki.issue_client``). The access control gives each admitted client a subject of its
+own with its role's rules, so two operators' laptops are two identities, and one can be shut out
+alone. The router re-reads this list when it changes (``cli/cmd_router.py``) and trusts at
+connection only the show CA and the issuers of the clients listed (:func:`write_router_trust`):
+revoking a client removes it from the list, so its TLS handshake fails (it cannot connect) and
+no rule would admit it anyway (default deny). Issuing a name again makes a new issuer: only the
+newest certificate of a name is ever accepted. Light (no ``cryptography``): the router reads it
+on every start.
 
 Layout (written whole, then renamed into place, so a reader never sees half a file)::
 
@@ -28,10 +30,12 @@ from trust.files import KeysError
 __all__ = [
     "IssuedClients",
     "client_common_name",
+    "client_issuer_path",
     "load_clients",
     "record_client",
     "registry_path",
     "revoke_client",
+    "write_router_trust",
 ]
 
 REGISTRY_NAME = "clients.json"
@@ -41,6 +45,12 @@ def client_common_name(name: str, role: str) -> str:
     """The identity of an outside client: ``operator@alice`` (``@`` is in no vehicle's or
     service's name, so a client never takes theirs)."""
     return f"{role}@{name}"
+
+
+def client_issuer_path(keys_dir: Path, name: str) -> Path:
+    """The certificate of the issuer of client ``name``'s certificate (``trust.pki``): the
+    router trusts it while ``name`` is admitted."""
+    return Path(keys_dir) / "clients" / name / "issuer.pem"
 
 
 def registry_path(keys_dir: Path) -> Path:
@@ -55,7 +65,7 @@ class IssuedClients:
     roles: Mapping[str, str] = field(default_factory=dict)
     """Name -> role of every client the router admits."""
     revoked: frozenset[str] = frozenset()
-    """Names revoked: shut out, and never issued again."""
+    """Names revoked (and not issued again since): shut out, kept for the record."""
 
     @property
     def common_names(self) -> dict[str, str]:
@@ -82,31 +92,30 @@ def load_clients(keys_dir: Path) -> IssuedClients:
     return IssuedClients(roles, revoked)
 
 
-def _save(keys_dir: Path, clients: IssuedClients) -> None:
-    path = registry_path(keys_dir)
-    data = {"clients": dict(sorted(clients.roles.items())), "revoked": sorted(clients.revoked)}
-    partial = path.with_suffix(".json.partial")
+def _write_whole(path: Path, data: bytes) -> None:
+    """Write ``path`` (0600) under another name, then rename it into place."""
+    partial = path.with_name(path.name + ".partial")
     fd = os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
-    with os.fdopen(fd, "w", encoding="utf-8") as out:
-        out.write(json.dumps(data, indent=2) + "\n")
+    with os.fdopen(fd, "wb") as out:
+        out.write(data)
     os.replace(partial, path)
 
 
+def _save(keys_dir: Path, clients: IssuedClients) -> None:
+    data = {"clients": dict(sorted(clients.roles.items())), "revoked": sorted(clients.revoked)}
+    _write_whole(registry_path(keys_dir), (json.dumps(data, indent=2) + "\n").encode())
+
+
 def record_client(keys_dir: Path, name: str, role: str) -> None:
-    """List ``name`` as a client of ``role`` (replacing its former role); :class:`KeysError`
-    if it was revoked."""
+    """Admit ``name`` as a client of ``role`` (replacing its former role; a revoked name is
+    admitted again with the new certificate its new issuer signed, never its old one)."""
     clients = load_clients(keys_dir)
-    if name in clients.revoked:
-        raise KeysError(
-            f"client {name!r} was revoked: its old certificate would be admitted again with "
-            f"the name; issue the new one under another name"
-        )
-    _save(keys_dir, IssuedClients({**clients.roles, name: role}, clients.revoked))
+    _save(keys_dir, IssuedClients({**clients.roles, name: role}, clients.revoked - {name}))
 
 
 def revoke_client(keys_dir: Path, name: str) -> str:
-    """Shut ``name`` out for good; returns its role. :class:`KeysError` if it is not a client
-    of the show (or was revoked already)."""
+    """Shut ``name`` out; returns its role. :class:`KeysError` if it is not a client of the
+    show (or was revoked already)."""
     clients = load_clients(keys_dir)
     if name not in clients.roles:
         known = ", ".join(sorted(clients.roles)) or "none"
@@ -115,3 +124,19 @@ def revoke_client(keys_dir: Path, name: str) -> str:
     roles = {n: r for n, r in clients.roles.items() if n != name}
     _save(keys_dir, IssuedClients(roles, clients.revoked | {name}))
     return clients.roles[name]
+
+
+def write_router_trust(keys_dir: Path, show_ca: Path, clients: IssuedClients, out: Path) -> Path:
+    """Write whom a router accepts at connection (PEM, for Zenoh's ``root_ca_certificate``):
+    the show CA, then the issuer of every admitted client (one whose issuer is missing is left
+    out: it cannot connect); returns ``out``."""
+    try:
+        parts = [show_ca.read_bytes()]
+        for name in sorted(clients.roles):
+            issuer = client_issuer_path(keys_dir, name)
+            if issuer.exists():
+                parts.append(issuer.read_bytes())
+        _write_whole(out, b"".join(parts))
+    except OSError as exc:
+        raise KeysError(f"{out}: cannot write the router's trusted issuers: {exc}") from exc
+    return out

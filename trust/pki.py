@@ -4,24 +4,30 @@ Layout of a show's keys folder (``show.keys_dir``; private keys 0600, folders 07
 
     ca.pem  ca.key                  the show CA (ECDSA P-256, 5 years)
     <identity>/cert.pem  key.pem    one per service and per vehicle (common name = identity)
-    clients/<name>/cert.pem key.pem ca.pem   outside clients (common name = <role>@<name>)
+    clients/<name>/cert.pem key.pem ca.pem issuer.pem   outside clients (``<role>@<name>``)
     clients.json                    the outside clients admitted and revoked (trust/clients.py)
+    router/trusted.pem              whom the router accepts: the show CA, admitted clients' issuers
 
 Certificates by role: only a router's certificate may serve. It carries server and client
 authentication (a companion router also joins the ground router) and the routers' host names
 (from the show's endpoints), which clients verify on connecting. Every other identity's
 certificate is for client authentication only, without names: rustls (Zenoh's TLS) refuses it
 as a server's, so a stolen vehicle's or client's key cannot pose as the router. Every
-certificate is signed by the CA and valid for one year.
+certificate is valid for one year.
 
-A CA is marked (:data:`CA_PROFILE`) as issuing by role. A keys folder whose CA lacks the mark was
-made by an older skyquill, whose every certificate could serve: re-issuing its own files would
-leave copies of the old ones (outside clients, companion hosts) able to pose as the router, so
-it is refused with what to do (a new CA) rather than used. Likewise an outside client issued
-before clients had names of their own (its common name was its role): an operator's was then the
-console's own identity, and can be shut out by no access rule, so a keys folder holding one is
-refused (:func:`check_old_clients`); a client holding an old folder is told to have it issued
-again (:func:`client_identity`).
+The show CA signs the show's own identities. An outside client's certificate is signed by an
+issuer of its own (:func:`issue_client`): a CA made for that one certificate, whose key is
+dropped once it has signed, so nothing else can ever chain to it. The router trusts the show CA
+and the issuers of the clients admitted now (``trust.settings``), so revoking a client takes its
+issuer out of the router's trust: its TLS handshake fails, it cannot even connect. (Zenoh's TLS
+has no revocation list; this is one, kept as the router's trust anchors.)
+
+A CA is marked (:data:`CA_PROFILE`). A keys folder whose CA lacks the mark was made by an older
+skyquill, whose certificates could serve, or whose outside clients were signed by the show CA
+itself and so could never be refused at connection: re-issuing its own files would leave copies
+of the old ones (outside clients, companion hosts) valid, so it is refused with what to do (a
+new CA) rather than used. A client holding a folder issued before clients had names of their own
+(its common name was its role) is told to have it issued again (:func:`client_identity`).
 """
 
 from __future__ import annotations
@@ -29,6 +35,7 @@ from __future__ import annotations
 import datetime
 import ipaddress
 import os
+import secrets
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -38,7 +45,7 @@ from cryptography.hazmat.primitives import hashes, serialization
 from cryptography.hazmat.primitives.asymmetric import ec
 from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 
-from trust.clients import client_common_name
+from trust.clients import client_common_name, client_issuer_path
 from trust.files import IdentityFiles, KeysError, identity_files
 from trust.hosts import is_router
 
@@ -46,20 +53,21 @@ __all__ = [
     "CA_PROFILE",
     "IdentityFiles",
     "KeysError",
-    "check_old_clients",
     "client_files",
     "client_identity",
     "ensure_ca",
     "identity_files",
     "is_valid",
     "issue",
+    "issue_client",
 ]
 
 CA_LIFETIME = datetime.timedelta(days=5 * 365)
 CERT_LIFETIME = datetime.timedelta(days=365)
 CLOCK_SKEW = datetime.timedelta(minutes=10)
-CA_PROFILE = "certificates by role"
-"""Organisational unit of a show CA that gives server authentication to routers only."""
+CA_PROFILE = "certificates by role, clients by own issuers"
+"""Organisational unit of a show CA that gives server authentication to routers only and signs
+no outside client (each has an issuer of its own)."""
 _ROUTER_USAGES = (ExtendedKeyUsageOID.SERVER_AUTH, ExtendedKeyUsageOID.CLIENT_AUTH)
 _CLIENT_USAGES = (ExtendedKeyUsageOID.CLIENT_AUTH,)
 
@@ -91,24 +99,6 @@ def client_identity(folder: Path) -> str:
             f"operator to issue it again (`skyquill keys SHOW --client NAME --role ROLE`)"
         )
     return common_name
-
-
-def check_old_clients(keys_dir: Path) -> None:
-    """:class:`KeysError` if the keys folder issued an outside operator before clients had names
-    (its certificate says ``operator``, as the console's does, and no rule can shut it out).
-    Old watchers and submitters need nothing: no rule admits their common names any more."""
-    old = sorted(
-        cert.parent.name
-        for cert in (Path(keys_dir) / "clients").glob("*/cert.pem")
-        if _common_name(cert) == "operator"
-    )
-    if old:
-        raise KeysError(
-            f"{keys_dir} issued outside operators before clients had names ({', '.join(old)}): "
-            f"they act as the console and cannot be revoked; move the folder away and run "
-            f"`skyquill keys` (or `up`) with the show file for a new CA, then issue outside "
-            f"clients again (--client) and copy the new folders to companion hosts"
-        )
 
 
 def _now() -> datetime.datetime:
@@ -147,7 +137,8 @@ def _alt_names(hosts: Iterable[str]) -> list[x509.GeneralName]:
 
 
 def issues_by_role(ca: x509.Certificate) -> bool:
-    """Whether ``ca`` was made to give server authentication to routers only (its mark)."""
+    """Whether ``ca`` was made to give server authentication to routers only and to sign no
+    outside client (its mark)."""
     units = ca.subject.get_attributes_for_oid(NameOID.ORGANIZATIONAL_UNIT_NAME)
     return any(unit.value == CA_PROFILE for unit in units)
 
@@ -165,8 +156,9 @@ def ensure_ca(keys_dir: Path, show_id: str) -> tuple[x509.Certificate, ec.Ellipt
             raise KeysError(f"{key_path}: not an ECDSA key")
         if not issues_by_role(cert):
             raise KeysError(
-                f"{keys_dir} was made by an older skyquill: any of its certificates can pose as "
-                f"the router; move the folder away and run `skyquill keys` (or `up`) with the "
+                f"{keys_dir} was made by an older skyquill: its certificates could pose as the "
+                f"router or its outside clients could not be shut out; move the folder away "
+                f"and run `skyquill keys` (or `up`) with the "
                 f"show file for a new CA, then issue outside clients again (--client) and copy "
                 f"the new folders to companion hosts"
             )
@@ -179,15 +171,25 @@ def ensure_ca(keys_dir: Path, show_id: str) -> tuple[x509.Certificate, ec.Ellipt
             x509.NameAttribute(NameOID.COMMON_NAME, f"skyquill show CA {show_id}"),
         ]
     )
+    cert = _self_signed_ca(name, key, CA_LIFETIME)
+    _write_private(key_path, _key_pem(key))
+    _write_public(cert_path, cert)
+    return cert, key
+
+
+def _self_signed_ca(
+    name: x509.Name, key: ec.EllipticCurvePrivateKey, lifetime: datetime.timedelta
+) -> x509.Certificate:
+    """A CA certificate that signs end certificates only (no CA below it)."""
     now = _now()
-    cert = (
+    return (
         x509.CertificateBuilder()
         .subject_name(name)
         .issuer_name(name)
         .public_key(key.public_key())
         .serial_number(x509.random_serial_number())
         .not_valid_before(now - CLOCK_SKEW)
-        .not_valid_after(now + CA_LIFETIME)
+        .not_valid_after(now + lifetime)
         .add_extension(x509.BasicConstraints(ca=True, path_length=0), critical=True)
         .add_extension(
             x509.KeyUsage(
@@ -206,9 +208,6 @@ def ensure_ca(keys_dir: Path, show_id: str) -> tuple[x509.Certificate, ec.Ellipt
         .add_extension(x509.SubjectKeyIdentifier.from_public_key(key.public_key()), critical=False)
         .sign(key, hashes.SHA256())
     )
-    _write_private(key_path, _key_pem(key))
-    _write_public(cert_path, cert)
-    return cert, key
 
 
 def issue(
@@ -217,16 +216,56 @@ def issue(
     *,
     show_id: str,
     hosts: Iterable[str] = (),
-    holder: str | None = None,
 ) -> IdentityFiles:
-    """Sign a new key pair for ``files.common_name`` (replacing any there); returns ``files``.
+    """Sign a new key pair for the show's own identity ``files.common_name`` with the show CA
+    (replacing any there); returns ``files``.
 
     A router's identity gets a server certificate naming ``hosts`` (and loopback); any other
-    gets a client-only certificate, and ``hosts`` is not used. ``holder`` is a person's or
-    device's name kept in the subject (organisational unit), apart from the common name the
-    access control matches.
+    gets a client-only certificate, and ``hosts`` is not used.
     """
     ca_cert, ca_key = ensure_ca(keys_dir, show_id)
+    _sign(files, ca_cert, ca_key, show_id=show_id, hosts=hosts)
+    if files.ca != Path(keys_dir) / "ca.pem":
+        _write_public(files.ca, ca_cert)
+    return files
+
+
+def issue_client(keys_dir: Path, name: str, role: str, *, show_id: str) -> IdentityFiles:
+    """Sign a new key pair for the outside client ``name`` by an issuer of its own, made for
+    this one certificate and then forgotten (its key is never written); returns its files.
+
+    The folder gets the certificate, its key, the show CA (to verify the router) and the issuer
+    (``issuer.pem``, public: the router trusts it while the client is admitted).
+    """
+    ca_cert, _ = ensure_ca(keys_dir, show_id)
+    files = client_files(keys_dir, name, role)
+    issuer_key = ec.generate_private_key(ec.SECP256R1())
+    issuer_name = x509.Name(
+        [
+            x509.NameAttribute(NameOID.ORGANIZATION_NAME, f"skyquill {show_id}"),
+            x509.NameAttribute(NameOID.SERIAL_NUMBER, secrets.token_hex(16)),  # one of its kind
+            x509.NameAttribute(NameOID.COMMON_NAME, f"issuer of {files.common_name}"),
+        ]
+    )
+    issuer = _self_signed_ca(issuer_name, issuer_key, CERT_LIFETIME)
+    _sign(files, issuer, issuer_key, show_id=show_id, holder=name)
+    _write_public(files.ca, ca_cert)
+    _write_public(client_issuer_path(keys_dir, name), issuer)
+    return files
+
+
+def _sign(
+    files: IdentityFiles,
+    issuer: x509.Certificate,
+    issuer_key: ec.EllipticCurvePrivateKey,
+    *,
+    show_id: str,
+    hosts: Iterable[str] = (),
+    holder: str | None = None,
+) -> None:
+    """Write a new key and its certificate for ``files.common_name``, signed by ``issuer``.
+    ``holder`` is a person's or device's name kept in the subject (organisational unit), apart
+    from the common name the access control matches."""
     key = ec.generate_private_key(ec.SECP256R1())
     attributes = [x509.NameAttribute(NameOID.ORGANIZATION_NAME, f"skyquill {show_id}")]
     if holder:
@@ -237,7 +276,7 @@ def issue(
     builder = (
         x509.CertificateBuilder()
         .subject_name(x509.Name(attributes))
-        .issuer_name(ca_cert.subject)
+        .issuer_name(issuer.subject)
         .public_key(key.public_key())
         .serial_number(x509.random_serial_number())
         .not_valid_before(now - CLOCK_SKEW)
@@ -247,19 +286,17 @@ def issue(
             x509.ExtendedKeyUsage(_ROUTER_USAGES if router else _CLIENT_USAGES), critical=False
         )
         .add_extension(
-            x509.AuthorityKeyIdentifier.from_issuer_public_key(ca_key.public_key()), critical=False
+            x509.AuthorityKeyIdentifier.from_issuer_public_key(issuer_key.public_key()),
+            critical=False,
         )
     )
     if router:
         builder = builder.add_extension(
             x509.SubjectAlternativeName(_alt_names(hosts)), critical=False
         )
-    cert = builder.sign(ca_key, hashes.SHA256())
+    cert = builder.sign(issuer_key, hashes.SHA256())
     _write_private(files.key, _key_pem(key))
     _write_public(files.cert, cert)
-    if files.ca != Path(keys_dir) / "ca.pem":
-        _write_public(files.ca, ca_cert)
-    return files
 
 
 def _fits_role(cert: x509.Certificate, common_name: str, hosts: Iterable[str]) -> bool:

@@ -16,7 +16,7 @@ from bus.session import BusSettings
 from showfile.bus_view import ShowBus
 from showfile.roles import SERVICE_ROLES
 from trust.acl import access_control
-from trust.clients import load_clients
+from trust.clients import load_clients, write_router_trust
 from trust.files import IdentityFiles, KeysError, identity_files
 from trust.hosts import all_endpoints, companion_routers, endpoints, is_router
 
@@ -53,9 +53,8 @@ def ensure_show_keys(show: ShowBus) -> list[str]:
     """Create the show CA and any missing or stale identity; returns the identities (re)issued."""
     if show.security.mode == "none":
         return []
-    from trust.pki import check_old_clients, is_valid, issue  # cryptography: where keys are made
+    from trust.pki import is_valid, issue  # cryptography: where keys are made
 
-    check_old_clients(show.keys_dir)
     issued = []
     hosts = show_hosts(show)
     for identity in identities(show):
@@ -83,10 +82,12 @@ def check_keys(show: ShowBus, wanted: Sequence[str]) -> None:
         )
 
 
-def tls_section(files: IdentityFiles, *, router: bool) -> dict[str, Any]:
-    """Zenoh ``transport/link/tls`` for an identity: mutual TLS against the show CA."""
+def tls_section(files: IdentityFiles, *, trusted: Path | None = None) -> dict[str, Any]:
+    """Zenoh ``transport/link/tls`` for an identity: mutual TLS against the show CA; a router
+    (which serves) trusts ``trusted`` instead (the show CA and the admitted clients' issuers)."""
+    router = trusted is not None
     section: dict[str, Any] = {
-        "root_ca_certificate": str(files.ca),
+        "root_ca_certificate": str(trusted or files.ca),
         "enable_mtls": True,
         "verify_name_on_connect": True,
         "connect_private_key": str(files.key),
@@ -108,18 +109,23 @@ def secured(show: ShowBus, files: IdentityFiles, *, router: bool) -> BusSettings
             )
     z = show.zenoh
     where = endpoints(show, files.common_name)
-    acl = None
+    acl = trusted = None
     if router:
-        clients = load_clients(show.keys_dir).common_names
+        clients = load_clients(show.keys_dir)
         vehicle_ids = [v.id for v in show.vehicles]
-        acl = access_control(show.show_id, vehicle_ids, companion_routers(show), clients)
+        acl = access_control(
+            show.show_id, vehicle_ids, companion_routers(show), clients.common_names
+        )
+        trusted = write_router_trust(
+            show.keys_dir, files.ca, clients, files.cert.parent / "trusted.pem"
+        )
     return BusSettings(
         router_listen=as_tls(where.router_listen),
         connect=as_tls(where.connect),
         multicast_scouting=z.multicast_scouting,
         router_connect=as_tls(where.router_connect),
         peer_listen=as_tls(z.peer_listen),
-        tls=tls_section(files, router=router),
+        tls=tls_section(files, trusted=trusted),
         access_control=acl,
         extra=dict(z.extra),
         open_timeout_s=z.open_timeout_s,
