@@ -190,14 +190,15 @@ def test_a_landed_idle_vehicle_rests_and_wakes_at_once_on_an_assignment(
             telemetry_before = len(orch.telemetry)
             sent_s = time.monotonic()
             assert (await orch.command(assign("j1"))).ok
-            await asyncio.sleep(0.1)
-            assert not service.resting and ticks_within(service, sent_s) >= 10
+            await asyncio.sleep(1.0)  # woken: hundreds of ticks a second (resting: <= 3); 20 on
+            assert ticks_within(service, sent_s) >= 20  # a loaded machine still tells them apart
             await wait_for(lambda: "done" in orch.events() and service.runner.state == "idle")
             assert orch.events() == ["started", "done"]
             await wait_for(lambda: service.resting)
             assert len(orch.telemetry) > telemetry_before
-            # agent time went on while resting: it is close to 5x the wall time since the start
-            assert service.clock.now_s > 5.0 * (time.monotonic() - since_s)
+            # agent time went on while resting: about 5x the wall time since the start (a tick
+            # clock that stopped while resting would be far behind; a loaded one lags a little)
+            assert service.clock.now_s > 0.8 * 5.0 * (time.monotonic() - since_s)
 
     asyncio.run(scenario())
 

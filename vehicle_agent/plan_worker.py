@@ -32,8 +32,12 @@ from vehicle_agent.worker_protocol import (
     write_frame,
 )
 
-PICTURE_WAIT_S = 3.0
-"""On ``close``, how long in [s] the worker waits for a job's report.png still being drawn."""
+PICTURE_WAIT_S = 20.0
+"""On ``close``, how long in [s] the worker waits for a job's report.png still being drawn.
+A picture takes under a second on a quiet machine; beside four busy processes the worker (nice
+5) did not finish one within the former 3 s (the suite run under load lost it). A picture is the
+job's record, so an idle worker waits for it; when an agent is stopped, the supervisor's grace
+for the agent bounds the wait (``cli/supervisor.py``)."""
 PR_SET_PDEATHSIG = 1
 
 log = logging.getLogger("vehicle_agent.plan_worker")

@@ -31,8 +31,9 @@ log = logging.getLogger(__name__)
 IDLE_EXIT_S = 120.0
 """Wall time in [s] without requests after which the worker is stopped (an agent between jobs
 of a running show keeps it; an idle one frees its memory)."""
-CLOSE_WAIT_S = 5.0
-"""How long in [s] ``close`` waits for an idle worker to exit (it may be drawing a picture)."""
+CLOSE_WAIT_S = 25.0
+"""How long in [s] ``close`` waits for an idle worker to exit (it may be drawing a picture: the
+worker's own wait, ``plan_worker.PICTURE_WAIT_S``, and its exit)."""
 
 
 class RemoteJobWork:
