@@ -473,8 +473,9 @@ def test_the_console_is_a_viewer_killed_it_reopens_quit_the_show_runs_on(tmp_pat
         _down(path)
         assert up.wait(timeout=30) == 0
     finally:
-        if up.poll() is None:
+        if up.poll() is None:  # failed midway: the children outlive a killed `up` by design
             up.kill()
+            subprocess.run(skyquill_argv("down", str(path)), env=child_env(), timeout=60)
         os.close(tty)
     log = (show.database_path.parent / "logs" / "up.log").read_text()
     assert "console exited (killed by signal 9); reopening it" in log, log[-3000:]
