@@ -12,7 +12,8 @@ orchestrator's margin by the step):
   report was sent; without one, it does not write at all;
 - the **orchestrator** (``orchestrator/holders.py``) stores the receipt of each ready report
   before acknowledging it (``Job.writing_since_s``, the latest one, which came after the agent's
-  latest acknowledged one was sent), and gives the job to nobody else until
+  latest acknowledged one was sent), and gives the job to nobody else until the vehicle is heard
+  again, or the operator has put a fresh sheet on its board, which it accepts only
   :func:`unheard_writing_s` plus ``lost_job_hold_s`` after it.
 
 So every moment the old holder may still ink lies before the moment anyone else may be given the

@@ -177,6 +177,38 @@ def watch_liveliness(
     return session.liveliness().declare_subscriber(key_expr, _guarded(handle), history=history)
 
 
+def watch_router_link(
+    session: zenoh.Session, on_change: Callable[[bool], None]
+) -> zenoh.TransportEventsListener[None]:
+    """Call ``on_change(up)`` when this session's last link to a router goes (``False``) and
+    when one opens again (``True``): a router restart, or a cut, seen from this process. Not
+    called for a session that is itself the router."""
+    routers: set[str] = set()
+    lock = threading.Lock()
+
+    def handle(event: zenoh.TransportEvent) -> None:
+        if event.transport.whatami != zenoh.WhatAmI.ROUTER:
+            return
+        zid, up = str(event.transport.zid), event.kind == zenoh.SampleKind.PUT
+        with lock:
+            had = bool(routers)
+            if up:
+                routers.add(zid)
+            else:
+                routers.discard(zid)
+            changed = had != bool(routers)
+        if changed:
+            on_change(up)
+
+    def callback(event: zenoh.TransportEvent) -> None:
+        try:
+            handle(event)
+        except Exception:  # a callback must never kill Zenoh's thread
+            log.exception("router link callback failed")
+
+    return session.info.declare_transport_events_listener(callback, history=True)
+
+
 def alive_keys(session: zenoh.Session, key_expr: str, *, timeout_s: float = 1.0) -> set[str]:
     """Keys of the liveliness tokens matching ``key_expr`` alive now."""
     keys: set[str] = set()

@@ -13,6 +13,8 @@ alert (kind)        cause                                closes when
 ``vehicle_lost``    the vehicle is lost                  it is heard again
 ``vehicle_fault``   its agent reported a backend fault   a later status not in ``fault``
 ``board_dirty``     the board is half-written            ``fresh_sheet``
+``job_waits``       a job waits past its hold for its    its vehicle heard again, or
+                    lost vehicle (``holders.py``)        ``fresh_sheet`` of its board
 ``disk_full``       the orchestrator writes on its disk  ``disk_room``: room made again (not
                     reserve (``orchestrator/disk_room``)  kept over a restart: the new process
                                                          checks its disk and says it again)
@@ -49,7 +51,7 @@ def cause_of(event: Event, vehicles: Mapping[str, VehicleView]) -> tuple[str, st
     view = vehicles.get(vid) if vid is not None else None
     if view is None:
         return None
-    if event.kind == "board_dirty":
+    if event.kind in ("board_dirty", "job_waits"):  # both until a fresh sheet
         return ("dirty", view.info.board_id)
     what = {"vehicle_held": "held", "vehicle_lost": "lost", "vehicle_fault": "fault"}
     return (what[event.kind], view.info.vehicle_id) if event.kind in what else None

@@ -47,7 +47,6 @@ def assign(book: Book, eff: Effects, now_s: float) -> None:
         if job is None:
             continue
         queue.remove(job)
-        holders.warn_if_taken_over(book, eff, job, vid, now_s)
         job = book.put(
             eff,
             transition(

@@ -29,7 +29,7 @@ from bus.messages import (
     SubmitRequest,
     VehicleStatus,
 )
-from orchestrator import assignment, positions, presence, reports
+from orchestrator import assignment, holders, positions, presence, reports
 from orchestrator.alerts import OpenAlerts
 from orchestrator.core_types import CoreConfig, Effects, Level
 from orchestrator.finished import MAX_FINAL_JOBS, FinishedJobs
@@ -99,6 +99,10 @@ class Book:
         boards = {v.board_id for v in config.vehicles}
         self.dirty_boards: set[str] = {b for b in dirty_boards if b in boards}
         """Boards left half-written: no job there until the operator's ``fresh_sheet``."""
+        self.router_down_since_s: float | None = None
+        """Since when the orchestrator has had no link to the router, [s] (None: it has one)."""
+        self.told_overdue: set[str] = set()
+        """Jobs whose overdue wait for their holder was alerted (``holders.tell_overdue``)."""
 
     # --- views ------------------------------------------------------------------------------
     @property
@@ -168,9 +172,14 @@ class Book:
         )
         return {j.job_id: (i + 1, etas.get(j.job_id)) for i, j in enumerate(queue)}
 
+    def sheet_wanted(self) -> set[str]:
+        """Boards waiting for the operator's fresh sheet: half-written ones, and those of lost
+        vehicles whose job waits for them past its hold (``holders.tell_overdue``)."""
+        return self.dirty_boards | holders.overdue_boards(self)
+
     def open_alerts(self) -> list[Event]:
         """The alerts whose cause lasts, oldest first (``orchestrator/alerts.py``)."""
-        return self.alerts.current(self.vehicles, self.dirty_boards)
+        return self.alerts.current(self.vehicles, self.sheet_wanted())
 
     def snapshot(
         self,
@@ -213,7 +222,7 @@ class Book:
             vehicles=vehicles,
             events=list(events),
             alerts=self.open_alerts()[-MAX_SNAPSHOT_ALERTS:],
-            dirty_boards=sorted(self.dirty_boards),
+            dirty_boards=sorted(self.sheet_wanted()),
             job_counts={state: n for state, n in sorted(self.job_counts.items()) if n > 0},
         )
 
@@ -399,6 +408,10 @@ class Book:
     def liveliness(self, vehicle_id: str, alive: bool, now_s: float) -> Effects:
         """A vehicle's token appeared or disappeared."""
         return self.settle(presence.liveliness(self, vehicle_id, alive, now_s), now_s)
+
+    def router_link(self, up: bool, now_s: float) -> Effects:
+        """The orchestrator's own link to the router went or came back."""
+        return self.settle(presence.router_link(self, up, now_s), now_s)
 
     def status(self, status: VehicleStatus, now_s: float) -> Effects:
         """A vehicle's published status (a heartbeat that changes nothing moves no ETA)."""

@@ -34,8 +34,9 @@ class CoreConfig:
     confirm_grace_s: float = 3.0
     """How long a vehicle may not mention its assigned job before it is taken back, [s]."""
     lost_job_hold_s: float = 15.0
-    """A job taken back from a lost vehicle waits this long for it before another vehicle may
-    take it, [s] (``policy.lost_job_hold_s``, ``orchestrator/holders.py``)."""
+    """A job taken back from a lost vehicle that cannot have begun it waits this long for it;
+    one that may have, this long past its write fence before the operator is told, [s]
+    (``policy.lost_job_hold_s``, ``orchestrator/holders.py``)."""
     refuse_backoff_s: float = 2.0
     """No new assignment to a vehicle this long after it refused or did not answer, [s]."""
     tracking_error_alert_m: float = 0.05

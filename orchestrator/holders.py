@@ -1,18 +1,33 @@
-"""A job taken back from a lost vehicle waits for that vehicle a while (pure).
+"""A job taken back from a lost vehicle waits for that vehicle (pure): nobody writes it twice.
 
 Losing a vehicle (its token gone, or silent, for ``lost_after_s``: a router restart, a Wi-Fi
 drop, a crash), or restarting the orchestrator, does not say whether the vehicle is still writing
-its job. Its lease (``vehicle_agent/lease.py``) lets it write unheard until the write fence
-(``bus/fence.py``): only after a *ready* report this orchestrator stored and acknowledged, and
-then for the planned writing time (with room for a slow host) after the latest such report. So
-the job goes back to the queue for its last holder alone, for ``CoreConfig.lost_job_hold_s`` past
-the later of now and that fence (:func:`hold_until_s`), and its board is left as it is: back with
-the job (its status or a report names it), the vehicle has it again (``job_reclaimed``) and
-writes on; back without it (it gave the job up, or its agent restarted), the job is free at once,
-for another vehicle first (that one takes no job for ``refuse_backoff_s``), and a board it may
-have begun (a ready report was stored) is marked half-written then. After the hold anyone may
-take it, with a warning: the old holder can no longer be writing it, but if it had finished it
-and could not say so since, the character is written twice.
+its job, nor whether it has finished it. So the job goes back to the queue for its last holder
+alone and its board is left as it is:
+
+- back with the job (its status or a report names it: writing on, or written and its result on
+  its way), the vehicle has it again (``job_reclaimed``), or its result is taken;
+- back without it (it gave the job up, or its agent restarted before the end), the job is free
+  at once, for another vehicle first (that one takes no job for ``refuse_backoff_s``), and a board
+  it may have begun is marked half-written;
+- not back: a job it cannot have begun (no *ready* report stored: its brush never went down) is
+  free after ``lost_job_hold_s``. A job it may have begun waits for its word, however long: it may
+  have written it in full and not been able to say so. After the write fence
+  (``bus/fence.py``: it can no longer be inking) plus ``lost_job_hold_s`` (:func:`hold_until_s`),
+  an alert (``job_waits``) tells the operator; a fresh sheet on that vehicle's board
+  (``fresh_sheet``: the operator has looked, and nothing of the job is left there) frees the job,
+  and what the old holder says of it afterwards is refused (``not_assigned``).
+
+Why no character is written twice in full, under any interleaving: another vehicle is given a
+job only when it is queued and nobody waits for it. A job's last holder writes it in full only
+after a ready report the orchestrator stored (``Job.writing_since_s``) before acknowledging it.
+From then on the job waits for that holder whenever it is taken back, until (a) the holder
+says it has the job (reclaimed, or its result taken: then it is the holder's alone again), or
+(b) the holder speaks without naming it; its agent names a job from its assignment until the
+orchestrator has answered its result, across restarts too (``vehicle_agent/results.py``), so (b)
+means it did not write it in full; or (c) the operator replaced the sheet, and a result the holder
+sends after that is refused: the character is not on any board. A job with no stored ready report
+cannot have been inked at all. ``tests/test_write_fence.py`` checks this against a model.
 """
 
 from __future__ import annotations
@@ -57,33 +72,78 @@ def left_half_written(book: Book, eff: Effects, job: Job, now_s: float) -> None:
 
 
 def waits_for(job: Job, now_s: float) -> str | None:
-    """The vehicle a queued job still waits for (None: any vehicle may take it)."""
+    """The vehicle a queued job still waits for (None: any vehicle may take it): one that may
+    have begun it, until it is heard; one that cannot have, until ``holder_hold_until_s``."""
     until = job.holder_hold_until_s
-    if job.state != "queued" or until is None or now_s >= until:
+    if job.state != "queued" or until is None:
+        return None
+    if job.writing_since_s is None and now_s >= until:
         return None
     return job.vehicle_id
+
+
+def overdue(job: Job, now_s: float) -> bool:
+    """Whether ``job`` waits for a holder that may have written it and is past its hold: only
+    the holder's word or a fresh sheet on its board frees it now."""
+    until = job.holder_hold_until_s
+    return waits_for(job, now_s) is not None and until is not None and now_s >= until
+
+
+def tell_overdue(book: Book, eff: Effects, now_s: float) -> None:
+    """Alert once for each job that has begun waiting for its holder beyond its hold."""
+    for vehicle_id in book.vehicles:
+        job = book.awaited_by(vehicle_id)
+        if job is None or not overdue(job, now_s) or job.job_id in book.told_overdue:
+            continue
+        book.told_overdue.add(job.job_id)
+        board = job.board_id or "its board"
+        message = (
+            f"{job.label} waits for {vehicle_id}, which may have written it: nobody else writes"
+            f" it until {vehicle_id} says how it ended. If {vehicle_id} cannot come back, put a"
+            f" fresh sheet on {board}: then another vehicle writes it"
+        )
+        book.event(
+            eff, now_s, "alert", "job_waits", message, vehicle_id=vehicle_id, job_id=job.job_id
+        )
+
+
+def overdue_boards(book: Book) -> set[str]:
+    """Boards of the vehicles whose job has been alerted as overdue and still waits for them."""
+    boards = set()
+    for job_id in list(book.told_overdue):
+        job = book.jobs.get(job_id)
+        holder = job.vehicle_id if job is not None else None
+        if job is None or holder is None or book.awaited_by(holder) != job:
+            book.told_overdue.discard(job_id)
+        else:
+            boards.add(book.vehicles[holder].info.board_id)
+    return boards
+
+
+def free_on_fresh_sheet(book: Book, eff: Effects, board_id: str, now_s: float) -> Job | None:
+    """The operator put a fresh sheet on ``board_id``: an overdue job waiting for that board's
+    vehicle is free for anyone, its old holder no longer heard about it; returns it."""
+    for view in book.vehicles.values():
+        job = book.awaited_by(view.info.vehicle_id)
+        if view.info.board_id != board_id or job is None or not overdue(job, now_s):
+            continue
+        holder = job.vehicle_id
+        book.put(
+            eff,
+            update(job, now_s, vehicle_id=None, holder_hold_until_s=None, writing_since_s=None),
+        )
+        message = f"{job.label}: fresh sheet on {board_id}; another vehicle writes it, not {holder}"
+        book.event(
+            eff, now_s, "warning", "job_released", message, vehicle_id=holder, job_id=job.job_id
+        )
+        return job
+    return None
 
 
 def assignable(job: Job, now_s: float) -> bool:
     """Whether ``job`` may be given to a vehicle now: not while it waits for its last holder
     (who gets it back only by naming it; back without it, it frees it)."""
     return waits_for(job, now_s) is None
-
-
-def warn_if_taken_over(book: Book, eff: Effects, job: Job, vehicle_id: str, now_s: float) -> None:
-    """``job``, held for a lost vehicle until lately, now goes to ``vehicle_id``: say so."""
-    holder = job.vehicle_id
-    if job.holder_hold_until_s is None or holder in (None, vehicle_id):
-        return
-    if job.writing_since_s is not None:
-        left_half_written(book, eff, job, now_s)
-    message = (
-        f"{job.label}: {holder} did not come back in time;"
-        f" {vehicle_id} writes it (twice, if {holder} had finished it)"
-    )
-    book.event(
-        eff, now_s, "warning", "job_taken_over", message, vehicle_id=vehicle_id, job_id=job.job_id
-    )
 
 
 def heard_without(

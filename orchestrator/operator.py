@@ -32,6 +32,7 @@ if TYPE_CHECKING:
     from orchestrator.core_types import Effects, Level
     from orchestrator.jobs import Job
 
+from orchestrator import holders
 from orchestrator.jobs import transition, update
 from orchestrator.moderation import apply_bulk, is_bulk
 from orchestrator.requeue import requeue
@@ -188,13 +189,16 @@ def _clear_fault(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandReply
     )
 
 
-def _fresh_sheet(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandReply:
+def _fresh_sheet(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> CommandReply:
+    """A half-written board is clean again; a job overdue for its lost holder there is free
+    (``orchestrator/holders.py``)."""
     boards = sorted({view.info.board_id for view in book.vehicles.values()})
     if cmd.board_id is None:
         return _error("missing_field", "fresh_sheet needs board_id", "board_id")
     if cmd.board_id not in boards:
         return _error("unknown_board", f"no board {cmd.board_id}; boards: {boards}", "board_id")
-    if cmd.board_id not in book.dirty_boards:
+    freed = holders.free_on_fresh_sheet(book, eff, cmd.board_id, now_s)
+    if cmd.board_id not in book.dirty_boards and freed is None:
         return _error("bad_state", f"{cmd.board_id} is not waiting for a fresh sheet", "board_id")
     book.dirty_boards.discard(cmd.board_id)
     eff.settings_changed = eff.fleet_changed = True
@@ -228,7 +232,7 @@ def apply_operator(book: Book, command: object, eff: Effects, now_s: float) -> C
     elif cmd.command == "clear_fault":
         reply = _clear_fault(book, cmd, eff)
     elif cmd.command == "fresh_sheet":
-        reply = _fresh_sheet(book, cmd, eff)
+        reply = _fresh_sheet(book, cmd, eff, now_s)
     elif cmd.command in ("land", "land_all"):
         vids = _stop_vehicles(book, cmd, eff, now_s, "land")
         if cmd.command == "land_all":

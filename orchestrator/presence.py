@@ -208,8 +208,36 @@ def silent_for_s(view: VehicleView, now_s: float) -> float | None:
     return now_s - max(marks) if marks else None
 
 
+def router_link(book: Book, up: bool, now_s: float) -> Effects:
+    """The orchestrator's own link to the router went (a router restart, a cut cable) or came
+    back. Meanwhile nobody can be heard, so nobody is taken as lost for it; once it is back,
+    every vehicle has ``lost_after_s`` from then to be heard again: the clients reconnect to
+    a restarted router as the orchestrator does, and a router restart the supervisor repaired
+    costs no vehicle (the loss was counted from the tokens' going, 0.3 s of a restart and more
+    of a loaded machine's reconnection taken from the grace)."""
+    eff = Effects()
+    if not up:
+        if book.router_down_since_s is None:
+            book.router_down_since_s = now_s
+            book.event(eff, now_s, "warning", "router_link", "the orchestrator lost the router")
+        return eff
+    since_s, book.router_down_since_s = book.router_down_since_s, None
+    if since_s is None:
+        return eff
+    for view in book.vehicles.values():
+        view.resumed_at_s = now_s
+        if not view.alive and view.gone_since_s is not None:
+            view.gone_since_s = max(view.gone_since_s, now_s)
+    message = f"the orchestrator has the router again after {now_s - since_s:.1f} s"
+    book.event(eff, now_s, "info", "router_link", message)
+    return eff
+
+
 def _why_lost(book: Book, view: VehicleView, now_s: float) -> str | None:
-    """Why the vehicle is to be taken as lost now (None: it is not)."""
+    """Why the vehicle is to be taken as lost now (None: it is not, or it cannot be heard: the
+    orchestrator has no link to the router)."""
+    if book.router_down_since_s is not None:
+        return None
     lost_after = book.config.lost_after_s
     checked, view.checked_at_s = view.checked_at_s, now_s
     if checked is not None and now_s - checked > lost_after / 2:
@@ -227,6 +255,7 @@ def tick_into(book: Book, eff: Effects, now_s: float) -> None:
     """Lost vehicles give their job back; so do vehicles that do not confirm it; then assign."""
     for view in book.vehicles.values():
         check_vehicle(book, eff, view, now_s)
+    holders.tell_overdue(book, eff, now_s)
     book.assign(eff, now_s)
 
 

@@ -10,10 +10,12 @@ others a while), otherwise the vehicle is told to stop (``not_assigned``); ``hol
 writing: the vehicle renews its lease, ``vehicle_agent/lease.py``) changes nothing else, unless it
 carries the planned writing (a *ready* report: the brush goes down once it is acknowledged), whose
 receipt is stored as the start of the write fence (``Job.writing_since_s``);
-``failed`` is acknowledged and ignored. A ``failed`` report with ``retry_after_s`` hands the job
-back to the queue instead of failing it, and so does a ``plan_failed`` one while a vehicle of
-another kind may still write the job (the vehicle's kind cannot write it: a width outside the
-sponge's range...); it then waits for such a vehicle.
+``failed`` is acknowledged and ignored, except a job written in full (``progress`` 1: out of the
+bounds, or unmeasured after an agent restart, ``vehicle_agent/results.py``) that still waits for
+that vehicle: it fails, and is not written again. A ``failed`` report with ``retry_after_s``
+hands the job back to the queue instead of failing it, and so does a ``plan_failed`` one while a
+vehicle of another kind may still write the job (the vehicle's kind cannot write it: a width
+outside the sponge's range...); it then waits for such a vehicle.
 """
 
 from __future__ import annotations
@@ -52,6 +54,8 @@ def apply_report(book: Book, rep: AgentReport, eff: Effects, now_s: float) -> Co
         return _done(book, job, rep, eff, now_s)
     owner = job.vehicle_id if job.active else None
     if owner != rep.vehicle_id:
+        if rep.event == "failed" and rep.progress >= 1.0 and holders.waits_for(job, now_s):
+            return _fail(book, job, rep, eff, now_s, _failure(job, rep))  # written, badly
         if rep.event == "failed":
             return CommandReply(ok=True, message="ignored: the job is not yours any more")
         if not holders.reclaim(book, eff, job, rep.vehicle_id, now_s):
@@ -116,8 +120,12 @@ def _failed(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) 
         and book.kinds.refuse(job.job_id, rep.vehicle_id, book.config.vehicles)
     ):
         return _handed_back(book, job, rep, eff, now_s, 0.0)
+    return _fail(book, job, rep, eff, now_s, _failure(job, rep))
+
+
+def _failure(job: Job, rep: AgentReport) -> str:
     reason = rep.error.message if rep.error else "no reason given"
-    return _fail(book, job, rep, eff, now_s, f"{job.label} failed on {rep.vehicle_id}: {reason}")
+    return f"{job.label} failed on {rep.vehicle_id}: {reason}"
 
 
 def _handed_back(

@@ -40,7 +40,7 @@ def requeue(
     ``wait_for_holder``: its vehicle was lost, and the job waits for it a while
     (``orchestrator/holders.py``)."""
     info = ErrorInfo(code="vehicle_lost" if lost else "requeued", message=reason)
-    begun = job.state == "writing" or job.progress > 0
+    begun = job.state == "writing" or job.progress > 0 or job.writing_since_s is not None
     if begun and not wait_for_holder:  # a lost holder may be writing on: see holders.py
         left_half_written(book, eff, job, now_s)
     gave_up = _gave_up(book, job, lost and not (wait_for_holder and begun))
@@ -57,7 +57,9 @@ def requeue(
         )
         return
     until_s = hold_until_s(book.config, job, now_s) if wait_for_holder else None
-    if until_s is not None:
+    if until_s is not None and job.writing_since_s is not None:
+        reason = f"{reason}; waits for it to say how it ended (it may be writing it)"
+    elif until_s is not None:
         reason = f"{reason}; waits {until_s - now_s:.0f} s for it to come back"
     queued = transition(
         job,

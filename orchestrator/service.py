@@ -40,7 +40,13 @@ from bus.messages import (
     Telemetry,
     VehicleStatus,
 )
-from bus.pubsub import declare_token, subscribe, subscribe_raw, watch_liveliness
+from bus.pubsub import (
+    declare_token,
+    subscribe,
+    subscribe_raw,
+    watch_liveliness,
+    watch_router_link,
+)
 from bus.rpc import serve_async, serve_async_keyed
 from orchestrator.disk_room import storage_full
 from orchestrator.operator import signed_by
@@ -69,6 +75,8 @@ about 115 kB (an operator's name and reason of 1000 characters each); the open a
 SNAPSHOT_WRITTEN_BYTES = 100_000
 """JSON bytes of done jobs' ink pictures a ``snapshot`` reply carries at most, newest first
 (about 25 jobs); strokes and pictures together stay under half the payload limit."""
+ROUTER_LINK = ""
+"""The key under which the router link's changes join the vehicle tokens' (no token has it)."""
 
 
 def new_job_id() -> str:
@@ -219,7 +227,12 @@ class OrchestratorService(BookOutputs):
 
     # --- subscriptions ------------------------------------------------------------------------
     async def _follow_presence(self, changes: FifoChannel[tuple[str, bool]]) -> None:
+        """Vehicle tokens and the router link, in the order Zenoh told them (a restarted
+        router's link opens before the tokens come back over it)."""
         async for key, alive in changes:
+            if key == ROUTER_LINK:
+                self.apply(self.book.router_link(alive, self.clock()))
+                continue
             with contextlib.suppress(ValueError):
                 self.apply(self.book.liveliness(vehicle_id_from_key(key), alive, self.clock()))
 
@@ -292,6 +305,7 @@ class OrchestratorService(BookOutputs):
             )
             declared.append(watch_liveliness(s, f"{keys.prefix}/**", rec.record_liveliness))
         declared += [
+            watch_router_link(s, lambda up: presence.push((ROUTER_LINK, up))),
             watch_liveliness(s, keys.vehicles_alive_all, lambda k, a: presence.push((k, a))),
             subscribe(s, keys.vehicle_status_all, VehicleStatus, self.receive_status),
             subscribe(

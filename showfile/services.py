@@ -131,14 +131,13 @@ class PolicySettings(ShowModel):
     lost_after_s: float = Field(default=1.5, gt=0.0)
     """A vehicle whose liveliness token is gone this long is lost; its job is requeued, in [s]."""
     lost_job_hold_s: float = Field(default=15.0, ge=0.0)
-    """A lost vehicle's job waits for that vehicle this long in [s] past the end of its write
-    fence (``bus/fence.py``: while it may still be writing the job unheard; now, if it had not
-    begun) before another may take it: it may have finished the character with its report held
-    up (a router restart, a Wi-Fi drop, a cut cable). 15 s covers a vehicle cut off for 10 s
-    whatever the moment of the cut (the fence runs at least ``lost_after_s`` past it), and a
-    restart of the router or the orchestrator many times over. Longer: fewer characters written
-    twice after a long outage; shorter: a vehicle that died for good delays its job less (one
-    whose agent restarted frees its job at once)."""
+    """In [s]: a lost vehicle's job that it cannot have begun (no ready report stored) waits
+    this long for it before another may take it; one it may have begun waits for its word
+    (``orchestrator/holders.py``: it may have written it in full), and this long past the end
+    of its write fence (``bus/fence.py``: it can no longer be inking) the operator is told, and
+    may free it with a fresh sheet on its board. 15 s covers a vehicle cut off for 10 s whatever
+    the moment of the cut (the fence runs at least ``lost_after_s`` past it), and a restart of
+    the router or the orchestrator many times over, without troubling the operator."""
     tracking_error_alert_m: float = Field(default=0.05, gt=0.0)
     """Tracking error that raises an alert event, in [m]."""
     max_queue: int = Field(default=200, ge=1)

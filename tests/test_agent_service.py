@@ -7,6 +7,7 @@ import threading
 import time
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
+from pathlib import Path
 
 from test_agent_job_runner import HOME, config, line_samples
 
@@ -324,3 +325,53 @@ def test_autopilot_texts_become_events_without_repeats() -> None:
     now[0] = 111.0
     outbox.autopilot_text(2, "PreArm: Need Position Estimate")  # said again later: kept
     assert len(outbox.drain()) == 1
+
+
+def test_a_result_unheard_when_its_agent_stops_is_sent_by_the_next_one(
+    free_tcp_port: Callable[[], int], tmp_path: Path
+) -> None:
+    """The orchestrator is away when uav1 finishes j1; its agent then stops (as a kill would:
+    the result is in its journal on disk, ``vehicle_agent/results.py``). The next agent of uav1
+    names j1 in its status from its first one and sends the result once the orchestrator is
+    back; then the journal is empty. A fresh agent without a journal would have said nothing of
+    j1, and the orchestrator would have given it to another vehicle: written twice."""
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    bus = BusSettings(router_listen=[endpoint], connect=[endpoint])
+    settings = ServiceSettings(
+        show_id=SHOW, zenoh=bus, time_scale=5.0, report_retry_s=0.1, results_dir=tmp_path
+    )
+
+    def agent() -> AgentService:
+        work = ThreadJobWork(prepare, measure)
+        return AgentService(settings, JobRunner(config()), KinematicBackend(HOME), work)
+
+    async def scenario(orch: FakeOrchestrator) -> None:
+        first, stop = agent(), asyncio.Event()
+        running = asyncio.create_task(first.run(stop))
+        await wait_for(lambda: first.runner.orchestrator_alive)
+        assert (await orch.command(assign("j1"))).ok
+        await wait_for(lambda: first.runner.phase == "write" and "started" in orch.events())
+        await asyncio.sleep(0.3)  # the acknowledgement is back at the agent
+        orch.queryable.undeclare()  # type: ignore[no-untyped-call]
+        await wait_for(lambda: first.runner.phase == "ground" and first.results.pending() == "j1")
+        stop.set()
+        await asyncio.wait_for(running, 10.0)
+        assert [p.name for p in tmp_path.iterdir()] == ["j1.json"]
+        statuses_before = len(orch.statuses)
+        second, stop = agent(), asyncio.Event()
+        running = asyncio.create_task(second.run(stop))
+        try:
+            await wait_for(lambda: len(orch.statuses) > statuses_before)
+            assert all(s.job_id == "j1" for s in orch.statuses[statuses_before:])
+            assert second.incarnation != first.incarnation
+            orch.queryable = serve(orch.session, KEYS.report("uav1"), AgentReport, orch._on_report)
+            await wait_for(lambda: orch.events() == ["started", "done"])
+            assert orch.reports[-1].metrics == METRICS
+            await wait_for(lambda: not list(tmp_path.iterdir()))
+            await wait_for(lambda: orch.statuses[-1].job_id is None)
+        finally:
+            stop.set()
+            await asyncio.wait_for(running, 10.0)
+
+    with open_session(bus, role="router"), open_session(bus, role="client") as orch_session:
+        asyncio.run(scenario(FakeOrchestrator(orch_session)))

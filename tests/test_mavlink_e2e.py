@@ -51,8 +51,11 @@ def free_udp_port() -> int:
         return int(sock.getsockname()[1])
 
 
-async def write_job(backend: VehicleBackend, setup: Any, text: str, *, paced: bool) -> JobMetrics:
-    """The agent's control loop without the bus: assign, fly, measure; back on the ground."""
+async def write_job(
+    backend: VehicleBackend, setup: Any, text: str, *, paced: bool
+) -> tuple[JobMetrics, float]:
+    """The agent's control loop without the bus: assign, fly, measure; back on the ground.
+    Also the longest step of agent time between two ticks in [s] (a stall skipped, paced)."""
     runner = JobRunner(setup.runner_config)
     assignment = JobAssignment(job_id="j1", text=text)
     prepared = prepare_job(setup, assignment)
@@ -61,10 +64,12 @@ async def write_job(backend: VehicleBackend, setup: Any, text: str, *, paced: bo
     # the agent's pacing (AgentService): a real vehicle's clock skips ahead after a stall
     clock = TickClock(backend.control_period_s, time_scale=SCALE, skip_when_late=True)
     metrics: JobMetrics | None = None
+    previous_s, longest_step_s = 0.0, 0.0
     while clock.now_s < 60.0:
         if paced:
             await asyncio.sleep(clock.delay_s())
         now = clock.now_s
+        longest_step_s, previous_s = max(longest_step_s, now - previous_s), now
         actions = runner.step(snapshot, now)
         if actions.plan_request is not None:
             runner.plan_ready(prepared)
@@ -77,7 +82,7 @@ async def write_job(backend: VehicleBackend, setup: Any, text: str, *, paced: bo
             metrics = job_metrics(setup, prepared, actions.finished)
         if metrics is not None and runner.phase == "ground":
             await backend.close()
-            return metrics
+            return metrics, longest_step_s
         clock.advance()
     raise AssertionError(f"job not finished: runner {runner.state}/{runner.phase}, {snapshot}")
 
@@ -92,22 +97,30 @@ def test_a_character_written_over_mavlink_matches_the_in_process_simulator() -> 
     assert [(c.vehicle_id, c.system_id) for c in configs] == [("mav1", 3)]
 
     sim_setup = vehicle_setup(show, "sim1")
-    in_process = asyncio.run(write_job(make_backend(sim_setup), sim_setup, "一", paced=False))
+    in_process, _ = asyncio.run(write_job(make_backend(sim_setup), sim_setup, "一", paced=False))
 
     mav_setup = vehicle_setup(show, "mav1", time_scale=SCALE)
     backend = make_backend(mav_setup)
     assert isinstance(backend, MavlinkBackend)
     with MavsimServer(configs, time_scale=SCALE) as server:
-        over_mavlink = asyncio.run(write_job(backend, mav_setup, "一", paced=True))
+        over_mavlink, longest_step_s = asyncio.run(write_job(backend, mav_setup, "一", paced=True))
         autopilot = server.endpoints[0].autopilot
         assert not autopilot.armed and autopilot.on_ground
         assert autopilot.setpoints_received > 0.9 * backend.setpoints_sent > 100
 
-    print(f"\nin-process: {in_process}\nover MAVLink: {over_mavlink}")
+    for name, m in (("in-process", in_process), ("over MAVLink", over_mavlink)):
+        print(f"\n{name}: rmse pen down {m.rmse_pen_down_m * 1000:.1f} mm,", end=" ")
+        print(f"max {m.max_error_m * 1000:.1f} mm, IoU {m.iou:.3f}", end="")
+    print()
+    print(f"longest control step {longest_step_s * 1000:.0f} ms of agent time")
     assert over_mavlink.duration_s == pytest.approx(in_process.duration_s, abs=0.05)
     assert in_process.rmse_pen_down_m < 0.01
     # the same character, within a small margin of the in-process flight
     assert over_mavlink.rmse_pen_down_m < in_process.rmse_pen_down_m + 0.005
-    assert over_mavlink.max_error_m < in_process.max_error_m + 0.01
+    # the worst sample: 10 mm, and what the reference moves (at most v_max) while a loaded
+    # host stalls the paced loop (a real vehicle's loop skips those ticks: its error is real)
+    stalled_s = max(0.0, longest_step_s - backend.control_period_s)
+    allowance_m = 0.01 + show.vehicle_limits("mav1").v_max_mps * stalled_s
+    assert over_mavlink.max_error_m < in_process.max_error_m + allowance_m
     assert in_process.iou is not None and over_mavlink.iou is not None  # brush from the pose
     assert over_mavlink.iou > in_process.iou - 0.05

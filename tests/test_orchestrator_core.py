@@ -128,8 +128,11 @@ def test_lost_vehicle_job_is_requeued_and_finished_by_another() -> None:
     assert any(e.kind == "vehicle_lost" for e in eff.events)
     assert _assigned(_online(book, "uav2", 4.0)) == []  # it waits for uav1 (holders.py)
     eff = book.tick(3.5 + book.config.lost_job_hold_s)
-    assert _assigned(eff) == [("uav2", "j1")] and book.jobs["j1"].attempts == 2
-    assert [e.kind for e in eff.events if e.level == "warning"] == ["job_taken_over"]
+    assert _assigned(eff) == [] and [e.kind for e in eff.events] == ["job_waits"]
+    sheet = OperatorCommand(command="fresh_sheet", board_id="b1")  # uav1 did not write it all
+    reply, eff = book.operator(sheet, 4.0 + book.config.lost_job_hold_s)
+    assert reply.ok and _assigned(eff) == [("uav2", "j1")] and book.jobs["j1"].attempts == 2
+    assert [e.kind for e in eff.events if e.level == "warning"] == ["job_released"]
     # the old vehicle's late progress is refused and it is told to stop
     book.liveliness("uav1", True, 9.0)
     reply, eff = book.report(AgentReport(vehicle_id="uav1", job_id="j1", event="progress"), 9.2)

@@ -191,3 +191,36 @@ def test_an_agent_restarted_unseen_by_liveliness_is_known_by_its_new_incarnation
     ]
     job = book.jobs["j1"]
     assert (job.state, job.attempts, job.handbacks) == ("queued", 1, 0)  # counted
+
+
+def test_a_router_restart_costs_no_vehicle_if_its_clients_reconnect_within_the_grace() -> None:
+    """The router dies at 1 s (every token goes, the orchestrator's link too) and is back 2.5 s
+    later (a loaded host's supervisor). uav1 is back 1.4 s after the orchestrator's link,
+    uav2 never: only uav2 is lost, 1.5 s after the link came back, not after its token went."""
+    book = _book()
+    _writing_j1(book)
+    _online(book, "uav2", 0.0)
+    _run(book, 0.2, 1.0, {"uav1": "j1", "uav2": None})
+    book.router_link(False, 1.0)
+    book.liveliness("uav1", False, 1.0)
+    book.liveliness("uav2", False, 1.0)
+    quiet = _run(book, 1.0, 3.5, {})
+    assert [e.kind for e in quiet.events] == [] and not quiet.jobs  # nobody could be heard
+    back = book.router_link(True, 3.5)
+    assert [e.kind for e in back.events] == ["router_link"] and "2.5 s" in back.events[0].message
+    merged = _run(book, 3.5, 4.9, {})
+    book.liveliness("uav1", True, 4.9)
+    merged.events += _run(book, 4.9, 6.0, {"uav1": "j1"}).events
+    lost = [(e.vehicle_id, e.time_s) for e in merged.events if e.kind == "vehicle_lost"]
+    assert lost == [("uav2", 5.0)]
+    assert book.jobs["j1"].vehicle_id == "uav1" and book.jobs["j1"].state == "writing"
+
+
+def test_without_the_router_link_a_lost_token_counts_from_when_it_went() -> None:
+    book = _book()
+    _writing_j1(book)
+    book.liveliness("uav1", False, 1.0)
+    merged = _run(book, 1.0, 2.6, {})
+    assert [(e.vehicle_id, e.time_s) for e in merged.events if e.kind == "vehicle_lost"] == [
+        ("uav1", 2.5)
+    ]

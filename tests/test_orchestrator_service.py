@@ -268,6 +268,13 @@ def test_jobs_flow_through_fake_agents_and_survive_vehicle_loss(
         uav1.token.undeclare()
         uav1.job_id = None
         uav2 = FakeAgent(agents, keys, "uav2")
+        waits = eventually(  # uav1 may have written it: the operator is asked to look
+            lambda: [e for e in _snapshot(client, keys).events if e.kind == "job_waits"]
+        )
+        assert waits[0].job_id == second.job_id and uav2.job_id is None
+        board = {v.vehicle_id: v.board_id for v in _snapshot(client, keys).vehicles}["uav1"]
+        sheet = OperatorCommand(command="fresh_sheet", board_id=board)
+        assert query_one(client, keys.command, sheet, CommandReply).ok
         assert uav2.write_job() == second.job_id
         jobs = {j.job_id: j for j in _snapshot(client, keys).jobs}
         assert jobs[first.job_id].state == "done" and jobs[first.job_id].vehicle_id == "uav1"
@@ -281,8 +288,8 @@ def test_jobs_flow_through_fake_agents_and_survive_vehicle_loss(
         # uav1, then uav2 (either may have had it twice: an assignment unanswered under load is
         # handed back, and given again after the back-off)
         assert distinct == ["uav1", "uav2"] and done.attempts == len(holders), holders
-        taken = [e for e in events if e.kind == "job_taken_over"]
-        assert taken and taken[0].job_id == second.job_id  # after waiting for uav1 (1 s)
+        freed = [e for e in events if e.kind == "job_released"]
+        assert freed and freed[0].job_id == second.job_id
         assert done.metrics is not None and done.metrics.iou == 0.8
         vehicles = {v.vehicle_id: v for v in _snapshot(client, keys).vehicles}
         assert vehicles["uav1"].state == "lost" and not vehicles["uav1"].alive

@@ -13,6 +13,8 @@ orchestrator's Unix clock differ by a constant, and only durations are compared)
 from __future__ import annotations
 
 import math
+import tempfile
+from pathlib import Path
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -23,6 +25,7 @@ from orchestrator.core import Book, CoreConfig
 from orchestrator.fleet import EtaModel, VehicleInfo
 from orchestrator.holders import writing_fence_s
 from vehicle_agent.lease import JobLease
+from vehicle_agent.results import ResultJournal
 
 LOST_AFTER_S = 1.5
 TICK_S = 0.01
@@ -41,9 +44,15 @@ def _config(time_scale: float) -> CoreConfig:
     )
 
 
-def _status(vid: str, job_id: str | None) -> VehicleStatus:
+def _status(vid: str, job_id: str | None, incarnation: str | None = None) -> VehicleStatus:
     state = "writing" if job_id else "idle"
-    return VehicleStatus(vehicle_id=vid, kind="quadrotor-brush", state=state, job_id=job_id)  # type: ignore[arg-type]
+    return VehicleStatus(
+        vehicle_id=vid,
+        kind="quadrotor-brush",
+        state=state,  # type: ignore[arg-type]
+        job_id=job_id,
+        incarnation=incarnation,
+    )
 
 
 def _last_ink_s(lease: JobLease, begin_s: float, writing_wall_s: float) -> float:
@@ -173,3 +182,94 @@ def test_the_fence_is_the_planned_writing_with_room_after_the_latest_ready_repor
     unacknowledged = JobLease(LOST_AFTER_S, time_scale=2.0)
     unacknowledged.hold("j1", active=True, writing=True, now_s=9.9)
     assert unacknowledged.breach(0.0, 9.9 + 1.6) is not None  # lost_after_s only
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    planned_s=st.floats(2.0, 60.0),
+    time_scale=st.sampled_from([1.0, 4.0, 6.0]),
+    outage_after_s=st.floats(0.0, 40.0),
+    killed=st.booleans(),
+    measure_s=st.floats(0.0, 10.0),
+    silence_s=st.one_of(st.none(), st.floats(0.0, 120.0)),
+    restart=st.booleans(),
+)
+def test_a_character_written_in_full_is_never_given_to_another_vehicle(
+    planned_s: float,
+    time_scale: float,
+    outage_after_s: float,
+    killed: bool,
+    measure_s: float,
+    silence_s: float | None,
+    restart: bool,
+) -> None:
+    """uav1 writes j1 from 10 s (its ready report acknowledged); ``outage_after_s`` later it is
+    cut off (its agent SIGKILLed then, or only unheard; the orchestrator restarted or not) for
+    ``silence_s`` (None: for good). Its writing, if it goes on, ends on plan; measuring it takes
+    ``measure_s``; its agent keeps the result in the real journal on disk
+    (``vehicle_agent/results.py``), which a restarted agent reads. The orchestrator (the real
+    ``Book``) must not give j1 to uav2 if uav1 wrote it in full, however long uav1 stays
+    silent; and once uav1 is back, j1 is settled: written by uav1, or given on."""
+    config = _config(time_scale)
+    book = Book(config, now_s=0.0)
+    book.liveliness("uav1", True, 0.0)
+    book.status(_status("uav1", None, "first"), 0.0)
+    book.submit("j1", SubmitRequest(text="L"), label="L", estimate_s=9.0, now_s=1.0)
+    ready = AgentReport(
+        vehicle_id="uav1", job_id="j1", event="holding", planned_duration_s=planned_s
+    )
+    book.status(_status("uav1", "j1", "first"), 10.0)
+    assert book.report(ready, 10.0)[0].ok
+    end_s = 10.0 + planned_s / time_scale
+    cut_s = 10.0 + outage_after_s
+    in_full = not killed or end_s <= cut_s
+    measured = in_full and (not killed or end_s + measure_s <= cut_s)
+    back_s = None if silence_s is None else cut_s + silence_s
+    with tempfile.TemporaryDirectory() as folder:
+        journal = ResultJournal("uav1", Path(folder))
+        if in_full:
+            journal.written("j1", planned_s)
+        if measured:
+            journal.measured(_DONE)
+        if restart:
+            book = Book(config, list(book.jobs.values()), now_s=cut_s)
+        book.liveliness("uav1", False, cut_s)
+        book.liveliness("uav2", True, cut_s)
+        if killed:  # the new agent knows only what is on disk
+            journal = ResultJournal("uav1", Path(folder))
+            for result in journal.recover():
+                assert result.job_id == "j1"
+        t = cut_s
+        while t < (back_s or cut_s) + 60.0:
+            t += 0.5
+            book.tick(t)
+            book.status(_status("uav2", _job_of(book, "uav2")), t)
+            if back_s is not None and t >= back_s:
+                if not book.vehicles["uav1"].alive:
+                    book.liveliness("uav1", True, t)
+                writing = not killed and t < end_s
+                said = "j1" if writing else journal.pending()
+                book.status(_status("uav1", said, "second" if killed else "first"), t)
+                if not writing and said is not None and t >= end_s + measure_s:
+                    result = _DONE if not killed else journal.recover()[0]
+                    book.report(result, t)
+                    journal.settled("j1")
+            job = book.jobs["j1"]
+            if in_full:
+                assert job.vehicle_id == "uav1", (t, job)
+        job = book.jobs["j1"]
+        if back_s is None:
+            assert job.state == "queued" if in_full else job.state in ("queued", "assigned")
+        elif in_full:
+            assert (job.state, job.vehicle_id) in {("done", "uav1"), ("failed", "uav1")}
+        else:
+            assert job.vehicle_id == "uav2" and job.state == "assigned"
+            assert "b1" in book.dirty_boards  # half-written
+
+
+_DONE = AgentReport(vehicle_id="uav1", job_id="j1", event="done", progress=1.0)
+
+
+def _job_of(book: Book, vehicle_id: str) -> str | None:
+    job = book.active_job_of(vehicle_id)
+    return None if job is None else job.job_id

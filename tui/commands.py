@@ -137,13 +137,14 @@ def vehicle_request(command: str, row: VehicleRow | None) -> Request:
 
 
 def fresh_sheet_request(row: VehicleRow | None, dirty_boards: frozenset[str]) -> Request:
-    """``fresh_sheet`` of the selected vehicle's board, once it was left half-written."""
+    """``fresh_sheet`` of the selected vehicle's board, once it waits for one (half-written,
+    or its lost vehicle's job waits for it: ``orchestrator/holders.py``)."""
     board_id = row.board_id if row else None
     if board_id is None or board_id not in dirty_boards:
         waiting = ", ".join(_name(b) for b in sorted(dirty_boards)) or "none"
-        return Refusal(f"fresh sheet: select a vehicle of a half-written board ({waiting})")
+        return Refusal(f"fresh sheet: select a vehicle of a board waiting for one ({waiting})")
     return Ask(
-        f"Fresh sheet on {_name(board_id)}?\nSay yes once the half-written sheet is replaced: "
+        f"Fresh sheet on {_name(board_id)}?\nSay yes once its sheet is replaced: "
         "the next job is written there.",
         "Fresh sheet",
         (OperatorCommand(command="fresh_sheet", board_id=board_id),),

@@ -69,6 +69,7 @@ def service_settings(setup: VehicleSetup) -> ServiceSettings:
         skip_when_late=not simulated,
         lost_after_s=setup.show.policy.lost_after_s,
         rest_period_s=REST_PERIOD_S if simulated else None,
+        results_dir=setup.show.database_path.parent / "results" / setup.vehicle_id,
     )
 
 

@@ -1,7 +1,9 @@
 """The agent's reports to the orchestrator: a FIFO sent to its ``report`` queryable, each retried
 until some reply acknowledges it (``progress`` and ``holding`` reports are best effort and
-superseded by newer ones). An acknowledgement renews the job lease; a ``not_assigned`` answer
-about the running job makes the agent give it up."""
+superseded by newer ones). Once a result (``done``/``failed``) is answered, ``settled`` is told
+(the agent's :class:`vehicle_agent.results.ResultJournal` lets it go). An acknowledgement
+renews the job lease; a ``not_assigned`` answer about the running job makes the agent give it
+up."""
 
 from __future__ import annotations
 
@@ -23,6 +25,8 @@ RETRY_CODES = frozenset({"internal", "unavailable", "busy"})
 """Error replies to a report after which it is sent again (the orchestrator could not take it)."""
 BEST_EFFORT = frozenset({"progress", "holding"})
 """Reports sent once, and superseded by a newer report of the same job not yet sent."""
+RESULTS = frozenset({"done", "failed"})
+"""Reports that end a job: ``settled`` is called once the orchestrator has answered one."""
 
 
 class ReportOutbox:
@@ -38,6 +42,7 @@ class ReportOutbox:
         timeout_s: float,
         running_job: Callable[[], str | None],
         refused: Callable[[str], None],
+        settled: Callable[[str], None],
     ) -> None:
         self.keys = keys
         self.vehicle_id = vehicle_id
@@ -46,6 +51,7 @@ class ReportOutbox:
         self._timeout_s = timeout_s
         self._running_job = running_job
         self._refused = refused
+        self._settled = settled
         self._reports: deque[AgentReport] = deque()
         self._ready = asyncio.Event()
 
@@ -57,13 +63,6 @@ class ReportOutbox:
         self._reports.append(report)
         self._ready.set()
 
-    def pending_result(self) -> str | None:
-        """The job whose result (``done``/``failed``) waits for the orchestrator's receipt."""
-        for report in self._reports:
-            if report.event in ("done", "failed"):
-                return report.job_id
-        return None
-
     async def send_forever(self, session: Session) -> None:
         """Deliver the queued reports in order, as they come."""
         while True:
@@ -71,6 +70,8 @@ class ReportOutbox:
             while self._reports:
                 report = self._reports[0]
                 delivered = await self._deliver(session, report)
+                if delivered and report.event in RESULTS:
+                    self._settled(report.job_id)
                 if delivered or report.event in BEST_EFFORT:
                     if self._reports and self._reports[0] is report:
                         self._reports.popleft()

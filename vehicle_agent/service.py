@@ -64,6 +64,7 @@ from vehicle_agent.lease import JobLease
 from vehicle_agent.pacer import OwnTimer, Pacer
 from vehicle_agent.reports import ReportOutbox
 from vehicle_agent.rest import at_rest
+from vehicle_agent.results import ResultJournal
 from vehicle_agent.runner_io import result_report
 from vehicle_agent.service_settings import ServiceSettings
 from vehicle_agent.trace import JobTrace
@@ -111,6 +112,8 @@ class AgentService:
         """This start of the vehicle's agent, on its statuses (``bus.messages.VehicleStatus``)."""
         self._tasks: set[asyncio.Task[None]] = set()
         self._lease = JobLease(settings.lost_after_s, time_scale=settings.time_scale)
+        self.results = ResultJournal(self.vehicle_id, settings.results_dir)
+        """Results of written jobs until the orchestrator has answered them."""
         self._guard = JobGuard(
             self._lease, runner, self.events, self.vehicle_id, lambda: self.clock.now_s
         )
@@ -122,6 +125,7 @@ class AgentService:
             timeout_s=settings.report_timeout_s,
             running_job=lambda: self.runner.job_id,
             refused=self._guard.give_up,
+            settled=self.results.settled,
         )
         self.pacer = pacer if pacer is not None else OwnTimer()
         """What the control loop waits on for its next tick (a fleet host's shared ticker)."""
@@ -148,6 +152,9 @@ class AgentService:
         """Fly on ``session`` (this vehicle's own, opened with its identity) until ``stop`` is
         set; the caller closes the session afterwards, which takes the liveliness token away."""
         self._session = session
+        for result in self.results.recover():  # written before a restart, never answered
+            log.info("%s: job %s's result sent again", self.vehicle_id, result.job_id)
+            self.reports.queue(result)
         declare_token(session, self.keys.vehicle_alive(self.vehicle_id))
         presence: FifoChannel[bool] = FifoChannel()
         watch_liveliness(
@@ -180,12 +187,12 @@ class AgentService:
         await asyncio.wait([stopping, *workers], return_when=asyncio.FIRST_COMPLETED)
         for task in [*workers, *self._tasks, stopping]:
             task.cancel()
-        results = await asyncio.gather(*workers, *self._tasks, return_exceptions=True)
+        outcomes = await asyncio.gather(*workers, *self._tasks, return_exceptions=True)
         await self.backend.close()
         await self.work.close()
-        for result in results:
-            if isinstance(result, Exception):
-                raise result
+        for outcome in outcomes:
+            if isinstance(outcome, Exception):
+                raise outcome
 
     # --- inputs --------------------------------------------------------------------------------
     async def _on_command(self, command: VehicleCommand) -> CommandReply:
@@ -200,7 +207,7 @@ class AgentService:
         vehicle has just finished (its result not yet delivered: the orchestrator was away) is
         refused rather than written twice."""
         job = command.job
-        if job is not None and job.job_id == self.reports.pending_result():
+        if job is not None and self.results.unsettled(job.job_id):
             return _refusal("busy", f"{job.job_id} is written; its report is on its way")
         if command.command != "assign":
             where = self.keys.vehicle_assign(self.vehicle_id)
@@ -312,6 +319,7 @@ class AgentService:
         for report in actions.reports:
             self.reports.queue(report)
         if actions.finished is not None:
+            self.results.written(actions.finished.job_id, actions.finished.duration_s)
             self._spawn(self._finish(actions.finished))
         if actions.telemetry is not None:
             self._telemetry.put(actions.telemetry)
@@ -340,7 +348,8 @@ class AgentService:
 
     async def _finish(self, trace: JobTrace) -> None:
         """Measure the flown job, record it, then report it: a job reported done has its
-        record on disk (its picture may still be drawn)."""
+        record on disk (its picture may still be drawn). From the tick its writing ended until
+        the orchestrator answers, its result is in ``results`` and the status names the job."""
         prepared = self._prepared[trace.job_id]
         metrics = None
         try:
@@ -354,13 +363,14 @@ class AgentService:
         else:
             if where is not None:
                 log.info("%s: job %s recorded in %s", self.vehicle_id, trace.job_id, where)
-        bounds = self.runner.safety.writing
-        self.reports.queue(result_report(self.vehicle_id, trace, metrics, bounds))
+        result = result_report(self.vehicle_id, trace, metrics, self.runner.safety.writing)
+        self.results.measured(result)
+        self.reports.queue(result)
 
     # --- outputs -------------------------------------------------------------------------------
     def _publish_status(self, *, only_if_changed: bool = False) -> None:
         status = self.runner.status(self.incarnation)
-        pending = self.reports.pending_result() if status.job_id is None else None
+        pending = self.results.pending() if status.job_id is None else None
         if pending is not None:  # not over until the orchestrator has its result
             status = msgspec.structs.replace(status, job_id=pending)
         if only_if_changed and status == self._status_sent:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 from bus.session import ZenohSettings
 
@@ -32,3 +33,6 @@ class ServiceSettings:
     rest_period_s: float | None = None
     """Wall time in [s] between ticks of a vehicle at rest (landed, no job, motors off); None:
     every control period, always (an autopilot needs its mocap and heartbeat streams)."""
+    results_dir: Path | None = None
+    """Where the results of written jobs wait for the orchestrator's answer, surviving a restart
+    (``vehicle_agent/results.py``); None: in memory only."""

@@ -28,7 +28,7 @@ HELP: tuple[tuple[str, str, str], ...] = (
     ("f", "reset a vehicle in fault after an E-STOP (confirmed)", "selected vehicle"),
     ("F", "reset every vehicle in fault (confirmed)", "whole fleet"),
     ("U", "release every held vehicle (confirmed)", "whole fleet"),
-    ("s", "fresh sheet: a half-written board may be written again", "selected vehicle's board"),
+    ("s", "fresh sheet: a board waiting for one is written on again", "selected vehicle's board"),
     ("Enter / d", "details of the vehicle", "selected vehicle (fleet focused)"),
     ("p", "pause / resume the queue (held vehicles stay held)", "queue"),
     ("L", "land every vehicle, pause the queue (confirmed)", "whole fleet"),
