@@ -395,6 +395,9 @@ class VehicleSummary(State, frozen=True):
     message: str = ""
     held: bool = False
     """Landed or stopped by the operator: it takes no job until a ``release`` (v1 addition)."""
+    paused: bool = False
+    """Paused by the operator (and not held): it finishes its job, then takes no new one until
+    ``resume`` (v1 addition)."""
 
 
 class ShowSnapshot(State, frozen=True):

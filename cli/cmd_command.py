@@ -4,8 +4,8 @@ Actions: ``pause [VEHICLE]``, ``resume [VEHICLE]``, ``cancel JOB``, ``approve JO
 ``reject JOB``, ``prioritize JOB --priority N``, ``land VEHICLE``, ``land-all``,
 ``estop [VEHICLE]`` (no vehicle: every vehicle), ``clear_fault VEHICLE`` (the vehicle leaves
 ``fault`` if it is landed and disarmed), ``release VEHICLE`` (a held vehicle may take jobs
-again), ``release-all`` (every held vehicle), ``fresh-sheet BOARD`` (a half-written board got a
-new sheet). A vehicle may also be named with ``--vehicle ID``.
+again), ``release-all`` (every held vehicle), ``fresh-sheet BOARD`` (a board waiting for a sheet
+has a fresh one). A vehicle may also be named with ``--vehicle ID``.
 ``land-all`` is the bus command ``land_all``; either spelling is accepted (also ``clear-fault``,
 ``release-all``).
 

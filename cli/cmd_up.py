@@ -9,8 +9,9 @@ kiosk. Their output goes to ``<database dir>/logs/``; ``up`` writes its pid and 
 
 Without ``--headless`` the operator console runs in the foreground (when this is a terminal). It
 is a viewer: quitting it leaves the show running (``up`` stays in the foreground; Enter reopens the
-console), a crash reopens it. The show stops only on purpose: Ctrl-C or SIGTERM to ``up``, or
-``skyquill down SHOW`` from any shell. Each process then gets SIGTERM and its own grace period.
+console), a crash reopens it. The show stops only on purpose: SIGTERM to ``up``, ``skyquill down
+SHOW`` from any shell, or Ctrl-C (with vehicles in the air, a second Ctrl-C after ``up`` has
+named them: ``cli/interrupt.py``). Each process then gets SIGTERM and its own grace period.
 
 A show across several machines (``zenoh.hosts`` in the show file) is started with ``--host NAME``
 on each: that host's router, and the orchestrator and kiosk on the ground station, the agents of
@@ -30,13 +31,13 @@ import os
 import signal
 import subprocess
 import sys
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from cli.interrupt import StopRequests
 from cli.runstate import AdoptedProcess, ProcessRecord, RunFile, command_line
 from cli.supervisor import ChildSpec, Supervisor
 from cli.viewer import ConsoleViewer, UpOutput, enter_pressed
@@ -51,6 +52,8 @@ DETACHED = (
     "the console is closed; the show keeps running. Enter: reopen the console; "
     "Ctrl-C here or `skyquill down {show}`: stop the show"
 )
+FLYING_QUERY_S = 2.0
+"""How long a Ctrl-C waits for the orchestrator to say which vehicles fly, wall [s]."""
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -215,7 +218,7 @@ def _supervise(
         die_with_supervisor=False,
         on_spawn=lambda name, pid: _record(runfile, name, pid),
     )
-    stop = threading.Event()
+    stop = StopRequests(lambda: _flying(show), output.say, str(args.show))
     _install_signals(stop, output)
     try:
         _adopt_survivors(supervisor, specs, previous, runfile, output.say)
@@ -233,7 +236,7 @@ def _supervise(
             )
             _run_with_console(supervisor, viewer, stop, output, str(args.show))
         else:
-            supervisor.run_until(stop.is_set)
+            supervisor.run_until(stop.due)
     finally:
         output.quiet = False
         output.say("stopping")
@@ -258,10 +261,24 @@ def _record(runfile: RunFile, name: str, pid: int) -> None:
         runfile.save()
 
 
-def _install_signals(stop: threading.Event, output: UpOutput) -> None:
-    """SIGINT/SIGTERM stop the show; SIGHUP (the terminal went away) only silences ``up``."""
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda _signum, _frame: stop.set())
+def _flying(show: Show) -> list[str] | None:
+    """The show's vehicles in the air, as the orchestrator sees them (None: it does not answer,
+    or this host holds no operator certificate)."""
+    from bus.messages import AIRBORNE_STATES
+    from orchestrator.client import snapshot
+
+    try:
+        vehicles = snapshot(show, timeout_s=FLYING_QUERY_S).vehicles
+    except Exception:  # no answer, no keys here: the question says it cannot tell
+        return None
+    return [v.vehicle_id for v in vehicles if v.state in AIRBORNE_STATES]
+
+
+def _install_signals(stop: StopRequests, output: UpOutput) -> None:
+    """SIGTERM stops the show, Ctrl-C too unless vehicles fly (``cli/interrupt.py``); SIGHUP
+    (the terminal went away) only silences ``up``."""
+    signal.signal(signal.SIGINT, lambda _signum, _frame: stop.interrupt())
+    signal.signal(signal.SIGTERM, lambda _signum, _frame: stop.terminate())
 
     def hung_up(_signum: int, _frame: object) -> None:
         output.hung_up = True
@@ -303,7 +320,7 @@ def _adopt_survivors(
 def _run_with_console(
     supervisor: Supervisor,
     viewer: ConsoleViewer,
-    stop: threading.Event,
+    stop: StopRequests,
     output: UpOutput,
     show: str,
 ) -> None:
@@ -311,7 +328,7 @@ def _run_with_console(
     output.quiet = True
     viewer.open()
     try:
-        while not stop.is_set():
+        while not stop.due():
             supervisor.poll()
             outcome = viewer.poll()
             if outcome in ("quit", "given_up"):

@@ -167,9 +167,10 @@ def snapshot(session: Session, keys: ShowKeys, *, timeout_s: float = 5.0) -> Sho
 
 
 class Stagehand:
-    """Replaces the sheet of every board a lost or stopped vehicle left half-written (the
-    operator's ``fresh_sheet``), as the crew would at a show; a thread, for tests and the demo.
-    ``replaced`` lists the boards in order."""
+    """Replaces the sheet of every board a lost or stopped vehicle left half-written, or whose
+    character a visitor takes away (``sheets: per_character``), with the operator's
+    ``fresh_sheet``, as the crew would at a show; a thread, for tests and the demo. ``replaced``
+    lists the boards in order."""
 
     def __init__(self, session: Session, keys: ShowKeys, *, period_s: float = 0.3) -> None:
         self._session, self._keys, self._period_s = session, keys, period_s
@@ -188,7 +189,7 @@ class Stagehand:
     def _run(self) -> None:
         while not self._stop.wait(self._period_s):
             try:
-                for board_id in snapshot(self._session, self._keys, timeout_s=2.0).dirty_boards:
+                for board_id in _crews_boards(snapshot(self._session, self._keys, timeout_s=2.0)):
                     command = OperatorCommand(
                         command="fresh_sheet", board_id=board_id, operator="stagehand"
                     )
@@ -234,3 +235,11 @@ def wait_for_jobs(
             states = {j: (last[j].state if j in last else "unknown") for j in wanted}
             raise TimeoutError(f"jobs not finished after {timeout_s:.0f} s: {states}")
         time.sleep(period_s)
+
+
+def _crews_boards(shown: ShowSnapshot) -> list[str]:
+    """The boards waiting for a sheet that a crew changes by routine: not those whose job waits
+    for a lost vehicle (``job_waits``: the operator's call, after looking at the board)."""
+    boards = {v.vehicle_id: v.board_id for v in shown.vehicles}
+    operators = {boards.get(a.vehicle_id or "") for a in shown.alerts if a.kind == "job_waits"}
+    return [b for b in shown.dirty_boards if b not in operators]

@@ -97,11 +97,14 @@ def metrics_view(m: JobMetrics | None) -> dict[str, Any] | None:
     }
 
 
-def job_view(state: JobState, places: Mapping[str, int] | None = None) -> dict[str, Any]:
+def job_view(
+    state: JobState, places: Mapping[str, int] | None = None, *, show_paused: bool = False
+) -> dict[str, Any]:
     """What the page is told about a job: public fields and a sentence to show (English; the
     page words the fields in the visitor's language).
 
-    ``places``: vehicle id -> position of its board from the left (1 first)."""
+    ``places``: vehicle id -> position of its board from the left (1 first); ``show_paused``:
+    the operator paused the queue (a queued job keeps its place, its ETA means nothing)."""
     board = (places or {}).get(state.vehicle_id or "")
     place = wording.place_words(board)
     return {
@@ -118,8 +121,10 @@ def job_view(state: JobState, places: Mapping[str, int] | None = None) -> dict[s
         "progress": state.progress,
         "metrics": metrics_view(state.metrics),
         "updated_at_s": state.updated_at_s,
+        "show_paused": show_paused,
         "status_text": wording.status_text(
             state.state,
+            paused=show_paused,
             queue_position=state.queue_position,
             eta_s=state.eta_s,
             vehicle_id=state.vehicle_id,
@@ -155,6 +160,7 @@ def ticket_view(job: KioskJob) -> dict[str, Any]:
         "progress": 0.0,
         "metrics": None,
         "updated_at_s": 0.0,
+        "show_paused": False,
         "status_text": text,
     }
 
@@ -171,6 +177,8 @@ class JobBook:
         self._states: OrderedDict[str, JobState] = OrderedDict()
         self._max_jobs = max_jobs
         self._max_states = max_states
+        self.show_paused = False
+        """The show's queue is paused (the latest ``fleet`` snapshot): queued jobs say so."""
 
     def add(self, *, session_id: str, label: str, preview: dict[str, Any] | None) -> KioskJob:
         """A new ticket with a fresh token and idempotency key."""
@@ -261,7 +269,9 @@ class JobBook:
     def view(self, job: KioskJob, places: Mapping[str, int] | None = None) -> dict[str, Any]:
         """What the page shows of ``job`` now."""
         state = self._states.get(job.job_id) if job.job_id is not None else None
-        return job_view(state, places) if state is not None else ticket_view(job)
+        if state is None:
+            return ticket_view(job)
+        return job_view(state, places, show_paused=self.show_paused)
 
 
 def _keep_written(old: JobState | None, new: JobState) -> JobState:

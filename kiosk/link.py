@@ -65,6 +65,8 @@ class OrchestratorLink:
         self._watchers: dict[str, set[RingChannel[str]]] = {}
         """Ticket -> channels of the pages following it (woken with the ticket)."""
         self._follow_ups: set[asyncio.Task[None]] = set()
+        self._paused_seen = False
+        """Whether the latest ``fleet`` snapshot had the queue paused (Zenoh's thread writes)."""
         self._inbox: FifoChannel[JobState | None] | None = None
         self._subscribers: list[Any] = []
         self._task: asyncio.Task[None] | None = None
@@ -80,6 +82,7 @@ class OrchestratorLink:
         def on_fleet(_key: str, snapshot: ShowSnapshot) -> None:
             for state in snapshot.jobs:
                 inbox.push(state)
+            self._paused_seen = snapshot.queue_paused  # read with the marker below
             inbox.push(None)  # marks the snapshot's arrival (fresh news of the orchestrator)
 
         self._subscribers = [
@@ -110,6 +113,7 @@ class OrchestratorLink:
                 return
             if state is None:
                 self.fleet_seen_s = self._clock()
+                self._follow_pause(self._paused_seen)
             else:
                 self.apply(state)
 
@@ -124,6 +128,14 @@ class OrchestratorLink:
             ticket = self.book.ticket_of(state.job_id)
             if ticket is not None:
                 self.wake(ticket)
+
+    def _follow_pause(self, paused: bool) -> None:
+        """The show's queue paused or resumed: every page following a ticket says so."""
+        if paused == self.book.show_paused:
+            return
+        self.book.show_paused = paused
+        for ticket in list(self._watchers):
+            self.wake(ticket)
 
     def wake(self, ticket: str) -> None:
         """Tell the pages following ``ticket`` that it changed."""

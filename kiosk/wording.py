@@ -73,11 +73,13 @@ def status_text(
     progress: float = 0.0,
     attempts: int = 0,
     place: str | None = None,
+    paused: bool = False,
 ) -> str:
     """What the page says about a job in ``state`` (a bus JobStateName).
 
     ``attempts``: assignments so far (a requeued job was assigned before); ``place``: where the
-    writing vehicle's board is ("board 2 from the left")."""
+    writing vehicle's board is ("board 2 from the left"); ``paused``: the show is paused (a
+    queued job keeps its place, with no start time to promise)."""
     if state in ("submitted", "awaiting_approval"):
         return "Waiting for the show's operator to approve your character."
     if state == "queued":
@@ -86,6 +88,12 @@ def status_text(
             if attempts >= 1
             else ""
         )
+        if paused:
+            kept = f", number {queue_position} in the queue" if queue_position else ""
+            return (
+                again + f"The show is paused for now. You keep your place{kept}: your character"
+                " is written when the show goes on."
+            )
         if queue_position is None:
             return again + "In the queue."
         line = "next in line" if queue_position <= 1 else f"number {queue_position} in the queue"

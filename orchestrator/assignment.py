@@ -38,7 +38,10 @@ def assign(book: Book, eff: Effects, now_s: float) -> None:
         vid = view.info.vehicle_id
         if vid in busy_vehicles or view.info.board_id in busy_boards:
             continue
-        if view.info.board_id in book.dirty_boards or not ready_for_job(view, now_s):
+        board_id = view.info.board_id
+        if board_id in book.dirty_boards or book.sheets.busy(board_id, now_s):
+            continue
+        if not ready_for_job(view, now_s):
             continue
         job = next(
             (j for j in queue if book.kinds.may_take(j, vid) and holders.assignable(j, now_s)),

@@ -38,6 +38,7 @@ from orchestrator.jobs import WAITING_STATES, Job, to_state, transition, update
 from orchestrator.kinds import KindMatch, KindPlans
 from orchestrator.operator import apply_operator
 from orchestrator.quotas import is_operator
+from orchestrator.sheets import Sheets
 
 __all__ = ["MAX_FINAL_JOBS", "Book", "CoreConfig", "Effects", "Level"]
 
@@ -55,13 +56,15 @@ class Book:
         paused_vehicles: Iterable[str] = (),
         held_vehicles: Iterable[str] = (),
         dirty_boards: Iterable[str] = (),
+        sheet_boards: Iterable[str] = (),
         job_counts: Mapping[str, int] | None = None,
         max_final_jobs: int = MAX_FINAL_JOBS,
         open_alerts: Iterable[Event] = (),
     ) -> None:
         """``jobs``: the stored ones (every unfinished job and at least the latest finished);
         ``job_counts``: jobs per state in the database (default: counted from ``jobs``);
-        ``open_alerts``: the alerts open when the orchestrator stopped."""
+        ``open_alerts``: the alerts open when the orchestrator stopped; ``sheet_boards``: the
+        boards that waited for the crew's sheet."""
         self.config = config
         self.queue_paused = queue_paused
         self.vehicles = {v.vehicle_id: VehicleView(v, gone_since_s=now_s) for v in config.vehicles}
@@ -99,6 +102,14 @@ class Book:
         boards = {v.board_id for v in config.vehicles}
         self.dirty_boards: set[str] = {b for b in dirty_boards if b in boards}
         """Boards left half-written: no job there until the operator's ``fresh_sheet``."""
+        self.sheets = Sheets(
+            dict(config.boards),
+            time_scale=config.eta.time_scale,
+            sheet_change_s=config.sheet_change_s,
+            waiting=sheet_boards,
+            now_s=now_s,
+        )
+        """Boards waiting for the crew's sheet or drying (``orchestrator/sheets.py``)."""
         self.router_down_since_s: float | None = None
         """Since when the orchestrator has had no link to the router, [s] (None: it has one)."""
         self.told_overdue: set[str] = set()
@@ -168,14 +179,17 @@ class Book:
                 landing=landing,
                 may_take=self.kinds.may_take,
                 writing_s_on=self.kinds.writing_s_on,
+                board_free_s={b: self.sheets.free_at_s(b, now_s) for b in usable.values()},
+                after_character_s=self.sheets.after_character_s,
             )
         )
         return {j.job_id: (i + 1, etas.get(j.job_id)) for i, j in enumerate(queue)}
 
     def sheet_wanted(self) -> set[str]:
-        """Boards waiting for the operator's fresh sheet: half-written ones, and those of lost
-        vehicles whose job waits for them past its hold (``holders.tell_overdue``)."""
-        return self.dirty_boards | holders.overdue_boards(self)
+        """Boards waiting for a fresh sheet: half-written ones, those with a character the crew
+        takes away (``orchestrator/sheets.py``), and those of lost vehicles whose job waits for
+        them past its hold (``holders.tell_overdue``)."""
+        return self.dirty_boards | self.sheets.waiting.keys() | holders.overdue_boards(self)
 
     def open_alerts(self) -> list[Event]:
         """The alerts whose cause lasts, oldest first (``orchestrator/alerts.py``)."""

@@ -8,6 +8,7 @@ from typing import Literal
 from bus.messages import Event, VehicleCommand, WrittenInk
 from orchestrator.fleet import EtaModel, VehicleInfo
 from orchestrator.jobs import Job
+from orchestrator.sheets import BoardSheets
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,10 @@ class CoreConfig:
     """ETA assumptions."""
     eta_tolerance_s: float = 2.0
     """A queued job whose expected start moved by more than this is published again, [s]."""
+    boards: tuple[tuple[str, BoardSheets], ...] = ()
+    """What a written character costs each board (default: ``when_spoiled``)."""
+    sheet_change_s: float = 40.0
+    """The crew's first expected turnaround for a sheet, show seconds (``policy``)."""
 
 
 @dataclass

@@ -97,6 +97,7 @@ class VehicleView:
             last_seen_s=self.last_seen_s,
             message=self.message + (" (paused)" if self.paused and not self.held else ""),
             held=self.held,
+            paused=self.paused and not self.held,
         )
 
 
@@ -161,6 +162,8 @@ def queue_etas(
     landing: Iterable[str] = (),
     may_take: Callable[[Job, str], bool] | None = None,
     writing_s_on: Callable[[Job, str], float] | None = None,
+    board_free_s: Mapping[str, float] | None = None,
+    after_character_s: Callable[[str], float] | None = None,
 ) -> dict[str, float]:
     """Wall seconds from now until each queued job should start writing (list scheduling).
 
@@ -172,17 +175,24 @@ def queue_etas(
     Empty when no vehicle is usable. ``may_take(job, vehicle_id)`` (default: always) leaves out
     the vehicles whose kind cannot write a job; a job no usable vehicle may take has no ETA.
     ``writing_s_on(job, vehicle_id)`` (default: the job's own estimate) is how long the job writes
-    on that vehicle (kinds differ).
+    on that vehicle (kinds differ). ``board_free_s``: when each board may take a job (Unix
+    time [s]: a sheet being changed, a surface drying; default now); ``after_character_s(board)``
+    (default 0): show seconds a board takes no job after each character (the crew's sheet).
     """
     scale = model.time_scale
     vehicle_free = dict.fromkeys(usable_boards, now_s)
     for vid in set(landing) & vehicle_free.keys():
         vehicle_free[vid] = now_s + model.after_write_s / 2 / scale
-    board_free = dict.fromkeys(usable_boards.values(), now_s)
+    board_free = {b: max(now_s, (board_free_s or {}).get(b, now_s)) for b in usable_boards.values()}
+
+    def after_s(board_id: str) -> float:
+        return after_character_s(board_id) / scale if after_character_s else 0.0
+
     for job in active:
         done = now_s + remaining_s(job, now_s, model) / scale
         if job.board_id is not None:
-            board_free[job.board_id] = max(board_free.get(job.board_id, now_s), done)
+            free = done + after_s(job.board_id)
+            board_free[job.board_id] = max(board_free.get(job.board_id, now_s), free)
         if job.vehicle_id in vehicle_free:
             vehicle_free[job.vehicle_id] = done + model.after_write_s / scale
     etas: dict[str, float] = {}
@@ -200,6 +210,6 @@ def queue_etas(
         start = assigned + model.before_write_s / scale
         done = start + (writing_s_on(job, vid) if writing_s_on else writing_s(job)) / scale
         etas[job.job_id] = start - now_s
-        board_free[usable_boards[vid]] = done
+        board_free[usable_boards[vid]] = done + after_s(usable_boards[vid])
         vehicle_free[vid] = done + model.after_write_s / scale
     return etas

@@ -190,7 +190,8 @@ def _clear_fault(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandReply
 
 
 def _fresh_sheet(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> CommandReply:
-    """A half-written board is clean again; a job overdue for its lost holder there is free
+    """A board waiting for a sheet has one: half-written, or with a character the crew takes
+    away (``orchestrator/sheets.py``); a job overdue for its lost holder there is free
     (``orchestrator/holders.py``)."""
     boards = sorted({view.info.board_id for view in book.vehicles.values()})
     if cmd.board_id is None:
@@ -198,7 +199,8 @@ def _fresh_sheet(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -
     if cmd.board_id not in boards:
         return _error("unknown_board", f"no board {cmd.board_id}; boards: {boards}", "board_id")
     freed = holders.free_on_fresh_sheet(book, eff, cmd.board_id, now_s)
-    if cmd.board_id not in book.dirty_boards and freed is None:
+    taken_away = book.sheets.changed(cmd.board_id, now_s)
+    if cmd.board_id not in book.dirty_boards and freed is None and not taken_away:
         return _error("bad_state", f"{cmd.board_id} is not waiting for a fresh sheet", "board_id")
     book.dirty_boards.discard(cmd.board_id)
     eff.settings_changed = eff.fleet_changed = True

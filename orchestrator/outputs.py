@@ -29,6 +29,7 @@ from orchestrator.core import MAX_FINAL_JOBS, Book, CoreConfig, Effects
 from orchestrator.estimates import DurationEstimates
 from orchestrator.fleet import EtaModel, VehicleInfo
 from orchestrator.jobs import to_state
+from orchestrator.sheets import BoardSheets
 from orchestrator.store import JobStore, StoreError
 from orchestrator.written import with_written
 from showfile import Show
@@ -57,6 +58,8 @@ def core_config(show: Show) -> CoreConfig:
         max_handbacks=show.policy.max_handbacks,
         tracking_error_alert_m=show.policy.tracking_error_alert_m,
         eta=EtaModel(time_scale=show.time_scale),
+        boards=tuple((b.id, BoardSheets(b.sheets, b.dry_s)) for b in show.boards),
+        sheet_change_s=show.policy.sheet_change_s,
     )
 
 
@@ -94,6 +97,7 @@ class BookOutputs:
             paused_vehicles=stored.paused_vehicles,
             held_vehicles=stored.held_vehicles,
             dirty_boards=stored.dirty_boards,
+            sheet_boards=stored.sheet_boards,
             open_alerts=stored.open_alerts,
         )
         self.estimates = DurationEstimates(show)
@@ -128,6 +132,7 @@ class BookOutputs:
                 "paused_vehicles": [v for v, view in self.book.vehicles.items() if view.paused],
                 "held_vehicles": [v for v, view in self.book.vehicles.items() if view.held],
                 "dirty_boards": self.book.dirty_boards,
+                "sheet_boards": list(self.book.sheets.waiting),
                 "open_alerts": self.book.open_alerts(),
             }
         try:

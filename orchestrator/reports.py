@@ -106,9 +106,21 @@ def _done(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) ->
     )
     if owner is not None and owner != rep.vehicle_id:
         eff.commands.append((owner, VehicleCommand(command="cancel", job_id=job.job_id)))
+    _written(book, job, eff, now_s)
     eff.fleet_changed = True
     book.assign(eff, now_s)
     return CommandReply(ok=True, message="done recorded")
+
+
+def _written(book: Book, job: Job, eff: Effects, now_s: float) -> None:
+    """``job`` is on its board in full: that board may now wait for the crew's sheet."""
+    if job.board_id is None or not book.sheets.written(job.board_id, now_s):
+        return
+    eff.settings_changed = True
+    message = f"{job.board_id}: {job.label} is written; a fresh sheet, then it writes again"
+    book.event(
+        eff, now_s, "info", "sheet_due", message, vehicle_id=job.vehicle_id, job_id=job.job_id
+    )
 
 
 def _failed(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
@@ -159,6 +171,8 @@ def _fail(
     book.event(
         eff, now_s, "alert", "job_failed", message, vehicle_id=rep.vehicle_id, job_id=job.job_id
     )
+    if rep.progress >= 1.0:  # written out of its bounds, or unmeasured: on its sheet all the same
+        _written(book, job, eff, now_s)
     eff.fleet_changed = True
     book.assign(eff, now_s)
     return CommandReply(ok=True, message="failure recorded")

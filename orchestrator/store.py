@@ -98,6 +98,8 @@ class StoredState:
     """Vehicles held by the operator's land or estop (no job until ``release``)."""
     dirty_boards: list[str]
     """Boards left half-written (no job until ``fresh_sheet``)."""
+    sheet_boards: list[str]
+    """Boards waiting for the crew's sheet after a character (``orchestrator/sheets.py``)."""
     open_alerts: list[Event]
     """Alerts whose cause lasted when they were last stored, oldest first."""
 
@@ -176,6 +178,7 @@ class JobStore:
         paused_vehicles: Iterable[str] | None = None,
         held_vehicles: Iterable[str] | None = None,
         dirty_boards: Iterable[str] | None = None,
+        sheet_boards: Iterable[str] | None = None,
         open_alerts: Iterable[Event] | None = None,
         written: Mapping[str, WrittenInk] | None = None,
     ) -> None:
@@ -194,6 +197,7 @@ class JobStore:
             ("paused_vehicles", paused_vehicles),
             ("held_vehicles", held_vehicles),
             ("dirty_boards", dirty_boards),
+            ("sheet_boards", sheet_boards),
         ):
             if names is not None:
                 settings.append((key, json.dumps(sorted(names))))
@@ -260,6 +264,7 @@ class JobStore:
             paused_vehicles=list(json.loads(settings.get("paused_vehicles", "[]"))),
             held_vehicles=list(json.loads(settings.get("held_vehicles", "[]"))),
             dirty_boards=list(json.loads(settings.get("dirty_boards", "[]"))),
+            sheet_boards=list(json.loads(settings.get("sheet_boards", "[]"))),
             open_alerts=_events_decoder.decode(settings.get("open_alerts", "[]")),
         )
 

@@ -46,6 +46,13 @@ class Board(ShowModel):
     """Board extent along its own x and y (vertical: width and height), in [m]."""
     writing_area_m: Size2
     """Extent of the area glyphs are laid out in, centred on the board, in [m]."""
+    sheets: Literal["per_character", "when_spoiled", "none"] = "when_spoiled"
+    """When the crew changes the sheet: after every character (``per_character``: the visitor
+    takes it away, as at the Airshow), only after a half-written one (``when_spoiled``), or never
+    (``none``: a surface that clears itself, e.g. water on a cloth, after ``dry_s``)."""
+    dry_s: float = Field(default=0.0, ge=0.0)
+    """With ``sheets: none``: show seconds after a character before the board is written on
+    again (the surface dries)."""
 
     @property
     def yaw_rad(self) -> float:
@@ -57,6 +64,8 @@ class Board(ShowModel):
         for name in ("size_m", "writing_area_m"):
             if min(getattr(self, name)) <= 0.0:
                 raise ValueError(f"{name} must be positive")
+        if self.dry_s > 0.0 and self.sheets != "none":
+            raise ValueError("dry_s goes with sheets: none (a sheet changed needs no drying)")
         return self
 
 

@@ -170,6 +170,11 @@ class PolicySettings(ShowModel):
     ran out under load or on a poor link). Bounds them so that nothing goes round for ever."""
     fleet_period_s: float = Field(default=1.0, gt=0.0)
     """Period of the fleet snapshot publication, in [s]."""
+    sheet_change_s: float = Field(default=40.0, gt=0.0)
+    """Show seconds the crew is expected to take to change a sheet, for the ETAs until it has
+    changed some (then the median of its last ten: ``orchestrator/sheets.py``). Not from the
+    papers, which give no figure: a first guess (walk to the board, unclip, clip), replaced by
+    the day's own pace."""
 
 
 KIOSK_BODY_MAX_BYTES = 256_000

@@ -12,9 +12,11 @@ from pathlib import Path
 import pytest
 
 from bus.keys import ShowKeys
+from bus.messages import AIRBORNE_STATES
 from bus.session import open_session
+from cli.cmd_up import FLYING_QUERY_S
 from cli.runstate import AdoptedProcess, ProcessRecord, RunFile, RunFileError, run_file_path
-from cli.showrun import derived_show, submit_texts, wait_for_jobs
+from cli.showrun import derived_show, snapshot, submit_texts, wait_for_jobs
 from cli.supervisor import (
     ChildSpec,
     RestartPolicy,
@@ -241,6 +243,8 @@ def _alive(pid: int) -> bool:
 @pytest.mark.timeout(120)
 @pytest.mark.skipif(not Path("/proc").is_dir(), reason="reads /proc")
 def test_skyquill_up_runs_a_show_and_stops_every_process_on_ctrl_c(tmp_path: Path) -> None:
+    """A first job written; then, with the vehicle writing the second, a first Ctrl-C only names
+    it (``cli/interrupt.py``) and a second stops the show."""
     show_path, show = derived_show(SHOWS / "solo.yaml", tmp_path, time_scale=6.0)
     ensure_show_keys(show)  # `up` would make them too, but this test's session needs them first
     up = subprocess.Popen(
@@ -255,10 +259,18 @@ def test_skyquill_up_runs_a_show_and_stops_every_process_on_ctrl_c(tmp_path: Pat
             keys = ShowKeys(show.show_id)
             (reply,) = submit_texts(session, keys, ["一"], timeout_s=60.0)
             (job,) = wait_for_jobs(session, keys, [str(reply.job_id)], timeout_s=60.0)
-        assert job.state == "done" and job.metrics is not None
-        assert job.metrics.written is not None and job.metrics.written.width_px == 160
-        children = _children_of(up.pid)
-        assert len(children) == 3  # router, orchestrator and one agent
+            assert job.state == "done" and job.metrics is not None
+            assert job.metrics.written is not None and job.metrics.written.width_px == 160
+            children = _children_of(up.pid)
+            assert len(children) == 3  # router, orchestrator and one agent
+            submit_texts(session, keys, ["十"], timeout_s=60.0)
+            deadline = time.monotonic() + 60.0
+            while snapshot(session, keys).vehicles[0].state not in AIRBORNE_STATES:
+                assert time.monotonic() < deadline, "the second job never flew"
+                time.sleep(0.1)
+        up.send_signal(signal.SIGINT)
+        time.sleep(FLYING_QUERY_S + 1.0)
+        assert up.poll() is None  # asked, still running
         up.send_signal(signal.SIGINT)
         _, stderr = up.communicate(timeout=30.0)
     finally:
@@ -269,5 +281,6 @@ def test_skyquill_up_runs_a_show_and_stops_every_process_on_ctrl_c(tmp_path: Pat
             subprocess.run(skyquill_argv("down", str(show_path)), env=child_env(), timeout=60)
     assert up.returncode == 0, stderr
     assert "skyquill up: stopping" in stderr and "killing" not in stderr
+    assert "uav1 is in the air. `skyquill command" in stderr
     assert not [pid for pid in children if _alive(pid)]
     assert not run_file_path(show.database_path).exists()

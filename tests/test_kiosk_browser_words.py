@@ -9,6 +9,7 @@ flight per character, to see a longer drawing refused before it is sent.
 
 from __future__ import annotations
 
+import re
 import socket
 import subprocess
 import sys
@@ -136,6 +137,17 @@ def open_page(browser: object, url: str, locale: str, device: dict[str, object])
     return page
 
 
+def hand_in_typed(page: object, text: str) -> str:
+    """Type ``text``, preview it, hand it in; the job id its status page shows."""
+    page.tap("#tab-type")  # type: ignore[attr-defined]
+    page.fill("#text", text)  # type: ignore[attr-defined]
+    page.tap("#preview")  # type: ignore[attr-defined]
+    page.wait_for_selector("#confirm:not([hidden])", timeout=UI_WAIT_MS)  # type: ignore[attr-defined]
+    page.tap("#submit")  # type: ignore[attr-defined]
+    page.wait_for_selector("#status:not([hidden])", timeout=UI_WAIT_MS)  # type: ignore[attr-defined]
+    return str(page.inner_text("#job-id")).strip()  # type: ignore[attr-defined]
+
+
 def lang(page: object) -> str:
     return str(page.evaluate("document.documentElement.lang"))  # type: ignore[attr-defined]
 
@@ -219,13 +231,7 @@ def test_the_finished_page_shows_the_ink_the_drone_left(
 ) -> None:
     show = shows.show
     page = open_page(browser, show.url, locale, device)
-    page.tap("#tab-type")
-    page.fill("#text", "十")
-    page.tap("#preview")
-    page.wait_for_selector("#confirm:not([hidden])", timeout=UI_WAIT_MS)
-    page.tap("#submit")
-    page.wait_for_selector("#status:not([hidden])", timeout=UI_WAIT_MS)
-    job_id = page.inner_text("#job-id").strip()
+    job_id = hand_in_typed(page, "十")
     assert show.command(command="approve", job_id=job_id).ok
     show.relay(job_id, "writing", vehicle_id="uav1", progress=0.5, queue_position=None)
     page.locator("#status-text").filter(has_text="50%").wait_for(timeout=UI_WAIT_MS)
@@ -276,5 +282,32 @@ def test_a_drawing_longer_than_the_flight_limit_is_refused_before_it_is_sent(
     page.tap("button.lang[data-lang='zh-Hans']")
     assert "5 秒" in message.inner_text()  # the reason, in the other language too
     assert sent == [] and len(shows.show.snapshot().jobs) == jobs_before  # nothing was sent
+    assert page.errors == []
+    page.context.close()
+
+
+def test_a_paused_show_tells_the_visitor_and_the_character_keeps_its_place(
+    browser: object, shows: Shows
+) -> None:
+    """The operator pauses the show: the visitor's page says so in their language (no start
+    time it cannot keep), and words it again when the show goes on."""
+    show = shows.show
+    page = open_page(browser, show.url, "zh-CN", PHONE)
+    job_id = hand_in_typed(page, "山")
+    assert show.command(command="pause").ok
+    try:
+        assert show.command(command="approve", job_id=job_id).ok
+        status = page.locator("#status-text")
+        status.filter(has_text="表演暂时停下了").wait_for(timeout=UI_WAIT_MS)
+        assert re.search(r"你仍排在第 \d+ 位", status.inner_text())  # its place, no start time
+        page.tap("button.lang[data-lang='en']")
+        assert "The show is paused for now" in status.inner_text()
+        page.screenshot(path=str(SHOTS_DIR / "en-320x568-paused.png"))
+        assert show.command(command="resume").ok
+        status.filter(has_text="You are").wait_for(timeout=UI_WAIT_MS)  # next, or number N
+        assert "paused" not in status.inner_text()
+    finally:
+        show.command(command="resume")
+        show.command(command="cancel", job_id=job_id)
     assert page.errors == []
     page.context.close()

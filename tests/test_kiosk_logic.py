@@ -188,6 +188,9 @@ def test_status_text_says_what_happens_in_plain_words() -> None:
     assert "uav2" in wording.status_text("writing", vehicle_id="uav2", progress=0.5)
     assert "50%" in wording.status_text("writing", vehicle_id="uav2", progress=0.5)
     assert wording.status_text("done", vehicle_id="uav2").startswith("Done!")
+    paused = wording.status_text("queued", queue_position=4, eta_s=200.0, paused=True)
+    assert "paused" in paused and "number 4" in paused and "minute" not in paused  # no promise
+    assert job_view(state("j", "queued", 1.0), show_paused=True)["show_paused"]
     requeued = wording.status_text("queued", attempts=1, queue_position=2, eta_s=10.0)
     assert "had to land" in requeued and "number 2" in requeued
     again = wording.status_text(

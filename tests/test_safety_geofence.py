@@ -1,4 +1,5 @@
-"""The geofence alone: built from a board, a home and margins; points in and out; plans."""
+"""The geofence alone: built from a board, a home and margins; points in and out; plans; the
+guard's verdict on a vehicle at its boundary (within the position's resolution: no breach)."""
 
 from __future__ import annotations
 
@@ -11,8 +12,10 @@ from hypothesis import strategies as st
 
 from showfile import load_show
 from showfile.checks import footprint
-from vehicle_agent.safety import Geofence, GeofenceError, vehicle_fence
-from vehicle_agent.safety.geofence import FenceWatch, convex_hull
+from vehicle_agent.backends.base import VehicleSnapshot
+from vehicle_agent.safety import Geofence, GeofenceError, SafetyLimits, vehicle_fence
+from vehicle_agent.safety.geofence import BOUNDARY_TOLERANCE_M, FenceWatch, convex_hull
+from vehicle_agent.safety.guard import Breach, SafetyGuard
 
 BOARD = [(-0.7, -0.7), (0.7, -0.7), (0.7, 0.7), (-0.7, 0.7)]
 HOME = (0.0, -1.2, 0.0)
@@ -112,3 +115,43 @@ def test_each_shipped_vehicles_fence_holds_its_board_and_home_but_not_its_neighb
     f1, _ = fences["uav1"]
     _, b3 = fences["uav3"]
     assert not f1.contains((*b3.center_m_enu[:2], 1.0))
+
+
+def judged(f: Geofence, position_m_enu: np.ndarray) -> Breach | None:
+    """The guard's verdict on a vehicle flying a transit at ``position_m_enu``."""
+    x, y, z = (float(v) for v in position_m_enu)
+    guard = SafetyGuard(SafetyLimits(fence=f))
+    snapshot = VehicleSnapshot(t_s=1.0, position_m_enu=(x, y, z), velocity_mps_enu=(0.0, 0.0, 0.0),
+                               armed=True, mode="offboard", on_ground=False)  # fmt: skip
+    return guard.check("transit", snapshot, None, 1.0)
+
+
+def on_an_edge(f: Geofence) -> tuple[np.ndarray, np.ndarray]:
+    """The middle of the fence's first edge at mid-height, and the edge's outward unit normal."""
+    (x0, y0), (x1, y1) = f.polygon_xy_m[0], f.polygon_xy_m[1]
+    length = math.hypot(x1 - x0, y1 - y0)
+    middle = np.array([(x0 + x1) / 2, (y0 + y1) / 2, (f.floor_z_m + f.ceiling_z_m) / 2])
+    return middle, np.array([(y1 - y0) / length, -(x1 - x0) / length, 0.0])  # right: outside
+
+
+def test_a_vehicle_on_the_boundary_or_within_its_resolution_outside_is_not_a_breach() -> None:
+    f = fence()
+    middle, outward = on_an_edge(f)
+    ceiling, up = np.array([0.0, 0.0, f.ceiling_z_m]), np.array([0.0, 0.0, 1.0])
+    for on_boundary, out in [(middle, outward), (ceiling, up)]:
+        for position in (on_boundary, on_boundary + 0.9 * BOUNDARY_TOLERANCE_M * out):
+            assert judged(f, position) is None, position
+            # as an autopilot reports it: rounded to float32 (LOCAL_POSITION_NED)
+            assert judged(f, position.astype(np.float32)) is None, position
+
+
+def test_a_vehicle_beyond_the_resolution_is_a_breach_named_in_millimetres() -> None:
+    f = fence()
+    middle, outward = on_an_edge(f)
+    for outside_m, words in [(1.5 * BOUNDARY_TOLERANCE_M, "by 0.01 mm at"),
+                             (0.0042, "by 4.2 mm at"), (0.25, "by 250.0 mm at")]:  # fmt: skip
+        breach = judged(f, middle + outside_m * outward)
+        assert breach is not None and breach.code == "geofence", outside_m
+        assert f"outside its geofence {words}" in breach.message, breach.message
+    above = judged(f, np.array([0.0, 0.0, f.ceiling_z_m + 0.001]))
+    assert above is not None and "by 1.0 mm" in above.message

@@ -8,6 +8,8 @@ autopilot's mode and faults, and the writing-bounds verdict of a written job.
 
 from __future__ import annotations
 
+import math
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
@@ -21,6 +23,7 @@ from vehicle_agent.backends.base import Setpoint, Vec3, VehicleSnapshot
 from vehicle_agent.backends.kinematic import KinematicVehicle
 from vehicle_agent.job_runner import JobRunner, PreparedJob, RunnerConfig
 from vehicle_agent.runner_io import RunnerEvent, result_report
+from vehicle_agent.runner_phases import unsettled_reason
 from vehicle_agent.safety import DeviationLimit, SafetyLimits, WritingBounds, vehicle_fence
 from vehicle_agent.trace import JobTrace
 
@@ -204,6 +207,7 @@ def test_an_unsettled_start_is_flown_again_then_handed_back_without_ink() -> Non
     report = run.failed()
     assert report.error is not None and report.error.code == "not_settled"
     assert report.retry_after_s == 20.0 and "after 2 approaches" in report.error.message
+    assert "20.0 mm from the start, outside the 10.0 mm tolerance" in report.error.message
     assert run.phases.count("transit") == 2 and run.phases.count("settle") == 2
     assert "write" not in run.phases and "started" not in [r.event for r in run.reports]
     assert [e.level for e in run.events if e.kind == "not_settled"] == ["warning"]
@@ -217,6 +221,39 @@ def test_a_vehicle_swinging_through_the_start_does_not_write() -> None:
     report = run.failed()
     assert report.error is not None and report.error.code == "not_settled"
     assert "write" not in run.phases and "started" not in [r.event for r in run.reports]
+
+
+def test_an_approach_that_ends_inside_the_tolerance_names_the_hold_it_fell_short_of() -> None:
+    """Back within 1 cm 0.3 s before the last approach runs out: its distance passes the check,
+    the time it held does not, and the message says so (not "error 4 mm, not within 10 mm")."""
+    probe = Run(push=lambda _t: (0.02, 0.0, 0.0))
+    probe.assign()
+    probe.until(lambda: probe.phases.count("settle") == 2)  # the last approach begins to settle
+    inside_from_s = probe.now_s + probe.safety.settle_timeout_s - 0.3
+    run = Run(push=lambda t: (0.02 if t < inside_from_s else 0.004, 0.0, 0.0))
+    run.assign()
+    run.until(lambda: run.runner.phase == "ground" and bool(run.reports))
+    message = run.failed().error.message  # type: ignore[union-attr]
+    found = re.search(
+        r"within ([\d.]+) mm of the start for ([\d.]+) s, short of the ([\d.]+) s", message
+    )
+    assert found is not None, message
+    tolerance_mm, held_s, hold_s = (float(v) for v in found.groups())
+    assert tolerance_mm == pytest.approx(run.safety.settle_tolerance_m * 1e3)
+    assert hold_s == run.safety.settle_hold_s and held_s < hold_s
+    assert held_s == pytest.approx(0.3, abs=2 * DT)
+    assert "after 2 approaches of 3.0 s" in message and "write" not in run.phases
+
+
+def test_an_unsettled_figure_is_never_shown_equal_to_the_bound_it_failed() -> None:
+    safety = limits(settle_tolerance_m=0.01, settle_hold_s=1.0)
+    outside = unsettled_reason(0.0100004, -math.inf, safety)
+    assert outside == "10.0004 mm from the start, outside the 10.0000 mm tolerance"
+    assert unsettled_reason(0.025, -math.inf, safety) == (
+        "25.0 mm from the start, outside the 10.0 mm tolerance"
+    )
+    inside = unsettled_reason(0.0099, 0.999, safety)
+    assert inside == "within 10.0 mm of the start for 0.999 s, short of the 1.000 s to hold"
 
 
 def test_the_brush_goes_down_only_after_the_start_is_held() -> None:
@@ -257,7 +294,9 @@ def test_a_vehicle_outside_its_fence_holds_then_lands_there_and_stays_in_fault()
     run.until(lambda: run.runner.phase == "fence_hold")
     breach_s = run.now_s
     (event,) = [e for e in run.events if e.kind == "geofence"]
-    assert event.level == "alert" and "outside its geofence by 0.0" in event.message
+    assert event.level == "alert"
+    found = re.search(r"outside its geofence by ([\d.]+) mm", event.message)
+    assert found is not None and 0.0 < float(found.group(1)) <= 1e3 * DT  # a tick at 1 m/s
     assert "at (1.21, 0.00, 0.35) m" in event.message  # caught at the fence's edge, x = 1.21
     run.until(lambda: run.runner.phase == "land")
     assert run.now_s - breach_s == pytest.approx(1.0, abs=0.05)

@@ -1,6 +1,7 @@
 """scripts/sitl/build.py and source_edits.py: the edits made to an autopilot checkout before it is
 built (loopback binds, PX4 board options, SIH's vibration parameter), checked on files that hold
-the texts of the releases they were written for; the builds themselves are run by hand (README)."""
+the texts of the releases they were written for; checkouts refused for their submodules; the build
+steps' failures, on a fake ``./waf``. The builds themselves are run by hand (README)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import re
 import sys
 from pathlib import Path
 from types import ModuleType
+from typing import Any
 
 import pytest
 
@@ -39,7 +41,7 @@ def edits() -> ModuleType:
     return by_path("source_edits")
 
 
-def checkout(root: Path, recipe_edits: tuple) -> Path:
+def checkout(root: Path, recipe_edits: tuple[Any, ...]) -> Path:
     """A checkout whose files hold each edit's text between other lines, as the release does."""
     for edit in recipe_edits:
         path = root / edit.path
@@ -140,3 +142,68 @@ def test_the_edits_only_run_prints_each_edit_and_exits_two_on_a_bad_checkout(
     assert build.main(["px4", str(root), "--edits-only"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("build.py: ") and err.count("\n") == 1 and "not a px4 checkout" in err
+
+
+def test_a_submodule_holding_only_its_git_link_is_refused_with_the_command_that_fills_it(
+    build: ModuleType, tmp_path: Path
+) -> None:
+    recipe = build.RECIPES["ardupilot"]
+    (tmp_path / recipe.marker).parent.mkdir(parents=True)
+    (tmp_path / recipe.marker).write_text("")
+    for sub in recipe.submodules:
+        (tmp_path / sub).mkdir(parents=True, exist_ok=True)
+        (tmp_path / sub / "wscript").write_text("")
+    (tmp_path / "modules/waf/wscript").unlink()  # registered by git, never checked out
+    (tmp_path / "modules/waf/.git").write_text("gitdir: ../../.git/modules/modules/waf\n")
+    command = f"git -C {tmp_path} submodule update --init --recursive modules/waf)"
+    with pytest.raises(build.BuildError, match=r"submodules missing: modules/waf \(") as refused:
+        build.check_checkout("ardupilot", tmp_path)
+    assert str(refused.value).endswith(command)
+    (tmp_path / "modules/waf/waf-light").write_text("")
+    build.check_checkout("ardupilot", tmp_path)
+
+
+def fake_waf(root: Path, body: str) -> Path:
+    """An ArduPilot checkout whose ``./waf`` is a shell script that logs its arguments to
+    ``waf.log`` and then runs ``body``."""
+    waf = root / "waf"
+    waf.write_text(f'#!/bin/sh\necho "$@" >> "$(dirname "$0")/waf.log"\n{body}\n')
+    waf.chmod(0o755)
+    return root / "waf.log"
+
+
+def test_a_step_that_says_a_submodule_is_missing_stops_the_build_although_it_exits_0(
+    build: ModuleType, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """ArduPilot's ./waf without modules/waf/waf-light: its two lines, then exit 0."""
+    log = fake_waf(tmp_path, "echo 'Missing waf submodule. Trying to get it'\n"
+                             "echo 'Submodules OK, try running again'\nexit 0")  # fmt: skip
+    with pytest.raises(build.BuildError) as failed:
+        build.build("ardupilot", tmp_path, tmp_path)
+    message = str(failed.value)
+    assert message == (
+        "./waf configure --board sitl --no-submodule-update failed "
+        "(exit 0, but it said: Missing waf submodule. Trying to get it)"
+    )
+    assert log.read_text().splitlines() == ["configure --board sitl --no-submodule-update"]
+    out = capsys.readouterr().out  # shown to the user as well as read
+    assert "Missing waf submodule" in out and "try running again" in out
+
+
+def test_a_step_that_exits_non_zero_stops_the_build_and_one_that_succeeds_builds(
+    build: ModuleType, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    log = fake_waf(tmp_path, "echo 'waf: no such board' >&2\nexit 1")
+    with pytest.raises(build.BuildError, match=r"^\./waf configure .* failed \(exit 1\)"):
+        build.build("ardupilot", tmp_path, tmp_path)
+    assert len(log.read_text().splitlines()) == 1
+    assert "waf: no such board" in capsys.readouterr().out
+    log.unlink()
+    binary = tmp_path / build.RECIPES["ardupilot"].binary
+    fake_waf(tmp_path, f"echo \"'configure' finished successfully\"\n"
+                       f"mkdir -p {binary.parent} && touch {binary}")  # fmt: skip
+    assert build.build("ardupilot", tmp_path, tmp_path) == binary
+    assert log.read_text().splitlines() == [
+        "configure --board sitl --no-submodule-update",
+        "copter --no-submodule-update",
+    ]

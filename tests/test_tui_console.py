@@ -201,7 +201,7 @@ def test_late_joiner_approves_a_submission_and_sees_it_queued(router: Any) -> No
         await until(pilot, lambda: app.model.job("j-1").state == "queued", "j-1 queued")
         await until(pilot, lambda: "queued" in app._header.last_reply, "the answer")
         await until(
-            pilot, lambda: "ETA" in str(app._queue.get_row("j-1")[3]), "j-1's ETA in the queue"
+            pilot, lambda: "ETA" in str(app._queue.get_row("j-1")[4]), "j-1's ETA in the queue"
         )
         assert str(app._queue.get_row("j-1")[0]) == "queued"
 

@@ -15,9 +15,9 @@ import pytest
 from bus.messages import OperatorCommand, ShowSnapshot, VehicleStatus, VehicleSummary
 from tui.app import ConsoleApp
 from tui.demo import DEMO_TIME_S, demo_model, demo_settings
-from tui.widgets.board_strip import strip_text
+from tui.widgets.board_strip import SYMBOLS, strip_text
 from tui.widgets.confirm_screen import ConfirmScreen
-from tui.widgets.help_screen import HELP, HelpScreen
+from tui.widgets.help_screen import BOARD_MARKS, HELP, HelpScreen
 from tui.widgets.preview_screen import PreviewScreen
 from tui.widgets.vehicle_detail_screen import VehicleDetailScreen
 
@@ -123,6 +123,31 @@ def test_land_is_confirmed_and_the_held_vehicle_shows_in_the_fleet() -> None:
     play(scenario)
 
 
+def test_p_pauses_the_selected_vehicle_at_once_and_resuming_it_is_confirmed() -> None:
+    async def scenario(app: ConsoleApp, pilot: Any) -> None:
+        await pilot.press("P")
+        await settle(pilot)
+        assert not isinstance(app.screen, ConfirmScreen)  # no new job: nothing to confirm
+        assert sent(app) == OperatorCommand(command="pause", vehicle_id="uav1")
+        summary = VehicleSummary(
+            vehicle_id="uav1", kind="quadrotor-brush", state="idle", alive=True, paused=True
+        )
+        fleet = ShowSnapshot(
+            show_id="demo-show", time_s=0, queue_paused=False, jobs=[], vehicles=[summary]
+        )
+        app.model.apply(fleet, DEMO_TIME_S + 100)
+        await pilot.pause(0.3)
+        assert app._fleet.cell_text("uav1", "state") == "idle paused"
+        await pilot.press("P")
+        await settle(pilot)
+        assert isinstance(app.screen, ConfirmScreen) and "fly" in app.screen.question
+        await pilot.press("y")
+        await settle(pilot)
+        assert sent(app) == OperatorCommand(command="resume", vehicle_id="uav1")
+
+    play(scenario)
+
+
 def test_release_all_asks_once_and_releases_every_held_vehicle() -> None:
     """After an E-STOP or a land of the whole fleet: ``U`` names the held vehicles, says the
     paused queue stays paused, and sends one ``release_all``."""
@@ -214,6 +239,8 @@ def test_help_lists_every_key_and_the_preview_fills_the_screen() -> None:
         for key in binding.key.split(","):  # type: ignore[union-attr]
             shown = {"plus": "+", "minus": "-", "question_mark": "?", "f1": "F1"}.get(key, key)
             assert shown in documented, f"key {key!r} missing from the help"
+    for mark in [*(m for m, _ in SYMBOLS.values()), "^", "H", "P", "✎"]:
+        assert f" {mark} " in BOARD_MARKS or f"{mark} " in BOARD_MARKS, f"{mark!r} unexplained"
 
 
 def test_header_counts_faults_and_approvals_and_never_claims_a_stalled_queue_runs() -> None:
@@ -276,3 +303,18 @@ def test_the_board_strip_names_every_board_in_whole_entries() -> None:
         settings = demo_settings(count)
         shown = strip_text(demo_model(settings), settings, DEMO_TIME_S, width).plain
         assert shown == expected and len(shown) <= width
+
+
+def test_home_and_end_take_the_queue_cursor_to_the_first_and_the_last_job() -> None:
+    async def scenario(app: ConsoleApp, pilot: Any) -> None:
+        await pilot.press("tab")
+        await settle(pilot)
+        assert app.focused is app._queue
+        await pilot.press("end")
+        await settle(pilot)
+        last = app._queue.selected_job
+        await pilot.press("home")
+        await settle(pilot)
+        assert app._queue.selected_job == app._queue._keys[0] != last == app._queue._keys[-1]
+
+    play(scenario)

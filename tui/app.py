@@ -62,7 +62,9 @@ class ConsoleApp(App[None]):
     CSS_PATH = "console.tcss"
     TITLE = "skyquill"
     ENABLE_COMMAND_PALETTE = False
-    BINDINGS: ClassVar[list[BindingType]] = [
+    BINDINGS: ClassVar[list[BindingType]] = [  # E-STOP and help first: the footer keeps them
+        Binding("e", "estop", "E-STOP"),
+        Binding("question_mark,f1", "help", "help"),
         Binding("a", "approve", "approve"),
         Binding("r", "reject", "reject"),
         Binding("c", "cancel_job", "cancel"),
@@ -80,10 +82,9 @@ class ConsoleApp(App[None]):
         Binding("s", "fresh_sheet", "fresh sheet", show=False),
         Binding("d", "detail", "detail", show=False),
         Binding("p", "toggle_pause", "pause"),
+        Binding("P", "vehicle('pause')", "pause vehicle", show=False),
         Binding("L", "land_all", "land all"),
-        Binding("e", "estop", "E-STOP"),
         Binding("x", "acknowledge", "ack", show=False),
-        Binding("question_mark,f1", "help", "help"),
         Binding("q", "quit", "quit", show=False),
     ]
 

@@ -109,10 +109,19 @@ def _prioritize(command: str, job: JobState, what: str) -> Request:
 
 
 def vehicle_request(command: str, row: VehicleRow | None) -> Request:
-    """``land``, ``release`` or ``clear_fault`` on the selected vehicle."""
+    """``land``, ``release``, ``clear_fault`` or ``pause`` (pause or resume: a toggle) on the
+    selected vehicle."""
     if row is None:
         return Refusal(f"{command}: no vehicle selected")
     name = _name(row.vehicle_id)
+    if command == "pause" and not row.paused:  # no new job: nothing moves, nothing to confirm
+        return OperatorCommand(command="pause", vehicle_id=row.vehicle_id)
+    if command == "pause":
+        return Ask(
+            f"Resume {name}?\nIt may take the next job and fly.",
+            "Resume",
+            (OperatorCommand(command="resume", vehicle_id=row.vehicle_id),),
+        )
     if command == "land":
         return Ask(
             f"Land {name}?\nIt stays on the ground (held) until you release it with u.",

@@ -146,11 +146,14 @@ def section_text(row: QueueRow) -> Text:
     return Text(label, style=style)
 
 
-def vehicle_state_text(state: str, held: bool) -> Text:
-    """:func:`state_text`, marked ``held`` when the operator holds the vehicle on the ground."""
+def vehicle_state_text(state: str, held: bool, paused: bool = False) -> Text:
+    """:func:`state_text`, marked ``held`` when the operator holds the vehicle on the ground,
+    ``paused`` when it takes no new job."""
     text = state_text(state)
     if held:
         text.append(" held", style="bold black on yellow")
+    elif paused:
+        text.append(" paused", style="bold black on cyan")
     return text
 
 

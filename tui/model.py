@@ -129,6 +129,7 @@ class ConsoleModel:
             message=v.message,
             position_m_enu=v.position_m_enu,
             held=v.held,
+            paused=v.paused,
             surface=v.surface,
             force_n=v.force_n,
             force_reference_n=v.force_reference_n,
@@ -330,6 +331,7 @@ class ConsoleModel:
         v.kind = v.kind or s.kind
         v.board_id = v.board_id or s.board_id
         v.held = s.held
+        v.paused = s.paused
         if v.alive is None:
             v.alive = s.alive
         recent = v.heard_s is not None and now_s - v.heard_s <= self.settings.lost_after_s

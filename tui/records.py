@@ -44,6 +44,7 @@ class VehicleRecord:
         self.message = ""
         self.position_m_enu: tuple[float, float, float] | None = None
         self.held = False
+        self.paused = False
         self.force_n: float | None = None
         self.force_reference_n: float | None = None
         self.track = Track()

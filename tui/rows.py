@@ -39,6 +39,8 @@ class VehicleRow:
     position_m_enu: tuple[float, float, float] | None
     held: bool = False
     """Landed or stopped by the operator: it takes no job until released (``u``)."""
+    paused: bool = False
+    """Paused by the operator: no new job until resumed (``P``)."""
     surface: str = ""
     """What it writes on (``board``, ``wall``, ``floor``), from the show file; empty if unknown."""
     force_n: float | None = None

@@ -20,7 +20,8 @@ from vehicle_agent.runner_io import (
     telemetry_message,
 )
 from vehicle_agent.runner_job import RunningJob
-from vehicle_agent.safety.guard import SafetyGuard
+from vehicle_agent.safety.guard import SafetyGuard, figures_apart
+from vehicle_agent.safety.limits import SafetyLimits
 from vehicle_agent.trace import JobTrace
 
 Level = Literal["info", "warning", "alert"]
@@ -206,13 +207,14 @@ class RunnerPhases:
             return job.setpoint(now_s)
         if now_s < self._settle_until_s:
             return self._hold()
+        why = unsettled_reason(error, held_s, safety)
         if job.approaches < safety.settle_attempts:
-            self.message = f"not settled ({error:.3f} m): flying the approach again"
+            self.message = f"not settled ({why}): flying the approach again"
             self._start_transit(snap.position_m_enu)
             return self._reference_now(now_s)
         message = (
-            f"not settled within {safety.settle_tolerance_m:.3f} m of the start after "
-            f"{job.approaches} approaches of {safety.settle_timeout_s:.1f} s (error {error:.3f} m)"
+            f"not settled after {job.approaches} approaches of "
+            f"{safety.settle_timeout_s:.1f} s: {why}"
         )
         self._abort_job("not_settled", message, self._hold_m_enu, level="warning")
         assert self._move is not None
@@ -339,3 +341,18 @@ class RunnerPhases:
             message=self.message,
             incarnation=incarnation,
         )
+
+
+def unsettled_reason(error_m: float, held_s: float, safety: SafetyLimits) -> str:
+    """Why the vehicle has not settled at the start when its approach runs out, in the figure its
+    check failed: its distance ``error_m`` while outside the tolerance, else how long ``held_s``
+    it has been inside (it must stay ``settle_hold_s`` without a break). Its distance alone, once
+    back inside, would read as a success."""
+    if error_m > safety.settle_tolerance_m:
+        error, tolerance = figures_apart(error_m * 1e3, safety.settle_tolerance_m * 1e3)
+        return f"{error} mm from the start, outside the {tolerance} mm tolerance"
+    held, hold = figures_apart(held_s, safety.settle_hold_s)
+    return (
+        f"within {safety.settle_tolerance_m * 1e3:.1f} mm of the start for {held} s, "
+        f"short of the {hold} s to hold"
+    )

@@ -23,7 +23,9 @@ window.SkyquillStatus = (() => {
   function queued(job) {
     const again = job.attempts >= 1 ? { key: "st_requeued" } : null;
     let line;
-    if (!job.queue_position) line = ["st_in_queue", {}];
+    if (job.show_paused && job.queue_position) line = ["st_paused_n", { n: job.queue_position }];
+    else if (job.show_paused) line = ["st_paused", {}];
+    else if (!job.queue_position) line = ["st_in_queue", {}];
     else if (job.queue_position <= 1) line = ["st_next", { eta: duration(job.eta_s) }];
     else line = ["st_number", { n: job.queue_position, eta: duration(job.eta_s) }];
     if (!again) return line;

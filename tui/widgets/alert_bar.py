@@ -19,19 +19,36 @@ class AlertBar(Static):
         self.set_class(bool(alerts), "-active")
 
     def render(self) -> Text:
-        if not self.alerts:
-            return Text(" no alerts", style="dim", no_wrap=True)
-        text = Text(no_wrap=True, overflow="ellipsis")
-        text.append(f" ⚠ {len(self.alerts)} ", style="bold reverse")
-        text.append(" x:ack ", style="italic")
-        width = self.content_size.width or 10_000
-        for i, message in enumerate(self.alerts):
-            shown = clean(message)
-            rest = len(self.alerts) - i
-            if text.cell_len + 3 + len(shown) + (6 if rest > 1 else 0) > width:
-                text.append(f" │ +{rest} more", style="italic")  # whole alerts only
-                break
-            if i:
-                text.append(" │ ")
-            text.append(shown)
-        return text
+        return alert_line(self.alerts, self.content_size.width or 10_000)
+
+
+def alert_line(alerts: tuple[str, ...], width: int) -> Text:
+    """The alert line in ``width`` cells: the count, then the alerts whole, the first always
+    shown (cut to fit when it is longer than the line) and ``+N more`` for those left out."""
+    if not alerts:
+        return Text(" no alerts", style="dim", no_wrap=True)
+    text = Text(no_wrap=True, overflow="ellipsis")
+    text.append(f" ⚠ {len(alerts)} ", style="bold reverse")
+    text.append(" x:ack ", style="italic")
+    for i, message in enumerate(alerts):
+        shown = Text(clean(message))
+        rest = len(alerts) - i
+        after = len(_more(rest - 1)) if rest > 1 else 0
+        room = width - text.cell_len - (3 if i else 0) - after
+        if shown.cell_len > room and i:
+            text.append(_more(rest), style="italic")  # whole alerts after the first
+            break
+        if i:
+            text.append(" │ ")
+        if shown.cell_len > room:  # the first is always shown, cut to fit
+            shown.truncate(max(1, room), overflow="ellipsis")
+            text.append_text(shown)
+            if rest > 1:
+                text.append(_more(rest - 1), style="italic")
+            break
+        text.append_text(shown)
+    return text
+
+
+def _more(count: int) -> str:
+    return f" │ +{count} more"

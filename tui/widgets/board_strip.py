@@ -29,7 +29,7 @@ def board_entry(model: ConsoleModel, board_id: str, now_s: float) -> Text:
         if row.job_label:
             entry.append(f"«{clean(row.job_label, 6)}» {100 * row.progress:.0f}%")
         else:
-            entry.append_text(fmt.vehicle_state_text(row.state, row.held))
+            entry.append_text(fmt.vehicle_state_text(row.state, row.held, row.paused))
     if board_id in model.dirty_boards:
         entry.append(" new sheet?", style="bold black on yellow")
     return entry
@@ -40,7 +40,8 @@ SYMBOLS = {"fault": ("!", "bold red"), "lost": ("✖", "bold white on red"), "id
 
 
 def compact_entry(model: ConsoleModel, board_id: str, now_s: float) -> Text:
-    """``b1工`` writing, ``b2^`` flying, ``b3✖`` lost, ``b4·`` idle, ``H`` held, ``✎`` new sheet."""
+    """``b1工`` writing, ``b2^`` flying, ``b3✖`` lost, ``b4·`` idle, ``H`` held, ``P`` paused,
+    ``✎`` new sheet (the legend: ``help_screen.BOARD_MARKS``)."""
     entry = Text(clean(board_id, 8), style="bold")
     for vid in model.vehicles_on_board(board_id):
         row = model.vehicle_row(vid, now_s)
@@ -53,6 +54,8 @@ def compact_entry(model: ConsoleModel, board_id: str, now_s: float) -> Text:
             entry.append(mark, style=style)
         if row.held:
             entry.append("H", style="bold black on yellow")
+        elif row.paused:
+            entry.append("P", style="bold black on cyan")
     if board_id in model.dirty_boards:
         entry.append("✎", style="bold black on yellow")
     return entry

@@ -25,8 +25,10 @@ def event_line(event: Event) -> Text:
     return text
 
 
-class EventLog(RichLog):
-    """Appends only what is new; optionally only one vehicle's events."""
+class EventLog(RichLog, can_focus=False):
+    """Appends only what is new; optionally only one vehicle's events. Not a Tab stop: no key
+    acts on it (Tab moves between the fleet and the queue; ``skyquill log`` reads the whole
+    log)."""
 
     def __init__(self, *, vehicle_id: str | None = None, **kwargs: object) -> None:
         super().__init__(max_lines=500, wrap=False, **kwargs)  # type: ignore[arg-type]

@@ -64,7 +64,7 @@ def row_cells(row: VehicleRow) -> Cells:
     values: tuple[Text | str, ...] = (
         Text(fmt.short_id(row.vehicle_id, ID_CHARS), style="bold"),
         row.surface or "-",
-        fmt.vehicle_state_text(row.state, row.held),
+        fmt.vehicle_state_text(row.state, row.held, row.paused),
         Text(fmt.short_id(row.job_label, 6) if row.job_label else "-", style="bold"),
         fmt.progress(row.progress, 5) if row.job_id else "",
         fmt.tracking_error(row),

@@ -31,6 +31,7 @@ HELP: tuple[tuple[str, str, str], ...] = (
     ("s", "fresh sheet: a board waiting for one is written on again", "selected vehicle's board"),
     ("Enter / d", "details of the vehicle", "selected vehicle (fleet focused)"),
     ("p", "pause / resume the queue (held vehicles stay held)", "queue"),
+    ("P", "pause a vehicle: no new job / resume it (confirmed)", "selected vehicle"),
     ("L", "land every vehicle, pause the queue (confirmed)", "whole fleet"),
     ("e", "EMERGENCY STOP: motors off (confirmed)", "whole fleet; one vehicle in details"),
     ("x", "acknowledge the alerts shown", "alert line"),
@@ -39,6 +40,13 @@ HELP: tuple[tuple[str, str, str], ...] = (
     ("q / Ctrl+Q", "quit the console (asks while vehicles fly); the show keeps running", ""),
 )
 """Keys, what they do and what they act on; the footer shows those that act now."""
+
+
+BOARD_MARKS = (
+    "boards line (small terminals): b1工 writing 工 · b2^ in the air · b4· idle · ! fault · "
+    "✖ lost · H held · P paused · ✎ waits for a fresh sheet (s)"
+)
+"""The legend of the compact board strip (``tui/widgets/board_strip.py``)."""
 
 
 def help_table() -> Table:
@@ -61,6 +69,7 @@ class HelpScreen(ModalScreen[None]):
     def compose(self) -> ComposeResult:
         with VerticalScroll(id="help-dialog"):
             yield Static(help_table(), id="help-table")
+            yield Static(Text(BOARD_MARKS, style="dim"), id="help-legend")
 
     def on_mount(self) -> None:
         self.query_one("#help-dialog").border_title = "keys (Esc: back)"

@@ -6,7 +6,10 @@ bulk reject; a mark lasts while its job waits.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from rich.text import Text
+from textual.binding import Binding, BindingType
 from textual.message import Message
 from textual.widgets import DataTable
 
@@ -15,8 +18,15 @@ from tui import format as fmt
 from tui.rows import QueueRow
 from tui.safe_text import clean
 
-COLUMNS = (("section", "State"), ("char", "Char"), ("job", "Job"), ("detail", "Detail"))
-"""Job ids before the details, which are the widest: a narrow queue still shows every id."""
+COLUMNS = (
+    ("section", "State"),
+    ("char", "Char"),
+    ("prio", "Prio"),
+    ("job", "Job"),
+    ("detail", "Detail"),
+)
+"""Job ids before the details, which are the widest: a narrow queue still shows every id. The
+priority (``+``/``-`` move it) is blank at 0, the default, so the ones moved stand out."""
 
 Cells = tuple[Text, ...]
 MARKABLE = frozenset({"awaiting", "queued"})
@@ -30,6 +40,7 @@ def row_cells(row: QueueRow, marked: bool = False) -> Cells:
     return (
         MARK + fmt.section_text(row) if marked else fmt.section_text(row),
         Text(fmt.short_id(row.job.label, 12), style="bold"),
+        Text(f"{row.job.priority:+d}" if row.job.priority else "", style="bold"),
         Text(fmt.short_id(row.job.job_id)),
         Text(fmt.job_detail(row)),
     )
@@ -37,6 +48,11 @@ def row_cells(row: QueueRow, marked: bool = False) -> Cells:
 
 class QueueTable(DataTable[Text]):
     """Jobs by section; the cursor selects the job that approve/reject/cancel act on."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [  # as in the fleet: the first and the last job
+        Binding("home", "scroll_top", "first", show=False),
+        Binding("end", "scroll_bottom", "last", show=False),
+    ]
 
     class JobHighlighted(Message):
         """The cursor moved to another job (or to none)."""
@@ -108,9 +124,11 @@ class QueueTable(DataTable[Text]):
         self.border_subtitle = f"{count} marked · R: reject" if count else ""
 
     def show_rows(self, rows: list[QueueRow]) -> None:
-        """Bring the table in line with ``rows``; the cursor stays on the same job if it can.
-        Marks of jobs that no longer wait are dropped."""
+        """Bring the table in line with ``rows``; the cursor stays on the same job if it can,
+        or among those awaiting approval (:func:`cursor_after`). Marks of jobs that no longer
+        wait are dropped."""
         keys = [row.job.job_id for row in rows]
+        previous = [self._rows[k] for k in self._keys if k in self._rows]
         self._rows = {row.job.job_id: row for row in rows}
         self._marked = {
             k for k in self._marked if k in self._rows and self._rows[k].section in MARKABLE
@@ -126,7 +144,7 @@ class QueueTable(DataTable[Text]):
                         self.update_cell(key, column, after)
             self._shown = cells
             return
-        selected = self.selected_job
+        selected = cursor_after(self.selected_job, previous, rows)
         self.clear()
         for key in keys:
             self.add_row(*cells[key], key=key)
@@ -138,3 +156,15 @@ class QueueTable(DataTable[Text]):
     def on_data_table_row_highlighted(self, event: DataTable.RowHighlighted) -> None:
         event.stop()
         self.post_message(self.JobHighlighted(event.row_key.value))
+
+
+def cursor_after(selected: str | None, before: list[QueueRow], after: list[QueueRow]) -> str | None:
+    """The job the cursor is on once the rows change from ``before`` to ``after``: the same job,
+    unless it was awaiting approval and is not any more (approved, rejected): then the job
+    awaiting approval now where it was, or the last one still awaiting. So ``a`` three times
+    approves the next three submissions, as a mail client's delete moves to the next message."""
+    was = [r.job.job_id for r in before if r.section == "awaiting"]
+    awaiting = [r.job.job_id for r in after if r.section == "awaiting"]
+    if selected not in was or selected in awaiting or not awaiting:
+        return selected
+    return awaiting[min(was.index(selected), len(awaiting) - 1)]

@@ -37,7 +37,7 @@ def detail_table(row: VehicleRow) -> Table:
         ("vehicle", plain(row.vehicle_id, "bold")),
         ("kind", plain(row.kind or "-")),
         ("writes on", plain(row.surface or "-")),
-        ("state", fmt.vehicle_state_text(row.state, row.held)),
+        ("state", fmt.vehicle_state_text(row.state, row.held, row.paused)),
         ("board", plain(row.board_id or "-")),
         ("job", plain(row.job_id or "-")),
         ("character", plain(row.job_label or "-", "bold")),
@@ -99,11 +99,13 @@ class VehicleDetailScreen(Screen[None]):
         self.query_one(EventLog).border_title = Text(f"events of {shown}")
 
     def sync(self, now_s: float) -> None:
-        """Show the model's state of the vehicle (nothing yet while it is being composed)."""
-        if not self.is_mounted:
+        """Show the model's state of the vehicle (nothing while it is being composed, or torn
+        down with the app: mounted, its children gone)."""
+        found = self.query("#detail-info").results(Static) if self.is_mounted else iter(())
+        info = next(found, None)
+        if info is None:
             return
         row = self.model.vehicle_row(self.vehicle_id, now_s)
-        info = self.query_one("#detail-info", Static)
         info.update(detail_table(row) if row else plain(f"{self.vehicle_id}: unknown"))
         self.query_one(BoardView).sync(now_s)
         self.query_one(ForcePlot).sync()

@@ -170,7 +170,12 @@ class MavlinkBackend:
             now_s = self.tick_time.now_s(time.monotonic())
             self.aid.on_message(message, now_s, resting_at_home=not self.state.armed)
         elif kind == "STATUSTEXT":
-            severity, text = self.state.recent_texts[-1]
+            self._tell_texts()
+
+    def _tell_texts(self) -> None:
+        """Hand on the autopilot's texts completed since the last time (chunks joined: two at
+        once when a cut-off one is followed by another, a late part from ``tick``)."""
+        for severity, text in self.state.take_to_tell():
             self.commands.on_text(text)
             self.events.append((severity, text))
             if "using external nav" in text and self._link is not None:
@@ -314,6 +319,7 @@ class MavlinkBackend:
         self._now_s = now_s
         self.tick_time.ticked(now_s, time.monotonic())
         self._supervise(now_s)
+        self._tell_texts()  # the part of a chunked text that waited its time for the rest
         if self.fault is None and self._link is not None:
             self._advance(now_s)
             self._stream(setpoint, now_s)

@@ -1,13 +1,17 @@
-"""What the autopilot told us, absorbed message by message (pure: no I/O, no clock).
+"""What the autopilot told us, absorbed message by message (pure: no I/O; the one clock, for how
+long part of a chunked STATUSTEXT waits for the rest, is given to :class:`LinkState`).
 
 :class:`Flavor` captures the two autopilots' mode encodings: ArduPilot's HEARTBEAT ``custom_mode``
 is the mode number (GUIDED 4, LAND 9); PX4's is ``main << 16 | sub << 24`` (OFFBOARD main 6,
 AUTO.LAND main 4 sub 6) and MAV_CMD_DO_SET_MODE takes main and sub in params 2 and 3.
+:class:`StatustextJoiner` makes one text of a STATUSTEXT sent in chunks (PX4, over 50 characters).
 """
 
 from __future__ import annotations
 
+import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -19,6 +23,13 @@ MAV_AUTOPILOT_PX4 = 12
 MAV_TYPE_GCS = 6
 MAV_MODE_FLAG_SAFETY_ARMED = 128
 SEVERITY_WARNING = 4
+STATUSTEXT_CHARS = 50
+"""Characters in one STATUSTEXT's ``text`` (common.xml: char[50]); a chunk this full may go on."""
+STATUSTEXT_JOIN_WAIT_S = 1.0
+"""How long in [s] part of a chunked STATUSTEXT waits for its next chunk before it is handed on as
+it is. PX4 sends all the chunks of a text in one pass of its STATUSTEXT stream
+(``src/modules/mavlink/streams/STATUSTEXT.hpp``), so they arrive together: the wait is for a chunk
+lost on the link, and for a text of exactly 50, 100... characters, whose last chunk is full."""
 
 _ARDUPILOT_MODES = {0: "STABILIZE", 2: "ALT_HOLD", 3: "AUTO", 4: "GUIDED", 5: "LOITER", 6: "RTL",
                     9: "LAND", 16: "POSHOLD", 17: "BRAKE", 20: "GUIDED_NOGPS"}  # fmt: skip
@@ -65,10 +76,80 @@ def flavor_for(autopilot: int) -> Flavor | None:
     return {MAV_AUTOPILOT_ARDUPILOTMEGA: ARDUPILOT, MAV_AUTOPILOT_PX4: PX4}.get(autopilot)
 
 
+@dataclass
+class _PartialText:
+    """The chunks of one STATUSTEXT received so far."""
+
+    severity: int
+    text_id: int
+    next_chunk: int
+    """The ``chunk_seq`` that would continue it."""
+    parts: list[str]
+    last_chunk_s: float
+    """When its last chunk arrived, in [s] (the caller's clock)."""
+
+
+class StatustextJoiner:
+    """One text from the STATUSTEXTs it was sent in (pure: the time is given).
+
+    MAVLink 2 sends a text longer than 50 characters as STATUSTEXTs with the same ``id`` and
+    ``chunk_seq`` 0, 1, 2...; the last is shorter than 50 (NUL-terminated). ``id`` 0 means a text
+    of one chunk (common.xml), as ArduPilot and mavsim send every text. (PX4 numbers its texts
+    from 0, ``_id++``: its first text after boot, if chunked, comes as separate texts.) Part
+    of a text is handed on as it is when a chunk of another text (or out of sequence) arrives, or
+    once it has waited :data:`STATUSTEXT_JOIN_WAIT_S`: no words are lost to a chunk that never
+    comes.
+    """
+
+    def __init__(self, wait_s: float = STATUSTEXT_JOIN_WAIT_S) -> None:
+        self.wait_s = wait_s
+        self._partial: _PartialText | None = None
+
+    def add(
+        self, severity: int, text: str, text_id: int, chunk_seq: int, now_s: float
+    ) -> list[tuple[int, str]]:
+        """The texts (severity, text), oldest first, that are whole once this chunk is in:
+        usually none (it waits for the rest) or one."""
+        done = self.expire(now_s)
+        partial = self._partial
+        if partial is not None and (text_id, chunk_seq) != (partial.text_id, partial.next_chunk):
+            done += self._hand_on()
+        if text_id == 0:
+            return [*done, (severity, text)]
+        if self._partial is None:  # chunk_seq > 0: its beginning was lost, the rest still joins
+            self._partial = _PartialText(severity, text_id, chunk_seq, [], now_s)
+        self._partial.parts.append(text)
+        self._partial.next_chunk += 1
+        self._partial.last_chunk_s = now_s
+        if len(text) < STATUSTEXT_CHARS:
+            done += self._hand_on()
+        return done
+
+    def expire(self, now_s: float) -> list[tuple[int, str]]:
+        """The part of a text that has waited too long for its next chunk (or nothing)."""
+        partial = self._partial
+        if partial is not None and now_s - partial.last_chunk_s >= self.wait_s:
+            return self._hand_on()
+        return []
+
+    def _hand_on(self) -> list[tuple[int, str]]:
+        partial, self._partial = self._partial, None
+        return [] if partial is None else [(partial.severity, "".join(partial.parts))]
+
+
 class LinkState:
     """Latest vehicle state from its messages; counters let callers see what is new."""
 
-    def __init__(self, system_id: int | None = None, *, own_system_id: int = 255) -> None:
+    def __init__(
+        self,
+        system_id: int | None = None,
+        *,
+        own_system_id: int = 255,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self._clock = clock
+        """Time in [s], for how long part of a chunked STATUSTEXT has waited for the rest."""
+        self._text_joiner = StatustextJoiner()
         self.own_system_id = own_system_id
         """Our system id: COMMAND_ACKs addressed to another ground station are not ours."""
         self.system_id = system_id
@@ -93,8 +174,12 @@ class LinkState:
         """``time_boot_ms`` of the last POSITION_TARGET_LOCAL_NED (our stamp, on mavsim)."""
         self.acks: deque[tuple[int, int]] = deque(maxlen=64)
         self.texts: deque[tuple[int, str]] = deque(maxlen=64)
-        """STATUSTEXTs (severity, text) not yet taken by :meth:`take_texts`."""
+        """STATUSTEXTs (severity, text), chunks joined, not yet taken by :meth:`take_texts`."""
         self.recent_texts: deque[tuple[int, str]] = deque(maxlen=16)
+        """The last STATUSTEXTs (chunks joined), newest last."""
+        self.to_tell: deque[tuple[int, str]] = deque(maxlen=64)
+        """STATUSTEXTs (chunks joined) not yet handed on by :meth:`take_to_tell` (the backend's
+        event log, its command refusals), apart from the watchdog's :meth:`take_texts`."""
 
     @property
     def flavor(self) -> Flavor | None:
@@ -106,13 +191,24 @@ class LinkState:
         return self.heartbeats > 0
 
     def take_texts(self) -> list[tuple[int, str]]:
-        """The STATUSTEXTs received since the last call."""
+        """The STATUSTEXTs received since the last call, with the part of a chunked one that has
+        waited its time for the rest (the watchdog calls this every tick: no text is held long)."""
+        self._keep_texts(self._text_joiner.expire(self._clock()))
         texts = list(self.texts)
         self.texts.clear()
         return texts
 
+    def take_to_tell(self) -> list[tuple[int, str]]:
+        """The STATUSTEXTs completed since the last call, the part of a chunked one that has
+        waited its time for the rest included: every text once, however it came."""
+        self._keep_texts(self._text_joiner.expire(self._clock()))
+        told = list(self.to_tell)
+        self.to_tell.clear()
+        return told
+
     def absorb(self, message: Any) -> str:
-        """Take one message into the state; returns its type ("" when ignored: other system)."""
+        """Take one message into the state; returns its type ("" when ignored: another system,
+        or a STATUSTEXT chunk that waits for the rest of its text)."""
         kind: str = message.get_type()
         source = message.get_srcSystem()
         if kind == "HEARTBEAT":
@@ -161,11 +257,22 @@ class LinkState:
     def _extended_sys_state(self, m: Any) -> None:
         self.landed_state = int(m.landed_state)
 
-    def _statustext(self, m: Any) -> None:
+    def _statustext(self, m: Any) -> bool:
         text = m.text.decode(errors="replace") if isinstance(m.text, bytes) else str(m.text)
-        entry = (int(m.severity), text.rstrip("\x00"))
-        self.texts.append(entry)
-        self.recent_texts.append(entry)
+        whole = self._text_joiner.add(
+            int(m.severity),
+            text.split("\x00", 1)[0],
+            int(getattr(m, "id", 0)),  # MAVLink 1 has neither field: one chunk
+            int(getattr(m, "chunk_seq", 0)),
+            self._clock(),
+        )
+        self._keep_texts(whole)
+        return bool(whole)
+
+    def _keep_texts(self, texts: list[tuple[int, str]]) -> None:
+        self.texts.extend(texts)
+        self.recent_texts.extend(texts)
+        self.to_tell.extend(texts)
 
     def _command_ack(self, m: Any) -> bool:
         if getattr(m, "target_system", 0) not in (0, self.own_system_id):

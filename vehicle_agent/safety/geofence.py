@@ -21,6 +21,13 @@ Point2 = tuple[float, float]
 
 GROUND_SLACK_M = 0.2
 """How far below the home's height the floor of the fence lies, in [m] (landing gear, noise)."""
+BOUNDARY_TOLERANCE_M = 2.0**-17
+"""How far in [m] (7.6 µm) a measured position may lie outside the fence and still count as on its
+boundary: the resolution of the positions an autopilot reports. MAVLink's LOCAL_POSITION_NED and
+SET_POSITION_TARGET_LOCAL_NED carry x, y, z as 32-bit floats (common.xml), spaced 2^-17 m apart
+from 64 to 128 m off the autopilot's origin (finer nearer it); a setpoint on the boundary, sent,
+flown and read back, is rounded by up to half that each way. Less is the boundary measured, not a
+vehicle beyond it (counted as a breach, it landed the vehicle in ``fault`` "by 0.00 m")."""
 _CIRCLE_SIDES = 16
 """The margin around each point is a circumscribed polygon with this many sides."""
 

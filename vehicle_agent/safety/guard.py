@@ -14,7 +14,7 @@ from typing import Literal
 import numpy as np
 
 from vehicle_agent.backends.base import Setpoint, Vec3, VehicleSnapshot
-from vehicle_agent.safety.geofence import FenceWatch
+from vehicle_agent.safety.geofence import BOUNDARY_TOLERANCE_M, FenceWatch
 from vehicle_agent.safety.limits import SafetyLimits
 from vehicles.deviation import DeviationMonitor
 
@@ -59,9 +59,10 @@ class SafetyGuard:
         watch = self._watch
         if watch is not None and phase not in FENCED_EXEMPT and not snapshot.on_ground:
             outside_m = watch.distance_outside_m(position)
-            if outside_m > 0.0:
+            if outside_m > BOUNDARY_TOLERANCE_M:
+                outside_mm, _ = figures_apart(outside_m * 1e3, 0.0)
                 where = ", ".join(f"{v:.2f}" for v in position)
-                message = f"outside its geofence by {outside_m:.2f} m at ({where}) m"
+                message = f"outside its geofence by {outside_mm} mm at ({where}) m"
                 return Breach("geofence", message, position)
         if phase not in TRACKED_PHASES or reference is None:
             self.monitor.reset()
@@ -99,3 +100,12 @@ class SafetyGuard:
 
 def _fmt(p: tuple[float, ...]) -> str:
     return "(" + ", ".join(f"{v:.2f}" for v in p) + ")"
+
+
+def figures_apart(value: float, bound: float, decimals: int = 1) -> tuple[str, str]:
+    """``value`` and the ``bound`` it failed, with ``decimals`` decimals or as many more as tell
+    them apart (up to 9), so that a message never shows a failed figure equal to its bound (a
+    geofence breach of "0.0 mm", a settling error "outside" a tolerance it prints equal to)."""
+    while decimals < 9 and f"{value:.{decimals}f}" == f"{bound:.{decimals}f}":
+        decimals += 1
+    return f"{value:.{decimals}f}", f"{bound:.{decimals}f}"

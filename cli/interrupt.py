@@ -1,0 +1,74 @@
+"""When ``skyquill up`` stops: at once on SIGTERM (``skyquill down``, a script), and on Ctrl-C
+only once nothing is in the air, or on a second Ctrl-C after it has said what is.
+
+A Ctrl-C in a terminal is easily pressed by mistake (into the wrong window, to copy text, after
+quitting the console). Stopping the show stops every agent: a simulated vehicle simply stops,
+an autopilot left without its setpoint stream falls back on its own failsafe, wherever it is.
+So, like a build tool's "press again to force", the first Ctrl-C with vehicles in the air only
+names them and says how to land them; a second within :data:`CONFIRM_WINDOW_S` stops the show.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+CONFIRM_WINDOW_S = 10.0
+"""How long after the question a second Ctrl-C stops the show anyway, wall [s]: time to read two
+lines, short enough that a later Ctrl-C is taken as a new first one."""
+
+
+class StopRequests:
+    """Ctrl-C and SIGTERM as they come (record them in the signal handler: nothing slow there);
+    :meth:`due` decides in the supervising loop."""
+
+    def __init__(
+        self,
+        flying: Callable[[], list[str] | None],
+        say: Callable[[str], None],
+        show: str,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        """``flying()``: the vehicles in the air now, None when that cannot be told (the
+        orchestrator does not answer)."""
+        self._flying = flying
+        self._say = say
+        self._show = show
+        self._clock = clock
+        self._terminated = False
+        self._interrupted = False
+        self._asked_at_s: float | None = None
+
+    def terminate(self) -> None:
+        """SIGTERM: stop at once."""
+        self._terminated = True
+
+    def interrupt(self) -> None:
+        """Ctrl-C (SIGINT)."""
+        self._interrupted = True
+
+    def due(self) -> bool:
+        """Whether the show is to stop now (call it from the loop, often)."""
+        if self._terminated:
+            return True
+        if not self._interrupted:
+            return False
+        self._interrupted = False
+        now_s = self._clock()
+        if self._asked_at_s is not None and now_s - self._asked_at_s <= CONFIRM_WINDOW_S:
+            return True
+        flying = self._flying()
+        if flying == []:
+            return True
+        what = (
+            f"{', '.join(flying)} {'is' if len(flying) == 1 else 'are'} in the air"
+            if flying is not None
+            else "the orchestrator does not answer: vehicles may be in the air"
+        )
+        self._say(
+            f"{what}. `skyquill command {self._show} land-all` lands them first; Ctrl-C again "
+            f"within {CONFIRM_WINDOW_S:.0f} s stops the show anyway (an autopilot then falls "
+            "back on its own failsafe, a simulated vehicle stops where it is)"
+        )
+        self._asked_at_s = self._clock()
+        return False
