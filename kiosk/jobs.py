@@ -127,7 +127,7 @@ def job_view(
             paused=show_paused,
             queue_position=state.queue_position,
             eta_s=state.eta_s,
-            vehicle_id=state.vehicle_id,
+            board=board,
             progress=state.progress,
             attempts=state.attempts,
             place=place,

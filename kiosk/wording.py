@@ -69,7 +69,7 @@ def status_text(
     *,
     queue_position: int | None = None,
     eta_s: float | None = None,
-    vehicle_id: str | None = None,
+    board: int | None = None,
     progress: float = 0.0,
     attempts: int = 0,
     place: str | None = None,
@@ -77,8 +77,10 @@ def status_text(
 ) -> str:
     """What the page says about a job in ``state`` (a bus JobStateName).
 
-    ``attempts``: assignments so far (a requeued job was assigned before); ``place``: where the
-    writing vehicle's board is ("board 2 from the left"); ``paused``: the show is paused (a
+    ``board``: the position from the left of the writing vehicle's board, which names the drone
+    for the public ("drone 2": an internal vehicle id is no name for a visitor); ``attempts``:
+    assignments so far (a requeued job was assigned before); ``place``: where that board is
+    ("board 2 from the left"); ``paused``: the show is paused (a
     queued job keeps its place, with no start time to promise)."""
     if state in ("submitted", "awaiting_approval"):
         return "Waiting for the show's operator to approve your character."
@@ -98,11 +100,11 @@ def status_text(
             return again + "In the queue."
         line = "next in line" if queue_position <= 1 else f"number {queue_position} in the queue"
         return again + f"You are {line}. Your character should start in {duration_words(eta_s)}."
-    drone = f"drone {vehicle_id}" if vehicle_id else "a drone"
+    drone = f"drone {board}" if board else "a drone"
     where = f" at {place}" if place else ""
     if state in ("assigned", "writing") and attempts >= 2:
         done = f" ({_percent(progress)} done)" if state == "writing" else ""
-        return f"The first drone had to land; another drone, {drone}, is writing it{where}{done}."
+        return f"The first drone had to land; now {drone} is writing it{where}{done}."
     if state == "assigned":
         return f"Getting ready: {drone} is taking off to write your character{where}."
     if state == "writing":

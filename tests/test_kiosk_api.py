@@ -63,6 +63,7 @@ def kiosk(bus: tuple[BusSettings, FakeOrchestrator]) -> Iterator[str]:
         ),
         rate_limit_per_minute=6,
         submit_timeout_s=1.0,
+        places={"uav3": 3, "uav4": 4},
     )  # fmt: skip
     with serving(settings, zenoh_settings, role="client") as server:
         yield server.url
@@ -486,14 +487,15 @@ def test_submit_reaches_the_orchestrator_and_status_follows_the_bus(
     assert next(frames)[0] == "live"  # between changes, the stream says whether it is current
     fake.set_state(job_id, "writing", vehicle_id="uav3", progress=0.4, queue_position=None)
     _, writing = next(events)
-    assert writing["state"] == "writing" and "uav3" in writing["status_text"]
+    assert writing["state"] == "writing" and "by drone 3 at board 3" in writing["status_text"]
     assert "40%" in writing["status_text"]
     fake.set_state(job_id, "queued", vehicle_id="uav3", attempts=1, queue_position=1)
     _, requeued = next(events)
     assert "had to land" in requeued["status_text"] and "next in line" in requeued["status_text"]
     fake.set_state(job_id, "writing", vehicle_id="uav4", attempts=2, progress=0.1)
     _, again = next(events)
-    assert "another drone, drone uav4" in again["status_text"]
+    assert "now drone 4 is writing it" in again["status_text"]
+    assert not [t for t in (writing, again) if "uav" in t["status_text"]]  # no internal ids
     fake.set_state(job_id, "done", vehicle_id="uav4", progress=1.0, metrics=done_metrics())
     _, done = next(events)
     assert done["final"] and done["metrics"]["rmse_pen_down_m"] == pytest.approx(0.012)

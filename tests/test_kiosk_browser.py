@@ -243,9 +243,10 @@ def test_draw_preview_submit_and_follow_on_a_phone(browser: object, show: Show) 
     assert page.inner_text("#job-id").strip() == job_id
     status.filter(has_text="next in line").wait_for(timeout=UI_WAIT_MS)
     # the orchestrator, which owns the job, may publish it queued again meanwhile (seen once in
-    # CI: "uav1" not shown within 15 s): relayed until the page shows it
-    _relay_until_shown(show, status, job_id, "uav1", "writing", vehicle_id="uav1", progress=0.3,
-                       queue_position=None)  # fmt: skip
+    # CI: "uav1" not shown within 15 s): relayed until the page shows it, by its public name
+    _relay_until_shown(show, status, job_id, "drone 1", "writing", vehicle_id="uav1",
+                       progress=0.3, queue_position=None)  # fmt: skip
+    assert "uav1" not in status.inner_text()  # never the internal id
     show.relay(job_id, "done", vehicle_id="uav1", progress=1.0, metrics=done_metrics())
     status.filter(has_text="Done!").wait_for(timeout=UI_WAIT_MS)
     page.wait_for_selector("#result:not([hidden])", timeout=UI_WAIT_MS)

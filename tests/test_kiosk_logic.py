@@ -185,18 +185,18 @@ def test_status_text_says_what_happens_in_plain_words() -> None:
     assert "less than a minute" in wording.status_text("queued", queue_position=1, eta_s=20.0)
     assert "number 4" in wording.status_text("queued", queue_position=4, eta_s=200.0)
     assert "about 3 minutes" in wording.status_text("queued", queue_position=4, eta_s=200.0)
-    assert "uav2" in wording.status_text("writing", vehicle_id="uav2", progress=0.5)
-    assert "50%" in wording.status_text("writing", vehicle_id="uav2", progress=0.5)
-    assert wording.status_text("done", vehicle_id="uav2").startswith("Done!")
+    assert "by drone 2" in wording.status_text("writing", board=2, progress=0.5)  # its board
+    assert "50%" in wording.status_text("writing", board=2, progress=0.5)
+    assert wording.status_text("done", board=2).startswith("Done!")
     paused = wording.status_text("queued", queue_position=4, eta_s=200.0, paused=True)
     assert "paused" in paused and "number 4" in paused and "minute" not in paused  # no promise
     assert job_view(state("j", "queued", 1.0), show_paused=True)["show_paused"]
     requeued = wording.status_text("queued", attempts=1, queue_position=2, eta_s=10.0)
     assert "had to land" in requeued and "number 2" in requeued
     again = wording.status_text(
-        "writing", attempts=2, vehicle_id="uav2", progress=0.3, place="board 2 from the left"
+        "writing", attempts=2, board=2, progress=0.3, place="board 2 from the left"
     )
-    assert "another drone" in again and "board 2 from the left" in again and "30%" in again
+    assert "now drone 2" in again and "board 2 from the left" in again and "30%" in again
     assert wording.board_numbers({"u1": "b1", "u2": "b2", "u3": "gone"}, ["b2", "b1"]) == {
         "u1": 2, "u2": 1
     }  # fmt: skip

@@ -13,7 +13,8 @@ window.SkyquillStatus = (() => {
   }
 
   function drone(job) {
-    return job.vehicle_id ? { key: "drone_named", args: { id: job.vehicle_id } } : { key: "drone_any" };
+    // named for the public by its board's place from the left, never by its internal id
+    return job.board ? { key: "drone_named", args: { n: job.board } } : { key: "drone_any" };
   }
 
   function where(job) {
