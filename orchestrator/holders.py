@@ -90,7 +90,9 @@ def overdue(job: Job, now_s: float) -> bool:
 
 
 def tell_overdue(book: Book, eff: Effects, now_s: float) -> None:
-    """Alert once for each job that has begun waiting for its holder beyond its hold."""
+    """Alert once for each job that has begun waiting for its holder beyond its hold (and
+    forget the alerted jobs that wait no more)."""
+    book.told_overdue &= {j.job_id for v in book.vehicles if (j := book.awaited_by(v))}
     for vehicle_id in book.vehicles:
         job = book.awaited_by(vehicle_id)
         if job is None or not overdue(job, now_s) or job.job_id in book.told_overdue:
@@ -109,15 +111,11 @@ def tell_overdue(book: Book, eff: Effects, now_s: float) -> None:
 
 def overdue_boards(book: Book) -> set[str]:
     """Boards of the vehicles whose job has been alerted as overdue and still waits for them."""
-    boards = set()
-    for job_id in list(book.told_overdue):
-        job = book.jobs.get(job_id)
-        holder = job.vehicle_id if job is not None else None
-        if job is None or holder is None or book.awaited_by(holder) != job:
-            book.told_overdue.discard(job_id)
-        else:
-            boards.add(book.vehicles[holder].info.board_id)
-    return boards
+    return {
+        view.info.board_id
+        for vid, view in book.vehicles.items()
+        if (job := book.awaited_by(vid)) is not None and job.job_id in book.told_overdue
+    }
 
 
 def free_on_fresh_sheet(book: Book, eff: Effects, board_id: str, now_s: float) -> Job | None:

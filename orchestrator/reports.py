@@ -106,13 +106,13 @@ def _done(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) ->
     )
     if owner is not None and owner != rep.vehicle_id:
         eff.commands.append((owner, VehicleCommand(command="cancel", job_id=job.job_id)))
-    _written(book, job, eff, now_s)
+    _left_on_its_sheet(book, job, eff, now_s)
     eff.fleet_changed = True
     book.assign(eff, now_s)
     return CommandReply(ok=True, message="done recorded")
 
 
-def _written(book: Book, job: Job, eff: Effects, now_s: float) -> None:
+def _left_on_its_sheet(book: Book, job: Job, eff: Effects, now_s: float) -> None:
     """``job`` is on its board in full: that board may now wait for the crew's sheet."""
     if job.board_id is None or not book.sheets.written(job.board_id, now_s):
         return
@@ -172,7 +172,7 @@ def _fail(
         eff, now_s, "alert", "job_failed", message, vehicle_id=rep.vehicle_id, job_id=job.job_id
     )
     if rep.progress >= 1.0:  # written out of its bounds, or unmeasured: on its sheet all the same
-        _written(book, job, eff, now_s)
+        _left_on_its_sheet(book, job, eff, now_s)
     eff.fleet_changed = True
     book.assign(eff, now_s)
     return CommandReply(ok=True, message="failure recorded")

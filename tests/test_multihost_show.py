@@ -304,7 +304,7 @@ def test_one_show_across_three_hosts_writes_through_loss_and_a_partition(
         assert job["vehicle_id"] == victim and job["attempts"] == 1, job  # nobody else had it
         _wait(f"{victim} back", 30.0, lambda: _ready(observer, [victim]))
         kinds = [e["kind"] for e in observer.records("events") if e.get("job_id") == job_id]
-        assert "board_dirty" not in kinds and "job_taken_over" not in kinds, kinds
+        assert "board_dirty" not in kinds and "job_waits" not in kinds, kinds  # back in its hold
         _check_written_once(show, observer)
         victim_log = (tmp_path / "logs" / cut_host / f"{victim}.log").read_text()
         assert f"gave job {job_id} up: " not in victim_log

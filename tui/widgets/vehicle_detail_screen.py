@@ -101,8 +101,9 @@ class VehicleDetailScreen(Screen[None]):
     def sync(self, now_s: float) -> None:
         """Show the model's state of the vehicle (nothing while it is being composed, or torn
         down with the app: mounted, its children gone)."""
-        found = self.query("#detail-info").results(Static) if self.is_mounted else iter(())
-        info = next(found, None)
+        if not self.is_mounted:
+            return
+        info = next(self.query("#detail-info").results(Static), None)
         if info is None:
             return
         row = self.model.vehicle_row(self.vehicle_id, now_s)
