@@ -241,29 +241,56 @@ def run(vehicles: int, seconds: float, rate_hz: float) -> None:
 
 
 def writing(texts: list[str], targets: list[str]) -> None:
-    """Pen-down RMSE and IoU of each character on each target, side by side."""
-    print("\nwriting, 2 cm brush: pen-down RMSE [mm] / IoU (lead [s] the backend applied)")
-    print("  " + "".join(f"{t:>24}" for t in targets))
-    columns = []
+    """Per target and character: the pace chosen, the error predicted for it and the error
+    flown, the ink IoU and the lead the backend applied (each target identifies its tracking
+    anew: its first character at the cautious first pace, the others at the identified one)."""
+    print("\nwriting, 2 cm brush, planning.pace: tracking (aim 6 mm):")
+    print(f"  {'target':<10}{'char':>5}{'stretch':>9}{'predicted':>11}{'flown':>8}"
+          f"{'IoU':>7}{'lead':>8}   [mm, s]")  # fmt: skip
     for target in targets:
-        if target in ("ardupilot", "px4") and not mavlink_writing.sitl_available(target):
-            columns.append(["no SITL binary"] * len(texts))
+        if target in SITL_TARGETS and not mavlink_writing.sitl_available(target):
+            print(
+                f"  {target:<10} no SITL binary (${mavlink_writing.launcher().ENV_BINARY[target]})"
+            )
             continue
         try:
             flown = mavlink_writing.write(target, texts)
         except (RuntimeError, OSError, mavlink_writing.launcher().SitlError) as exc:
-            print(f"  {target}: {exc}", file=sys.stderr)
-            columns.append(["failed"] * len(texts))
+            print(f"  {target:<10} failed: {exc}")
             continue
-        cells = []
-        for w in flown:
-            m = w.metrics
-            lead = "" if w.lead_s is None else f" ({w.lead_s:.3f})"
-            iou = "-" if m.iou is None else f"{m.iou:.2f}"
-            cells.append(f"{1000 * m.rmse_pen_down_m:.1f} / {iou}{lead}")
-        columns.append(cells)
-    for k, text in enumerate(texts):
-        print(f"{text:>2}" + "".join(f"{column[k]:>24}" for column in columns))
+        for text, w in zip(texts, flown, strict=True):
+            print("  " + _writing_row(target, text, w))
+        _print_medians(target, flown)
+
+
+SITL_TARGETS = ("ardupilot", "px4")
+
+
+def _writing_row(target: str, text: str, w: Any) -> str:
+    m = w.metrics
+    predicted = m.extra.get("pace_predicted_rmse_pen_down_m")
+    cells = (
+        f"{m.extra.get('pace_stretch', 1.0):9.2f}",
+        "      first" if predicted is None else f"{1000 * predicted:11.1f}",
+        f"{1000 * m.rmse_pen_down_m:8.1f}",
+        "      -" if m.iou is None else f"{m.iou:7.2f}",
+        "       -" if w.lead_s is None else f"{w.lead_s:8.3f}",
+    )
+    return f"{target:<10}{text:>4} " + "".join(cells)
+
+
+def _print_medians(target: str, flown: list[Any]) -> None:
+    rmse = [1000 * w.metrics.rmse_pen_down_m for w in flown]
+    ious = [w.metrics.iou for w in flown if w.metrics.iou is not None]
+    predicted = "pace_predicted_rmse_pen_down_m"
+    ratio = [w.metrics.rmse_pen_down_m / w.metrics.extra[predicted]
+             for w in flown if predicted in w.metrics.extra]  # fmt: skip
+    line = f"  {target:<10} median {statistics.median(rmse):.1f} mm"
+    if ious:
+        line += f", IoU median {statistics.median(ious):.2f} worst {min(ious):.2f}"
+    if ratio:
+        line += f", flown / predicted median {statistics.median(ratio):.2f}"
+    print(line)
 
 
 def main() -> None:

@@ -30,25 +30,26 @@ from vehicle_agent.backends.base import CommandRefusedError, VehicleBackend
 from vehicle_agent.backends.mavlink import MavlinkBackend
 from vehicle_agent.clock import TickClock
 from vehicle_agent.job_runner import JobRunner
-from vehicle_agent.jobs import job_metrics, prepare_job
+from vehicle_agent.jobs import job_metrics, planned_job, prepared_job
 from vehicle_agent.setup import vehicle_setup
 
 ROOT = Path(__file__).resolve().parents[1]
 HOME_M_ENU = (0.0, -1.0, 0.0)
-SITL_INDEX = 7
+SITL_SYSTEM_ID = 8
+"""System id of the SITL autopilot (start.py picks a free instance number and ports)."""
 SITL_MOCAP = {"ardupilot": "vision_position_estimate", "px4": "odometry"}
 """How each autopilot gets the mocap: PX4 SIH hovers within 1-1.5 cm only with the mocap's
 velocity fused (ODOMETRY); ArduCopter writes as well on the position alone."""
-"""SITL instance number used here (apart from shows, probe 4, step_response 5, conformance 6)."""
 SHOW = """
 show_id: mavlink-writing
 boards:
   - {{id: b1, center_m_enu: [0.0, 0.0, 0.75], size_m: [1.4, 1.4], writing_area_m: [0.6, 0.6]}}
 vehicles:
   - {{id: v1, board: b1, home_m_enu: [0.0, -1.0, 0.0], {vehicle}}}
-planning: {{write_height_m: 0.25, clearance_m: 0.05, pace: nominal}}
+planning: {{write_height_m: 0.25, clearance_m: 0.05, pace: {pace}}}
+storage: {{database: {database}}}
 """
-TARGETS = ("sim", "mavsim", "ardupilot", "px4")
+TARGETS = ("sim", "rotorpy", "mavsim", "ardupilot", "px4")
 WARM_UP_S = 8.0
 """An autopilot's least time on the ground after connect (mocap fused, sources switched)."""
 READY_LIMIT_S = 240.0
@@ -91,7 +92,8 @@ async def fly_jobs(
     assignments = [JobAssignment(job_id=f"j{k}", text=text) for k, text in enumerate(texts)]
     # Planned before connecting: planning inside the loop stalled it, and the mocap stream, for
     # 1.2 s before take-off (PX4 dropped external vision); the agent plans in a worker process.
-    plans = [prepare_job(setup, a) for a in assignments]
+    # Each is paced just before it flies, with the tracking identified on the jobs before it.
+    plans = [planned_job(setup, a) for a in assignments]
     snapshot = await backend.start()
     clock = TickClock(backend.control_period_s, time_scale=1.0, skip_when_late=True)
     while paced and not _warm(backend, clock.now_s):  # the EKF converges on the forwarded mocap
@@ -103,7 +105,8 @@ async def fly_jobs(
         clock.advance()
     done: list[JobMetrics] = []
     runner = JobRunner(setup.runner_config)  # one per vehicle, as the agent has
-    for k, (assignment, prepared) in enumerate(zip(assignments, plans, strict=True)):
+    for k, (assignment, plan) in enumerate(zip(assignments, plans, strict=True)):
+        prepared = prepared_job(setup, assignment.job_id, plan)
         if not runner.handle_command(VehicleCommand(command="assign", job=assignment),
                                      clock.now_s).ok:  # fmt: skip
             raise RuntimeError(f"the runner refused job {k}")
@@ -167,12 +170,24 @@ def _last_texts(backend: VehicleBackend) -> list[str]:
     return [text for _, text in backend.events][-5:] if isinstance(backend, MavlinkBackend) else []
 
 
+def show_of(vehicle: str, pace: str = "tracking") -> Any:
+    """The one-board show of ``vehicle`` (its show-file fields) at ``pace``; its database, and
+    so the vehicle's tracking model, in a fresh temporary folder: every run identifies anew."""
+    database = Path(tempfile.mkdtemp(prefix="skyquill-writing-")) / "show.sqlite3"
+    return parse_show(SHOW.format(vehicle=vehicle, pace=pace, database=database))
+
+
 def write(target: str, texts: list[str]) -> list[Written]:
-    """Fly ``texts`` one after the other on ``target`` (one of :data:`TARGETS`)."""
+    """Fly ``texts`` one after the other on ``target`` (one of :data:`TARGETS`), each paced to
+    the tracking identified on the ones before it (the first at the cautious first pace)."""
     if target == "sim":
-        setup = vehicle_setup(parse_show(SHOW.format(vehicle="backend: sim")), "v1")
+        setup = vehicle_setup(show_of("backend: sim"), "v1")
         flown = asyncio.run(fly_jobs(make_backend(setup), setup, texts, paced=False))
         return [Written(target, m, None) for m in flown]
+    if target == "rotorpy":  # RotorPy's SE3 controller on PX4 SIH's airframe (beside this file)
+        from rotorpy_writing import write_rotorpy
+
+        return [Written(target, m, None) for m in write_rotorpy(show_of("backend: sim"), texts)]
     if target == "mavsim":
         return _write_mavsim(texts)
     return _write_sitl(target, texts)
@@ -186,7 +201,7 @@ def _write_mavsim(texts: list[str]) -> list[Written]:
         sock.bind(("127.0.0.1", 0))
         port = int(sock.getsockname()[1])
     vehicle = f'backend: mavlink, mavlink_url: "udp:127.0.0.1:{port}", mavlink_system_id: 1'
-    show = parse_show(SHOW.format(vehicle=vehicle))
+    show = show_of(vehicle)
     with MavsimServer(vehicle_configs(show, position_source_delay_s=0.0)):
         return _fly_mavlink("mavsim", show, texts)
 
@@ -196,8 +211,8 @@ def _write_sitl(kind: str, texts: list[str]) -> list[Written]:
     binary = launch.binary_for(kind)
     run_dir = Path(tempfile.mkdtemp(prefix=f"skyquill-writing-{kind}-"))
     vibration = launch.RESEARCH_AIRFRAME_VIBRATION if kind == "px4" else None  # start.py's default
-    inst = launch.Instance(kind, SITL_INDEX, SITL_INDEX + 1, launch.home_lla(HOME_M_ENU), binary,
-                           run_dir, mocap=True, imu_vibration=vibration)  # fmt: skip
+    inst = launch.claim_instance(kind, SITL_SYSTEM_ID, launch.home_lla(HOME_M_ENU), binary,
+                                 run_dir, mocap=True, imu_vibration=vibration)  # fmt: skip
     process = launch.start(inst)
     try:
         if kind == "ardupilot":  # its EKF waits for the mocap the agent forwards: the agent waits
@@ -208,7 +223,7 @@ def _write_sitl(kind: str, texts: list[str]) -> list[Written]:
             f'backend: mavlink, mavlink_url: "{inst.url}", mavlink_system_id: {inst.system_id}, '
             f"mavlink_truth: sitl, mavlink_mocap: {SITL_MOCAP[kind]}"
         )
-        return _fly_mavlink(kind, parse_show(SHOW.format(vehicle=vehicle)), texts)
+        return _fly_mavlink(kind, show_of(vehicle), texts)
     finally:
         launch.stop(process)
         if not os.environ.get("SKYQUILL_KEEP_SITL_RUN"):

@@ -291,6 +291,10 @@ class VehicleStatus(State, frozen=True):
     incarnation: str | None = None
     """Random id of the agent's start (of each vehicle's, in a fleet host): a new one says the
     agent restarted, and has lost the job it had."""
+    preflight: str = ""
+    """Why the vehicle cannot take off now, in its autopilot's own words (a failing pre-arm
+    check, e.g. ``Preflight Fail: horizontal velocity unstable``); empty: it can. The
+    orchestrator gives it no job meanwhile, rather than have its arming refused and retried."""
 
 
 class VehicleCommand(Request, frozen=True):

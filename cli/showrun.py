@@ -44,14 +44,17 @@ def derived_show(
     time_scale: float | None = None,
     **updates: Any,
 ) -> tuple[Path, Show]:
-    """A copy of ``source`` on a free loopback port, storing under ``out_dir``; returns its path."""
+    """A copy of ``source`` on a free loopback port, storing under ``out_dir``; returns its path.
+
+    The copy is written in ``out_dir`` and its paths are relative to its own folder (where a show
+    file's relative paths start, ``showfile/paths.py``): ``out_dir`` keeps everything together."""
     show = load_show(source)
     endpoint = free_tcp_endpoint()
     zenoh = show.zenoh.model_copy(update={"router_listen": (endpoint,), "connect": (endpoint,)})
     storage = show.storage.model_copy(
-        update={"database": out_dir / "show.sqlite3", "recordings_dir": out_dir / "recordings"}
+        update={"database": Path("show.sqlite3"), "recordings_dir": Path("recordings")}
     )
-    security = show.security.model_copy(update={"keys_dir": out_dir / "keys"})
+    security = show.security.model_copy(update={"keys_dir": Path("keys")})
     changes: dict[str, Any] = {
         "zenoh": zenoh,
         "storage": storage,

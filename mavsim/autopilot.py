@@ -5,6 +5,9 @@ What it reproduces, where it matters for a companion computer (measured on ArduC
 - arming is refused (MAV_RESULT_FAILED + "PreArm: ..." text) until the estimator has a position
   source, ``position_source_delay_s`` after start; while disarmed any mode may be selected (as
   ArduCopter does), armed GUIDED/LOITER/RTL need the position too;
+- a failing pre-arm check (that one, stale mocap, or ``prearm_fault``, set from outside) shows in
+  SYS_STATUS and is said when it begins or changes, every 30 s while it lasts (PX4: on change
+  only) and on MAV_CMD_RUN_PREARM_CHECKS;
 - GUIDED (custom mode 4) is entered with MAV_CMD_DO_SET_MODE; MAV_CMD_NAV_TAKEOFF ramps the
   throttle over TKOFF_SLEW_TIME until the vehicle lifts, then climbs to param 7 metres above home;
   a setpoint before it has lifted ends the take-off on the ground (ArduCopter's ``land_complete``);
@@ -66,6 +69,7 @@ class Autopilot(AutopilotCore):
             self.flight_time_s += dt
         self._after_step()
         self._check_fence()
+        self._announce_prearm()
 
     def _follow_gain_params(self) -> None:
         """Each flies its position gains as they are set now (unless the configuration fixes

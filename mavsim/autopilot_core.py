@@ -33,6 +33,8 @@ Submode = Literal["ground", "takeoff", "track", "attitude"]
 SEVERITY_CRITICAL = 2
 SEVERITY_WARNING = 4
 SEVERITY_INFO = 6
+PREARM_PREFIX: dict[Flavor, str] = {"ardupilot": "PreArm: ", "px4": "Preflight Fail: "}
+"""How each autopilot begins the text of a failing pre-arm check."""
 
 
 class Result(IntEnum):
@@ -57,6 +59,9 @@ class AutopilotCore:
     takeoff_owns_ground = True
     """A setpoint before NAV_TAKEOFF has lifted the vehicle ends the take-off on the ground
     (ArduCopter: guided position control does nothing while ``land_complete``)."""
+    prearm_repeat_s = 30.0
+    """A failing pre-arm check is said again this often in [s] while it lasts (ArduPilot's
+    PREARM_DISPLAY_PERIOD; PX4 says it only when its checks change)."""
 
     def __init__(self, config: VehicleConfig) -> None:
         self.config = config
@@ -100,6 +105,13 @@ class AutopilotCore:
         self._takeoff_since_s = 0.0
         self.texts: list[tuple[int, str]] = []
         """STATUSTEXTs (severity, text) waiting to be sent; the endpoint drains this list."""
+        self.prearm_fault: str | None = config.arm_refusal
+        """A pre-arm check failing now, in the words after the autopilot's prefix (None: none):
+        ``config.arm_refusal`` from boot; a test or a rehearsal sets and clears it while the
+        vehicle runs, as a real estimator settles (PX4 SITL said "horizontal velocity unstable"
+        for 30-60 s before most take-offs)."""
+        self._prearm_said: str | None = None
+        self._prearm_said_s = -math.inf
 
     # --- state as telemetry sees it ------------------------------------------------------------
     @property
@@ -166,16 +178,42 @@ class AutopilotCore:
         self.say(SEVERITY_INFO, "Arming motors")
         return Result.ACCEPTED
 
-    def _arming_refusal(self) -> str | None:
-        if self.config.arm_refusal is not None:
-            return f"PreArm: {self.config.arm_refusal}"
+    def prearm_failure(self) -> str | None:
+        """The pre-arm check failing now, in the autopilot's words (None: they pass): what
+        SYS_STATUS's MAV_SYS_STATUS_PREARM_CHECK reports. Arming checks the mode besides."""
+        if self.prearm_fault is not None:
+            return PREARM_PREFIX[self.flavor] + self.prearm_fault
         if self.now_s >= self.config.position_source_delay_s and self.mocap_stale:
             return STALE_REFUSAL[self.flavor]
         if not self.position_source_ready:
             return "PreArm: Need Position Estimate"
-        if self.mode in NOT_ARMABLE:
-            return "Arm: Mode not armable"
         return None
+
+    def _arming_refusal(self) -> str | None:
+        reason = self.prearm_failure()
+        if reason is None and self.mode in NOT_ARMABLE:
+            return "Arm: Mode not armable"
+        return reason
+
+    def _announce_prearm(self) -> None:
+        """While disarmed, say a failing pre-arm check when it begins or changes and again every
+        ``prearm_repeat_s`` (ArduPilot's AP_Arming::update; PX4 reports its health checks on
+        change): a ground station learns why before it tries to arm."""
+        failure = None if self.armed else self.prearm_failure()
+        due = self.now_s - self._prearm_said_s >= self.prearm_repeat_s
+        if failure is not None and (failure != self._prearm_said or due):
+            self.say(SEVERITY_CRITICAL, failure)
+            self._prearm_said_s = self.now_s
+        self._prearm_said = failure
+
+    def run_prearm_checks(self) -> Result:
+        """MAV_CMD_RUN_PREARM_CHECKS (a ground station's "check"): say the failing pre-arm
+        check now; refused while armed, as ArduPilot does."""
+        if self.armed:
+            return Result.TEMPORARILY_REJECTED
+        self._prearm_said_s = -math.inf
+        self._announce_prearm()
+        return Result.ACCEPTED
 
     def disarm(self, *, force: bool = False) -> Result:
         """MAV_CMD_COMPONENT_ARM_DISARM param1 = 0 (param2 21196 forces it in the air)."""

@@ -121,7 +121,9 @@ class VehicleConfig:
     position_source_delay_s: float = 3.0
     """Seconds after start before the estimator has a position source; arming is refused before."""
     arm_refusal: str | None = None
-    """When set, every arming attempt is refused with this pre-arm reason (tests, rehearsal)."""
+    """When set, a pre-arm check fails from boot, in these words after the autopilot's prefix
+    (``PreArm: ``, ``Preflight Fail: ``): arming is refused (tests, rehearsal); the autopilot's
+    ``prearm_fault`` clears it or sets another while it runs."""
     guided_timeout_s: float | None = None
     """The setpoint timeout at boot in [s] (ArduPilot GUID_TIMEOUT, PX4 COM_OF_LOSS_T); None:
     the autopilot's default (3 s, 1 s)."""

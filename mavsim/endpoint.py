@@ -231,6 +231,8 @@ class VehicleEndpoint:
             if not int(message.param1) & mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
                 return Result.UNSUPPORTED
             return self._set_mode(int(message.param2), int(message.param2), int(message.param3))
+        if command == mavlink.MAV_CMD_RUN_PREARM_CHECKS:
+            return ap.run_prearm_checks()
         if command == mavlink.MAV_CMD_NAV_TAKEOFF:
             return ap.takeoff(float(message.param7))
         if command == mavlink.MAV_CMD_NAV_LAND:
@@ -389,9 +391,8 @@ class VehicleEndpoint:
         amps = 10.0 if self.autopilot.armed else 0.5
         remaining = round(100 * fraction)
         if message_id == mavlink.MAVLINK_MSG_ID_SYS_STATUS:
-            sensors = PREARM_CHECK  # present and enabled; healthy while arming would pass
-            ap = self.autopilot
-            healthy = ap.config.arm_refusal is None and ap.position_source_ready
+            sensors = PREARM_CHECK  # present and enabled; healthy while its checks pass
+            healthy = self.autopilot.prearm_failure() is None
             return self._mav.sys_status_encode(
                 sensors, sensors, sensors if healthy else 0, 100, int(volts * 1000),
                 int(amps * 100), remaining, 0, 0, 0, 0, 0, 0,

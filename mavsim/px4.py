@@ -61,6 +61,7 @@ class Px4Autopilot(Autopilot):
     timeout_param = "COM_OF_LOSS_T"
     shapes_targets = False
     takeoff_owns_ground = False
+    prearm_repeat_s = math.inf
 
     def __init__(self, config: VehicleConfig) -> None:
         super().__init__(config)

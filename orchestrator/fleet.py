@@ -78,6 +78,9 @@ class VehicleView:
     """Since when its status has not mentioned the job the orchestrator gave it, [s]."""
     message: str = "not connected"
     """Human note for displays."""
+    preflight: str = ""
+    """Why the vehicle cannot take off now, in its autopilot's words (its status's
+    ``preflight``); empty: it can. It gets no job meanwhile: arming would only be refused."""
     last_alert_s: float = -1e18
     """Orchestrator time of its last tracking alert, [s]."""
     event_tokens: float = 10.0
@@ -95,14 +98,22 @@ class VehicleView:
             board_id=self.info.board_id,
             job_id=job_id,
             last_seen_s=self.last_seen_s,
-            message=self.message + (" (paused)" if self.paused and not self.held else ""),
+            message=self._note() + (" (paused)" if self.paused and not self.held else ""),
             held=self.held,
             paused=self.paused and not self.held,
         )
 
+    def _note(self) -> str:
+        """Its message, after what its autopilot waits for (a vehicle present)."""
+        if not self.preflight or self.lost:
+            return self.message
+        waiting = f"waiting for its pre-arm checks: {self.preflight}"
+        return f"{waiting}; {self.message}" if self.message else waiting
+
 
 def ready_for_job(view: VehicleView, now_s: float) -> bool:
-    """Healthy and idle by its own account, not paused, not backing off."""
+    """Healthy and idle by its own account, not paused, not backing off, its autopilot ready
+    to arm (a ground station does not offer arming before the pre-arm checks pass either)."""
     return (
         view.alive
         and not view.lost
@@ -111,6 +122,7 @@ def ready_for_job(view: VehicleView, now_s: float) -> bool:
         and view.status_at_s is not None
         and view.state in READY_STATES
         and view.reported_job_id is None
+        and not view.preflight
         and view.refused_until_s <= now_s
         and view.info.cannot_write is None
     )

@@ -17,8 +17,10 @@ it: the hold is the orchestrator's and stored, so an agent restart, which forget
 not shed it. Not for a token that went and came back: the orchestrator's own session
 sees every token do that when it reconnects to the router (a router restart, or the orchestrator
 frozen past its session's lease). After an orchestrator restart, jobs that were active wait for the
-same confirmation. Events the agents publish about their vehicles (autopilot messages, refused
-take-offs) join the show's event log here.
+same confirmation. A vehicle whose status says its autopilot's pre-arm checks fail (``preflight``)
+gets no job until a status says they pass: nothing is handed back, no back-off grows. Events the
+agents publish about their vehicles (autopilot messages, refused take-offs) join the show's event
+log here.
 """
 
 from __future__ import annotations
@@ -78,8 +80,10 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
     view = book.vehicles.get(status.vehicle_id)
     if view is None:
         return eff
-    changed = (view.state, view.reported_job_id) != (status.state, status.job_id)
+    was = (view.state, view.reported_job_id, view.preflight)
+    changed = was != (status.state, status.job_id, status.preflight)
     view.state, view.reported_job_id = status.state, status.job_id
+    view.preflight = status.preflight  # a vehicle whose checks pass may take a job at once
     view.status_at_s = view.last_seen_s = view.heard_at_s = now_s
     view.message = status.message
     if status.incarnation != view.incarnation:

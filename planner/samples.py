@@ -59,6 +59,31 @@ class TrajectorySamples:
         i = int(np.searchsorted(self.t_s, t_s, side="right")) - 1
         return min(max(i, 0), int(self.t_s.shape[0]) - 1)
 
+    def stretched(self, factor: float) -> TrajectorySamples:
+        """The same path flown ``factor`` times slower (``factor >= 1``), at the same rate:
+        sample times ``t / factor`` of this reference, speeds divided by ``factor`` and
+        accelerations by ``factor**2``. Positions and speeds between samples are cubic Hermite
+        interpolants (exact on the planner's cubic spline within a span), accelerations
+        linear; the pen is as at the sample at or before."""
+        if not factor >= 1.0:
+            raise PlannerError(f"must be >= 1, got {factor}", field="stretch")
+        if factor == 1.0:
+            return self
+        n = round(self.duration_s * factor * self.rate_hz) + 1
+        t_new = np.linspace(0.0, self.duration_s * factor, n)
+        u = np.minimum(t_new / factor, self.t_s[-1])
+        i = np.clip(np.searchsorted(self.t_s, u, side="right") - 1, 0, self.t_s.shape[0] - 2)
+        return TrajectorySamples(
+            t_new,
+            _hermite(self.t_s, self.position_m_enu, self.velocity_mps_enu, i, u),
+            _hermite(self.t_s, self.velocity_mps_enu, self.acceleration_mps2_enu, i, u) / factor,
+            np.column_stack(
+                [np.interp(u, self.t_s, self.acceleration_mps2_enu[:, k]) for k in range(3)]
+            )
+            / factor**2,
+            self.pen_down[np.clip(np.searchsorted(self.t_s, u, side="right") - 1, 0, None)],
+        )
+
     def to_json_dict(self) -> dict[str, Any]:
         """The ``samples`` object of ``TRAJ.json`` (see docs/formats.md)."""
         return {
@@ -83,3 +108,20 @@ class TrajectorySamples:
         except (TypeError, ValueError) as exc:
             raise PlannerError(f"not a numeric array: {exc}", field="samples") from None
         return cls(t, p, v, a, pen)
+
+
+def _hermite(
+    t_s: FloatArray, value: FloatArray, slope: FloatArray, i: NDArray[np.intp], u: FloatArray
+) -> FloatArray:
+    """Cubic Hermite interpolation of ``value`` (N, 3) with time derivative ``slope`` at times
+    ``u`` lying in the intervals ``[t_s[i], t_s[i + 1]]``."""
+    h = (t_s[i + 1] - t_s[i])[:, None]
+    s = ((u - t_s[i]) / (t_s[i + 1] - t_s[i]))[:, None]
+    h00 = 2 * s**3 - 3 * s**2 + 1
+    h10 = s**3 - 2 * s**2 + s
+    h01 = -2 * s**3 + 3 * s**2
+    h11 = s**3 - s**2
+    out: FloatArray = (
+        h00 * value[i] + h10 * h * slope[i] + h01 * value[i + 1] + h11 * h * slope[i + 1]
+    )
+    return out

@@ -1,6 +1,8 @@
 """The part of a show file that joining its bus takes (show id, vehicle ids, ``zenoh``,
-``security``), read without the show-file models: pydantic and the models' schemas cost a one-off
-``skyquill status`` about 0.35 s, more than everything else it does (benchmarks/bench_cli.py).
+``security``, and ``storage.database``, beside which the keys are by default), read without the
+show-file models: pydantic and the models' schemas cost a one-off ``skyquill status`` about
+0.35 s, more than everything else it does (benchmarks/bench_cli.py). Its paths are resolved as
+the models' are (``showfile/paths.py``).
 
 :func:`read_bus_view` checks these strictly (exact types, nothing coerced; of ``vehicles``, the
 ids) and ignores the rest. It returns None for any file it does not vouch for (unreadable, not
@@ -23,6 +25,7 @@ from typing import Any, Literal, Protocol
 
 import yaml
 
+from showfile import paths
 from showfile.roles import RESERVED_IDS
 
 ID_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
@@ -153,13 +156,15 @@ class ShowBusView:
     vehicles: tuple[VehicleView, ...]
     zenoh: ZenohView
     security: SecurityView
+    database: Path | None = None
+    """``storage.database`` as written (the keys' default folder is beside it)."""
     source_path: Path | None = None
-    """The file it was read from."""
+    """The file it was read from; its folder is where relative paths start."""
 
     @property
     def keys_dir(self) -> Path:
-        """The show's CA, certificates and keys (``Show.keys_dir``)."""
-        return self.security.keys_dir or Path("out") / self.show_id / "keys"
+        """The show's CA, certificates and keys (``Show.keys_dir``: ``showfile.paths.keys_dir``)."""
+        return paths.keys_dir(self.source_path, self.show_id, self.security.keys_dir, self.database)
 
 
 class _NotVouchedError(Exception):
@@ -178,6 +183,7 @@ def read_bus_view(path: str | Path) -> ShowBusView | None:
             vehicles=_vehicles(doc.get("vehicles")),
             zenoh=_zenoh(_mapping(doc.get("zenoh", {}), _ZENOH_FIELDS)),
             security=_security(_mapping(doc.get("security", {}), _SECURITY_FIELDS)),
+            database=_database(_mapping(doc.get("storage", {}), ())),
             source_path=Path(path),
         )
     except (OSError, UnicodeDecodeError, RecursionError, yaml.YAMLError, _NotVouchedError):
@@ -315,3 +321,12 @@ def _security(section: dict[str, Any]) -> SecurityView:
     if mode not in ("mtls", "none") or not (keys_dir is None or isinstance(keys_dir, str)):
         raise _NotVouchedError("security")
     return SecurityView(mode=mode, keys_dir=Path(keys_dir) if keys_dir is not None else None)
+
+
+def _database(storage: dict[str, Any]) -> Path | None:
+    """``storage.database`` (a string, as the models take it); the other fields of ``storage``
+    are the loader's alone."""
+    database = storage.get("database")
+    if not (database is None or isinstance(database, str)):
+        raise _NotVouchedError("storage.database")
+    return Path(database) if database is not None else None

@@ -177,7 +177,9 @@ def parse_show(text: str, *, file: str = "<show>") -> Show:
 
 
 def load_show(path: str | Path) -> Show:
-    """Read and validate a show file; raises :class:`ShowFileError` naming file, line and field."""
+    """Read and validate a show file; raises :class:`ShowFileError` naming file, line and field.
+
+    The show keeps ``path`` as ``source_path``: its relative paths start from that file's folder."""
     file = str(path)
     try:
         text = Path(path).read_text(encoding="utf-8")
@@ -190,7 +192,8 @@ def load_show(path: str | Path) -> Show:
 def dump_show(show: Show, path: str | Path | None = None) -> str:
     """The show as YAML text (written to ``path`` when given): temporary shows in tests.
 
-    ``load_show(path)`` of the result gives back an equal show (apart from ``source_path``).
+    ``load_show(path)`` of the result gives back an equal show (apart from ``source_path``), whose
+    relative paths start from ``path``'s folder (``showfile/paths.py``), not the original's.
     """
     data = show.model_dump(mode="json", exclude_none=True, exclude={"source_path"})
     text: str = yaml.safe_dump(data, sort_keys=False, allow_unicode=True)

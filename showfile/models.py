@@ -18,6 +18,7 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
+from showfile import paths
 from showfile.model_base import ID_PATTERN, Identifier, ShowModel
 from showfile.safety import SafetySettings
 from showfile.security import RESERVED_IDS, SecuritySettings
@@ -143,10 +144,27 @@ class PlanningSettings(ShowModel):
     resegment: bool = True
     """Re-time the segments (with ``pace: limits``, at the limits; with ``nominal``, the paper's
     re-segmentation from a conservative start). Read by: quadrotor-brush."""
-    pace: Literal["limits", "nominal"] = "limits"
+    pace: Literal["limits", "nominal", "tracking"] = "limits"
     """``limits``: as fast as the limits allow (within ~1.25x of time-optimal); ``nominal``: the
-    earlier, slower default (about 2x), for vehicles that track less tightly (an autopilot's own
-    position loop behind MAVLink). Read by: quadrotor-brush."""
+    earlier, slower default (about 2x); ``tracking``: planned at the limits, then each job flown
+    just slow enough that the vehicle's own tracking, identified from the jobs it flew
+    (planner.pace, kept in ``<database dir>/tracking/<vehicle>.json``), is predicted to write
+    within ``pace_rmse_target_m``. Read by: quadrotor-brush (``limits``, ``nominal``), every kind's
+    agent (``tracking``)."""
+    pace_rmse_target_m: float = Field(default=0.006, gt=0.0)
+    """With ``pace: tracking``: the pen-down RMSE in [m] a job's pace aims at. 6 mm: on the
+    brush quadrotor's 2 cm ink line, jobs written at 3.8-6.6 mm reached IoU 0.78-0.85 and those at
+    7.3-11 mm 0.60-0.72 (README's SITL and simulator measurements), so 6 mm aims at an IoU of
+    0.75 with room for the prediction's own error. Read by: every kind's agent."""
+    pace_first_stretch: float = Field(default=2.0, ge=1.0)
+    """With ``pace: tracking``: how many times slower than the limits a vehicle flies while its
+    tracking is not yet identified (its first job). 2: PX4 SIH wrote a 1.2 m character 13-20 mm
+    off and the same at 0.6 m, half the speed and acceleration at the same time, 8-11 mm (issue
+    31's measurement). Read by: every kind's agent."""
+    pace_max_stretch: float = Field(default=4.0, ge=1.0)
+    """With ``pace: tracking``: the slowest a job is flown, times the limits' duration, even when
+    the target is below what the vehicle can reach (its prediction then says so). Read by:
+    every kind's agent."""
     solver: Literal["piqp", "clarabel"] = "piqp"
     """QP solver of the acceleration-limited fit. Read by: quadrotor-brush."""
     sample_rate_hz: float = Field(default=100.0, ge=100.0)
@@ -155,6 +173,15 @@ class PlanningSettings(ShowModel):
     total_time_s: float | None = Field(default=None, gt=0.0)
     """Fixed duration of a character, or None to let the planner choose, in [s].
     Read by: quadrotor-brush."""
+
+    @model_validator(mode="after")
+    def _first_within_max(self) -> PlanningSettings:
+        if self.pace_first_stretch > self.pace_max_stretch:
+            raise ValueError(
+                f"pace_first_stretch {self.pace_first_stretch} is above pace_max_stretch "
+                f"{self.pace_max_stretch}"
+            )
+        return self
 
 
 class ControllerSettings(ShowModel):
@@ -302,22 +329,26 @@ class Show(ShowModel):
     areas); None: defaults, a flat floor."""
 
     source_path: Path | None = Field(default=None, exclude=True)
-    """The file the show was loaded from (set by load_show, not written in the file)."""
+    """The file the show was loaded from (set by load_show, not written in the file); its folder
+    is where the show's relative paths start (``showfile/paths.py``)."""
 
     @property
     def database_path(self) -> Path:
-        """SQLite file of the orchestrator."""
-        return self.storage.database or Path("out") / self.show_id / "show.sqlite3"
+        """SQLite file of the orchestrator (``showfile.paths.database_path``)."""
+        return paths.database_path(self.source_path, self.show_id, self.storage.database)
 
     @property
     def keys_dir(self) -> Path:
-        """The show's CA, certificates and private keys (see ``security.keys_dir``)."""
-        return self.security.keys_dir or Path("out") / self.show_id / "keys"
+        """The show's CA, certificates and private keys (``showfile.paths.keys_dir``)."""
+        return paths.keys_dir(
+            self.source_path, self.show_id, self.security.keys_dir, self.storage.database
+        )
 
     @property
     def recordings_dir(self) -> Path:
-        """Directory of MCAP recordings."""
-        return self.storage.recordings_dir or Path("out") / self.show_id / "recordings"
+        """Directory of MCAP recordings; default ``out/<show_id>/recordings`` beside the file."""
+        default = Path("out") / self.show_id / "recordings"
+        return paths.resolve(self.source_path, self.storage.recordings_dir or default)
 
     def board(self, board_id: str) -> Board:
         """The board with ``board_id``; KeyError listing the known ids otherwise."""

@@ -38,7 +38,8 @@ class SecuritySettings(BaseModel):
     reaches the bus may do anything: throwaway loopback tests only (a show whose bus listens
     beyond loopback is refused; ``skyquill up`` says it in red)."""
     keys_dir: Path | None = None
-    """Where the CA, the certificates and their keys live; default ``out/<show_id>/keys``.
+    """Where the CA, the certificates and their keys live (relative: from the show file's folder);
+    default ``keys`` beside ``storage.database`` (``out/<show_id>/keys`` for the shipped shows).
     Never commit it: the private keys are the show's authority."""
 
 

@@ -85,10 +85,12 @@ class ZenohSettings(ShowModel):
 
 
 class StorageSettings(ShowModel):
-    """Where the orchestrator keeps its durable state (relative paths: from the working dir)."""
+    """Where the orchestrator keeps its durable state. Relative paths, defaults included, start
+    from the show file's folder, not the working directory (``showfile/paths.py``)."""
 
     database: Path | None = None
-    """SQLite file of the job queue and event log; default ``out/<show_id>/show.sqlite3``."""
+    """SQLite file of the job queue and event log; default ``out/<show_id>/show.sqlite3``. The
+    show's keys (``security.keys_dir``), job files and logs go in its folder."""
     recordings_dir: Path | None = None
     """Directory of the MCAP recordings, one file per run; default ``out/<show_id>/recordings``."""
     record: bool = True

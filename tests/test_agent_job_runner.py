@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pytest
@@ -13,7 +13,7 @@ from bus.messages import AgentReport, ErrorInfo, JobAssignment, Telemetry, Vehic
 from planner.samples import TrajectorySamples
 from vehicle_agent.backends.base import Vec3
 from vehicle_agent.backends.kinematic import KinematicVehicle
-from vehicle_agent.job_runner import JobRunner, PreparedJob, RunnerConfig
+from vehicle_agent.job_runner import PREFLIGHT_HOLD_S, JobRunner, PreparedJob, RunnerConfig
 from vehicle_agent.motion import PEAK_ACCEL_FACTOR, PEAK_SPEED_FACTOR, plan_move
 from vehicle_agent.trace import JobTrace
 
@@ -70,13 +70,21 @@ class Run:
     commands: list[str] = field(default_factory=list)
     refuse_takeoffs: int = 0
     """The vehicle refuses this many take-offs (pre-arm checks) before it flies."""
+    preflight: str | None = None
+    """What the vehicle says of its pre-arm checks (None: they pass)."""
+    not_ready_takeoffs: int = 0
+    """This many take-offs meet checks that have just begun failing (nothing asked of it)."""
 
     def tick(self) -> None:
-        actions = self.runner.step(self.vehicle.snapshot(), self.now_s)
+        snapshot = replace(self.vehicle.snapshot(), preflight=self.preflight)
+        actions = self.runner.step(snapshot, self.now_s)
         if actions.backend_command is not None:
             name, hover = actions.backend_command
             self.commands.append(name)
-            if name == "takeoff" and self.refuse_takeoffs > 0:
+            if name == "takeoff" and self.not_ready_takeoffs > 0:
+                self.not_ready_takeoffs -= 1
+                self.runner.takeoff_refused("not arming: checks fail", self.now_s, not_ready=True)
+            elif name == "takeoff" and self.refuse_takeoffs > 0:
                 self.refuse_takeoffs -= 1
                 self.runner.takeoff_refused("PreArm: Compass not calibrated", self.now_s)
             else:
@@ -213,6 +221,57 @@ def test_estop_cuts_motors_abandons_the_job_and_refuses_new_ones() -> None:
     assert run.vehicle.mode == "estop" and run.runner.state == "fault"
     assert run.events() == ["started"] and run.runner.status().job_id is None
     assert not run.assign("j2")
+
+
+def test_pre_arm_checks_failing_are_in_the_status_with_one_event_as_they_fail_and_pass() -> None:
+    runner = JobRunner(config())
+    ready = KinematicVehicle(HOME, dt_s=DT).snapshot()
+    why = "Preflight Fail: horizontal velocity unstable"
+    waiting = replace(ready, preflight=why)
+    events: list[tuple[str, str]] = []
+    for k in range(3400):  # 34 s of ticks waiting, then ready
+        actions = runner.step(waiting if k < 3400 - 1 else ready, 10.0 + k * DT)
+        events += [(e.level, e.message) for e in actions.events if e.kind == "preflight"]
+        if k == 100:
+            assert runner.status().preflight == why
+    assert events == [
+        ("warning", f"uav1 waiting for its pre-arm checks: {why}"),
+        ("info", "uav1 pre-arm checks pass after 34 s"),
+    ]
+    assert runner.status().preflight == ""
+
+
+def test_a_planned_job_takes_off_the_moment_the_pre_arm_checks_pass() -> None:
+    """No take-off is asked while the autopilot says its checks fail (PX4 flips them every few
+    seconds on the ground); the first tick they pass, it goes; nothing is handed back."""
+    run = Run(preflight="Preflight Fail: horizontal velocity unstable")
+    assert run.assign()
+    run.until(lambda: run.now_s > 12.0)
+    assert (run.runner.phase, run.commands, run.reports) == ("preflight", [], [])
+    run.preflight = None
+    run.tick()
+    assert run.commands == ["takeoff"]
+    run.until(lambda: run.runner.state == "idle" and run.runner.phase == "ground")
+    assert run.events() == ["started"]
+
+
+def test_checks_that_never_pass_hand_the_job_back_after_the_hold() -> None:
+    run = Run(preflight="Preflight Fail: vertical velocity unstable")
+    assert run.assign()
+    run.until(lambda: bool(run.reports), max_s=PREFLIGHT_HOLD_S + 1.0)
+    assert PREFLIGHT_HOLD_S < run.now_s < PREFLIGHT_HOLD_S + 0.1 and run.commands == []
+    (report,) = run.reports
+    assert report.error is not None and report.error.code == "takeoff_refused"
+    assert "vertical velocity unstable" in report.error.message
+
+
+def test_checks_that_fail_as_it_takes_off_are_waited_for_again() -> None:
+    """The autopilot was not asked (the backend's NotReadyError): back to waiting, job kept."""
+    run = Run(not_ready_takeoffs=2)
+    assert run.assign()
+    run.until(lambda: run.runner.state == "idle" and run.runner.phase == "ground")
+    assert run.commands == ["takeoff", "takeoff", "takeoff", "land"]
+    assert run.events() == ["started"]
 
 
 def test_a_refused_takeoff_hands_the_job_back_and_backs_off_twice_as_long_each_time() -> None:

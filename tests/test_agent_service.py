@@ -7,6 +7,7 @@ import threading
 import time
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
+from dataclasses import replace
 from pathlib import Path
 
 from test_agent_job_runner import HOME, config, line_samples
@@ -25,7 +26,13 @@ from bus.messages import (
 from bus.pubsub import declare_token, subscribe
 from bus.rpc import aquery_one, serve
 from bus.session import BusSettings, Session, open_session
-from vehicle_agent.backends.base import BackendError, CommandRefusedError, Vec3
+from vehicle_agent.backends.base import (
+    BackendError,
+    CommandRefusedError,
+    Setpoint,
+    Vec3,
+    VehicleSnapshot,
+)
 from vehicle_agent.backends.kinematic import KinematicBackend
 from vehicle_agent.events import EventOutbox
 from vehicle_agent.job_runner import JobRunner, PreparedJob
@@ -113,6 +120,17 @@ class RefusingBackend(KinematicBackend):
             self.refusals -= 1
             raise self.error
         await super().takeoff(hover_m_enu)
+
+
+class UnsettledBackend(KinematicBackend):
+    """Says its autopilot's pre-arm checks fail while ``preflight`` is set (why)."""
+
+    def __init__(self) -> None:
+        super().__init__(HOME)
+        self.preflight: str | None = None
+
+    async def tick(self, setpoint: Setpoint | None, now_s: float) -> VehicleSnapshot:
+        return replace(await super().tick(setpoint, now_s), preflight=self.preflight)
 
 
 @asynccontextmanager
@@ -292,6 +310,33 @@ def test_a_refused_takeoff_hands_the_job_back_and_is_told_on_the_events_key(
             assert service.runner.state == "idle" and service.runner.job_id is None
             busy = await orch.command(assign("j2"))  # backing off: 5 s of agent time
             assert not busy.ok and busy.error is not None and busy.error.code == "takeoff_refused"
+
+    asyncio.run(scenario())
+
+
+def test_pre_arm_checks_are_published_in_the_status_with_an_event_as_they_fail_and_pass(
+    free_tcp_port: Callable[[], int],
+) -> None:
+    why = "Preflight Fail: horizontal velocity unstable"
+
+    async def scenario() -> None:
+        backend = UnsettledBackend()
+        async with show(free_tcp_port, backend) as (_service, orch):
+            events: list[Event] = []
+            subscribe(
+                orch.session, KEYS.vehicle_events("uav1"), Event, lambda _k, m: events.append(m)
+            )
+            await asyncio.sleep(0.2)  # the subscriber is in place
+            backend.preflight = why
+            await wait_for(lambda: any(s.preflight == why for s in orch.statuses))
+            await asyncio.sleep(0.3)
+            backend.preflight = None
+            await wait_for(lambda: orch.statuses[-1].preflight == "")  # published on change
+            await wait_for(lambda: any("pass after" in e.message for e in events))
+            said = [(e.level, e.message) for e in events if e.kind == "preflight"]
+            assert said[0] == ("warning", f"uav1 waiting for its pre-arm checks: {why}")
+            assert said[1][0] == "info" and len(said) == 2  # one each, not one per tick
+            assert said[1][1].startswith("uav1 pre-arm checks pass after ")
 
     asyncio.run(scenario())
 

@@ -32,6 +32,7 @@ from bus.messages import (
     SubmitRequest,
     Telemetry,
     VehicleCommand,
+    VehicleStatus,
 )
 
 
@@ -60,6 +61,14 @@ def test_requests_reject_unknown_fields_and_name_the_field() -> None:
     with pytest.raises(MessageError) as bad_command:
         decode(b'{"command": "self_destruct"}', OperatorCommand)
     assert bad_command.value.info.code == "invalid"
+
+
+def test_a_status_without_preflight_reads_as_ready_and_one_with_it_round_trips() -> None:
+    old = b'{"v": 1, "vehicle_id": "uav1", "kind": "quadrotor-brush", "state": "idle"}'
+    assert decode(old, VehicleStatus).preflight == ""  # an agent from before the field
+    why = "Preflight Fail: horizontal velocity unstable"
+    status = VehicleStatus(vehicle_id="uav1", kind="quadrotor-brush", state="idle", preflight=why)
+    assert decode(encode(status), VehicleStatus) == status
 
 
 def test_oversized_payload_is_refused_before_parsing() -> None:

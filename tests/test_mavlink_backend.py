@@ -32,6 +32,7 @@ from vehicle_agent.backends.mavlink import MavlinkBackend
 from vehicle_agent.backends.mavlink_errors import (
     ArmingRefusedError,
     LinkLostError,
+    PrearmFailingError,
     VehicleFaultError,
 )
 from vehicle_agent.backends.mavlink_mocap import MocapPose
@@ -126,25 +127,62 @@ async def airborne(backend: MavlinkBackend, driver: Driver) -> VehicleSnapshot:
     [
         ({"position_source_delay_s": 60.0}, "PreArm: Need Position Estimate"),
         ({"arm_refusal": "Compass not calibrated"}, "PreArm: Compass not calibrated"),
+        (
+            {"arm_refusal": "horizontal velocity unstable", "autopilot": "px4"},
+            "Preflight Fail: horizontal velocity unstable",
+        ),
     ],
 )
-def test_a_refused_arm_is_reported_with_the_autopilots_reason(
+def test_failing_pre_arm_checks_are_explained_and_no_arming_is_tried(
     overrides: dict[str, Any], reason: str
 ) -> None:
+    # failing since boot: the autopilot said why before we listened, so the backend asks it
+    # (MAV_CMD_RUN_PREARM_CHECKS, as a ground station's "check"); a take-off is refused in the
+    # autopilot's words without a mode change or an ARM sent
     async def scenario(server: MavsimServer) -> None:
+        ap = server.endpoints[0].autopilot
         async with connected(server) as (backend, driver):
-            with pytest.raises(ArmingRefusedError) as refused:
+            await driver.until(lambda s: s.preflight == reason, 4.0)
+            with pytest.raises(PrearmFailingError) as refused:
                 await backend.takeoff(HOVER)
             assert refused.value.reason == reason
-            assert reason in str(refused.value)
+            assert reason in str(refused.value) and "not arming" in str(refused.value)
             assert isinstance(refused.value, CommandRefusedError)  # the agent will try again
+            answered = {command for command, _result in backend.state.acks}
+            assert answered.isdisjoint({176, 400})  # neither DO_SET_MODE nor ARM was sent
+            assert (ap.mode, ap.armed, ap.setpoints_received) == (CopterMode.STABILIZE, False, 0)
             snapshot = await driver.tick()
             assert (snapshot.mode, snapshot.armed, snapshot.fault) == ("idle", False, None)
-            assert (
-                server.endpoints[0].autopilot.mode == CopterMode.GUIDED
-            )  # the mode change was fine
+            assert snapshot.preflight == reason
 
     with vehicle(**overrides) as server:
+        asyncio.run(scenario(server))
+
+
+@pytest.mark.parametrize(
+    ("autopilot", "said"),
+    [("ardupilot", "PreArm: "), ("px4", "Preflight Fail: ")],
+)
+def test_a_vehicle_waits_out_its_pre_arm_checks_then_takes_off(autopilot: str, said: str) -> None:
+    # as PX4 SITL before most take-offs: the estimator unsettled for a while, said as it begins
+    async def scenario(server: MavsimServer) -> None:
+        ap = server.endpoints[0].autopilot
+        async with connected(server) as (backend, driver):
+            await driver.until(lambda s: backend.state.prearm_good is True, 4.0)
+            assert (await driver.tick()).preflight is None
+            ap.prearm_fault = "horizontal velocity unstable"
+            waiting = await driver.until(lambda s: s.preflight is not None, 4.0)
+            assert waiting.preflight == f"{said}horizontal velocity unstable"
+            assert 401 not in {command for command, _ in backend.state.acks}  # no need to ask
+            with pytest.raises(PrearmFailingError):
+                await backend.takeoff(HOVER)
+            assert not ap.armed and 400 not in {command for command, _ in backend.state.acks}
+            ap.prearm_fault = None
+            await driver.until(lambda s: s.preflight is None, 4.0)
+            await airborne(backend, driver)
+            assert ap.armed
+
+    with vehicle(autopilot=autopilot) as server:
         asyncio.run(scenario(server))
 
 
@@ -386,14 +424,14 @@ def test_a_mocap_vehicle_is_set_up_at_connect_and_arms_only_while_poses_flow(
                 await backend.takeoff(HOVER)
             assert refused.value.reason.startswith(refusal)
             poses["on"] = True
-            await driver.until(lambda _s: ap.position_source_ready, 5.0)
+            await driver.until(lambda s: s.preflight is None, 5.0)  # the agent waits so
             for attempt in range(3):  # as the agent retries: a loaded machine may delay a pose
                 try:
                     await airborne(backend, driver)
                     break
                 except ArmingRefusedError:
                     assert attempt < 2
-                    await driver.until(lambda _s: ap.position_source_ready, 5.0)
+                    await driver.until(lambda s: s.preflight is None, 5.0)
             assert ap.armed
 
     with vehicle(autopilot=autopilot, params=boot) as server:

@@ -9,6 +9,8 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from vehicle_agent.backends.mavlink_state import (
+    MAV_SYS_STATUS_PREARM_CHECK,
+    PREARM_UNSAID,
     STATUSTEXT_CHARS,
     STATUSTEXT_JOIN_WAIT_S,
     LinkState,
@@ -137,3 +139,32 @@ def test_every_length_comes_back_whole(length: int) -> None:
         state.absorb(message)
     clock.now_s += STATUSTEXT_JOIN_WAIT_S  # a full last chunk is handed on after the wait
     assert state.take_texts() == [(WARNING, text)]
+
+
+def sys_status(prearm_good: bool) -> Any:
+    """SYS_STATUS as PX4 sends it: the pre-arm bit in health only."""
+    health = MAV_SYS_STATUS_PREARM_CHECK if prearm_good else 0
+    return wire(mavlink.MAVLink_sys_status_message(0, 0, health, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0))
+
+
+def test_the_pre_arm_explanation_is_the_autopilots_latest_while_the_checks_fail() -> None:
+    state, _ = connected(mavlink.MAV_AUTOPILOT_PX4)
+    assert state.preflight is None  # no SYS_STATUS yet
+    state.absorb(sys_status(prearm_good=False))
+    assert state.preflight == PREARM_UNSAID  # failing, not said why (yet)
+    (vertical,) = chunks("Preflight Fail: vertical velocity unstable\t", 3)  # PX4's tab
+    state.absorb(vertical)
+    assert state.preflight == "Preflight Fail: vertical velocity unstable"
+    for message in chunks(PX4_DENIAL, 4):  # a refused ARM names no check: not better
+        state.absorb(message)
+    state.absorb(sys_status(prearm_good=False))
+    assert state.preflight == "Preflight Fail: vertical velocity unstable"
+    (horizontal,) = chunks("Preflight Fail: horizontal velocity unstable", 5)
+    state.absorb(horizontal)
+    assert state.preflight == "Preflight Fail: horizontal velocity unstable"
+    state.absorb(sys_status(prearm_good=True))
+    assert (state.preflight, state.prearm_text) == (None, None)  # forgotten once they pass
+    for message in chunks(PX4_DENIAL, 6):  # the only words of the next failure
+        state.absorb(message)
+    state.absorb(sys_status(prearm_good=False))
+    assert state.preflight == PX4_DENIAL

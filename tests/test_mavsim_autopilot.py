@@ -15,6 +15,7 @@ from mavsim.config import PositionGains, VehicleConfig
 from mavsim.control import Target, thrust_to_attitude
 from mavsim.errors import MavsimError
 from mavsim.modes import CopterMode
+from mavsim.px4 import Px4Autopilot
 from vehicles.quadrotor_brush.dynamics import body_z_axis
 
 HOME = (1.0, -1.2, 0.0)
@@ -26,7 +27,7 @@ class Sim:
     def __init__(self, **overrides: object) -> None:
         config = VehicleConfig(vehicle_id="v", system_id=1, port=0, home_m_enu=HOME,
                                **overrides)  # type: ignore[arg-type]  # fmt: skip
-        self.ap = Autopilot(config)
+        self.ap = Px4Autopilot(config) if config.autopilot == "px4" else Autopilot(config)
         self.t = 0.0
 
     def run(self, seconds: float) -> None:
@@ -64,9 +65,40 @@ def test_arming_is_refused_until_the_position_source_is_ready() -> None:
 def test_a_forced_refusal_names_its_reason() -> None:
     sim = Sim(position_source_delay_s=0.0, arm_refusal="Compass not calibrated")
     sim.run(0.1)
+    assert sim.texts() == ["PreArm: Compass not calibrated"]  # said before anyone tries to arm
     assert sim.ap.arm() == Result.FAILED
     assert sim.texts() == ["PreArm: Compass not calibrated"]
     assert not sim.ap.armed
+
+
+@pytest.mark.parametrize(
+    ("autopilot", "said", "repeats"),
+    [
+        ("ardupilot", "PreArm: gyros still settling", 2),
+        ("px4", "Preflight Fail: gyros still settling", 0),
+    ],
+)
+def test_a_failing_pre_arm_check_is_said_as_each_autopilot_says_it(
+    autopilot: str, said: str, repeats: int
+) -> None:
+    # ArduPilot (AP_Arming::update): when the failure begins or changes, then every 30 s; PX4
+    # reports its health checks when they change; both say them on MAV_CMD_RUN_PREARM_CHECKS
+    sim = Sim(position_source_delay_s=0.0, autopilot=autopilot)
+    sim.run(1.0)
+    assert sim.texts() == [] and sim.ap.prearm_failure() is None
+    sim.ap.prearm_fault = "gyros still settling"
+    sim.run(0.1)
+    assert sim.texts() == [said]
+    sim.run(65.0)
+    assert sim.texts() == [said] * repeats
+    assert sim.ap.run_prearm_checks() == Result.ACCEPTED and sim.texts() == [said]
+    assert sim.ap.arm() == Result.FAILED
+    sim.ap.prearm_fault = None
+    sim.run(0.1)
+    assert sim.ap.run_prearm_checks() == Result.ACCEPTED
+    sim.texts()
+    assert sim.ap.prearm_failure() is None and sim.ap.arm() == Result.ACCEPTED
+    assert sim.ap.run_prearm_checks() == Result.TEMPORARILY_REJECTED  # armed, as ArduPilot
 
 
 def test_takeoff_climbs_to_param7_above_home_and_holds() -> None:

@@ -28,7 +28,7 @@ from bus.messages import (
 )
 from orchestrator import holders
 from orchestrator.core import Book, CoreConfig, Effects
-from orchestrator.fleet import VehicleInfo, ready_for_job
+from orchestrator.fleet import VehicleInfo, VehicleView, ready_for_job
 from orchestrator.jobs import (
     FINAL_STATES,
     TRANSITIONS,
@@ -253,6 +253,32 @@ def test_refused_takeoff_requeues_the_job_and_backs_the_vehicle_off() -> None:
     assert _assigned(eff) == [("uav1", "j1")] and eff.jobs["j1"].counted_attempts == 1
     plain = AgentReport(vehicle_id="uav1", job_id="j1", event="failed", error=error)
     assert book.report(plain, 7.0)[1].jobs["j1"].state == "failed"  # no retry: the job failed
+
+
+def test_a_vehicle_waiting_for_its_pre_arm_checks_gets_no_job_until_they_pass() -> None:
+    book = Book(_config(), now_s=0.0)
+    book.liveliness("uav1", True, 0.0)
+    why = "Preflight Fail: horizontal velocity unstable"
+    waiting = VehicleStatus(vehicle_id="uav1", kind="quadrotor-brush", state="idle", preflight=why)
+    book.status(waiting, 0.1)
+    view = book.vehicles["uav1"]
+    assert not ready_for_job(view, 0.1)
+    assert not _assigned(_submit(book, "j1", 0.2))
+    assert not _assigned(book.tick(40.0)) and not _assigned(book.status(waiting, 40.0))
+    (summary,) = [v for v in book.snapshot(40.0).vehicles if v.vehicle_id == "uav1"]
+    assert summary.message == f"waiting for its pre-arm checks: {why}"
+    job = book.jobs["j1"]
+    assert (job.state, job.attempts, view.refused_until_s) == ("queued", 0, 0.0)  # no back-off
+    ready = msgspec.structs.replace(waiting, preflight="")
+    assert _assigned(book.status(ready, 41.0)) == [("uav1", "j1")]  # at once, not at a tick
+
+
+def test_ready_for_job_needs_the_pre_arm_checks_passing() -> None:
+    view = VehicleView(VEHICLES[0], alive=True, lost=False, state="idle", status_at_s=0.0)
+    view.preflight = "PreArm: Need Position Estimate"
+    assert not ready_for_job(view, 1.0)
+    view.preflight = ""
+    assert ready_for_job(view, 1.0)
 
 
 def test_a_job_aborted_before_writing_counts_its_attempts_and_fails_at_the_limit() -> None:

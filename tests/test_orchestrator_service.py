@@ -123,6 +123,8 @@ class FakeAgent:
         self.commands: list[VehicleCommand] = []
         self.job_id: str | None = None
         self.accept = True
+        self.preflight = ""
+        """Why its autopilot would not arm now (empty: it would), said in its status."""
         self.queryables = [
             serve(session, keys.vehicle_command(vehicle_id), VehicleCommand, self._on),
             serve(session, keys.vehicle_assign(vehicle_id), VehicleCommand, self._on),
@@ -158,7 +160,11 @@ class FakeAgent:
     def status(self) -> None:
         state = "writing" if self.job_id else "idle"
         status = VehicleStatus(
-            vehicle_id=self.vehicle_id, kind="quadrotor-brush", state=state, job_id=self.job_id
+            vehicle_id=self.vehicle_id,
+            kind="quadrotor-brush",
+            state=state,
+            job_id=self.job_id,
+            preflight=self.preflight,
         )
         publish(self.session, self.keys.vehicle_status(self.vehicle_id), status)
 
@@ -294,6 +300,32 @@ def test_jobs_flow_through_fake_agents_and_survive_vehicle_loss(
         vehicles = {v.vehicle_id: v for v in _snapshot(client, keys).vehicles}
         assert vehicles["uav1"].state == "lost" and not vehicles["uav1"].alive
         assert vehicles["uav2"].alive
+
+
+def test_a_vehicle_gets_no_job_while_its_autopilot_waits_for_its_pre_arm_checks(
+    tmp_path: Path, endpoint: str, client: Session
+) -> None:
+    _, show = make_show(tmp_path, "preflight", endpoint)
+    keys = ShowKeys(show.show_id)
+    settings = BusSettings(router_listen=[], connect=[endpoint])
+    why = "Preflight Fail: horizontal velocity unstable"
+    with RunningOrchestrator(show), agents_bus(settings) as agents:
+        eventually(lambda: query(client, keys.snapshot, None, ShowSnapshot, timeout_s=0.5))
+        uav1 = FakeAgent(agents, keys, "uav1")
+        uav1.preflight = why
+
+        def summary() -> Any:
+            return {v.vehicle_id: v for v in _snapshot(client, keys).vehicles}["uav1"]
+
+        said = f"waiting for its pre-arm checks: {why}"
+        eventually(lambda: summary().message == said, "the operator told why")
+        job = _submit(client, keys, SubmitRequest(text="L"))
+        time.sleep(1.0)  # heartbeats come and go: no job is offered meanwhile
+        assert not [c for c in uav1.commands if c.command == "assign"]
+        assert uav1.job_id is None
+        uav1.preflight = ""
+        assert uav1.write_job() == job.job_id  # offered once its autopilot can arm
+        assert {j.job_id: j.state for j in _snapshot(client, keys).jobs} == {job.job_id: "done"}
 
 
 def test_operator_commands_and_moderation(tmp_path: Path, endpoint: str, client: Session) -> None:

@@ -79,6 +79,25 @@ def test_view_of_a_dumped_show_with_its_defaults_written_out(tmp_path: Path) -> 
     assert view is not None and _bus_part(view) == _bus_part(load_show(path))
 
 
+@pytest.mark.parametrize("security", [{}, {"keys_dir": "k"}])
+def test_keys_are_found_from_the_show_files_folder_not_the_working_directory(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, security: dict[str, Any]
+) -> None:
+    """Issue 31, for ``skyquill status``: the keys beside the database the show file names
+    (``../out/solo`` from ``shows/``), or its own ``keys_dir``, both from the file's folder."""
+    root = tmp_path.resolve()
+    (root / "shows").mkdir()
+    (root / "elsewhere").mkdir()
+    doc = {**_minimal(), "security": {"mode": "mtls", **security}}
+    path = root / "shows" / "solo.yaml"
+    path.write_text(yaml.safe_dump(doc), encoding="utf-8")
+    monkeypatch.chdir(root / "elsewhere")
+    view = read_bus_view(Path("..") / "shows" / "solo.yaml")
+    assert view is not None
+    wanted = root / "shows" / "k" if security else root / "out" / "solo" / "keys"
+    assert view.keys_dir == wanted == load_show(path).keys_dir
+
+
 @pytest.mark.parametrize(
     ("view_class", "model_class"),
     [(ZenohView, ZenohSettings), (HostView, ZenohHost), (SecurityView, SecuritySettings)],
@@ -111,6 +130,8 @@ def _minimal() -> dict[str, Any]:
         {"vehicles": [{"id": "operator"}]},  # a role's name
         {"show_id": "bad id"},
         {"source_path": "x.yaml"},
+        {"storage": {"database": 5}},  # not a path
+        {"storage": "show.sqlite3"},
     ],
 )
 def test_what_the_view_does_not_vouch_for_is_left_to_the_loader(

@@ -255,6 +255,38 @@ def test_unreadable_file_names_it(tmp_path: Path) -> None:
         load_show(tmp_path / "nope.yaml")
 
 
+@pytest.mark.parametrize("named", ["absolute", "relative"])
+def test_relative_paths_start_from_the_show_files_folder_not_the_working_directory(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, named: str
+) -> None:
+    """Issue 31: ``skyquill status /abs/show.yaml`` run from another folder looked for the keys
+    there. Whether the file is named absolute or relative to the working directory, its paths
+    start from its own folder; the keys' default folder is beside the database."""
+    root = tmp_path.resolve()
+    (root / "shows").mkdir()
+    (root / "elsewhere").mkdir()
+    storage = "storage: {database: ../out/t/show.sqlite3, recordings_dir: rec}\n"
+    (root / "shows" / "t.yaml").write_text(SOLO + storage, encoding="utf-8")
+    (root / "shows" / "k.yaml").write_text(SOLO + "security: {keys_dir: k}\n", encoding="utf-8")
+    monkeypatch.chdir(root / "elsewhere")
+    folder = root / "shows" if named == "absolute" else Path("..") / "shows"
+    show = load_show(folder / "t.yaml")
+    assert show.database_path == root / "out" / "t" / "show.sqlite3"
+    assert show.keys_dir == root / "out" / "t" / "keys"
+    assert show.recordings_dir == root / "shows" / "rec"
+    defaults = load_show(folder / "k.yaml")
+    assert defaults.keys_dir == root / "shows" / "k"
+    assert defaults.database_path == root / "shows" / "out" / "t" / "show.sqlite3"
+    assert defaults.recordings_dir == root / "shows" / "out" / "t" / "recordings"
+
+
+def test_a_show_built_in_memory_keeps_its_paths_relative_to_the_working_directory() -> None:
+    show = parse_show(SOLO)
+    assert show.database_path == Path("out/t/show.sqlite3")
+    assert show.keys_dir == Path("out/t/keys")
+    assert show.recordings_dir == Path("out/t/recordings")
+
+
 def test_rotated_rectangles_overlap_by_separating_axes() -> None:
     show = parse_show(SOLO)
     board = show.boards[0]

@@ -6,7 +6,9 @@ steps' failures, on a fake ``./waf``. The builds themselves are run by hand (REA
 from __future__ import annotations
 
 import importlib.util
+import os
 import re
+import subprocess
 import sys
 from pathlib import Path
 from types import ModuleType
@@ -70,10 +72,11 @@ def test_every_edit_applies_once_then_is_found_present(
 @pytest.mark.parametrize("autopilot", ["ardupilot", "px4"])
 def test_no_listener_is_left_on_every_interface(build: ModuleType, autopilot: str) -> None:
     recipe = build.RECIPES[autopilot]
-    binds = [e for e in recipe.edits if "INADDR" in e.before + e.after]
+    binds = [e for e in recipe.edits if "loopback only" in e.after]
     assert binds, "the recipe binds nothing to loopback"
     for edit in binds:
-        assert "INADDR_ANY" not in edit.after and "INADDR_LOOPBACK" in edit.after
+        assert "INADDR_ANY" not in edit.after and '"0.0.0.0"' not in edit.after
+        assert "INADDR_LOOPBACK" in edit.after or '"127.0.0.1"' in edit.after
 
 
 def test_a_checkout_of_another_release_is_named_and_left_untouched(
@@ -81,7 +84,8 @@ def test_a_checkout_of_another_release_is_named_and_left_untouched(
 ) -> None:
     recipe = build.RECIPES["px4"]
     root = checkout(tmp_path, recipe.edits)
-    sih = root / recipe.edits[-1].path
+    (sih_edit,) = [e for e in recipe.edits if e.path.endswith("sih.cpp")]
+    sih = root / sih_edit.path
     sih.write_text(sih.read_text().replace("noiseGauss3f(0.5f", "noiseGauss3f(0.6f"))
     before = {p: p.read_text() for p in root.rglob("*") if p.is_file()}
     with pytest.raises(edits.EditError, match=r"sih\.cpp: expected exactly one .*found 0"):
@@ -118,10 +122,13 @@ def test_a_checkout_without_its_submodules_is_refused_naming_them(
     recipe = build.RECIPES["px4"]
     (tmp_path / recipe.marker).parent.mkdir(parents=True)
     (tmp_path / recipe.marker).write_text("")
-    for sub in recipe.submodules[1:]:
-        (tmp_path / sub).mkdir(parents=True)
-        (tmp_path / sub / "CMakeLists.txt").write_text("")
-    with pytest.raises(build.BuildError, match=r"submodules missing: src/modules/mavlink/mavlink "):
+    mavlink = "src/modules/mavlink/mavlink"  # with pymavlink inside it, a submodule of its own
+    for sub in recipe.submodules:
+        if not sub.startswith(mavlink):
+            (tmp_path / sub).mkdir(parents=True)
+            (tmp_path / sub / "CMakeLists.txt").write_text("")
+    expected = f"submodules missing: {mavlink}, {mavlink}/pymavlink "
+    with pytest.raises(build.BuildError, match=expected):
         build.check_checkout("px4", tmp_path)
     with pytest.raises(build.BuildError, match="not a ardupilot checkout"):
         build.check_checkout("ardupilot", tmp_path)
@@ -207,3 +214,87 @@ def test_a_step_that_exits_non_zero_stops_the_build_and_one_that_succeeds_builds
         "configure --board sitl --no-submodule-update",
         "copter --no-submodule-update",
     ]
+
+
+PX4_STARTUP_RUNS = (
+    ("MAV_SYS_ID", 'param() { echo "param $*"; }\n', ""),
+    ("udp_offboard_port_remote", "udp_offboard_port_remote=$((14540+px4_instance))\n",
+     'echo "remote $udp_offboard_port_remote"\n'),
+    ("udp_gcs_port_local", 'mavlink() { echo "mavlink $*"; }\nudp_gcs_port_local=18573\n', ""),
+)  # fmt: skip
+"""Per PX4 startup edit (found by a word of its text): what it needs before it to run alone in
+/bin/sh, and what to print after it."""
+PX4_PORT_ENV = {
+    "PX4_SYS_ID": "42",
+    "PX4_OFFBOARD_REMOTE_PORT": "47650",
+    "PX4_GCS_REMOTE_PORT": "14563",
+}
+
+
+def run_sh(script: str, env: dict[str, str]) -> str:
+    """stdout of ``script`` run by /bin/sh (PX4 SITL runs its startup scripts so)."""
+    done = subprocess.run(["/bin/sh", "-c", script], env={"PATH": "/usr/bin:/bin", **env},
+                          capture_output=True, text=True, check=True)  # fmt: skip
+    return done.stdout
+
+
+@pytest.mark.parametrize("px4_instance", [3, 12])
+def test_px4_startup_takes_its_system_id_and_ports_from_the_environment_only_when_set(
+    edits: ModuleType, px4_instance: int
+) -> None:
+    startup = [e for e in edits.PX4_EDITS if "init.d-posix" in e.path]
+    assert len(startup) == len(PX4_STARTUP_RUNS)
+    outputs = []
+    for word, prelude, show in PX4_STARTUP_RUNS:
+        (edit,) = [e for e in startup if word in e.before]
+        head = f"px4_instance={px4_instance}\n{prelude}"
+        stock = run_sh(head + edit.before + show, {})
+        assert run_sh(head + edit.after + show, {}) == stock  # unset: as shipped
+        outputs.append((stock, run_sh(head + edit.after + show, PX4_PORT_ENV)))
+    (sys_id, sys_id_set), (remote, remote_set), (gcs, gcs_set) = outputs
+    assert sys_id == f"param set MAV_SYS_ID {px4_instance + 1}\n"
+    assert sys_id_set == "param set MAV_SYS_ID 42\n"
+    assert remote == f"remote {14540 + px4_instance if px4_instance <= 9 else 14549}\n"
+    assert remote_set == "remote 47650\n"
+    assert gcs == "mavlink start -x -u 18573 -r 4000000 -f\n"  # PX4 sends to 14550
+    assert gcs_set == "mavlink start -x -u 18573 -r 4000000 -f -o 14563\n"
+
+
+def px4_checkout() -> Path | None:
+    """The PX4 checkout $SKYQUILL_PX4_SITL was built from, when it is a git checkout."""
+    binary = os.environ.get("SKYQUILL_PX4_SITL")
+    if not binary:
+        return None
+    root = Path(binary).resolve().parents[3]  # build/px4_sitl_default/bin/px4
+    return root if (root / ".git").exists() else None
+
+
+def test_the_px4_startup_edits_apply_to_the_release_files_and_run(
+    edits: ModuleType, tmp_path: Path
+) -> None:
+    """On a copy of v1.16's own px4-rc.mavlink and rcS (as committed in the checkout): every
+    link of px4-rc.mavlink starts as shipped when the variables are unset, and the offboard and
+    GCS links send where they say when set."""
+    root = px4_checkout()
+    if root is None:
+        pytest.skip("SKYQUILL_PX4_SITL not set or not built in a PX4 git checkout")
+    startup = tuple(e for e in edits.PX4_EDITS if "init.d-posix" in e.path)
+    for path in {e.path for e in startup}:
+        stock = subprocess.run(["git", "-C", str(root), "show", f"HEAD:{path}"],
+                               capture_output=True, text=True, check=True).stdout  # fmt: skip
+        (tmp_path / path).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / path).write_text(stock)
+    mavlink_rc = tmp_path / startup[-1].path
+    stub = 'mavlink() { echo "mavlink $*"; }\npx4_instance=2\nPX4_SIMULATOR=sihsim\n'
+    shipped = run_sh(stub + mavlink_rc.read_text(), {})
+    assert [o for _, o in edits.apply_edits(tmp_path, startup)] == ["applied"] * 3
+    assert run_sh(stub + mavlink_rc.read_text(), {}) == shipped
+    ours = run_sh(stub + mavlink_rc.read_text(), PX4_PORT_ENV).splitlines()
+    assert "mavlink start -x -u 18572 -r 4000000 -f -o 14563" in ours
+    assert "mavlink start -x -u 14582 -r 4000000 -f -m onboard -o 47650" in ours
+    rcs = (tmp_path / startup[0].path).read_text()
+    (line,) = [x for x in rcs.splitlines() if x.startswith("param set MAV_SYS_ID")]
+    assert rcs.index("PX4_PARAM_") < rcs.index(line)  # after the overrides, as before
+    param = 'param() { echo "param $*"; }\npx4_instance=2\n'
+    assert run_sh(param + line, {}) == "param set MAV_SYS_ID 3\n"
+    assert run_sh(param + line, PX4_PORT_ENV) == "param set MAV_SYS_ID 42\n"

@@ -196,6 +196,35 @@ def test_missing_keys_give_a_one_line_hint(tmp_path: Path) -> None:
         session_settings(show, "orchestrator")
 
 
+@pytest.mark.parametrize("command", [("status",), ("submit", "--text", "L")])
+def test_status_and_submit_find_the_keys_from_another_directory(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    command: tuple[str, ...],
+) -> None:
+    """Issue 31: keys made from the checkout's root (as the README runs ``skyquill keys``) are
+    found by a command run elsewhere with the show file's absolute path. Nobody listens (the
+    discard port): the command fails to reach the bus, not for want of its keys."""
+    root = tmp_path.resolve()
+    (root / "shows").mkdir()
+    (root / "elsewhere").mkdir()
+    text = SOLO.read_text(encoding="utf-8").replace("tcp/127.0.0.1:7448", "tcp/127.0.0.1:9")
+    text = text.replace(
+        "multicast_scouting: false", "multicast_scouting: false\n  open_timeout_s: 0"
+    )
+    show = root / "shows" / "solo.yaml"
+    show.write_text(text, encoding="utf-8")
+    monkeypatch.chdir(root)
+    assert main(["keys", "shows/solo.yaml"]) == 0
+    assert (root / "out" / "solo" / "keys" / "operator" / "cert.pem").is_file()
+    monkeypatch.chdir(root / "elsewhere")
+    capsys.readouterr()
+    assert main([command[0], str(show), *command[1:], "--timeout", "0.1"]) == 2
+    err = capsys.readouterr().err
+    assert f"skyquill {command[0]}:" in err and "is missing" not in err, err
+
+
 def test_cli_issues_a_client_whose_config_file_joins_the_show(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -59,6 +59,12 @@ from vehicle_agent.runner_job import RunningJob
 from vehicle_agent.runner_phases import ABORT_LIFT_M, Level, RunnerPhases
 from vehicle_agent.safety.guard import Breach
 
+PREFLIGHT_HOLD_S = 30.0
+"""How long in [s] a vehicle with a planned job waits for its autopilot's pre-arm checks before
+it hands the job back for another vehicle. PX4 SIH on mocap flips its velocity-innovation check
+on and off every few seconds on the ground (EKF2's test ratio 0.05-0.6 against its 0.5, measured
+here): the vehicle takes off in the first moment it passes, usually within seconds."""
+
 __all__ = [
     "ACTIVE_PHASES",
     "BackendCommand",
@@ -112,9 +118,23 @@ class JobRunner(RunnerPhases):
             self.plan_failed(job.job_id, ErrorInfo(code="geofence", message=f"refused: {why}"))
             return
         job.prepared = prepared
-        if self.phase == "preflight":
+        self._planned_at_s = self._now_s
+        self._take_off_when_ready()
+
+    def _take_off_when_ready(self) -> None:
+        """With the plan in hand, on the ground: take off as soon as the vehicle says it can
+        (its pre-arm checks pass); a vehicle that has not said so ``PREFLIGHT_HOLD_S`` after the
+        plan was ready hands the job back for another."""
+        job = self._job
+        if self.phase != "preflight" or job is None or job.prepared is None:
+            return
+        if self.preflight is None:
             self._backend_command = ("takeoff", self.config.hover_home_m_enu)
             self.phase = "climb"
+        elif self._now_s - self._planned_at_s > PREFLIGHT_HOLD_S:
+            self.phase = "climb"  # as if refused: the same hand-back and back-off
+            self.takeoff_refused(f"pre-arm checks failing for {PREFLIGHT_HOLD_S:.0f} s: "
+                                 f"{self.preflight}", self._now_s)  # fmt: skip
 
     def plan_failed(self, job_id: str, error: ErrorInfo) -> None:
         """The job could not be laid out, planned or fenced: report it failed and come back."""
@@ -131,11 +151,16 @@ class JobRunner(RunnerPhases):
         if self.phase in ("wait_plan", "transit", "settle"):
             self._start_return(self._current_reference())
 
-    def takeoff_refused(self, reason: str, now_s: float) -> None:
+    def takeoff_refused(self, reason: str, now_s: float, *, not_ready: bool = False) -> None:
         """The vehicle declined to take off (its pre-arm checks failed) and is still on the ground,
         healthy: hand the job back (``failed`` with ``retry_after_s``) and take no job for a
-        while, twice as long after each refusal in a row."""
+        while, twice as long after each refusal in a row. ``not_ready``: nothing was asked of
+        the autopilot (its checks began failing just before): wait for them again instead,
+        within ``PREFLIGHT_HOLD_S`` of the plan."""
         if self.phase != "climb":
+            return
+        if not_ready and now_s - self._planned_at_s <= PREFLIGHT_HOLD_S:
+            self.phase, self.preflight = "preflight", self.preflight or reason
             return
         backoff = self._retry_backoff_s
         self._retry_backoff_s = min(2.0 * backoff, self.config.takeoff_retry_max_s)
@@ -249,6 +274,7 @@ class JobRunner(RunnerPhases):
         """Decide this control period from the vehicle state at its start (agent time ``now_s``)."""
         self._now_s = now_s
         self._watch(snapshot)
+        self._take_off_when_ready()
         if snapshot.fault is not None and self.phase != "stopped":
             self._stop(f"vehicle fault: {snapshot.fault}")
         plan_request = self._take_plan_request()
@@ -279,7 +305,7 @@ class JobRunner(RunnerPhases):
         return actions
 
     def _watch(self, snap: VehicleSnapshot) -> None:
-        """Events for the autopilot's mode changes and for a fault appearing."""
+        """Events for the autopilot's mode changes, a fault appearing, its pre-arm checks."""
         vid = self.config.vehicle_id
         mode = snap.autopilot_mode
         if mode is not None and mode != self._seen_mode:
@@ -290,6 +316,23 @@ class JobRunner(RunnerPhases):
             if snap.fault is not None:
                 self._event("alert", "vehicle_fault", f"{vid} fault: {snap.fault}")
             self._seen_fault = snap.fault
+        if (snap.preflight is None) != (self.preflight is None):
+            self._preflight_event(snap.preflight)
+        self.preflight = snap.preflight
+
+    def _preflight_event(self, preflight: str | None) -> None:
+        """One event when the pre-arm checks begin to fail (``preflight``: why) and one when
+        they pass again (None), with how long the vehicle waited: the log shows how long
+        vehicles wait for their autopilots."""
+        vid = self.config.vehicle_id
+        if preflight is None:
+            waited_s = self._now_s - self._preflight_since_s
+            self._event("info", "preflight", f"{vid} pre-arm checks pass after {waited_s:.0f} s")
+        else:
+            self._preflight_since_s = self._now_s
+            self._event(
+                "warning", "preflight", f"{vid} waiting for its pre-arm checks: {preflight}"
+            )
 
     def _take_plan_request(self) -> JobAssignment | None:
         if self._job is None or self._job.plan_requested or self.phase == "stopped":

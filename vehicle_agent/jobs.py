@@ -14,9 +14,19 @@ import numpy as np
 from bus.messages import JobAssignment, JobMetrics
 from planner.errors import PlannerError
 from planner.glyphs import Glyph, parse_strokes_json, text_glyph
+from planner.samples import FloatArray
 from vehicle_agent.job_files import COMPACT_PICTURE_DPI, JobFilesPolicy, compact_arrays, prune
 from vehicle_agent.job_picture import PICTURE_NAME, PictureWorker
 from vehicle_agent.job_runner import PreparedJob
+from vehicle_agent.pace import (
+    PaceSettings,
+    learn,
+    load_model,
+    model_path,
+    pace_figures,
+    pace_line,
+    paced,
+)
 from vehicle_agent.setup import VehicleSetup
 from vehicle_agent.trace import JobTrace
 from vehicle_agent.written_ink import written_ink_of_trace
@@ -38,14 +48,23 @@ def job_glyph(assignment: JobAssignment) -> Glyph:
 def prepare_job(setup: VehicleSetup, assignment: JobAssignment) -> PreparedJob:
     """Lay the job's glyph out on the vehicle's board and plan it with its kind (raises
     PlannerError); the context is the kind's :class:`vehicles.kind.WritingPlan`."""
-    job = plan_job(setup.show, setup.vehicle_id, job_glyph(assignment))
-    commands = setup.kind.command_reference(job.plan, setup.settings)
+    return prepared_job(setup, assignment.job_id, planned_job(setup, assignment))
+
+
+def planned_job(setup: VehicleSetup, assignment: JobAssignment) -> WritingPlan:
+    """The kind's plan of the job's glyph on the vehicle's board (the slow part: the planner)."""
+    return plan_job(setup.show, setup.vehicle_id, job_glyph(assignment)).plan
+
+
+def prepared_job(setup: VehicleSetup, job_id: str, plan: WritingPlan) -> PreparedJob:
+    """``plan`` ready to fly: paced to the vehicle's tracking as last identified (show
+    ``planning.pace: tracking``) and the kind's command reference made of it (fast: a job
+    planned long before it flies is paced with what its vehicle flew meanwhile)."""
+    if (pace := PaceSettings.of(setup.show)) is not None:
+        plan = paced(plan, pace, load_model(model_path(setup.show, setup.vehicle_id)))
+    commands = setup.kind.command_reference(plan, setup.settings)
     return PreparedJob(
-        assignment.job_id,
-        job.plan.samples,
-        command_samples=commands,
-        context=job.plan,
-        force_n=job.plan.force_n,
+        job_id, plan.samples, command_samples=commands, context=plan, force_n=plan.force_n
     )
 
 
@@ -58,20 +77,38 @@ def writing_plan(prepared: PreparedJob) -> WritingPlan:
 
 def job_metrics(setup: VehicleSetup, prepared: PreparedJob, trace: JobTrace) -> JobMetrics:
     """The kind's metrics of the flown job (writing-point errors, ink IoU); for a backend that
-    does not know its pen, errors of the vehicle reference point and no IoU."""
+    does not know its pen, errors of the vehicle reference point and no IoU. A paced job's
+    figures (``pace_*``) are added and, flown to its end, it refits the vehicle's tracking
+    with the error the metrics measured at each tick."""
+    metrics, error_m = _measured(setup, prepared, trace)
+    plan = writing_plan(prepared)
+    if plan.pace is None:
+        return metrics
+    flown = trace.flown
+    if flown.abort_reason is None and error_m is not None:
+        path = model_path(setup.show, setup.vehicle_id)
+        learn(path, flown.t_s, flown.reference_m_enu, error_m, flown.pen_down, plan.pace, metrics)
+    return msgspec.structs.replace(metrics, extra=metrics.extra | pace_figures(plan.pace))
+
+
+def _measured(
+    setup: VehicleSetup, prepared: PreparedJob, trace: JobTrace
+) -> tuple[JobMetrics, FloatArray | None]:
+    """The metrics and the error at each tick they were measured from (None: not known)."""
     flown = trace.flown
     if not trace.pen_known:
         error = np.linalg.norm(flown.writing_point_m_enu - flown.reference_m_enu, axis=1)
         down = flown.pen_down
-        return JobMetrics(
+        unknown_pen = JobMetrics(
             rmse_pen_down_m=float(np.sqrt(np.mean(error[down] ** 2))) if down.any() else 0.0,
             rmse_m=float(np.sqrt(np.mean(error**2))) if error.size else 0.0,
             max_error_m=float(error.max()) if error.size else 0.0,
             iou=None,
             duration_s=trace.duration_s,
         )
+        return unknown_pen, error
     score = setup.kind.score(writing_plan(prepared), flown, setup.settings)
-    return JobMetrics(
+    metrics = JobMetrics(
         rmse_pen_down_m=score.rmse_pen_down_m,
         rmse_m=score.rmse_m,
         max_error_m=score.max_error_m,
@@ -80,6 +117,7 @@ def job_metrics(setup: VehicleSetup, prepared: PreparedJob, trace: JobTrace) -> 
         extra={name: float(value) for name, value in score.extra.items()},
         written=written_ink_of_trace(trace, setup.surface.to_surface, setup.writing_area_m),
     )
+    return metrics, score.error_m
 
 
 def job_report_dir(setup: VehicleSetup, trace: JobTrace) -> Path:
@@ -149,6 +187,8 @@ def write_job_picture(
     if not trace.pen_known:
         return None
     title = f"job {trace.job_id} on {setup.vehicle_id}, attempt {trace.attempt}"
+    if (pace := writing_plan(prepared).pace) is not None:
+        title += f"\n{pace_line(pace)}"
     figure = setup.kind.report(writing_plan(prepared), trace.flown, setup.settings, title)
     path = out / PICTURE_NAME
     compact = JobFilesPolicy.of(setup.show).compact

@@ -113,7 +113,8 @@ class RunnerEvent:
     level: Literal["info", "warning", "alert"]
     """How loud: ``alert`` for aborts and faults."""
     kind: str
-    """e.g. ``deviation``, ``geofence``, ``not_settled``, ``vehicle_fault``, ``vehicle_mode``."""
+    """e.g. ``deviation``, ``geofence``, ``not_settled``, ``vehicle_fault``, ``vehicle_mode``,
+    ``preflight``."""
     message: str
     """One sentence for a person."""
     job_id: str | None = None

@@ -77,6 +77,13 @@ class RunnerPhases:
         self._retry_backoff_s = config.takeoff_retry_s
         self._seen_mode: str | None = None
         self._seen_fault: str | None = None
+        self.preflight: str | None = None
+        """Why the vehicle cannot take off now, in its autopilot's words (the latest snapshot's,
+        published in the status); None: it can."""
+        self._preflight_since_s = 0.0
+        self._planned_at_s = 0.0
+        """Agent time in [s] the current job's plan came back (the pre-arm wait counts from it)."""
+        """Agent time in [s] since when ``preflight`` has been set."""
         self._now_s = 0.0
 
     @property
@@ -340,6 +347,7 @@ class RunnerPhases:
             job_id=self.job_id,
             message=self.message,
             incarnation=incarnation,
+            preflight=self.preflight or "",
         )
 
 

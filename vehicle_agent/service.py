@@ -51,6 +51,7 @@ from bus.session import Session, open_session
 from vehicle_agent.backends.base import (
     BackendError,
     CommandRefusedError,
+    NotReadyError,
     Vec3,
     VehicleBackend,
     VehicleSnapshot,
@@ -303,9 +304,13 @@ class AgentService:
             return _with_fault(snapshot, str(exc))
 
     async def _takeoff(self, hover: Vec3, now_s: float) -> None:
-        """Take off; a refusal (pre-arm checks) hands the job back, any other error is a fault."""
+        """Take off; a refusal (pre-arm checks) hands the job back, any other error is a fault;
+        a vehicle that was not asked (its checks had just begun failing) waits for them again."""
         try:
             await self.backend.takeoff(hover)
+        except NotReadyError as exc:
+            log.info("%s: not taking off yet: %s", self.vehicle_id, exc)
+            self.runner.takeoff_refused(str(exc), now_s, not_ready=True)
         except CommandRefusedError as exc:
             job_id = self.runner.job_id
             log.warning("%s: take-off refused: %s", self.vehicle_id, exc)

@@ -34,6 +34,7 @@ if TYPE_CHECKING:
     import numpy as np
     from numpy.typing import NDArray
 
+    from planner.pace import PaceChoice
     from planner.samples import TrajectorySamples
     from showfile.models import Show
     from vehicles.surface import Orientation, Surface, Vec3
@@ -77,6 +78,10 @@ class WritingPlan:
     detail: object = None
     """The kind's own plan object, for its kind-specific outputs (the brush quadrotor: the
     ``planner.pipeline.PlannedTrajectory`` behind ``TRAJ.json`` and the plan plot)."""
+    pace: PaceChoice | None = None
+    """How much slower than planned ``samples`` fly, to the vehicle's identified tracking
+    (show ``planning.pace: tracking``, ``vehicle_agent/pace.py``); None: flown as planned
+    (``detail`` is then the unstretched plan)."""
 
     @property
     def duration_s(self) -> float:
@@ -123,6 +128,10 @@ class WritingScore:
     """Intersection over union of written and target ink rasters (None: not measurable)."""
     extra: Mapping[str, float] = field(default_factory=dict)
     """Kind-specific figures, names with units (``force_rmse_n``, ``rmse_base_m``, ...)."""
+    error_m: FloatArray | None = None
+    """(K,) the error in [m] at each tick of the flight whose pen-down RMS is
+    ``rmse_pen_down_m``, where the kind measures it tick by tick (the brush quadrotor: what
+    the agent's pace learns from, ``vehicle_agent/pace.py``); None otherwise."""
 
 
 @dataclass(frozen=True)

@@ -102,6 +102,7 @@ RECIPES = {
         marker="src/modules/simulation/simulator_sih/sih.cpp",
         submodules=(
             "src/modules/mavlink/mavlink",
+            "src/modules/mavlink/mavlink/pymavlink",  # its mavgen.py makes PX4's MAVLink headers
             "src/lib/events/libevents",
             "src/drivers/gps/devices",
             "src/lib/heatshrink/heatshrink",

@@ -3,8 +3,9 @@
     .venv/bin/python scripts/sitl/probe.py ardupilot mavsim-ardupilot px4 mavsim-px4 \
         --out out/probe.json
 
-Targets: ``ardupilot`` / ``px4`` start a real SITL instance (scripts/sitl/start.py, instance 4,
-binaries from $SKYQUILL_ARDUCOPTER_SITL / $SKYQUILL_PX4_SITL, waiting until it could arm);
+Targets: ``ardupilot`` / ``px4`` start a real SITL instance (scripts/sitl/start.py, on a free
+instance number, binaries from $SKYQUILL_ARDUCOPTER_SITL / $SKYQUILL_PX4_SITL, waiting until it
+could arm);
 ``mavsim-ardupilot`` / ``mavsim-px4`` serve the project's simulated vehicle of that flavour on
 udp 127.0.0.1:14690. Every case is a short exchange with bounded waits; the answer is a short
 string. With several targets the answers are printed side by side, differences marked ``<>``.
@@ -24,7 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 import start as launch  # scripts/sitl/start.py, beside this file
 
-INDEX = 4
+SYSTEM_ID = 5
 MAVSIM_PORT = 14690
 ARDU_GUIDED, ARDU_LAND = 4, 9
 PX4_OFFBOARD, PX4_AUTO, PX4_LAND_SUB = 6, 4, 6
@@ -264,10 +265,9 @@ def run_target(name: str) -> dict[str, str]:
         with MavsimServer([config]):
             time.sleep(4.0)  # position source delay 3 s
             return _cases(Probe(flavor, f"udpout:127.0.0.1:{MAVSIM_PORT}", 1))
-    inst = launch.Instance(
+    inst = launch.claim_instance(
         launch.as_kind(flavor),
-        INDEX,
-        INDEX + 1,
+        SYSTEM_ID,
         launch.home_lla((0.0, 0.0, 0.0)),
         launch.binary_for(launch.as_kind(flavor)),
         Path("out/sitl-probe") / flavor,

@@ -19,6 +19,12 @@ binary than one that listens on every interface.
   ``SIH_IMU_VIB`` (new, default 1: unchanged) scales the armed noise between SIH's own disarmed
   level (0: 0.1 m/s^2 and 0.01 rad/s on every axis) and the stock level (1); the same number of
   random draws either way. scripts/sitl/start.py sets it for vehicles on mocap.
+- **PX4's system id and two UDP ports from the environment.** ``px4 -i N`` forces MAV_SYS_ID
+  N + 1 (after the PX4_PARAM_* overrides, so those cannot change it), sends its offboard link to
+  14540 + N and its GCS link to 14550, one port for every instance on the machine: two shows, or
+  a show and a test, could not run side by side nor say where their autopilots are. When set,
+  ``PX4_SYS_ID``, ``PX4_OFFBOARD_REMOTE_PORT`` and ``PX4_GCS_REMOTE_PORT`` give them instead
+  (start.py sets all three); unset, PX4 starts as shipped.
 """
 
 from __future__ import annotations
@@ -98,6 +104,12 @@ ARDUPILOT_EDITS = (
         f"    sockaddr.sin_addr.s_addr = {LOOPBACK}; // skyquill: loopback only\n",
         "multicast-state servo input (20722 + I) on 127.0.0.1",
     ),
+    Edit(
+        "libraries/AP_RCProtocol/AP_RCProtocol_UDP.cpp",
+        '    if (!rc_in.bind("0.0.0.0", sitl->rcin_port)) {\n',
+        '    if (!rc_in.bind("127.0.0.1", sitl->rcin_port)) { // skyquill: loopback only\n',
+        "SITL RC input (udp 5501 + 10*I: sticks from anyone who sends) on 127.0.0.1",
+    ),
 )
 """ArduPilot 4.5-4.7 (checked on 4.7.0-dev)."""
 
@@ -130,6 +142,13 @@ PARAM_DEFINE_FLOAT(SIH_IMU_VIB, 1.0f);
 """
 _SIH_PARAM_ANCHOR = "PARAM_DEFINE_INT32(SIH_VEHICLE_TYPE, 0);\n"
 _SIH = "src/modules/simulation/simulator_sih/"
+_POSIX_INIT = "ROMFS/px4fmu_common/init.d-posix/"
+_OFFBOARD_REMOTE_STOCK = (
+    '[ "$px4_instance" -gt 9 ] && udp_offboard_port_remote=14549 # use the same ports for more '
+    "than 10 instances to avoid port overlaps\n"
+)
+_GCS_LINK_STOCK = "mavlink start -x -u $udp_gcs_port_local -r 4000000 -f\n"
+_SYS_ID_STOCK = "param set MAV_SYS_ID $((px4_instance+1))\n"
 
 PX4_EDITS = (
     Edit(
@@ -174,6 +193,29 @@ PX4_EDITS = (
         _SIH_NOISE_STOCK,
         _SIH_NOISE_SCALED,
         "SIH's armed IMU noise scaled by SIH_IMU_VIB",
+    ),
+    Edit(
+        _POSIX_INIT + "rcS",
+        _SYS_ID_STOCK,
+        "# skyquill: PX4_SYS_ID, when set, is the system id (else instance + 1)\n"
+        "param set MAV_SYS_ID ${PX4_SYS_ID:-$((px4_instance+1))}\n",
+        "MAV_SYS_ID from $PX4_SYS_ID when set",
+    ),
+    Edit(
+        _POSIX_INIT + "px4-rc.mavlink",
+        _OFFBOARD_REMOTE_STOCK,
+        _OFFBOARD_REMOTE_STOCK
+        + "# skyquill: PX4_OFFBOARD_REMOTE_PORT, when set, is where the offboard link sends\n"
+        "udp_offboard_port_remote=${PX4_OFFBOARD_REMOTE_PORT:-$udp_offboard_port_remote}\n",
+        "offboard link's remote port from $PX4_OFFBOARD_REMOTE_PORT when set",
+    ),
+    Edit(
+        _POSIX_INIT + "px4-rc.mavlink",
+        _GCS_LINK_STOCK,
+        "# skyquill: PX4_GCS_REMOTE_PORT, when set, is where the GCS link sends (else 14550)\n"
+        "mavlink start -x -u $udp_gcs_port_local -r 4000000 -f "
+        "${PX4_GCS_REMOTE_PORT:+-o $PX4_GCS_REMOTE_PORT}\n",
+        "GCS link's remote port from $PX4_GCS_REMOTE_PORT when set",
     ),
 )
 """PX4 v1.16 (SIH quadrotor)."""

@@ -2,9 +2,9 @@
 
     .venv/bin/python scripts/sitl/step_response.py ardupilot --out out/step-ardupilot.json
 
-Starts one SITL instance (scripts/sitl/start.py, instance 5, binary from $SKYQUILL_ARDUCOPTER_SITL
-or $SKYQUILL_PX4_SITL), climbs to ``--height`` (ArduCopter: GUIDED, arm, NAV_TAKEOFF; PX4:
-OFFBOARD with a position stream, arm), holds, then steps the position-only
+Starts one SITL instance (scripts/sitl/start.py, on a free instance number, binary from
+$SKYQUILL_ARDUCOPTER_SITL or $SKYQUILL_PX4_SITL), climbs to ``--height`` (ArduCopter: GUIDED,
+arm, NAV_TAKEOFF; PX4: OFFBOARD with a position stream, arm), holds, then steps the position-only
 SET_POSITION_TARGET_LOCAL_NED by ``--step`` metres north, later by ``--step-up`` metres up, at
 50 Hz, logging LOCAL_POSITION_NED at 50 Hz. For each step it reports the dead time (5 % of the
 step), the 10/50/90 % times, the overshoot, the 5 % settling time, the steady-state gain
@@ -27,7 +27,7 @@ from scipy.optimize import least_squares
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import start as launch  # scripts/sitl/start.py, beside this file
 
-INDEX = 5
+SYSTEM_ID = 6
 MAVSIM_PORT = 14691
 RATE_HZ = 50.0
 POSITION_ONLY = 0x09F8  # ignore velocity, acceleration, yaw rate; keep position and yaw
@@ -173,17 +173,16 @@ def run(kind: str, args: argparse.Namespace) -> dict[str, Any]:
         with MavsimServer([config]):
             time.sleep(4.0)  # its position source delay
             return fly_steps(Flight(f"udpout:127.0.0.1:{MAVSIM_PORT}", 1), flavor, 0.0, args)
-    inst = launch.Instance(
+    inst = launch.claim_instance(
         launch.as_kind(kind),
-        INDEX,
-        INDEX + 1,
+        SYSTEM_ID,
         launch.home_lla((0.0, 0.0, 0.0)),
         launch.binary_for(launch.as_kind(kind)),
         args.run_dir / f"{kind}-step",
     )
     proc = launch.start(inst)
     try:
-        ready_s = launch.wait_ready(inst, proc, launch.READY_TIMEOUT_S)
+        ready_s = launch.wait_ready(inst, proc, launch.READY_TIMEOUT_S).waited_s
         return fly_steps(Flight(inst.url, inst.system_id), kind, ready_s, args)
     finally:
         launch.stop(proc)

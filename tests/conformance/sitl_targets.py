@@ -27,9 +27,9 @@ from types import ModuleType
 import pytest
 
 START_PY = Path(__file__).resolve().parents[2] / "scripts" / "sitl" / "start.py"
-INSTANCE_INDEX = 6
-"""SITL instance used by tests (ArduCopter tcp 5820, PX4 udp 14546, system id 7): away from the
-instances 0.. that a show started by start.py uses."""
+SYSTEM_ID = 7
+"""MAVLink system id of the autopilot under test (its instance number and ports start.py picks
+among those free, beside any show or other test running)."""
 READY_TIMEOUT_S = 150.0
 """Longest wait for a fresh instance to be ready to arm, in [s] (ArduCopter's EKF: ~40 s)."""
 KINDS = ("ardupilot", "px4")
@@ -103,9 +103,7 @@ def start_sitl(kind: str) -> AutopilotTarget:
     except launch.SitlError as exc:
         pytest.fail(str(exc), pytrace=False)
     run_dir = Path(tempfile.mkdtemp(prefix=f"skyquill-sitl-{kind}-"))
-    inst = launch.Instance(
-        kind, INSTANCE_INDEX, INSTANCE_INDEX + 1, launch.home_lla((0.0, 0.0, 0.0)), binary, run_dir
-    )
+    inst = launch.claim_instance(kind, SYSTEM_ID, launch.home_lla((0.0, 0.0, 0.0)), binary, run_dir)
     target = AutopilotTarget(kind, inst.url, inst.system_id, launch.start(inst), run_dir)
     try:
         assert target.process is not None

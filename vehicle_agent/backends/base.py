@@ -55,6 +55,11 @@ class CommandRefusedError(BackendError):
     may try again later. Any other :class:`BackendError` from ``takeoff`` is a fault."""
 
 
+class NotReadyError(CommandRefusedError):
+    """Nothing was asked of the vehicle: it says it cannot take off now (its pre-arm checks
+    fail: :attr:`VehicleSnapshot.preflight`); the agent takes off once it says it can."""
+
+
 @dataclass(frozen=True)
 class Setpoint:
     """The reference for one control period, from the planned trajectory or a hold point."""
@@ -106,6 +111,11 @@ class VehicleSnapshot:
     true_position_m_enu: Vec3 | None = None
     """Where the vehicle reference point truly is in [m], ENU, when the backend knows it apart
     from the vehicle's own estimate (a simulator's truth behind an autopilot); None otherwise."""
+    preflight: str | None = None
+    """Why it cannot take off now, in the autopilot's own words (its failing pre-arm check, e.g.
+    ``Preflight Fail: horizontal velocity unstable``); None: it can (or the backend has no
+    autopilot). The agent publishes it, and no job is given to the vehicle meanwhile: arming
+    would only be refused."""
 
 
 @runtime_checkable

@@ -6,7 +6,9 @@ ground-station heartbeat, the autopilot's, the telemetry asked for, the show's p
 read back; if they do not hold, the vehicle is in fault).
 ``takeoff``: ArduPilot -> GUIDED (custom mode 4, MAV_CMD_DO_SET_MODE), arm, MAV_CMD_NAV_TAKEOFF
 (param 7: metres above home); PX4 -> stream setpoints for a second, OFFBOARD, arm, then our own
-climb ramp. ``tick`` streams SET_POSITION_TARGET_LOCAL_NED (p, v, a and the take-off heading) or
+climb ramp; not while SYS_STATUS says the pre-arm checks fail: then nothing is sent and the
+refusal carries the autopilot's words (asked for with MAV_CMD_RUN_PREARM_CHECKS if unsaid).
+``tick`` streams SET_POSITION_TARGET_LOCAL_NED (p, v, a and the take-off heading) or
 SET_ATTITUDE_TARGET at ``setpoint_rate_hz``; ``land`` switches to the autopilot's landing mode;
 ``estop`` force-disarms; ``recover`` makes a vehicle at rest ``idle`` again. ENU inside,
 LOCAL_NED on the wire (origin ``origin_m_enu``).
@@ -21,6 +23,7 @@ Refused commands raise :class:`CommandRejectedError` with the autopilot's STATUS
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import math
 import time
@@ -29,7 +32,7 @@ from collections.abc import Callable
 from typing import Any
 
 from vehicle_agent.backends.base import BackendError, BackendMode, Setpoint, Vec3, VehicleSnapshot
-from vehicle_agent.backends.mavlink_commands import CommandChannel
+from vehicle_agent.backends.mavlink_commands import REASON_GRACE_S, CommandChannel
 from vehicle_agent.backends.mavlink_connect import (
     GCS_HEARTBEAT_PERIOD_S,
     await_autopilot,
@@ -40,6 +43,7 @@ from vehicle_agent.backends.mavlink_connect import (
 from vehicle_agent.backends.mavlink_errors import (
     CommandRejectedError,
     LinkLostError,
+    PrearmFailingError,
     UnsupportedAutopilotError,
     VehicleFaultError,
 )
@@ -60,7 +64,9 @@ from vehicle_agent.motion import Move, plan_move
 log = logging.getLogger(__name__)
 
 CMD_NAV_LAND, CMD_NAV_TAKEOFF, CMD_DO_SET_MODE = 21, 22, 176
-CMD_ARM_DISARM = 400
+CMD_ARM_DISARM, CMD_RUN_PREARM_CHECKS = 400, 401
+PREARM_ASK_PERIOD_S = 5.0
+"""How often in [s] an autopilot whose pre-arm checks fail unexplained is asked why."""
 FORCE_DISARM = 21196.0
 TextHandler = Callable[[int, str], None]
 
@@ -107,6 +113,7 @@ class MavlinkBackend:
         self._commanded_mode: int | None = None
         self._commanded_at = 0  # heartbeat count when our last mode/arming change was accepted
         self._last_gcs_heartbeat_s = -math.inf
+        self._prearm_asked_s = -math.inf
         self._hold: Setpoint | None = None
         self._climb: Move | None = None
         self._climb_to: tuple[Vec3, Vec3] | None = None  # (from, to): planned at the next tick
@@ -207,6 +214,7 @@ class MavlinkBackend:
         self._check_usable()
         if self.mode != "idle":
             raise BackendError(f"cannot take off in mode {self.mode}")
+        await self._refuse_while_prearm_fails()
         flavor = self._flavor()
         here = self._position_m_enu()
         self.stream.new_flight(await self._heading_now())
@@ -230,6 +238,30 @@ class MavlinkBackend:
             self._climb_to = (here, top)
         self._hold = Setpoint(position_m_enu=hover_m_enu)
         self._set_backend_mode("takeoff")
+
+    async def _refuse_while_prearm_fails(self) -> None:
+        """Raise :class:`PrearmFailingError` while SYS_STATUS says the pre-arm checks fail,
+        having sent no mode change and no ARM (a ground station offers no arming then): the
+        refusal the autopilot would give, in its words, asked for if it has not said them."""
+        if self.state.prearm_good is not False:
+            return
+        if self.state.prearm_text is None:
+            with contextlib.suppress(BackendError):  # an autopilot without the command
+                await self.commands.run(CMD_RUN_PREARM_CHECKS)
+                await asyncio.sleep(REASON_GRACE_S)  # ArduPilot queues its texts after the ACK
+        why = self.state.preflight  # None: they passed meanwhile
+        if why is not None:
+            raise PrearmFailingError(why)
+
+    def _ask_why_not_ready(self, now_s: float) -> None:
+        """SYS_STATUS says the pre-arm checks fail and the autopilot has not said why (it said
+        it before we listened; ArduPilot repeats it only every 30 s): ask, as a ground
+        station's "check" does, without waiting for the answer."""
+        st = self.state
+        unsaid = st.prearm_good is False and st.prearm_text is None and not st.armed
+        if unsaid and now_s - self._prearm_asked_s >= PREARM_ASK_PERIOD_S:
+            self._prearm_asked_s = now_s
+            self.commands.send(CMD_RUN_PREARM_CHECKS)
 
     async def _heading_now(self) -> float:
         """The vehicle's heading in [rad] from north (ATTITUDE), held for the whole flight; a
@@ -320,6 +352,8 @@ class MavlinkBackend:
         self.tick_time.ticked(now_s, time.monotonic())
         self._supervise(now_s)
         self._tell_texts()  # the part of a chunked text that waited its time for the rest
+        if self._link is not None:
+            self._ask_why_not_ready(now_s)
         if self.fault is None and self._link is not None:
             self._advance(now_s)
             self._stream(setpoint, now_s)

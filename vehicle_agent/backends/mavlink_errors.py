@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from vehicle_agent.backends.base import BackendError, CommandRefusedError
+from vehicle_agent.backends.base import BackendError, CommandRefusedError, NotReadyError
 
 MAV_RESULT_NAMES = {0: "ACCEPTED", 1: "TEMPORARILY_REJECTED", 2: "DENIED", 3: "UNSUPPORTED",
                     4: "FAILED", 5: "IN_PROGRESS", 6: "CANCELLED"}  # fmt: skip
+COMMAND_ARM_DISARM, MAV_RESULT_TEMPORARILY_REJECTED = 400, 1
 COMMAND_NAMES = {11: "SET_MODE", 21: "NAV_LAND", 22: "NAV_TAKEOFF", 176: "DO_SET_MODE",
                  400: "COMPONENT_ARM_DISARM", 511: "SET_MESSAGE_INTERVAL"}  # fmt: skip
 
@@ -42,6 +43,15 @@ class CommandRejectedError(MavlinkError, CommandRefusedError):
 
 class ArmingRefusedError(CommandRejectedError):
     """Arming was refused (pre-arm checks: no position estimate yet, ...)."""
+
+
+class PrearmFailingError(ArmingRefusedError, NotReadyError):
+    """Arming was not asked for: the autopilot says its pre-arm checks fail (SYS_STATUS), and
+    ``reason`` is its explanation; an ARM now would only be refused."""
+
+    def __init__(self, reason: str) -> None:
+        super().__init__(COMMAND_ARM_DISARM, MAV_RESULT_TEMPORARILY_REJECTED, reason)
+        self.args = (f"not arming: the autopilot's pre-arm checks fail: {reason}",)
 
 
 class VehicleFaultError(MavlinkError):

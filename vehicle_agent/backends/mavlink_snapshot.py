@@ -3,6 +3,8 @@
 Position and velocity are the autopilot's own estimate (LOCAL_NED turned ENU); on the ground when
 EXTENDED_SYS_STATE says landed (before it does: when disarmed). The pen is modelled from the
 simulator's true pose when the backend reads it (SITL), otherwise from the estimate and ATTITUDE.
+On the ground and disarmed, ``preflight`` is why the autopilot would not arm (SYS_STATUS, and
+its words in STATUSTEXT).
 """
 
 from __future__ import annotations
@@ -48,4 +50,5 @@ def vehicle_snapshot(
         pen_contact=None if reading is None else reading.contact,
         autopilot_mode=None if st.flavor is None else st.flavor.mode_name(st.custom_mode or 0),
         true_position_m_enu=None if truth is None else truth.position_m_enu,
+        preflight=st.preflight if on_ground and not st.armed else None,
     )

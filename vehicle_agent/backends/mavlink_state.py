@@ -169,6 +169,9 @@ class LinkState:
         self.landed_state: int | None = None
         self.prearm_good: bool | None = None
         """SYS_STATUS says the pre-arm checks pass (None: no SYS_STATUS yet)."""
+        self.prearm_text: str | None = None
+        """The autopilot's latest explanation of a failing pre-arm check (a STATUSTEXT that
+        begins as :data:`PREARM_EXPLANATIONS`), forgotten whenever SYS_STATUS says they pass."""
         self.target_stamps = 0
         self.target_stamp_ms: int | None = None
         """``time_boot_ms`` of the last POSITION_TARGET_LOCAL_NED (our stamp, on mavsim)."""
@@ -184,6 +187,15 @@ class LinkState:
     @property
     def flavor(self) -> Flavor | None:
         return None if self.autopilot is None else flavor_for(self.autopilot)
+
+    @property
+    def preflight(self) -> str | None:
+        """Why the autopilot would refuse to arm now, in its own words (:data:`PREARM_UNSAID`
+        when it has not said); None while SYS_STATUS says its pre-arm checks pass, or before
+        the first SYS_STATUS."""
+        if self.prearm_good is not False:
+            return None
+        return self.prearm_text or PREARM_UNSAID
 
     @property
     def connected(self) -> bool:
@@ -251,6 +263,8 @@ class LinkState:
 
     def _sys_status(self, m: Any) -> None:
         self.prearm_good = bool(m.onboard_control_sensors_health & MAV_SYS_STATUS_PREARM_CHECK)
+        if self.prearm_good:  # an explanation said since belongs to a new failure
+            self.prearm_text = None
         if m.battery_remaining >= 0 and not self._battery_from_status:
             self.battery_fraction = m.battery_remaining / 100.0
 
@@ -273,6 +287,12 @@ class LinkState:
         self.texts.extend(texts)
         self.recent_texts.extend(texts)
         self.to_tell.extend(texts)
+        for _, text in texts:
+            said = text.strip()  # PX4 ends its event texts with a tab
+            if said.startswith(PREARM_EXPLANATIONS) or (
+                said.startswith(PREARM_DENIAL) and self.prearm_text is None
+            ):
+                self.prearm_text = said
 
     def _command_ack(self, m: Any) -> bool:
         if getattr(m, "target_system", 0) not in (0, self.own_system_id):
@@ -287,6 +307,15 @@ class LinkState:
 
 MAV_SYS_STATUS_PREARM_CHECK = 0x10000000
 """SYS_STATUS sensor bit of the pre-arm checks (PX4 sets it in health only, ArduPilot in all)."""
+PREARM_EXPLANATIONS = ("PreArm:", "Preflight Fail:")
+"""How a STATUSTEXT naming a failing pre-arm check begins: ArduPilot's (said when the failure
+begins or changes, every 30 s while it lasts, and on MAV_CMD_RUN_PREARM_CHECKS), PX4's (said
+when its health checks change, and on that command)."""
+PREARM_DENIAL = "Arming denied:"
+"""PX4's refusal of an ARM, at times naming no check ("Resolve system health failures first"):
+an explanation only until a better one comes."""
+PREARM_UNSAID = "pre-arm checks failing"
+"""The explanation while SYS_STATUS says the checks fail and the autopilot has not said why."""
 
 _HANDLERS = {
     "LOCAL_POSITION_NED": LinkState._local_position,

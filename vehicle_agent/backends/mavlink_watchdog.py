@@ -4,7 +4,12 @@ A fault, never a fight: a lost heartbeat, a mode or arming change we did not com
 switch or the autopilot's own failsafe), a STATUSTEXT naming a failsafe, a gap in our setpoint
 stream longer than the autopilot's timeout, or a take-off/landing that does not end in time.
 Not a fault: the autopilot disarming on the ground after a landing we commanded, whatever mode it
-reports with that disarm (PX4 goes back to the mode the pilot last chose, e.g. OFFBOARD).
+reports with that disarm (PX4 goes back to the mode the pilot last chose, e.g. OFFBOARD). Nor is
+one heartbeat in another mode than ours: a mode change counts once two heartbeats in a row say it
+(the first heartbeat after our command can predate its effect, and PX4 says the mode it goes back
+to one heartbeat before the disarm that comes with it: a vehicle faulted after a finished job,
+"mode changed to OFFBOARD ... not streaming", issue 31). A real change costs one heartbeat more
+to see (1 s at both autopilots' rate).
 """
 
 from __future__ import annotations
@@ -53,6 +58,9 @@ class Watchdog:
         self._last_tick_s = math.inf
         self.mode_since_s = math.nan
         """Agent time in [s] the backend's mode began (NaN: after the last tick)."""
+        self._other_mode_at_hb: int | None = None
+        """Heartbeat count at which the autopilot first said a mode other than ours (None: it
+        says ours)."""
 
     def mode_changed(self) -> None:
         """Our backend mode just changed: its timeouts start at the next tick."""
@@ -109,11 +117,17 @@ class Watchdog:
         fresh = state.heartbeats > commanded.at_heartbeat
         landed = mode == "landing" and not state.armed
         # a landing we commanded is over when it disarms, whatever mode comes with the disarm
+        other = mode in FLYING_MODES and fresh and state.custom_mode != commanded.custom_mode
+        if not other:
+            self._other_mode_at_hb = None
+        elif self._other_mode_at_hb is None:
+            self._other_mode_at_hb = state.heartbeats
         if mode in FLYING_MODES and fresh and not landed:
-            if state.custom_mode != commanded.custom_mode:
-                name = flavor.mode_name(state.custom_mode or 0)
-                return f"mode changed to {name} by the pilot or the autopilot: not streaming"
-            if not state.armed:
+            if other and self._other_mode_at_hb is not None:
+                if state.heartbeats > self._other_mode_at_hb:  # said twice in a row
+                    name = flavor.mode_name(state.custom_mode or 0)
+                    return f"mode changed to {name} by the pilot or the autopilot: not streaming"
+            elif not state.armed:
                 return "vehicle disarmed in flight by the pilot or the autopilot"
         gap_s = now_s - commanded.last_sent_s
         if mode in ("hold", "offboard") and gap_s > self.limits.setpoint_timeout_s:

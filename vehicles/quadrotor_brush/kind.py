@@ -118,15 +118,17 @@ class QuadrotorBrush:
         self, plan: WritingPlan, flown: FlownWriting, settings: QuadrotorSettings
     ) -> WritingScore:
         """Writing-point errors and ink IoU (Phang 2015 Fig. 12, Guo 2024 section VII)."""
-        from vehicles.quadrotor_brush.metrics import flight_metrics
+        from vehicles.quadrotor_brush.metrics import flight_metrics, writing_point_error
 
-        m = flight_metrics(flown, settings.flight.world.brush, pixel_m=settings.ink_pixel_m)
+        brush = settings.flight.world.brush
+        m = flight_metrics(flown, brush, pixel_m=settings.ink_pixel_m)
         return WritingScore(
             rmse_pen_down_m=m.rmse_pen_down_m,
             rmse_m=m.rmse_m,
             max_error_m=m.max_error_m,
             iou=m.iou if math.isfinite(m.iou) else None,
             extra={k: v for k, v in m.to_json_dict().items() if k not in _SCORE_FIELDS},
+            error_m=np.linalg.norm(writing_point_error(flown, brush), axis=1),
         )
 
     def report(

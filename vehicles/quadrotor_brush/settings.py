@@ -109,7 +109,7 @@ def plan_options(planning: PlanningSettings, limits: Limits) -> PlanOptions:
         resegment=planning.resegment,
         solver=planning.solver,
         sample_rate_hz=planning.sample_rate_hz,
-        pace=planning.pace,
+        pace="limits" if planning.pace == "tracking" else planning.pace,  # the agent paces
     )
 
 

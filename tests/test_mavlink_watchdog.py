@@ -1,0 +1,50 @@
+"""The watchdog's verdict on mode changes (pure): a mode change we did not command is a fault
+once two heartbeats in a row say it; one stale heartbeat (said before our command took effect,
+or PX4's mode-to-come one heartbeat before its disarm after a landing) is not."""
+
+from __future__ import annotations
+
+from vehicle_agent.backends.mavlink_state import PX4, LinkState
+from vehicle_agent.backends.mavlink_watchdog import Commanded, Watchdog, WatchLimits
+
+LIMITS = WatchLimits(
+    heartbeat_timeout_s=3.0, setpoint_timeout_s=1.0, takeoff_timeout_s=30.0, land_timeout_s=30.0
+)
+OFFBOARD, LAND = PX4.offboard_mode, PX4.land_mode
+
+
+def heartbeat(state: LinkState, custom_mode: int, armed: bool) -> None:
+    state.heartbeats += 1
+    state.custom_mode, state.armed = custom_mode, armed
+
+
+def verdicts(beats: list[tuple[int, bool]], mode: str, commanded_mode: int) -> list[str | None]:
+    """The watchdog's verdict after each heartbeat (one tick each, 1 s apart, setpoints fresh)."""
+    state, dog = LinkState(1), Watchdog(LIMITS)
+    commanded = Commanded(commanded_mode, at_heartbeat=0, last_sent_s=0.0)
+    out = []
+    for k, (custom_mode, armed) in enumerate(beats):
+        heartbeat(state, custom_mode, armed)
+        now_s = float(k)
+        commanded = Commanded(commanded_mode, at_heartbeat=0, last_sent_s=now_s)
+        out.append(dog.check(now_s, 0.01, state, PX4, mode, commanded))  # type: ignore[arg-type]
+    return out
+
+
+def test_one_stale_heartbeat_after_landing_is_no_fault() -> None:
+    """PX4 after a commanded landing: LAND, then OFFBOARD still armed (the mode it goes back
+    to), then OFFBOARD disarmed: the landing is over, no fault."""
+    beats = [(LAND, True), (OFFBOARD, True), (OFFBOARD, False), (OFFBOARD, False)]
+    assert verdicts(beats, "landing", LAND) == [None, None, None, None]
+
+
+def test_a_mode_change_said_twice_is_a_fault() -> None:
+    beats = [(OFFBOARD, True), (LAND, True), (LAND, True)]
+    found = verdicts(beats, "offboard", OFFBOARD)
+    assert found[:2] == [None, None]
+    assert found[2] is not None and "mode changed to" in found[2]
+
+
+def test_a_mode_said_once_between_ours_is_forgotten() -> None:
+    beats = [(OFFBOARD, True), (LAND, True), (OFFBOARD, True), (LAND, True), (OFFBOARD, True)]
+    assert verdicts(beats, "offboard", OFFBOARD) == [None] * 5
