@@ -11,6 +11,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from vehicle_agent.backends.mavlink_state import (
     MAV_SYS_STATUS_PREARM_CHECK,
     PREARM_UNSAID,
+    PX4,
     STATUSTEXT_CHARS,
     STATUSTEXT_JOIN_WAIT_S,
     LinkState,
@@ -168,3 +169,17 @@ def test_the_pre_arm_explanation_is_the_autopilots_latest_while_the_checks_fail(
         state.absorb(message)
     state.absorb(sys_status(prearm_good=False))
     assert state.preflight == PX4_DENIAL
+
+
+def test_px4_in_offboard_on_the_ground_is_not_judged_by_its_pre_arm_bit() -> None:
+    """PX4 sets the bit for the mode it is in; back in OFFBOARD after a landing, with no
+    setpoints streaming, it stays clear for good although arming (which the agent does only
+    once it streams) passes: that bit says nothing of a take-off. In another mode it counts."""
+    state, _ = connected(mavlink.MAV_AUTOPILOT_PX4)
+    for mode, wanted in ((PX4.offboard_mode, None), (PX4.land_mode, PREARM_UNSAID)):
+        beat = mavlink.MAVLink_heartbeat_message(
+            mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_PX4, 1, mode, 3, 3
+        )
+        state.absorb(wire(beat))
+        state.absorb(sys_status(prearm_good=False))
+        assert state.preflight == wanted

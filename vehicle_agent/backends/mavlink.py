@@ -243,7 +243,7 @@ class MavlinkBackend:
         """Raise :class:`PrearmFailingError` while SYS_STATUS says the pre-arm checks fail,
         having sent no mode change and no ARM (a ground station offers no arming then): the
         refusal the autopilot would give, in its words, asked for if it has not said them."""
-        if self.state.prearm_good is not False:
+        if self.state.preflight is None:
             return
         if self.state.prearm_text is None:
             with contextlib.suppress(BackendError):  # an autopilot without the command
@@ -258,7 +258,7 @@ class MavlinkBackend:
         it before we listened; ArduPilot repeats it only every 30 s): ask, as a ground
         station's "check" does, without waiting for the answer."""
         st = self.state
-        unsaid = st.prearm_good is False and st.prearm_text is None and not st.armed
+        unsaid = st.preflight is not None and st.prearm_text is None and not st.armed
         if unsaid and now_s - self._prearm_asked_s >= PREARM_ASK_PERIOD_S:
             self._prearm_asked_s = now_s
             self.commands.send(CMD_RUN_PREARM_CHECKS)

@@ -192,8 +192,15 @@ class LinkState:
     def preflight(self) -> str | None:
         """Why the autopilot would refuse to arm now, in its own words (:data:`PREARM_UNSAID`
         when it has not said); None while SYS_STATUS says its pre-arm checks pass, or before
-        the first SYS_STATUS."""
+        the first SYS_STATUS. None too while PX4 sits in OFFBOARD on the ground: its bit says
+        whether it could arm in the mode it is in, and OFFBOARD needs the setpoint stream the
+        agent starts only to take off (PX4 goes back to OFFBOARD after each landing; the bit then
+        stayed clear for good, measured on 1.16 SIH: SYS_STATUS.hpp sets it from
+        ``can_arm_mode_flags`` of the current ``nav_state``); arming says then."""
         if self.prearm_good is not False:
+            return None
+        flavor = self.flavor
+        if flavor is not None and flavor.name == "px4" and self.custom_mode == flavor.offboard_mode:
             return None
         return self.prearm_text or PREARM_UNSAID
 
