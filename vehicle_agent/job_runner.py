@@ -274,9 +274,9 @@ class JobRunner(RunnerPhases):
         """Decide this control period from the vehicle state at its start (agent time ``now_s``)."""
         self._now_s = now_s
         self._watch(snapshot)
-        self._take_off_when_ready()
         if snapshot.fault is not None and self.phase != "stopped":
             self._stop(f"vehicle fault: {snapshot.fault}")
+        self._take_off_when_ready()  # after the fault check: a faulted vehicle has no job
         plan_request = self._take_plan_request()
         breach = self.guard.check(self.phase, snapshot, self._tracked, now_s)
         if breach is not None and breach.code == "geofence":
