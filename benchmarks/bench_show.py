@@ -2,6 +2,7 @@
 
     python benchmarks/bench_show.py            # 20 characters (8 Latin, 12 Chinese)
     python benchmarks/bench_show.py --quick    # 4 characters (smoke run)
+    python benchmarks/bench_show.py --day      # also 8 hours of a show day (show_day.py)
 
 Each character is laid out and planned as a vehicle agent of ``shows/airshow-2014.yaml`` does it
 (``vehicles.jobs.job_setup``: the show's board, writing area and margin, and the brush room's
@@ -47,6 +48,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+
+from show_day import Phases  # noqa: E402  (benchmarks/)
+from show_day_report import ARRIVALS_PER_H, day  # noqa: E402
 
 from bus.messages import (  # noqa: E402
     JobState,
@@ -275,17 +279,31 @@ def main() -> int:
     parser.add_argument("--eta-only", action="store_true", help="only the ETA run")
     parser.add_argument("--eta-scale", type=float, default=1.0, help="time_scale of that run (1)")
     parser.add_argument("--settle", type=float, default=5.0, help="seconds before the snapshot")
+    parser.add_argument("--day", action="store_true", help="a show day, batteries and sheets")
+    parser.add_argument("--day-hours", type=float, default=8.0, help="show hours of the day (8)")
+    parser.add_argument("--arrivals", type=float, default=ARRIVALS_PER_H,
+                        help=f"visitors per hour (assumed: {ARRIVALS_PER_H:g})")  # fmt: skip
     args = parser.parse_args()
     chars = QUICK_CORPUS if args.quick else CORPUS
     if not args.eta_only:
-        throughput(chars, args.vehicle)
+        cycles = throughput(chars, args.vehicle)
+        if args.day:
+            phases = {c: day_phases(k) for c, k in zip(chars, cycles, strict=True)}
+            day(load_show(SHOW), phases, args.day_hours, args.arrivals)
     if args.eta or args.eta_only:
         eta_run(chars, args.eta_scale, args.settle)
     return 0
 
 
-def throughput(chars: str, vehicle_id: str) -> None:
-    """Plan every character at both paces and print the cycles and characters per hour."""
+def day_phases(c: Cycle) -> Phases:
+    """A job's phases in the show day (:mod:`show_day`)."""
+    return Phases(plan_s=c.plan, to_write_s=c.climb + c.transit, write_s=c.write,
+                  back_s=c.back + c.land)  # fmt: skip
+
+
+def throughput(chars: str, vehicle_id: str) -> list[Cycle]:
+    """Plan every character at both paces and print the cycles and characters per hour; the
+    cycles at the default pace."""
     show = load_show(SHOW)
     plan_strokes(text_glyph("A").strokes, PlanOptions())  # warm-up: imports, caches
     cycles: dict[str, list[Cycle]] = {pace: [] for pace in PACES}
@@ -312,6 +330,7 @@ def throughput(chars: str, vehicle_id: str) -> None:
         )
     gain = per_hour(cycles["limits"]) / per_hour(cycles["nominal"])
     print(f"  throughput x{gain:.2f}; take-off, transit, return and landing are the same in both")
+    return cycles["limits"]
 
 
 if __name__ == "__main__":

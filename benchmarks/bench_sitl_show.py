@@ -1,7 +1,7 @@
 """A SITL show at show scale, run as the README runs it, and what it wrote.
 
     .venv/bin/python benchmarks/bench_sitl_show.py shows/sitl-airshow.yaml [--busy 4]
-        [--chars 火 日 ...] [--rehearsal 1]
+        [--chars 火 日 ...] [--rehearsal 1] [--px4-imu-vibration stock]
 
 ``scripts/sitl/start.py`` starts one autopilot per vehicle, ``skyquill up --headless`` the show,
 then (benchmarks/sitl_show.py): a rehearsal round (``--rehearsal`` characters per vehicle, 口:
@@ -35,7 +35,15 @@ HELD_OUT = ("火", "日", "月", "天", "云", "田", "王", "石", "R", "K", "W
 REHEARSAL = "口"
 JOB_LIMIT_S = 240.0
 """Longest time one round of characters may take, per character queued on a vehicle."""
-WATCHED = ("not_settled", "vehicle_fault", "geofence", "deviation", "takeoff_refused", "preflight")
+WATCHED = (
+    "not_settled",
+    "vehicle_fault",
+    "geofence",
+    "deviation",
+    "takeoff_refused",
+    "preflight",
+    "battery_swap",
+)
 """Event kinds an operator would act on (faults, aborts) or a show would lose time to."""
 
 
@@ -141,10 +149,18 @@ def main() -> int:
     parser.add_argument("--chars", nargs="+", default=list(HELD_OUT))
     parser.add_argument("--rehearsal", type=int, default=1, help="characters per vehicle first")
     parser.add_argument("--busy", type=int, default=0, help="busy loops beside the show")
+    parser.add_argument(
+        "--px4-imu-vibration",
+        metavar="F|stock",
+        help="PX4 SIH's airframe, start.py's option (stock: SIH as shipped)",
+    )
     args = parser.parse_args()
+    vibration = args.px4_imu_vibration
+    sitl_args = () if vibration is None else ("--px4-imu-vibration", vibration)
+    name = args.show.stem + ("" if vibration is None else f"-vibration-{vibration}")
     busy = _busy(args.busy)
     try:
-        with running(args.show.resolve()) as run:
+        with running(args.show.resolve(), sitl_args=sitl_args) as run:
             vehicles = len(run.status()["vehicles"])
             print(f"{args.show.name}: {vehicles} vehicles up; folder {run.folder}", flush=True)
             rehearsal = [REHEARSAL] * (vehicles * args.rehearsal)
@@ -158,7 +174,8 @@ def main() -> int:
             jobs = [j for j in run.status()["jobs"] if j["job_id"] in ids]
             print(f"held-out characters written in {time.monotonic() - t0:.0f} s")
             report(jobs, run.events(), run.loads)
-            figure(jobs, ROOT / "out/bench" / f"sitl-show-{args.show.stem}.png", args.show.stem)
+            print(f"  battery swaps the crew confirmed: {len(run.swaps)} {run.swaps}")
+            figure(jobs, ROOT / "out/bench" / f"sitl-show-{name}.png", name)
     finally:
         for proc in busy:
             proc.kill()

@@ -46,6 +46,10 @@ class ShowRun:
     processes: list[subprocess.Popen[bytes]] = field(default_factory=list)
     loads: list[float] = field(default_factory=list)
     """The machine's 1-minute load average at each poll while jobs were awaited."""
+    swaps: list[str] = field(default_factory=list)
+    """Vehicles whose battery the bench's crew swapped, in order (it confirms at its next poll:
+    the SITL's reset, MAV_CMD_BATTERY_RESET or PX4's full pack when disarmed, is the swap)."""
+    _swapping: set[str] = field(default_factory=set)
 
     def skyquill(self, *args: str, timeout_s: float = 30.0) -> str:
         """Run ``skyquill ARGS`` (the show file appended) and return its output; ShowRunError
@@ -80,7 +84,9 @@ class ShowRun:
         while True:
             self.check_alive()
             self.loads.append(os.getloadavg()[0])
-            jobs = self.status()["jobs"]
+            status = self.status()
+            self._crew(status["vehicles"])
+            jobs = status["jobs"]
             ended = [j for j in jobs if j["state"] in TERMINAL]
             if len(ended) >= count:
                 return jobs
@@ -90,6 +96,15 @@ class ShowRun:
                     f"{len(ended)} of {count} jobs ended in {limit_s:.0f} s: {states}"
                 )
             time.sleep(5.0)
+
+    def _crew(self, vehicles: list[dict[str, Any]]) -> None:
+        """Confirm a battery swap for each vehicle newly waiting for one, as the crew would."""
+        waiting = {v["vehicle_id"] for v in vehicles if v["state"] == "battery_swap"}
+        for vehicle_id in sorted(waiting - self._swapping):
+            confirm = [*SKYQUILL, "command", str(self.show_path), "battery-swapped", vehicle_id]
+            subprocess.run(confirm, cwd=ROOT, capture_output=True, timeout=30.0, check=True)
+            self.swaps.append(vehicle_id)
+        self._swapping = waiting
 
     def wait_vehicles(self, limit_s: float = 120.0) -> None:
         """Wait until the orchestrator answers and sees every vehicle alive."""
@@ -164,16 +179,18 @@ def _stop(proc: subprocess.Popen[bytes], limit_s: float = 60.0) -> None:
 
 
 @contextmanager
-def running(show_path: Path, folder: Path | None = None) -> Iterator[ShowRun]:
-    """start.py and ``skyquill up --headless`` on a fresh copy of ``show_path``, every vehicle
-    up; stopped (``up`` first, then the autopilots) on leaving."""
+def running(
+    show_path: Path, folder: Path | None = None, sitl_args: tuple[str, ...] = ()
+) -> Iterator[ShowRun]:
+    """start.py (with ``sitl_args``) and ``skyquill up --headless`` on a fresh copy of
+    ``show_path``, every vehicle up; stopped (``up`` first, then the autopilots) on leaving."""
     folder = folder or Path(tempfile.mkdtemp(prefix=f"skyquill-{show_path.stem}-"))
     copy = fresh_copy(show_path, folder)
     run = ShowRun(copy, folder)
     sitl_log, up_log = folder / "start.log", folder / "up.log"
     try:
         sitl = _start([sys.executable, str(ROOT / "scripts/sitl/start.py"), str(copy),
-                       "--run-dir", str(folder / "sitl")], sitl_log)  # fmt: skip
+                       "--run-dir", str(folder / "sitl"), *sitl_args], sitl_log)  # fmt: skip
         run.processes.append(sitl)
         _wait_line(sitl_log, sitl, "all ready", READY_LIMIT_S)
         run.processes.append(_start([*SKYQUILL, "up", "--headless", str(copy)], up_log))

@@ -83,6 +83,12 @@ class ShowKeys:
         return f"{self.prefix}/orchestrator/snapshot"
 
     @property
+    def clock(self) -> str:
+        """Queryable (orchestrator): empty query -> ClockReply, its wall clock when the query
+        came and when it replied; every vehicle's agent asks (``vehicle_agent/clock_sync.py``)."""
+        return f"{self.prefix}/orchestrator/clock"
+
+    @property
     def orchestrator_alive(self) -> str:
         """Liveliness token of the orchestrator."""
         return f"{self.prefix}/orchestrator/alive"

@@ -38,7 +38,10 @@ VehicleStateName = Literal[
     "landed",
     "fault",
     "lost",
+    "battery_swap",
 ]
+"""A vehicle's state as it reports it; ``lost`` and ``battery_swap`` only as the orchestrator
+sees it (``battery_swap``: on the ground, waiting for the crew to change its battery)."""
 AIRBORNE_STATES: frozenset[VehicleStateName] = frozenset(
     {"taking_off", "writing", "returning", "landing"}
 )
@@ -100,6 +103,10 @@ class ErrorInfo(State, frozen=True):
     field: str | None = None
     stroke_index: int | None = None
     point_index: int | None = None
+    reason: str | None = None
+    """``rejected`` / ``cancelled``: the operator's own words for the visitor who handed the job
+    in (plain text; a kiosk shows it as text, cut to a line); None when none was given (v1
+    addition)."""
 
 
 # --- submissions --------------------------------------------------------------------------------
@@ -119,6 +126,10 @@ class SubmitRequest(Request, frozen=True):
     idempotency_key: IdempotencyKey | None = None
     """Optional key chosen by the client (1-64 chars): a request repeating a key already accepted
     from the same ``client_id`` gets that job's reply instead of a new job (safe retries)."""
+    phrase: bool = False
+    """``text`` is a phrase: one job per character, written together on adjacent boards in
+    reading order, at most as many characters as the show has boards in a row; the reply names
+    the first character's job, whose id is the phrase's (v1 addition)."""
 
     def __post_init__(self) -> None:
         """Refuse what is not plain text (:mod:`bus.public_text`): at decode, an ``invalid``
@@ -214,6 +225,17 @@ class JobMetrics(State, frozen=True):
     ``rmse_base_m``, ``force_rmse_n``, ``width_rmse_m``; empty for kinds without any."""
 
 
+class PhrasePlace(State, frozen=True):
+    """A job's place in a phrase written together (v1 addition)."""
+
+    phrase_id: str
+    """The phrase's id: its first character's job id."""
+    index: int
+    """Its character's place in reading order, 0 first (its board's place in the row too)."""
+    size: int
+    """Characters in the phrase."""
+
+
 class JobState(State, frozen=True):
     """A job as the orchestrator knows it; published on every change."""
 
@@ -240,6 +262,8 @@ class JobState(State, frozen=True):
     strokes: dict[str, Any] | None = None
     """The strokes document of a drawn job, for previews: only in ``jobs/<id>`` publications
     and ``snapshot`` replies while the job awaits approval or is queued (never in ``fleet``)."""
+    phrase: PhrasePlace | None = None
+    """Its place in a phrase written together; None: a job of its own (v1 addition)."""
 
 
 class JobAssignment(State, frozen=True):
@@ -295,12 +319,38 @@ class VehicleStatus(State, frozen=True):
     """Why the vehicle cannot take off now, in its autopilot's own words (a failing pre-arm
     check, e.g. ``Preflight Fail: horizontal velocity unstable``); empty: it can. The
     orchestrator gives it no job meanwhile, rather than have its arming refused and retried."""
+    battery_fraction: float | None = None
+    """Charge left in its battery over the rated capacity, 0..1, to the percent; None: unknown
+    (v1 addition)."""
+    battery_voltage_v: float | None = None
+    """Battery terminal voltage under the present load in [V], to 0.1 V (v1 addition)."""
+    battery_minutes_left: float | None = None
+    """Minutes until its battery is empty, to 0.1 min: at its kind's cruise draw (simulated
+    vehicles) or as its autopilot predicts (v1 addition)."""
+    link_loss_fraction: float | None = None
+    """Share of its autopilot's recent messages lost on the link, 0..1, to the percent; None:
+    no autopilot link (simulated vehicles) or not enough messages yet (v1 addition)."""
+    flight_s_today: float | None = None
+    """How long in [s] it has been off the ground today (the agent's local day, since its agent
+    started), to 10 s (v1 addition)."""
+    clock_offset_ms: float | None = None
+    """Its agent's wall clock minus the orchestrator's in [ms], to the millisecond, as measured
+    on ``orchestrator/clock`` (``vehicle_agent/clock_sync.py``); None: not measured yet (v1
+    addition)."""
+
+
+class ClockReply(State, frozen=True):
+    """Orchestrator -> an agent on ``orchestrator/clock``: its wall clock (Unix time [s]) when
+    the query came and when it replied, NTP's receive and transmit timestamps (RFC 5905)."""
+
+    receive_s: float
+    transmit_s: float
 
 
 class VehicleCommand(Request, frozen=True):
     """Orchestrator -> one agent."""
 
-    command: Literal["assign", "cancel", "land", "estop", "clear_fault"]
+    command: Literal["assign", "cancel", "land", "estop", "clear_fault", "battery_swapped"]
     job: JobAssignment | None = None
     """Only with ``assign``."""
     job_id: Id | None = None
@@ -344,11 +394,13 @@ class OperatorCommand(Request, frozen=True):
         "release_all",
         "clear_fault",
         "fresh_sheet",
+        "battery_swapped",
     ]
     job_id: Id | None = None
     vehicle_id: Id | None = None
     board_id: Id | None = None
-    """``fresh_sheet``: the board whose sheet was replaced (v1 addition)."""
+    """``fresh_sheet``: the board whose sheet was replaced (v1 addition). ``battery_swapped``
+    names its vehicle in ``vehicle_id`` (v1 addition)."""
     priority: Priority | None = None
     reason: Text = ""
     operator: Text = "operator"
@@ -402,6 +454,16 @@ class VehicleSummary(State, frozen=True):
     paused: bool = False
     """Paused by the operator (and not held): it finishes its job, then takes no new one until
     ``resume`` (v1 addition)."""
+    battery_fraction: float | None = None
+    """Its latest status's ``battery_fraction`` (v1 addition)."""
+    battery_minutes_left: float | None = None
+    """Its latest status's ``battery_minutes_left`` (v1 addition)."""
+    preflight: str = ""
+    """Its latest status's ``preflight``: why it may not take off now (v1 addition)."""
+    link_loss_fraction: float | None = None
+    """Its latest status's ``link_loss_fraction`` (v1 addition)."""
+    flight_s_today: float | None = None
+    """Its latest status's ``flight_s_today`` (v1 addition)."""
 
 
 class ShowSnapshot(State, frozen=True):

@@ -5,9 +5,10 @@ Actions: ``pause [VEHICLE]``, ``resume [VEHICLE]``, ``cancel JOB``, ``approve JO
 ``estop [VEHICLE]`` (no vehicle: every vehicle), ``clear_fault VEHICLE`` (the vehicle leaves
 ``fault`` if it is landed and disarmed), ``release VEHICLE`` (a held vehicle may take jobs
 again), ``release-all`` (every held vehicle), ``fresh-sheet BOARD`` (a board waiting for a sheet
-has a fresh one). A vehicle may also be named with ``--vehicle ID``.
+has a fresh one), ``battery-swapped VEHICLE`` (the crew put a fresh battery in a vehicle waiting
+for one). A vehicle may also be named with ``--vehicle ID``.
 ``land-all`` is the bus command ``land_all``; either spelling is accepted (also ``clear-fault``,
-``release-all``).
+``release-all``, ``battery-swapped``).
 
 ``reject`` and ``cancel`` also take many waiting jobs at once, in one command: ``--client ID``
 (every waiting job that client handed in) or ``--job ID`` repeated (a selection). Jobs a vehicle
@@ -24,8 +25,12 @@ NAME = "command"
 HELP = "Operator command: pause/resume/cancel/approve/reject/prioritize/land/land-all/estop/..."
 
 JOB_ACTIONS = ("cancel", "approve", "reject", "prioritize")
-VEHICLE_ACTIONS = ("pause", "resume", "land", "estop", "clear_fault", "clear-fault", "release")
-NEEDS_VEHICLE = ("land", "clear_fault", "clear-fault", "release")
+SWAP_ACTIONS = ("battery_swapped", "battery-swapped")
+VEHICLE_ACTIONS = (
+    *("pause", "resume", "land", "estop", "clear_fault", "clear-fault", "release"),
+    *SWAP_ACTIONS,
+)
+NEEDS_VEHICLE = ("land", "clear_fault", "clear-fault", "release", *SWAP_ACTIONS)
 BOARD_ACTIONS = ("fresh_sheet", "fresh-sheet")
 FLEET_ACTIONS = ("land-all", "land_all", "release-all", "release_all")
 BULK_ACTIONS = ("reject", "cancel")

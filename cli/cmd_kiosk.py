@@ -1,4 +1,8 @@
-"""``skyquill kiosk SHOW.yaml``: the public web kiosk; prints the page's URL when it serves."""
+"""``skyquill kiosk SHOW.yaml``: the public web kiosk; prints the page's URL when it serves.
+
+With the show's ``crew`` certificate it opens a second session under that identity and serves
+the crew's page on ``/crew`` (phones paired with ``skyquill crew SHOW --pair NAME``); without
+it, it says so and serves the public's page alone."""
 
 from __future__ import annotations
 
@@ -37,6 +41,7 @@ def run(args: argparse.Namespace) -> int:
     from kiosk.service import run_kiosk
     from kiosk.settings import settings_from_show
     from showfile import ShowError, load_show
+    from trust.files import KeysError
     from trust.settings import session_settings
 
     try:
@@ -51,12 +56,18 @@ def run(args: argparse.Namespace) -> int:
     if args.host:
         settings = dataclasses.replace(settings, host=args.host)
     try:
+        crew = session_settings(show, "crew")
+    except KeysError as exc:
+        print(f"skyquill kiosk: no crew page: {exc}", file=sys.stderr)
+        crew = None
+    try:
         run_kiosk(
             settings,
             session_settings(show, "kiosk"),
             role=args.role,
             connect=args.connect,
             on_started=lambda url: print(url, flush=True),
+            crew_zenoh=crew,
         )
     except SessionOpenError as exc:
         print(f"skyquill kiosk: {exc}", file=sys.stderr)

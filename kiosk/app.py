@@ -3,7 +3,10 @@
 Routes
     GET  /                          the page
     GET  /api/config                limits the page needs (text length, strokes, points, area)
-    POST /api/preview               ``{"text": ...}`` or ``{"strokes": {...}}`` -> planned path
+    POST /api/preview               ``{"text": ...}`` or ``{"strokes": {...}}`` -> planned path;
+                                    ``{"text": ..., "phrase": true}``: a phrase, one character
+                                    per board of the row, each planned (``kiosk/phrase_view.py``
+                                    follows it as one ticket; it counts as its characters)
     POST /api/submit                same body -> ticket, token, job id, queue place, ETA, path
                                     (202 with a pending ticket when the queue did not answer yet)
     GET  /api/jobs/{id}?token=T     the ticket's state (id: ticket or job id; token from submit)
@@ -11,6 +14,8 @@ Routes
     GET  /api/jobs/{id}/qr.svg?token=T   QR code of the ticket's ``/t/<code>`` link
     GET  /t/{code}                  the page, following the ticket of a short code
     GET  /api/t/{code}              the ticket (id, token) a short code opens (rate limited)
+    /crew, /crew/api/...            the crew's page, when the kiosk holds the crew's session
+                                    (``kiosk/crew/routes.py``)
 
 Every refusal is ``{"ok": false, "error": {"code": ..., "message": ...}}`` with a message for the
 public; nothing a visitor sends can stop the service. The POST routes take ``application/json``
@@ -35,10 +40,12 @@ from starlette.responses import FileResponse, JSONResponse, Response, StreamingR
 from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
-from bus.messages import JobState, SubmitReply, SubmitRequest
+from bus.messages import JobState, PhrasePlace, SubmitReply, SubmitRequest
 from bus.ratelimit import SlidingWindowLimiter
 from kiosk import wording
 from kiosk.addresses import proxy_networks
+from kiosk.crew.routes import ROUTES as CREW_ROUTES
+from kiosk.crew.routes import CrewDesk
 from kiosk.errors import RejectedError
 from kiosk.http import (
     Client,
@@ -91,10 +98,13 @@ class Kiosk:
         """Who sent ``request`` (see :func:`kiosk.http.identify`)."""
         return identify(request, self.proxies)
 
-    def check_rate(self, client: Client, *, preview: bool) -> None:
-        """Count a request of ``client``'s address; RejectedError (429) over the limit."""
+    def check_rate(self, client: Client, *, preview: bool, count: int = 1) -> None:
+        """Count ``count`` requests of ``client``'s address (a phrase's characters beyond the
+        first: it counts as its characters); RejectedError (429) over the limit."""
         limiter = self.preview_limiter if preview else self.submit_limiter
-        wait = limiter.hit(client.rate_key, self.clock())
+        now_s = self.clock()
+        waits = [w for _ in range(count) if (w := limiter.hit(client.rate_key, now_s)) is not None]
+        wait = max(waits, default=None)
         if wait is not None:
             seconds = max(1, round(wait))
             raise RejectedError(
@@ -173,6 +183,7 @@ async def config(request: Request) -> Response:
     return _ok({"config": {
         "show_id": s.settings.show_id,
         "max_text_chars": lim.max_text_chars,
+        "max_phrase_chars": lim.max_phrase_chars,
         "max_strokes": lim.max_strokes,
         "max_points": lim.max_points,
         "max_payload_bytes": lim.max_payload_bytes,
@@ -189,6 +200,8 @@ async def preview(request: Request) -> Response:
     client = kiosk.identify(request)
     kiosk.check_rate(client, preview=True)
     submission = await kiosk.checked_body(request)
+    if submission.characters > 1:  # each character of a phrase is planned
+        kiosk.check_rate(client, preview=True, count=submission.characters - 1)
     result = await run_in_threadpool(kiosk.previewer, submission)
     return _ok({"preview": result}, client, secure=kiosk.settings.secure_cookie)
 
@@ -199,16 +212,20 @@ async def submit(request: Request) -> Response:
     client = kiosk.identify(request)
     kiosk.check_rate(client, preview=False)
     submission = await kiosk.checked_body(request)
+    if submission.characters > 1:  # a phrase counts as its characters
+        kiosk.check_rate(client, preview=False, count=submission.characters - 1)
     planned = await run_in_threadpool(kiosk.previewer, submission)
     book = kiosk.link.book
     if book.pending_count() >= kiosk.settings.max_pending:  # refused before anything is sent
         raise RejectedError("unavailable", wording.PENDING_FULL, status=503, retry_after_s=30.0)
-    job = book.add(session_id=client.session_id, label=submission.label, preview=planned)
+    job = book.add(session_id=client.session_id, label=submission.label, preview=planned,
+                   phrase_size=submission.characters if submission.phrase else 0)  # fmt: skip
     bus_request = SubmitRequest(
         text=submission.text,
         strokes=submission.strokes,
         client_id=client.public_id,
         idempotency_key=job.key,
+        phrase=submission.phrase,
     )
     status = 200
     try:
@@ -239,26 +256,30 @@ async def submit(request: Request) -> Response:
 
 
 def _initial_state(reply: SubmitReply, label: str, request: SubmitRequest) -> JobState:
-    """What the submit reply says, stamped older than anything the orchestrator publishes."""
+    """What the submit reply says, stamped older than anything the orchestrator publishes (of a
+    phrase: its first character, whose job id is the phrase's)."""
     assert reply.job_id is not None
+    size = len(request.text or "")
+    phrase = PhrasePlace(phrase_id=reply.job_id, index=0, size=size) if request.phrase else None
     return JobState(
         job_id=reply.job_id,
         state=reply.state or "submitted",
-        label=label,
         kind="text" if request.text is not None else "strokes",
         client_id=request.client_id,
         created_at_s=time.time(),
         updated_at_s=0.0,
         queue_position=reply.queue_position,
         eta_s=reply.eta_s,
+        label=label[:1] if phrase is not None else label,
+        phrase=phrase,
     )
 
 
 async def job_status(request: Request) -> Response:
     kiosk: Kiosk = request.app.state.kiosk
     job = kiosk.job_for(request)
-    if job.job_id is not None and kiosk.link.book.state(job.job_id) is None:
-        await kiosk.link.fetch(job.job_id)
+    if kiosk.link.book.unknown(job):
+        await kiosk.link.fetch(job.job_id or "")
     return _ok({
         "ticket": job.ticket,
         "code": job.code,
@@ -317,15 +338,21 @@ def create_app(
     *,
     has_glyph: Callable[[str], bool],
     clock: Callable[[], float] = time.monotonic,
+    crew: CrewDesk | None = None,
 ) -> Starlette:
-    """The kiosk's ASGI application; its lifespan starts and stops ``link``."""
+    """The kiosk's ASGI application; its lifespan starts and stops ``link`` (and the crew's);
+    ``crew``: the crew page's desk (None: no crew page)."""
 
     @contextlib.asynccontextmanager
     async def lifespan(app: Starlette) -> AsyncIterator[None]:
         await link.start()
+        if crew is not None:
+            await crew.link.start()
         try:
             yield
         finally:
+            if crew is not None:
+                await crew.link.close()
             await link.close()
 
     routes = [
@@ -339,6 +366,7 @@ def create_app(
         Route("/api/jobs/{job_id}/qr.svg", ticket_qr),
         Route("/t/{code}", page),
         Route("/api/t/{code}", by_code),
+        *(CREW_ROUTES if crew is not None else ()),
         Mount("/static", StaticFiles(directory=STATIC_DIR), name="static"),
     ]
     app = Starlette(
@@ -348,4 +376,12 @@ def create_app(
         lifespan=lifespan,
     )
     app.state.kiosk = Kiosk(settings, link, previewer, has_glyph, clock)
+    app.state.crew = crew
     return app
+
+
+def end_streams(app: Starlette) -> None:
+    """Close every open stream, the public's and the crew's (server shutdown)."""
+    app.state.kiosk.link.end_streams()
+    if app.state.crew is not None:
+        app.state.crew.link.end_streams()

@@ -19,6 +19,7 @@ class RejectedError(KioskError):
         retry_after_s: float | None = None,
         stroke_index: int | None = None,
         point_index: int | None = None,
+        flight_s: float | None = None,
     ) -> None:
         super().__init__(message)
         self.code = code
@@ -31,6 +32,8 @@ class RejectedError(KioskError):
         """Seconds until trying again makes sense (rate limit, orchestrator away)."""
         self.stroke_index = stroke_index
         self.point_index = point_index
+        self.flight_s = flight_s
+        """``too_long``: how long the planned writing would take, [s] (the page says it)."""
 
     def to_json_dict(self) -> dict[str, object]:
         """The ``error`` object of an API reply."""
@@ -41,4 +44,6 @@ class RejectedError(KioskError):
             out["stroke_index"] = self.stroke_index
         if self.point_index is not None:
             out["point_index"] = self.point_index
+        if self.flight_s is not None:
+            out["flight_s"] = round(self.flight_s, 1)
         return out

@@ -21,6 +21,7 @@ import msgspec
 
 from bus.messages import JobMetrics, JobState, WrittenInk
 from kiosk import wording
+from kiosk.phrase_view import phrase_view
 
 FINAL_STATES = frozenset({"done", "failed", "cancelled", "rejected"})
 """Job states after which nothing changes."""
@@ -64,6 +65,9 @@ class KioskJob:
     """What to tell the visitor when a late answer refused the submission."""
     refusal_code: str | None = None
     """The code of that refusal (the page words it)."""
+    phrase_size: int = 0
+    """Characters of a phrase written together (one job each, ``kiosk/phrase_view.py``); 0:
+    one job."""
 
     @property
     def pending(self) -> bool:
@@ -104,9 +108,14 @@ def job_view(
     page words the fields in the visitor's language).
 
     ``places``: vehicle id -> position of its board from the left (1 first); ``show_paused``:
-    the operator paused the queue (a queued job keeps its place, its ETA means nothing)."""
+    the operator paused the queue (a queued job keeps its place, its ETA means nothing).
+    ``reason``: the operator's words on a rejection or cancellation, as plain text cut to a line
+    (:func:`kiosk.wording.visitor_reason`); ``failure``: a failed job's error code."""
     board = (places or {}).get(state.vehicle_id or "")
     place = wording.place_words(board)
+    error = state.error if state.state in ("failed", "cancelled", "rejected") else None
+    reason = wording.visitor_reason(error.reason) if error is not None else None
+    failure = error.code if error is not None and state.state == "failed" else None
     return {
         "job_id": state.job_id,
         "state": state.state,
@@ -122,9 +131,13 @@ def job_view(
         "metrics": metrics_view(state.metrics),
         "updated_at_s": state.updated_at_s,
         "show_paused": show_paused,
+        "reason": reason,
+        "failure": failure,
         "status_text": wording.status_text(
             state.state,
             paused=show_paused,
+            reason=reason,
+            failure=failure,
             queue_position=state.queue_position,
             eta_s=state.eta_s,
             board=board,
@@ -161,6 +174,8 @@ def ticket_view(job: KioskJob) -> dict[str, Any]:
         "metrics": None,
         "updated_at_s": 0.0,
         "show_paused": False,
+        "reason": None,
+        "failure": None,
         "status_text": text,
     }
 
@@ -175,13 +190,23 @@ class JobBook:
         self._codes: dict[str, str] = {}
         """Short code -> ticket."""
         self._states: OrderedDict[str, JobState] = OrderedDict()
+        self._phrases: dict[str, dict[int, str]] = {}
+        """Phrase id -> its characters' job ids by place, of the states kept."""
         self._max_jobs = max_jobs
         self._max_states = max_states
         self.show_paused = False
         """The show's queue is paused (the latest ``fleet`` snapshot): queued jobs say so."""
 
-    def add(self, *, session_id: str, label: str, preview: dict[str, Any] | None) -> KioskJob:
-        """A new ticket with a fresh token and idempotency key."""
+    def add(
+        self,
+        *,
+        session_id: str,
+        label: str,
+        preview: dict[str, Any] | None,
+        phrase_size: int = 0,
+    ) -> KioskJob:
+        """A new ticket with a fresh token and idempotency key (``phrase_size``: of a phrase,
+        its characters)."""
         job = KioskJob(
             ticket="t" + secrets.token_hex(8),
             token=secrets.token_urlsafe(24),
@@ -190,6 +215,7 @@ class JobBook:
             preview=preview,
             key=secrets.token_urlsafe(24),
             code=new_code(),
+            phrase_size=phrase_size,
         )
         while job.code in self._codes:
             job.code = new_code()
@@ -235,7 +261,12 @@ class JobBook:
         return job
 
     def ticket_of(self, job_id: str) -> str | None:
-        return self._tickets_of.get(job_id)
+        """The ticket following ``job_id``: its own, or its phrase's."""
+        ticket = self._tickets_of.get(job_id)
+        state = self._states.get(job_id)
+        if ticket is None and state is not None and state.phrase is not None:
+            ticket = self._tickets_of.get(state.phrase.phrase_id)
+        return ticket
 
     def authorised(self, ref: str, token: str | None) -> KioskJob | None:
         """The ticket when ``token`` is its token, else None (compared in constant time)."""
@@ -259,15 +290,36 @@ class JobBook:
             return False
         self._states[state.job_id] = state
         self._states.move_to_end(state.job_id)
+        if state.phrase is not None:
+            self._phrases.setdefault(state.phrase.phrase_id, {})[state.phrase.index] = state.job_id
         while len(self._states) > self._max_states:
-            self._states.popitem(last=False)
+            _, gone = self._states.popitem(last=False)
+            if gone.phrase is not None:
+                self._phrases.pop(gone.phrase.phrase_id, None)
         return True
 
     def state(self, job_id: str) -> JobState | None:
         return self._states.get(job_id)
 
+    def characters(self, job: KioskJob) -> list[JobState | None]:
+        """The newest states of a phrase ticket's characters in reading order (None: unknown)."""
+        ids = self._phrases.get(job.job_id or "", {})
+        return [self._states.get(ids.get(i, "")) for i in range(job.phrase_size)]
+
+    def unknown(self, job: KioskJob) -> bool:
+        """Whether the ticket is accepted but some of its jobs' states are not known here."""
+        if job.job_id is None:
+            return False
+        if job.phrase_size:
+            return None in self.characters(job)
+        return job.job_id not in self._states
+
     def view(self, job: KioskJob, places: Mapping[str, int] | None = None) -> dict[str, Any]:
         """What the page shows of ``job`` now."""
+        if job.phrase_size and job.job_id is not None:
+            states = self.characters(job)
+            if any(s is not None for s in states):
+                return phrase_view(job.label, states, places, show_paused=self.show_paused)
         state = self._states.get(job.job_id) if job.job_id is not None else None
         if state is None:
             return ticket_view(job)

@@ -37,6 +37,9 @@ class SubmissionLimits:
     """Longest typed text in characters (1: a single character; more: a short word)."""
     blocklist: tuple[str, ...] = ()
     """Words (any script) that typed text may not contain, compared after normalisation."""
+    max_phrase_chars: int = 0
+    """Longest phrase written together, one character per board: the show's boards in a row
+    (below 2: the show takes no phrase)."""
 
 
 @dataclass(frozen=True)
@@ -49,6 +52,15 @@ class Submission:
     """The strokes document as sent, only its ``FORWARDED_STROKES_FIELDS`` (docs/formats.md)."""
     label: str = field(default="")
     """A short description for people: the text, or ``drawing (N strokes)``."""
+    phrase: bool = False
+    """``text`` is a phrase: one character per board, written together
+    (``orchestrator/phrases.py``)."""
+
+    @property
+    def characters(self) -> int:
+        """How many characters it asks the drones to write (a phrase counts as its
+        characters in the per-address limit)."""
+        return len(self.text or "") if self.phrase else 1
 
 
 def normalise_for_blocklist(text: str) -> str:
@@ -82,13 +94,18 @@ def check_submission(
     limits: SubmissionLimits,
     has_glyph: Callable[[str], bool],
 ) -> Submission:
-    """Validate a decoded body ``{"text": ...}`` or ``{"strokes": {...}}``."""
-    unknown = set(data) - {"text", "strokes"}
-    if unknown:
+    """Validate a decoded body ``{"text": ...}``, ``{"text": ..., "phrase": true}`` or
+    ``{"strokes": {...}}``."""
+    unknown = set(data) - {"text", "strokes", "phrase"}
+    if unknown or not isinstance(data.get("phrase", False), bool):
         raise RejectedError("bad_request", wording.BAD_JSON)
     text, strokes = data.get("text"), data.get("strokes")
     if text is not None and strokes is not None:
         raise RejectedError("bad_request", wording.BAD_REQUEST)
+    if data.get("phrase", False):
+        if strokes is not None:
+            raise RejectedError("bad_request", wording.BAD_REQUEST)
+        return _check_phrase(text, limits, has_glyph)
     if text is not None:
         return _check_text(text, limits, has_glyph)
     if strokes is not None:
@@ -114,6 +131,33 @@ def _check_text(
         if ch != " " and not has_glyph(ch):
             raise RejectedError("no_glyph", wording.NO_GLYPH.format(char=ch), status=422)
     return Submission(text=text, strokes=None, label=text)
+
+
+def _check_phrase(
+    text: Any, limits: SubmissionLimits, has_glyph: Callable[[str], bool]
+) -> Submission:
+    """A phrase: 2 to ``max_phrase_chars`` characters without spaces, each one a drone writes
+    on its own board (the orchestrator checks the same, ``orchestrator/submissions.py``)."""
+    if text is not None and not isinstance(text, str):
+        raise RejectedError("bad_request", wording.BAD_JSON)
+    limit = limits.max_phrase_chars
+    if limit < 2:
+        raise RejectedError("no_phrase", wording.NO_PHRASE)
+    text = unicodedata.normalize("NFC", text or "").strip()
+    if not text:
+        raise RejectedError("empty", wording.TEXT_EMPTY)
+    if any(ch.isspace() for ch in text):
+        raise RejectedError("phrase_spaces", wording.PHRASE_SPACES)
+    if len(text) < 2:
+        raise RejectedError("phrase_too_short", wording.PHRASE_TOO_SHORT)
+    if len(text) > limit:
+        raise RejectedError("phrase_too_long", wording.PHRASE_TOO_LONG.format(limit=limit))
+    if is_blocked(text, limits.blocklist):
+        raise RejectedError("blocked_text", wording.BLOCKED)
+    for ch in text:
+        if not has_glyph(ch):
+            raise RejectedError("no_glyph", wording.NO_GLYPH.format(char=ch), status=422)
+    return Submission(text=text, strokes=None, label=text, phrase=True)
 
 
 def _check_strokes(doc: Any, limits: SubmissionLimits) -> Submission:

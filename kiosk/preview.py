@@ -4,9 +4,10 @@ Plans through the one job-planning function (:func:`vehicles.jobs.plan_glyph`) f
 the show as the orchestrator plans for them (:attr:`kiosk.settings.KioskSettings.preview_kinds`),
 in board order until one accepts: the preview is the plan of the first kind whose planner accepts
 the submission, which is refused only when every kind's planner refuses it, for the first kind's
-reason. Returns plain JSON for the page: turning points and the planned path in the writing
-area's own frame (metres, origin at the centre, y up), with the planned line width at each point
-where the kind writes with a width, and the one-line reasons of the kinds tried before (text).
+reason (a flight time over the show's limit before a bare "cannot fly"). Returns plain JSON
+for the page: turning points and the planned path in the writing area's own frame (metres,
+origin at the centre, y up), with the planned line width at each point where the kind writes
+with a width, and the one-line reasons of the kinds tried before (text).
 """
 
 from __future__ import annotations
@@ -97,7 +98,8 @@ def _plan_kinds(
     """The first kind whose planner accepts ``glyph`` within ``max_flight_s`` of writing, its
     plan, and the one-line reasons of the kinds tried before it (the kinds after it are not
     planned: a preview waits for one plan, not for every kind's); RejectedError for the first
-    kind's reason when every kind refuses."""
+    kind's reason when every kind refuses, but a kind's flight time over the limit before an
+    earlier kind's bare "cannot fly this one" (fewer strokes is something a visitor can do)."""
     refusals: dict[str, str] = {}
     first: RejectedError | None = None
     for setup in kinds:
@@ -112,10 +114,11 @@ def _plan_kinds(
             message = wording.TOO_LONG_FLIGHT.format(
                 seconds=round(duration_s), limit=round(max_flight_s)
             )
-            rejection = RejectedError("too_long", message, status=422)
+            rejection = RejectedError("too_long", message, status=422, flight_s=duration_s)
             reason = f"writes for {duration_s:.0f} s, over the show's {max_flight_s:.0f} s"
         refusals[setup.kind.name] = _one_line(reason)
-        first = first or rejection
+        if first is None or (first.code == "unplannable" and rejection.code == "too_long"):
+            first = rejection
     raise first or RejectedError("unplannable", wording.UNPLANNABLE, status=422)
 
 
@@ -138,10 +141,32 @@ def _one_line(reason: str) -> str:
     return line if len(line) <= REASON_CHARS_MAX else line[: REASON_CHARS_MAX - 1] + "…"
 
 
+def plan_phrase_preview(submission: Submission, settings: KioskSettings) -> dict[str, Any]:
+    """A phrase: each character planned as a job of its own (one drone each, on adjacent
+    boards in reading order), and the row they are written on (``row``: boards from the left)."""
+    characters = [
+        plan_preview(Submission(text=char, strokes=None, label=char), settings)
+        for char in submission.text or ""
+    ]
+    return {
+        "phrase": True,
+        "label": submission.label,
+        "row": settings.limits.max_phrase_chars,
+        "characters": characters,
+        "writing_area_m": characters[0]["writing_area_m"],
+        "stroke_count": sum(c["stroke_count"] for c in characters),
+        "turning_point_count": sum(c["turning_point_count"] for c in characters),
+        "duration_s": max(c["duration_s"] for c in characters),  # they write at once
+    }
+
+
 def make_previewer(settings: KioskSettings) -> Callable[[Submission], dict[str, Any]]:
-    """``plan_preview`` bound to ``settings`` (what :func:`kiosk.app.create_app` expects)."""
+    """``plan_preview`` (``plan_phrase_preview`` for a phrase) bound to ``settings`` (what
+    :func:`kiosk.app.create_app` expects)."""
 
     def previewer(submission: Submission) -> dict[str, Any]:
+        if submission.phrase:
+            return plan_phrase_preview(submission, settings)
         return plan_preview(submission, settings)
 
     return previewer

@@ -17,7 +17,10 @@ from starlette.applications import Starlette
 
 from bus.keys import ShowKeys
 from bus.session import Role, Session, ZenohSettings, open_session
-from kiosk.app import create_app
+from kiosk.app import create_app, end_streams
+from kiosk.crew.link import CrewLink
+from kiosk.crew.pairing import PairingFile
+from kiosk.crew.routes import CrewDesk
 from kiosk.jobs import JobBook
 from kiosk.link import OrchestratorLink
 from kiosk.preview import make_previewer
@@ -25,12 +28,22 @@ from kiosk.settings import KioskSettings
 from planner.glyphs import has_glyph
 
 
-def build_app(settings: KioskSettings, session: Session) -> Starlette:
-    """The kiosk application on an open bus session (the session outlives the app)."""
-    link = OrchestratorLink(
-        session, ShowKeys(settings.show_id), JobBook(), timeout_s=settings.submit_timeout_s
-    )
-    return create_app(settings, link, make_previewer(settings), has_glyph=has_glyph)
+def build_app(
+    settings: KioskSettings, session: Session, crew_session: Session | None = None
+) -> Starlette:
+    """The kiosk application on an open bus session (the sessions outlive the app); with the
+    crew's session (its own certificate) and ``settings.crew_phones``, the crew page too."""
+    keys = ShowKeys(settings.show_id)
+    link = OrchestratorLink(session, keys, JobBook(), timeout_s=settings.submit_timeout_s)
+    crew = None
+    if crew_session is not None and settings.crew_phones is not None:
+        crew_link = CrewLink(
+            crew_session, keys, settings.places, timeout_s=settings.submit_timeout_s
+        )
+        crew = CrewDesk(crew_link, PairingFile(settings.crew_phones),
+                        secure_cookie=settings.secure_cookie,
+                        stale_after_s=settings.stale_after_s)  # fmt: skip
+    return create_app(settings, link, make_previewer(settings), has_glyph=has_glyph, crew=crew)
 
 
 def page_url(host: str, port: int) -> str:
@@ -90,7 +103,7 @@ class KioskServer:
             app, log_level=log_level, lifespan="on", access_log=False,
             timeout_graceful_shutdown=2, proxy_headers=False,
         )  # fmt: skip
-        self._server = _Server(config, self._started, app.state.kiosk.link.end_streams)
+        self._server = _Server(config, self._started, lambda: end_streams(app))
         self._on_started = on_started
         self._thread: threading.Thread | None = None
 
@@ -122,13 +135,37 @@ class KioskServer:
 
 
 @contextlib.contextmanager
+def _sessions(
+    zenoh: ZenohSettings,
+    crew_zenoh: ZenohSettings | None,
+    role: Role,
+    connect: list[str] | None = None,
+) -> Iterator[tuple[Session, Session | None]]:
+    """The public's session, and the crew's when its settings are given (a peer that does not
+    listen: the public's session holds any ``peer_listen`` endpoint)."""
+    with contextlib.ExitStack() as stack:
+        session = stack.enter_context(open_session(zenoh, role=role, connect=connect))
+        crew = None
+        if crew_zenoh is not None:
+            crew_session = open_session(crew_zenoh, role=role, listen=(), connect=connect)
+            crew = stack.enter_context(crew_session)
+        yield session, crew
+
+
+@contextlib.contextmanager
 def serving(
-    settings: KioskSettings, zenoh: ZenohSettings, *, role: Role = "peer", **server_options: Any
+    settings: KioskSettings,
+    zenoh: ZenohSettings,
+    *,
+    role: Role = "peer",
+    crew_zenoh: ZenohSettings | None = None,
+    **server_options: Any,
 ) -> Iterator[KioskServer]:
-    """A kiosk serving from a background thread for the ``with`` block (tests, embedding)."""
-    with open_session(zenoh, role=role) as session:
-        server = KioskServer(build_app(settings, session), settings.host, settings.port,
-                             **server_options)  # fmt: skip
+    """A kiosk serving from a background thread for the ``with`` block (tests, embedding);
+    ``crew_zenoh``: the crew's session settings (its certificate), for the crew page."""
+    with _sessions(zenoh, crew_zenoh, role) as (session, crew_session):
+        server = KioskServer(build_app(settings, session, crew_session), settings.host,
+                             settings.port, **server_options)  # fmt: skip
         server.start_in_thread()
         try:
             yield server
@@ -143,13 +180,14 @@ def run_kiosk(
     role: Role = "peer",
     connect: list[str] | None = None,
     on_started: Callable[[str], None] = print,
+    crew_zenoh: ZenohSettings | None = None,
 ) -> None:
-    """Serve the kiosk until Ctrl-C; ``on_started(url)`` once the page can be opened.
+    """Serve the kiosk until Ctrl-C; ``on_started(url)`` once the page can be opened;
+    ``crew_zenoh``: the crew's session settings (its certificate), for the crew page.
 
     A ``peer`` session (default) starts even before the show's router is up and joins it when
     it appears; submissions made meanwhile get the "queue not answering" message.
     """
-    with open_session(zenoh, role=role, connect=connect) as session:
-        KioskServer(
-            build_app(settings, session), settings.host, settings.port, on_started=on_started
-        ).run()
+    with _sessions(zenoh, crew_zenoh, role, connect) as (session, crew_session):
+        app = build_app(settings, session, crew_session)
+        KioskServer(app, settings.host, settings.port, on_started=on_started).run()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from kiosk.limits import SubmissionLimits
@@ -68,6 +69,10 @@ class KioskSettings:
     submission. Empty (a kiosk without a show): ``vehicles.DEFAULT_KIND`` alone
     (:func:`kind_preview` on :attr:`writing_area_m`)."""
 
+    crew_phones: Path | None = None
+    """The crew's paired phones and open pairing codes (``kiosk/crew/pairing.py``; the show's
+    ``<keys_dir>/crew-phones.json``); None: no crew page."""
+
     def kinds(self) -> tuple[JobSetup, ...]:
         """The kinds the preview plans for, first choice first."""
         if self.preview_kinds:
@@ -98,6 +103,7 @@ def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
         max_points=kiosk.max_points,
         max_text_chars=kiosk.max_text_chars,
         blocklist=tuple(kiosk.blocklist),
+        max_phrase_chars=len(show.boards),  # the row, as the orchestrator counts it
     )
     # every kind reads its settings from the show as for its vehicles; the preview's sample
     # rate goes the same way, through the planning section (the brush samples its plan at it)
@@ -123,7 +129,13 @@ def settings_from_show(show: Any, *, port: int | None = None) -> KioskSettings:
         ),
         width_range_m=width_span_m(kinds),
         preview_kinds=kinds,
+        crew_phones=crew_phones_path(show.keys_dir),
     )
+
+
+def crew_phones_path(keys_dir: Path) -> Path:
+    """Where a show keeps its crew's phones (beside its keys: as secret)."""
+    return Path(keys_dir) / "crew-phones.json"
 
 
 def width_span_m(kinds: tuple[JobSetup, ...]) -> tuple[float, float] | None:

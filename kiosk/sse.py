@@ -2,7 +2,8 @@
 
 Between changes a ``live`` frame every ``beat_s`` says whether the information is current
 (``{"stale": true}`` when the orchestrator's 1 Hz fleet snapshot stopped arriving), so the page
-can say "connection lost, retrying" within seconds, and notice a silent stream itself.
+can say "the show is slow to answer" within seconds, and notice a silent stream itself (its
+connection to the kiosk lost).
 """
 
 from __future__ import annotations
@@ -39,8 +40,8 @@ async def job_events(
         job = link.book.get(ticket)
         if job is None:
             return
-        if job.job_id is not None and link.book.state(job.job_id) is None:
-            await link.fetch(job.job_id)
+        if link.book.unknown(job):
+            await link.fetch(job.job_id or "")
         last: dict[str, Any] | None = None
         while True:
             view = link.book.view(job, places)

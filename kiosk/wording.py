@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import unicodedata
 
 TOO_LARGE = "That drawing is too big to send. Please clear it and draw something simpler."
 TOO_MANY_STROKES = (
@@ -21,6 +22,12 @@ BAD_WIDTH = (
 TEXT_TOO_LONG = "Please type at most {limit} characters."
 TEXT_ONE_CHAR = "Please type just one character."
 TEXT_EMPTY = "Please type a character first."
+NO_PHRASE = "This show writes one character at a time. Please type just one."
+PHRASE_TOO_LONG = (
+    "A phrase can have at most {limit} characters here: one for each board in the row."
+)
+PHRASE_TOO_SHORT = "A phrase has at least 2 characters. For one, type it on its own."
+PHRASE_SPACES = "Each character of a phrase goes to its own board: please leave out the spaces."
 NO_GLYPH = (
     "Sorry, the drones do not know how to write \u201c{char}\u201d yet. Please try another one."
 )
@@ -52,6 +59,27 @@ PENDING_FULL = (
 UNKNOWN_CODE = "We do not know this code. Please check it, or ask at the kiosk."
 UNKNOWN_JOB = "We do not know this job. It may be from an earlier session."
 NOT_YOUR_JOB = "You can only follow the characters you sent from this page."
+REASON_CHARS_MAX = 200
+"""Longest operator's reason a visitor is shown, in characters (a longer one is cut, with …)."""
+_HIDDEN = frozenset(("Cc", "Cf", "Cs", "Zl", "Zp"))
+"""Unicode categories of characters never shown: controls (``ESC``...), format characters
+(bidirectional overrides), lone surrogates, line and paragraph separators."""
+_JOINERS = frozenset("\u200c\u200d")
+"""Zero-width (non-)joiners: format characters that emoji and several scripts need."""
+
+
+def visitor_reason(text: str | None) -> str | None:
+    """The operator's words as a visitor reads them: one line of plain text without control or
+    format characters, at most :data:`REASON_CHARS_MAX` characters; None when nothing is left."""
+    if not text:
+        return None
+    shown = "".join(
+        " " if unicodedata.category(ch) in _HIDDEN and ch not in _JOINERS else ch for ch in text
+    )
+    line = " ".join(shown.split())
+    if len(line) > REASON_CHARS_MAX:
+        line = line[: REASON_CHARS_MAX - 1].rstrip() + "\u2026"
+    return line or None
 
 
 def duration_words(seconds: float | None) -> str:
@@ -74,6 +102,8 @@ def status_text(
     attempts: int = 0,
     place: str | None = None,
     paused: bool = False,
+    reason: str | None = None,
+    failure: str | None = None,
 ) -> str:
     """What the page says about a job in ``state`` (a bus JobStateName).
 
@@ -81,7 +111,9 @@ def status_text(
     for the public ("drone 2": an internal vehicle id is no name for a visitor); ``attempts``:
     assignments so far (a requeued job was assigned before); ``place``: where that board is
     ("board 2 from the left"); ``paused``: the show is paused (a
-    queued job keeps its place, with no start time to promise)."""
+    queued job keeps its place, with no start time to promise); ``reason``: the operator's
+    words on a rejection or cancellation (:func:`visitor_reason`); ``failure``: the code of a
+    failed job's error (``writing_bounds``: written, out of the show's bounds)."""
     if state in ("submitted", "awaiting_approval"):
         return "Waiting for the show's operator to approve your character."
     if state == "queued":
@@ -111,13 +143,59 @@ def status_text(
         return f"Being written by {drone}{where}: {_percent(progress)} done."
     if state == "done":
         return f"Done! Your character was written by {drone}{where}."
+    if state == "failed" and failure == "writing_bounds":
+        return (
+            f"Sorry, {drone} wrote your character{where}, but further from the plan than the show"
+            " allows. This is the ink it left; the crew has been told."
+        )
     if state == "failed":
         return "Sorry, something went wrong while writing your character. The crew has been told."
+    said = f" The operator says: \u201c{reason}\u201d" if reason else ""
     if state == "cancelled":
-        return "Your character was cancelled by the show's operator."
+        return "Your character was cancelled by the show's operator." + said
     if state == "rejected":
-        return "Sorry, the show's operator did not approve this character."
+        return "Sorry, the show's operator did not approve this character." + said
     return "Please wait..."
+
+
+def phrase_status_text(
+    state: str,
+    *,
+    size: int,
+    written: int,
+    boards: list[int],
+    eta_s: float | None = None,
+    queue_position: int | None = None,
+    paused: bool = False,
+    reason: str | None = None,
+) -> str:
+    """What the page says about a phrase in ``state`` (:func:`kiosk.phrase_view.overall`):
+    ``written`` of its ``size`` characters are written, by the drones of ``boards`` (their
+    places from the left); a phrase waits for enough free drones side by side to write it
+    together, never piecemeal."""
+    if state in ("submitted", "awaiting_approval"):
+        return "Waiting for the show's operator to approve your phrase."
+    if state == "queued" and paused:
+        return "The show is paused for now. Your phrase keeps its place in the queue."
+    if state == "queued":
+        ahead = f"number {queue_position} in the queue; " if queue_position else ""
+        return (
+            f"Your phrase waits for {size} free drones side by side, to write it together "
+            f"({ahead}it should start in {duration_words(eta_s)})."
+        )
+    drones = ", ".join(str(b) for b in boards)
+    if state in ("assigned", "writing"):
+        return f"Drones {drones} are writing your phrase together: {written} of {size} written."
+    if state == "done":
+        return f"Done! Your phrase was written by drones {drones}, side by side."
+    said = f" The operator says: \u201c{reason}\u201d" if reason else ""
+    if state == "rejected":
+        return "Sorry, the show's operator did not approve this phrase." + said
+    if state == "cancelled":
+        return "Your phrase was cancelled by the show's operator." + said
+    return (
+        f"Sorry, only {written} of the {size} characters could be written. The crew has been told."
+    )
 
 
 def _percent(fraction: float) -> str:

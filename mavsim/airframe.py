@@ -99,6 +99,11 @@ class Airframe:
         r = self._state.attitude_rate_radps[0]
         return (float(r[0]), float(r[1]), float(r[2]))
 
+    @property
+    def rotor_thrust_n(self) -> float:
+        """Collective thrust of the rotors now in [N] (0 with the motors off)."""
+        return float(self._state.thrust_mps2[0]) * self.params.mass_kg
+
     def step(self, command: AttitudeThrust) -> None:
         """Advance one autopilot period under ``command``."""
         state = self._state

@@ -65,8 +65,7 @@ class Autopilot(AutopilotCore):
         self._follow_gain_params()
         command = self._command(dt)
         self.airframe.step(command)
-        if self.armed:
-            self.flight_time_s += dt
+        self.battery.step(self.airframe.rotor_thrust_n, dt)
         self._after_step()
         self._check_fence()
         self._announce_prearm()

@@ -12,6 +12,7 @@ from enum import IntEnum
 from typing import Literal
 
 from mavsim.airframe import Airframe
+from mavsim.battery import SimBattery
 from mavsim.config import VehicleConfig
 from mavsim.control import PositionController, Target
 from mavsim.guided import (
@@ -99,7 +100,8 @@ class AutopilotCore:
         self.ekf_origin_lla: tuple[float, float, float] | None = None
         """EKF origin (lat [deg], lon [deg], alt [m]) a companion set (SET_GPS_GLOBAL_ORIGIN)."""
         self.now_s = 0.0
-        self.flight_time_s = 0.0
+        self.battery = SimBattery(rotor_radius_m=self.airframe.params.rotor_radius_m)
+        """Its pack, drawn by the airframe's thrust each period (:mod:`mavsim.battery`)."""
         self._armed_idle_since_s = 0.0
         self._on_ground_since_s: float | None = None
         self._takeoff_since_s = 0.0
@@ -145,11 +147,6 @@ class AutopilotCore:
         return self.airframe.on_ground
 
     @property
-    def battery_fraction(self) -> float:
-        """Remaining battery 0..1 (linear in flight time)."""
-        return max(0.0, 1.0 - self.flight_time_s / self.config.battery_endurance_s)
-
-    @property
     def landed_state(self) -> int:
         """MAV_LANDED_STATE: 1 on ground, 2 in air, 3 taking off, 4 landing."""
         if self.on_ground:
@@ -188,6 +185,11 @@ class AutopilotCore:
         if not self.position_source_ready:
             return "PreArm: Need Position Estimate"
         return None
+
+    @property
+    def prearm_bit(self) -> bool:
+        """SYS_STATUS's MAV_SYS_STATUS_PREARM_CHECK health bit: set while the checks pass."""
+        return self.prearm_failure() is None
 
     def _arming_refusal(self) -> str | None:
         reason = self.prearm_failure()
@@ -285,6 +287,16 @@ class AutopilotCore:
         """MAV_CMD_DO_FLIGHTTERMINATION: motors off at once."""
         if self.armed:
             self._disarm()
+        return Result.ACCEPTED
+
+    def battery_reset(self, mask: int, percentage: float) -> Result:
+        """MAV_CMD_BATTERY_RESET as ArduPilot answers it (``handle_command_battery_reset``):
+        each battery in ``mask`` that exists (one here: bit 0) counts ``percentage`` [%] left;
+        bits of batteries it lacks are ignored, and it is accepted armed or not. Disarmed on
+        the ground, mavsim takes it as the crew's fresh pack (:mod:`mavsim.battery`)."""
+        if mask & 1:
+            fresh_pack = not self.armed and self.on_ground
+            self.battery.reset_remaining(percentage, fresh_pack=fresh_pack)
         return Result.ACCEPTED
 
     # --- guided setpoints ------------------------------------------------------------------------

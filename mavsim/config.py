@@ -137,8 +137,6 @@ class VehicleConfig:
     """Default rate of LOCAL_POSITION_NED, ATTITUDE and POSITION_TARGET_LOCAL_NED."""
     physics_rate_hz: float = 100.0
     """Rate of the autopilot loop in [Hz] (the simulator's control rate; 4 physics substeps)."""
-    battery_endurance_s: float = 900.0
-    """Flight time in [s] from full to empty (linear model)."""
     gains: PositionGains | None = None
     """Position controller gains; None: the autopilot's own defaults (:attr:`position_gains`)."""
     params: tuple[tuple[str, float], ...] = ()
@@ -168,7 +166,6 @@ class VehicleConfig:
             "land_speed_mps": self.land_speed_mps,
             "telemetry_rate_hz": self.telemetry_rate_hz,
             "physics_rate_hz": self.physics_rate_hz,
-            "battery_endurance_s": self.battery_endurance_s,
         }
         for name, value in positive.items():
             if not value > 0:

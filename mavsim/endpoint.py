@@ -45,8 +45,6 @@ FORCE_DISARM_MAGIC = 21196.0
 """MAV_CMD_COMPONENT_ARM_DISARM param2 that forces disarming in the air."""
 GCS_HEARTBEAT_TIMEOUT_S = 2.5
 """PX4 counts a link as having a ground station for this long after its heartbeat (vehicle time)."""
-BATTERY_FULL_V = 16.8
-BATTERY_EMPTY_V = 14.0
 
 
 PREARM_CHECK = 0x10000000
@@ -243,6 +241,8 @@ class VehicleEndpoint:
             return self._set_interval(int(message.param1), float(message.param2))
         if command == mavlink.MAV_CMD_REQUEST_MESSAGE:
             return self._request(int(message.param1))
+        if command == mavlink.MAV_CMD_BATTERY_RESET:
+            return ap.battery_reset(int(message.param1), float(message.param2))
         return Result.UNSUPPORTED
 
     def _set_mode(self, custom_mode: int, px4_main: int, px4_sub: int) -> Result:
@@ -386,23 +386,13 @@ class VehicleEndpoint:
         )  # fmt: skip
 
     def _battery(self, message_id: int) -> mavlink.MAVLink_message | None:
-        fraction = self.autopilot.battery_fraction
-        volts = BATTERY_EMPTY_V + fraction * (BATTERY_FULL_V - BATTERY_EMPTY_V)
-        amps = 10.0 if self.autopilot.armed else 0.5
-        remaining = round(100 * fraction)
+        battery = self.autopilot.battery
         if message_id == mavlink.MAVLINK_MSG_ID_SYS_STATUS:
             sensors = PREARM_CHECK  # present and enabled; healthy while its checks pass
-            healthy = self.autopilot.prearm_failure() is None
-            return self._mav.sys_status_encode(
-                sensors, sensors, sensors if healthy else 0, 100, int(volts * 1000),
-                int(amps * 100), remaining, 0, 0, 0, 0, 0, 0,
-            )  # fmt: skip
+            healthy = sensors if self.autopilot.prearm_bit else 0
+            return battery.sys_status(self._mav, sensors, healthy)
         if message_id == mavlink.MAVLINK_MSG_ID_BATTERY_STATUS:
-            cells = [int(volts * 250)] * 4 + [65535] * 6
-            return self._mav.battery_status_encode(
-                0, mavlink.MAV_BATTERY_FUNCTION_ALL, mavlink.MAV_BATTERY_TYPE_LIPO, 32767, cells,
-                int(amps * 100), -1, -1, remaining,
-            )  # fmt: skip
+            return battery.battery_status(self._mav, self.autopilot.flavor)
         return None
 
 

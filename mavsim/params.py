@@ -24,7 +24,7 @@ Motion-capture fusion (:mod:`mavsim.mocap`): ArduCopter VISO_TYPE (read at boot)
 EK3_SRC1_POSXY decide whether mocap is the position source; PX4 EKF2_EV_CTRL and EKF2_GPS_CTRL.
 The other estimator parameters a companion sets with them (EK3_SRC1_POSZ/VELXY/VELZ,
 VISO_POS_M_NSE, VISO_DELAY_MS, EK3_TAU_OUTPUT; EKF2_HGT_REF, EKF2_EVP_NOISE, EKF2_EVV_NOISE,
-EKF2_ACC_NOISE, EKF2_TAU_POS/VEL,
+EKF2_EVV_GATE, EKF2_ACC_NOISE, EKF2_TAU_POS/VEL,
 EKF2_RNG_CTRL, EKF2_ASP_DELAY, EKF2_DELAY_MAX) are kept and read back with the real defaults; the
 simulated estimator is exact, so they change nothing else.
 """
@@ -98,6 +98,7 @@ PX4_PARAMS = (
     ParamDef("EKF2_GPS_CTRL", INT32, 7),
     ParamDef("EKF2_EVP_NOISE", REAL32, 0.1),
     ParamDef("EKF2_EVV_NOISE", REAL32, 0.1),
+    ParamDef("EKF2_EVV_GATE", REAL32, 3.0),
     ParamDef("EKF2_ACC_NOISE", REAL32, 0.35),
     ParamDef("EKF2_TAU_POS", REAL32, 0.25),
     ParamDef("EKF2_TAU_VEL", REAL32, 0.25),

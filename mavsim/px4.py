@@ -22,7 +22,9 @@
   last chose again (OFFBOARD, if the companion flew it): a companion must not read that as a
   takeover;
 - its geofence is GF_MAX_HOR_DIST / GF_MAX_VER_DIST / GF_ACTION (:mod:`mavsim.fence`);
-- it sends STATUSTEXT only to links where it hears a ground station's heartbeat (the endpoint).
+- it sends STATUSTEXT only to links where it hears a ground station's heartbeat (the endpoint);
+- its pack is full whenever it is disarmed (SITL's battery simulator) and it has no
+  MAV_CMD_BATTERY_RESET (:mod:`mavsim.battery`).
 """
 
 from __future__ import annotations
@@ -101,6 +103,12 @@ class Px4Autopilot(Autopilot):
                 self.after_disarm_mode = self.chosen_mode
         return result
 
+    @property
+    def prearm_bit(self) -> bool:
+        """PX4 sets the bit for the mode it is in (SYS_STATUS.hpp, ``can_arm_mode_flags`` of
+        the current nav_state): clear in OFFBOARD with no stream, whatever the checks say."""
+        return super().prearm_bit and self._arming_refusal() is None
+
     def _arming_refusal(self) -> str | None:
         reason = super()._arming_refusal()
         if reason is None and self.mode == CopterMode.GUIDED and not self.signal_alive:
@@ -110,6 +118,17 @@ class Px4Autopilot(Autopilot):
     def takeoff(self, altitude_m: float) -> Result:
         """AUTO.TAKEOFF is not simulated: a PX4 companion climbs with OFFBOARD setpoints."""
         return Result.UNSUPPORTED
+
+    def battery_reset(self, mask: int, percentage: float) -> Result:
+        """PX4 has no MAV_CMD_BATTERY_RESET: Commander's default answer, UNSUPPORTED."""
+        return Result.UNSUPPORTED
+
+    def step(self, now_s: float) -> None:
+        """One period; disarmed, the pack is full again, as PX4 SITL's battery simulator has
+        it (``BatterySimulator::Run``: ``_battery_percentage = 1`` whenever not armed)."""
+        super().step(now_s)
+        if not self.armed:
+            self.battery.refill()
 
     def accepts_setpoints(self) -> bool:
         return self.mode == CopterMode.GUIDED and self.armed

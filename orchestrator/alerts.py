@@ -18,6 +18,8 @@ alert (kind)        cause                                closes when
 ``disk_full``       the orchestrator writes on its disk  ``disk_room``: room made again (not
                     reserve (``orchestrator/disk_room``)  kept over a restart: the new process
                                                          checks its disk and says it again)
+``clock_offset``    its agent reported its clock past    a status reporting it within the
+                    ``preflight.clock_offset_max_s``     bound (``clock_offsets.py``)
 ==================  ===================================  ===================================
 
 Other alerts (``limit``, ``job_failed``, safety aborts, autopilot messages) tell of a moment, not
@@ -53,7 +55,12 @@ def cause_of(event: Event, vehicles: Mapping[str, VehicleView]) -> tuple[str, st
         return None
     if event.kind in ("board_dirty", "job_waits"):  # both until a fresh sheet
         return ("dirty", view.info.board_id)
-    what = {"vehicle_held": "held", "vehicle_lost": "lost", "vehicle_fault": "fault"}
+    what = {
+        "vehicle_held": "held",
+        "vehicle_lost": "lost",
+        "vehicle_fault": "fault",
+        "clock_offset": "clock",
+    }
     return (what[event.kind], view.info.vehicle_id) if event.kind in what else None
 
 
@@ -105,5 +112,7 @@ def _lasts(
         return view.held
     if what == "lost":
         return view.lost
+    if what == "clock":
+        return view.clock_off
     heard_after = view.status_at_s is not None and view.status_at_s > event.time_s
     return not (heard_after and view.state != "fault")

@@ -29,8 +29,18 @@ from bus.messages import (
     SubmitRequest,
     VehicleStatus,
 )
-from orchestrator import assignment, holders, positions, presence, reports
+from orchestrator import (
+    assignment,
+    battery_swaps,
+    holders,
+    phrase_intake,
+    phrases,
+    positions,
+    presence,
+    reports,
+)
 from orchestrator.alerts import OpenAlerts
+from orchestrator.batteries import Swaps
 from orchestrator.core_types import CoreConfig, Effects, Level
 from orchestrator.finished import MAX_FINAL_JOBS, FinishedJobs
 from orchestrator.fleet import VehicleView, queue_etas
@@ -110,10 +120,15 @@ class Book:
             now_s=now_s,
         )
         """Boards waiting for the crew's sheet or drying (``orchestrator/sheets.py``)."""
+        self.swaps = Swaps(time_scale=config.eta.time_scale, swap_s=config.battery_swap_s)
+        """Vehicles waiting for the crew's battery swap (``orchestrator/batteries.py``)."""
         self.router_down_since_s: float | None = None
         """Since when the orchestrator has had no link to the router, [s] (None: it has one)."""
         self.told_overdue: set[str] = set()
         """Jobs whose overdue wait for their holder was alerted (``holders.tell_overdue``)."""
+        self.phrase_ready: dict[str, tuple[int, float]] = {}
+        """Job id -> (attempt, time [s]) of the latest *ready* report of a phrase's character
+        not acknowledged yet: its phrase starts when all are (``orchestrator/phrases.py``)."""
 
     # --- views ------------------------------------------------------------------------------
     @property
@@ -181,6 +196,8 @@ class Book:
                 writing_s_on=self.kinds.writing_s_on,
                 board_free_s={b: self.sheets.free_at_s(b, now_s) for b in usable.values()},
                 after_character_s=self.sheets.after_character_s,
+                charges=battery_swaps.eta_charges(self, now_s),
+                row=phrases.board_row(self.config),
             )
         )
         return {j.job_id: (i + 1, etas.get(j.job_id)) for i, j in enumerate(queue)}
@@ -381,6 +398,18 @@ class Book:
         self.assign(eff, now_s)
         self.settle(eff, now_s)
         return self.submit_reply(job_id, now_s), eff
+
+    def submit_phrase(
+        self,
+        job_ids: Sequence[str],
+        request: SubmitRequest,
+        estimates_s: Sequence[float],
+        *,
+        now_s: float,
+        submitted_by: str | None = None,
+    ) -> tuple[SubmitReply, Effects]:
+        """Accept a validated phrase: one job per character (``orchestrator/phrase_intake.py``)."""
+        return phrase_intake.submit(self, job_ids, request, estimates_s, now_s, submitted_by)
 
     def submit_reply(self, job_id: str, now_s: float) -> SubmitReply:
         """The ``ok`` reply naming an accepted job, with its current state, place and ETA."""

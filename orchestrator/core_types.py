@@ -9,6 +9,7 @@ from bus.messages import Event, VehicleCommand, WrittenInk
 from orchestrator.fleet import EtaModel, VehicleInfo
 from orchestrator.jobs import Job
 from orchestrator.sheets import BoardSheets
+from sim.battery import VehicleBattery
 
 
 @dataclass(frozen=True)
@@ -50,6 +51,17 @@ class CoreConfig:
     """What a written character costs each board (default: ``when_spoiled``)."""
     sheet_change_s: float = 40.0
     """The crew's first expected turnaround for a sheet, show seconds (``policy``)."""
+    batteries: tuple[tuple[str, VehicleBattery], ...] = ()
+    """Each kind's battery (``vehicles/batteries.py``); a kind without one, or a vehicle that
+    reports no charge, is dispatched without counting its battery."""
+    battery_reserve_fraction: float = 0.20
+    """Charge every job must leave in its vehicle (``battery.reserve_fraction``)."""
+    battery_swap_s: float = 60.0
+    """The crew's first expected turnaround for a battery swap, show seconds
+    (``battery.swap_s``)."""
+    clock_offset_max_s: float = 0.05
+    """A vehicle's clock reported further than this from the orchestrator's raises an alert, [s]
+    (``preflight.clock_offset_max_s``, ``orchestrator/clock_offsets.py``)."""
 
 
 @dataclass

@@ -6,6 +6,8 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from bus.messages import VehicleStateName, VehicleSummary
+from orchestrator import phrases
+from orchestrator.batteries import EtaCharges
 from orchestrator.jobs import Job
 
 READY_STATES: frozenset[str] = frozenset({"idle", "landed"})
@@ -81,6 +83,20 @@ class VehicleView:
     preflight: str = ""
     """Why the vehicle cannot take off now, in its autopilot's words (its status's
     ``preflight``); empty: it can. It gets no job meanwhile: arming would only be refused."""
+    battery_fraction: float | None = None
+    """Charge left in its battery, 0..1, as its latest status said (None: not reported)."""
+    battery_minutes_left: float | None = None
+    """Minutes until its battery is empty, as its latest status said."""
+    link_loss_fraction: float | None = None
+    """Share of its autopilot's messages lost, as its latest status said."""
+    flight_s_today: float | None = None
+    """Its time off the ground today in [s], as its latest status said."""
+    clock_off: bool = False
+    """Its clock was reported past ``clock_offset_max_s`` (the ``clock_offset`` alert is open
+    until it is reported within it again; ``orchestrator/clock_offsets.py``)."""
+    swap_reason: str = ""
+    """Why it was sent for a battery swap (``orchestrator/batteries.py``), in one line; empty:
+    it was not, or its fresh pack has reported. It gets no job meanwhile."""
     last_alert_s: float = -1e18
     """Orchestrator time of its last tracking alert, [s]."""
     event_tokens: float = 10.0
@@ -90,10 +106,11 @@ class VehicleView:
 
     def summary(self, job_id: str | None) -> VehicleSummary:
         """The wire view of this vehicle."""
+        swapping = self.swap_reason and not self.lost and self.state in READY_STATES
         return VehicleSummary(
             vehicle_id=self.info.vehicle_id,
             kind=self.info.kind,
-            state="lost" if self.lost else self.state,
+            state="lost" if self.lost else "battery_swap" if swapping else self.state,
             alive=self.alive,
             board_id=self.info.board_id,
             job_id=job_id,
@@ -101,19 +118,33 @@ class VehicleView:
             message=self._note() + (" (paused)" if self.paused and not self.held else ""),
             held=self.held,
             paused=self.paused and not self.held,
+            battery_fraction=self.battery_fraction,
+            battery_minutes_left=self.battery_minutes_left,
+            preflight="" if self.lost else self.preflight,
+            link_loss_fraction=self.link_loss_fraction,
+            flight_s_today=self.flight_s_today,
         )
 
     def _note(self) -> str:
-        """Its message, after what its autopilot waits for (a vehicle present)."""
+        """Its message, after what its autopilot waits for (a vehicle present), or why it waits
+        for a battery swap."""
+        if self.swap_reason and not self.lost:
+            return f"battery swap: {self.swap_reason}"
         if not self.preflight or self.lost:
             return self.message
-        waiting = f"waiting for its pre-arm checks: {self.preflight}"
+        waiting = f"held by its preflight: {self.preflight}"
         return f"{waiting}; {self.message}" if self.message else waiting
 
 
 def ready_for_job(view: VehicleView, now_s: float) -> bool:
-    """Healthy and idle by its own account, not paused, not backing off, its autopilot ready
-    to arm (a ground station does not offer arming before the pre-arm checks pass either)."""
+    """Healthy and idle by its own account, not paused, not backing off, its preflight passed
+    (a ground station does not offer arming before the pre-arm checks pass either)."""
+    return waiting_on_ground(view, now_s) and not view.preflight
+
+
+def waiting_on_ground(view: VehicleView, now_s: float) -> bool:
+    """:func:`ready_for_job` but for its preflight: a vehicle held by it (a flat battery among
+    others) may still be sent for a battery swap."""
     return (
         view.alive
         and not view.lost
@@ -122,7 +153,7 @@ def ready_for_job(view: VehicleView, now_s: float) -> bool:
         and view.status_at_s is not None
         and view.state in READY_STATES
         and view.reported_job_id is None
-        and not view.preflight
+        and not view.swap_reason
         and view.refused_until_s <= now_s
         and view.info.cannot_write is None
     )
@@ -176,6 +207,8 @@ def queue_etas(
     writing_s_on: Callable[[Job, str], float] | None = None,
     board_free_s: Mapping[str, float] | None = None,
     after_character_s: Callable[[str], float] | None = None,
+    charges: EtaCharges | None = None,
+    row: Sequence[str] = (),
 ) -> dict[str, float]:
     """Wall seconds from now until each queued job should start writing (list scheduling).
 
@@ -190,11 +223,19 @@ def queue_etas(
     on that vehicle (kinds differ). ``board_free_s``: when each board may take a job (Unix
     time [s]: a sheet being changed, a surface drying; default now); ``after_character_s(board)``
     (default 0): show seconds a board takes no job after each character (the crew's sheet).
+    ``charges`` (default: batteries not counted): the vehicles' charge, spent job by job; a job
+    its vehicle cannot take with the reserve starts after a swap (``orchestrator/batteries.py``).
+    ``row``: the boards left to right; the characters of a phrase start together when a window
+    of adjacent boards has a vehicle free for each, and the vehicles of the boards it could
+    use start nothing behind it before (``orchestrator/phrases.py``).
     """
     scale = model.time_scale
     vehicle_free = dict.fromkeys(usable_boards, now_s)
     for vid in set(landing) & vehicle_free.keys():
         vehicle_free[vid] = now_s + model.after_write_s / 2 / scale
+    for vid, free_s in (charges.free_at_s if charges else {}).items():
+        if vid in vehicle_free:
+            vehicle_free[vid] = max(vehicle_free[vid], free_s)
     board_free = {b: max(now_s, (board_free_s or {}).get(b, now_s)) for b in usable_boards.values()}
 
     def after_s(board_id: str) -> float:
@@ -207,21 +248,44 @@ def queue_etas(
             board_free[job.board_id] = max(board_free.get(job.board_id, now_s), free)
         if job.vehicle_id in vehicle_free:
             vehicle_free[job.vehicle_id] = done + model.after_write_s / scale
+            if charges is not None:  # the whole job, though part of it is flown: on the safe side
+                charges.spend(job, job.vehicle_id)
     etas: dict[str, float] = {}
     if not vehicle_free:
         return etas
 
-    def can_start(vid: str) -> tuple[float, str]:
-        return max(vehicle_free[vid], board_free[usable_boards[vid]]), vid
+    def can_start(job: Job, vid: str) -> tuple[float, str]:
+        swap_s = charges.swap_s / scale if charges and charges.swap_first(job, vid) else 0.0
+        return max(vehicle_free[vid] + swap_s, board_free[usable_boards[vid]]), vid
 
-    for job in queue:
-        takers = [v for v in vehicle_free if may_take is None or may_take(job, v)]
-        if not takers:
+    def option(job: Job, board_id: str | None = None) -> tuple[float, str] | None:
+        takers = [
+            v
+            for v in vehicle_free
+            if (may_take is None or may_take(job, v)) and board_id in (None, usable_boards[v])
+        ]
+        return min((can_start(job, v) for v in takers), default=None)
+
+    for unit in phrases.units(queue):
+        if phrases.together(unit[0]):  # all start when a window of them is free
+            best = phrases.best_window(unit, row, option)
+        else:
+            first = option(unit[0])
+            best = None if first is None else (first[0], [(unit[0], first[1])])
+        if best is None:
             continue
-        assigned, vid = min(map(can_start, takers))
-        start = assigned + model.before_write_s / scale
-        done = start + (writing_s_on(job, vid) if writing_s_on else writing_s(job)) / scale
-        etas[job.job_id] = start - now_s
-        board_free[usable_boards[vid]] = done + after_s(usable_boards[vid])
-        vehicle_free[vid] = done + model.after_write_s / scale
+        assigned, seats = best
+        for job, vid in seats:
+            if charges is not None:
+                charges.spend(job, vid)
+            start = assigned + model.before_write_s / scale
+            done = start + (writing_s_on(job, vid) if writing_s_on else writing_s(job)) / scale
+            etas[job.job_id] = start - now_s
+            board_free[usable_boards[vid]] = done + after_s(usable_boards[vid])
+            vehicle_free[vid] = done + model.after_write_s / scale
+        if phrases.together(unit[0]):  # nothing behind it goes first where it could go
+            held = phrases.could_use(unit, row, usable_boards, may_take)
+            for v, board_id in usable_boards.items():
+                if board_id in held:
+                    vehicle_free[v] = max(vehicle_free[v], assigned)
     return etas

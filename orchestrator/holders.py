@@ -35,6 +35,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from bus.fence import unheard_writing_s
+from orchestrator import phrases
 from orchestrator.core_types import CoreConfig, Effects
 from orchestrator.jobs import Job, transition, update
 
@@ -170,8 +171,8 @@ def reclaim(book: Book, eff: Effects, job: Job, vehicle_id: str, now_s: float) -
         return False  # only the last holder, only while nobody else has it
     if not view.alive or view.held or book.active_job_of(vehicle_id) is not None:
         return False  # held: the operator took the job away (sent before the agent knew)
-    if view.info.board_id in book.busy_boards():
-        return False
+    if view.info.board_id in book.busy_boards() or phrases.together(job):
+        return False  # a character of a phrase not begun goes out again with its phrase
     reclaimed = transition(
         job,
         "assigned",

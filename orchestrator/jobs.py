@@ -16,7 +16,7 @@ from typing import Any, Literal
 
 import msgspec
 
-from bus.messages import ErrorInfo, JobMetrics, JobState, JobStateName
+from bus.messages import ErrorInfo, JobMetrics, JobState, JobStateName, PhrasePlace
 
 FINAL_STATES: frozenset[str] = frozenset({"done", "failed", "cancelled", "rejected"})
 ACTIVE_STATES: frozenset[str] = frozenset({"assigned", "writing"})
@@ -99,6 +99,11 @@ class Job(msgspec.Struct, frozen=True, kw_only=True):
     submitted_by: str | None = None
     """The identity that submitted it on the bus (its certificate's common name, read from the
     submit key: ``orchestrator/quotas.py``); None for jobs stored before it was kept."""
+    phrase: PhrasePlace | None = None
+    """Its place in a phrase written together (``orchestrator/phrases.py``); None: alone."""
+    rewrite_alone: bool = False
+    """A character of a phrase that had begun, back in the queue: written again alone, on its
+    own board (``board_id``), and released at once."""
 
     @property
     def counted_attempts(self) -> int:
@@ -160,4 +165,5 @@ def to_state(
         metrics=job.metrics,
         error=job.error,
         strokes=job.strokes if waiting else None,
+        phrase=job.phrase,
     )

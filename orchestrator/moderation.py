@@ -6,7 +6,9 @@ certificate it came with, e.g. ``submitter@booth``, whatever ids that one declar
 selection (``job_ids``). Only jobs
 that no vehicle has are touched, so a bulk command never stops a flight:
 
-- ``reject`` takes jobs awaiting approval (a queued job was approved already: ``cancel`` it);
+- ``reject`` takes jobs awaiting approval (a queued job was approved already: ``cancel`` it),
+  and with a character of a phrase every character of it awaiting approval (a phrase is
+  moderated as one submission);
 - ``cancel`` takes jobs awaiting approval and queued ones, except a queued job that waits for
   the lost vehicle that had it (``orchestrator/holders.py``): that vehicle may be writing it;
 - assigned and writing jobs are left to the one-job ``cancel``, which tells their vehicle to stop:
@@ -64,8 +66,37 @@ def _chosen(book: Book, cmd: OperatorCommand) -> list[tuple[str, Job | None]] | 
             return _refused("unknown_client", f"no job of client {cmd.client_id!r}", "client_id")
         return [(j.job_id, j) for j in sorted(mine, key=lambda j: j.seq) if not j.final]
     ids = list(dict.fromkeys(cmd.job_ids or ()))
+    if cmd.command == "reject":  # a phrase is moderated as one submission
+        ids = list(dict.fromkeys(
+            k for i in ids for k in [i, *(j.job_id for j in _phrase_of(book, i))]
+        ))  # fmt: skip
     known = sorted((book.jobs[i] for i in ids if i in book.jobs), key=lambda j: j.seq)
     return [(j.job_id, j) for j in known] + [(i, None) for i in ids if i not in book.jobs]
+
+
+def moderated_together(book: Book, job: Job) -> list[Job]:
+    """What one approval or rejection of ``job`` decides: a phrase is moderated as one
+    submission (its characters are dispatched together), so every character of its phrase
+    awaiting approval, in reading order; else ``job`` alone."""
+    if job.phrase is None:
+        return [job]
+    phrase_id = job.phrase.phrase_id
+    return sorted(
+        (
+            j
+            for j in book.jobs.values()
+            if j.phrase is not None
+            and j.phrase.phrase_id == phrase_id
+            and j.state == "awaiting_approval"
+        ),
+        key=lambda j: j.phrase.index if j.phrase is not None else 0,
+    )
+
+
+def _phrase_of(book: Book, job_id: str) -> list[Job]:
+    """The characters awaiting approval of the phrase of ``job_id`` (none: not a phrase)."""
+    job = book.jobs.get(job_id)
+    return moderated_together(book, job) if job is not None and job.phrase is not None else []
 
 
 def _refused(code: str, message: str, field: str = "job_ids") -> OperatorReply:
@@ -89,7 +120,8 @@ def apply_bulk(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> 
             state = None if job is None else job.state
             skipped.append(SkippedJob(job_id=job_id, state=state, reason=why or ""))
             continue
-        book.put(eff, transition(job, final, now_s, error=ErrorInfo(code=final, message=note)))
+        info = ErrorInfo(code=final, message=note, reason=cmd.reason or None)
+        book.put(eff, transition(job, final, now_s, error=info))
         book.event(
             eff,
             now_s,

@@ -1,9 +1,10 @@
 """Operator commands applied to a :class:`~orchestrator.core.Book` (pure).
 
 =============  ===========================================================================
-approve        job awaiting approval -> queued
-reject         job awaiting approval -> rejected (``reason`` kept); with ``job_ids`` or
-               ``client_id`` many at once (``orchestrator/moderation.py``)
+approve        job awaiting approval -> queued; a character of a phrase: the whole phrase
+reject         job awaiting approval -> rejected (``reason`` kept); a character of a phrase:
+               the whole phrase, the reason on each; with ``job_ids`` or ``client_id`` many
+               at once (``orchestrator/moderation.py``)
 pause          no new assignments: the whole queue, or one vehicle (``vehicle_id``)
 resume         undo pause: the queue and every vehicle not held, or one vehicle
 release        a vehicle held by land / estop may take jobs again (``vehicle_id``)
@@ -18,6 +19,8 @@ clear_fault    ask a vehicle's agent to leave ``fault`` (``vehicle_id``); it doe
                backend reports it on the ground and disarmed; it stays held until ``release``
 prioritize     set a waiting job's ``priority`` (higher first)
 fresh_sheet    a half-written board (``board_id``) has a new sheet: jobs may be assigned there again
+battery_       the crew put a fresh battery in a vehicle waiting for one (``vehicle_id``);
+swapped        it takes jobs once its fresh pack reports (``orchestrator/battery_swaps.py``)
 =============  ===========================================================================
 """
 
@@ -32,13 +35,26 @@ if TYPE_CHECKING:
     from orchestrator.core_types import Effects, Level
     from orchestrator.jobs import Job
 
-from orchestrator import holders
+from orchestrator import battery_swaps, holders
 from orchestrator.jobs import transition, update
-from orchestrator.moderation import apply_bulk, is_bulk
+from orchestrator.moderation import apply_bulk, is_bulk, moderated_together
 from orchestrator.requeue import requeue
 
 DEFAULT_NAME = "operator"
 """``OperatorCommand.operator`` when the sender names no one."""
+CREW = "crew"
+"""The crew page's identity (the kiosk's second certificate, ``trust/acl.py``)."""
+CREW_COMMANDS = ("fresh_sheet", "battery_swapped")
+"""All the crew may send: a sheet changed, a battery swapped."""
+
+
+def refused(identity: str, cmd: OperatorCommand) -> CommandReply | None:
+    """Why ``identity`` may not send ``cmd`` (None: it may): the crew confirms sheets and
+    batteries and nothing else, whatever its page or its process asks."""
+    if identity != CREW or cmd.command in CREW_COMMANDS:
+        return None
+    allowed = " and ".join(CREW_COMMANDS)
+    return _error("forbidden", f"the crew may send {allowed} only, not {cmd.command}", "command")
 
 
 def signed_by(identity: str, declared: str) -> str:
@@ -102,13 +118,24 @@ def _moderate(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> C
         return job
     if job.state != "awaiting_approval":
         return _error("bad_state", f"{job.job_id} is {job.state}, not awaiting approval", "job_id")
-    if cmd.command == "approve":
-        book.put(eff, transition(job, "queued", now_s))
-    else:
-        info = ErrorInfo(code="rejected", message=cmd.reason or "rejected by the operator")
-        book.put(eff, transition(job, "rejected", now_s, error=info))
+    message = cmd.reason or "rejected by the operator"
+    info = ErrorInfo(code="rejected", message=message, reason=cmd.reason or None)
+    together = moderated_together(book, job)
+    for one in together:
+        if cmd.command == "approve":
+            book.put(eff, transition(one, "queued", now_s))
+        else:
+            book.put(eff, transition(one, "rejected", now_s, error=info))
     done = "approved" if cmd.command == "approve" else "rejected"
-    return CommandReply(ok=True, message=f"{job.job_id} {done}")
+    return CommandReply(ok=True, message=f"{_what(job, together)} {done}")
+
+
+def _what(job: Job, together: list[Job]) -> str:
+    """The moderated job, or its phrase: ``phrase 新年快乐 (4 characters, p0)``."""
+    if job.phrase is None:
+        return job.job_id
+    text = "".join(j.label for j in together)
+    return f"phrase {text} ({len(together)} characters, {job.phrase.phrase_id})"
 
 
 def _cancel(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> CommandReply:
@@ -119,7 +146,8 @@ def _cancel(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> Com
         return _error("bad_state", f"{job.job_id} is already {job.state}", "job_id")
     if job.active and job.vehicle_id is not None:
         eff.commands.append((job.vehicle_id, VehicleCommand(command="cancel", job_id=job.job_id)))
-    info = ErrorInfo(code="cancelled", message=cmd.reason or f"cancelled by {cmd.operator}")
+    message = cmd.reason or f"cancelled by {cmd.operator}"
+    info = ErrorInfo(code="cancelled", message=message, reason=cmd.reason or None)
     book.put(eff, transition(job, "cancelled", now_s, error=info))
     eff.fleet_changed = True
     return CommandReply(ok=True, message=f"{job.job_id} cancelled")
@@ -212,7 +240,7 @@ def apply_operator(book: Book, command: object, eff: Effects, now_s: float) -> C
     if not isinstance(command, OperatorCommand):
         return _error("invalid", "not an operator command")
     cmd = command
-    needs_vehicle = cmd.command in ("land", "release", "clear_fault")
+    needs_vehicle = cmd.command in ("land", "release", "clear_fault", "battery_swapped")
     if bad := _vehicle_ok(book, cmd, needs_vehicle):
         return bad
     if is_bulk(cmd):
@@ -235,6 +263,8 @@ def apply_operator(book: Book, command: object, eff: Effects, now_s: float) -> C
         reply = _clear_fault(book, cmd, eff)
     elif cmd.command == "fresh_sheet":
         reply = _fresh_sheet(book, cmd, eff, now_s)
+    elif cmd.command == "battery_swapped":
+        reply = battery_swaps.swapped(book, cmd, eff, now_s)
     elif cmd.command in ("land", "land_all"):
         vids = _stop_vehicles(book, cmd, eff, now_s, "land")
         if cmd.command == "land_all":
@@ -250,6 +280,9 @@ def apply_operator(book: Book, command: object, eff: Effects, now_s: float) -> C
         target = cmd.job_id or cmd.vehicle_id or cmd.board_id or ""
         if cmd.command == "prioritize":  # the new value, for the record
             target += f" to {cmd.priority}"
+        phrase = book.jobs[cmd.job_id].phrase if cmd.job_id in book.jobs else None
+        if cmd.command in ("approve", "reject") and phrase is not None:  # the whole phrase
+            target += f" (phrase {phrase.phrase_id}, {phrase.size} characters)"
         book.event(
             eff,
             now_s,

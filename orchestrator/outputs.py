@@ -34,6 +34,7 @@ from orchestrator.store import JobStore, StoreError
 from orchestrator.written import with_written
 from showfile import Show
 from showfile.checks import cannot_write
+from vehicles.batteries import kind_battery
 
 log = logging.getLogger(__name__)
 
@@ -60,6 +61,10 @@ def core_config(show: Show) -> CoreConfig:
         eta=EtaModel(time_scale=show.time_scale),
         boards=tuple((b.id, BoardSheets(b.sheets, b.dry_s)) for b in show.boards),
         sheet_change_s=show.policy.sheet_change_s,
+        batteries=tuple((k, kind_battery(k)) for k in sorted({v.kind for v in show.vehicles})),
+        battery_reserve_fraction=show.battery.reserve_fraction,
+        battery_swap_s=show.battery.swap_s,
+        clock_offset_max_s=show.preflight.clock_offset_max_s,
     )
 
 

@@ -28,7 +28,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from bus.messages import AIRBORNE_STATES, Event, VehicleStatus
-from orchestrator import holders
+from orchestrator import battery_swaps, clock_offsets, holders
 from orchestrator.core_types import Effects
 from orchestrator.fleet import VehicleView
 from orchestrator.requeue import hand_back, requeue
@@ -86,6 +86,11 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
     view.preflight = status.preflight  # a vehicle whose checks pass may take a job at once
     view.status_at_s = view.last_seen_s = view.heard_at_s = now_s
     view.message = status.message
+    view.battery_fraction = status.battery_fraction
+    view.battery_minutes_left = status.battery_minutes_left
+    view.link_loss_fraction, view.flight_s_today = status.link_loss_fraction, status.flight_s_today
+    changed = battery_swaps.heard(book, view) or changed
+    clock_offsets.heard(book, eff, view, status.clock_offset_ms, now_s)
     if status.incarnation != view.incarnation:
         if view.incarnation is not None:
             view.restarted_at_s = now_s

@@ -74,21 +74,25 @@ class SubmitQuotas:
         self._clients = SlidingWindowLimiter(self.policy.client_per_minute, WINDOW_S)
         self._kiosk = SlidingWindowLimiter(self.policy.kiosk_per_minute, WINDOW_S)
 
-    def refusal(self, identity: str, waiting: int, now_s: float) -> ErrorInfo | None:
-        """Count a submission of ``identity`` at ``now_s`` [s] (``waiting``: its jobs waiting
-        now); None to take it, else why not, with when to retry."""
+    def refusal(
+        self, identity: str, waiting: int, now_s: float, *, count: int = 1
+    ) -> ErrorInfo | None:
+        """Count a submission of ``count`` jobs (a phrase counts as its characters) of
+        ``identity`` at ``now_s`` [s] (``waiting``: its jobs waiting now); None to take it, else
+        why not, with when to retry."""
         if is_operator(identity):
             return None
         limit = self.policy.kiosk_per_minute if identity == KIOSK else self.policy.client_per_minute
         limiter = self._kiosk if identity == KIOSK else self._clients
-        wait_s = limiter.hit(identity, now_s)
+        waits_s = [limiter.hit(identity, now_s) for _ in range(max(1, count))]
+        wait_s = next((w for w in waits_s if w is not None), None)
         if wait_s is not None:
             return ErrorInfo(
                 code="rate_limited",
                 message=f"{identity} may submit {limit} a minute: "
                 f"try again in {math.ceil(wait_s)} s",
             )
-        if identity != KIOSK and waiting >= self.policy.client_max_waiting:
+        if identity != KIOSK and waiting + max(1, count) > self.policy.client_max_waiting:
             return ErrorInfo(
                 code="rate_limited",
                 message=f"{identity} has {waiting} jobs waiting, the most a client may: "

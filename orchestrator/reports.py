@@ -12,7 +12,10 @@ carries the planned writing (a *ready* report: the brush goes down once it is ac
 receipt is stored as the start of the write fence (``Job.writing_since_s``);
 ``failed`` is acknowledged and ignored, except a job written in full (``progress`` 1: out of the
 bounds, or unmeasured after an agent restart, ``vehicle_agent/results.py``) that still waits for
-that vehicle: it fails, and is not written again. A ``failed`` report with ``retry_after_s``
+that vehicle: it fails, and is not written again (a character of a phrase that has begun, not
+written in full, goes back to the queue alone instead while it has tries left:
+``orchestrator/phrases.py``, and a *ready* report of one whose phrase is not all ready is
+answered ``phrase_waits``). A ``failed`` report with ``retry_after_s``
 hands the job back to the queue instead of failing it, and so does a ``plan_failed`` one while a
 vehicle of another kind may still write the job (the vehicle's kind cannot write it: a width
 outside the sponge's range...); it then waits for such a vehicle.
@@ -23,7 +26,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from bus.messages import AgentReport, CommandReply, ErrorInfo, VehicleCommand
-from orchestrator import holders
+from orchestrator import holders, phrases
 from orchestrator.core_types import Effects
 from orchestrator.jobs import Job, transition, update
 from orchestrator.requeue import hand_back, requeue
@@ -31,6 +34,9 @@ from orchestrator.written import split_written
 
 PLAN_FAILED = "plan_failed"
 """Error code of a job the vehicle's planner refused (``planner.errors.PlannerError.code``)."""
+PHRASE_WAITS = "phrase_waits"
+"""Error code of a *ready* report not acknowledged yet: the other characters of its phrase are
+not all ready (``orchestrator/phrases.py``); the vehicle holds at the start and asks again."""
 UNCOUNTED = frozenset({"takeoff_refused", PLAN_FAILED})
 """Handed back without counting an attempt: the vehicle could not start (pre-arm checks), or its
 kind cannot write the job and another kind may."""
@@ -65,6 +71,9 @@ def apply_report(book: Book, rep: AgentReport, eff: Effects, now_s: float) -> Co
         return _failed(book, job, rep, eff, now_s)
     if rep.event == "holding":
         book.vehicles[rep.vehicle_id].mismatch_since_s = None
+        if rep.planned_duration_s is not None and not phrases.may_write(book, job, now_s):
+            info = ErrorInfo(code=PHRASE_WAITS, message=phrases.waiting_for(book, job))
+            return CommandReply(ok=False, message=info.message, error=info)
         if rep.planned_duration_s is not None:
             _ready(book, job, rep, eff, now_s)
         return CommandReply(ok=True, message="still yours")
@@ -132,7 +141,22 @@ def _failed(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) 
         and book.kinds.refuse(job.job_id, rep.vehicle_id, book.config.vehicles)
     ):
         return _handed_back(book, job, rep, eff, now_s, 0.0)
+    if _rewrite_alone(book, job, rep):
+        requeue(book, eff, job, now_s, _failure(job, rep) + "; written again alone", lost=False)
+        book.assign(eff, now_s)
+        return CommandReply(ok=True, message="the character goes back to the queue alone")
     return _fail(book, job, rep, eff, now_s, _failure(job, rep))
+
+
+def _rewrite_alone(book: Book, job: Job, rep: AgentReport) -> bool:
+    """A character of a phrase that has begun failed before it was written in full, with tries
+    left: it is written again alone on its board (the others stay as they are)."""
+    return (
+        job.phrase is not None
+        and rep.progress < 1.0
+        and job.counted_attempts < book.config.max_attempts
+        and not phrases.not_begun(book, job)
+    )
 
 
 def _failure(job: Job, rep: AgentReport) -> str:
@@ -167,7 +191,10 @@ def _handed_back(
 def _fail(
     book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float, message: str
 ) -> CommandReply:
-    book.put(eff, transition(job, "failed", now_s, error=rep.error))
+    metrics, written = split_written(rep.metrics)  # written out of its bounds: what it left
+    book.put(eff, transition(job, "failed", now_s, error=rep.error, metrics=metrics))
+    if written is not None:
+        eff.written[job.job_id] = written
     book.event(
         eff, now_s, "alert", "job_failed", message, vehicle_id=rep.vehicle_id, job_id=job.job_id
     )

@@ -10,13 +10,17 @@ could not take off, is of a kind that cannot write it, or is present and healthy
 names it: its lease ran out under load) does not count the attempt: under CPU overload or on a
 poor link, jobs with nothing wrong with them failed after three such give-ups. Those hand-backs
 are bounded apart, by ``CoreConfig.max_handbacks``, so that no job goes round for ever.
+
+A character of a phrase that has not begun takes the others dispatched with it back too; one
+whose phrase has begun is written again alone, on its board (``orchestrator/phrases.py``).
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from bus.messages import ErrorInfo
+from bus.messages import ErrorInfo, VehicleCommand
+from orchestrator import phrases
 from orchestrator.core_types import Effects
 from orchestrator.holders import hold_until_s, left_half_written
 from orchestrator.jobs import Job, transition, update
@@ -39,6 +43,8 @@ def requeue(
     hand-backs, :func:`hand_back`);
     ``wait_for_holder``: its vehicle was lost, and the job waits for it a while
     (``orchestrator/holders.py``)."""
+    together = phrases.not_begun(book, job)  # its phrase goes back with it, whoever held it
+    wait_for_holder = wait_for_holder and not together
     info = ErrorInfo(code="vehicle_lost" if lost else "requeued", message=reason)
     begun = job.state == "writing" or job.progress > 0 or job.writing_since_s is not None
     if begun and not wait_for_holder:  # a lost holder may be writing on: see holders.py
@@ -70,6 +76,7 @@ def requeue(
         assigned_at_s=None,
         holder_hold_until_s=until_s,
         writing_since_s=job.writing_since_s if until_s is not None else None,
+        rewrite_alone=job.rewrite_alone or (job.phrase is not None and not together),
     )
     book.put(eff, queued)
     book.event(
@@ -82,6 +89,19 @@ def requeue(
         job_id=job.job_id,
     )
     eff.fleet_changed = True
+    if together:
+        _with_its_phrase(book, eff, job, now_s)
+
+
+def _with_its_phrase(book: Book, eff: Effects, job: Job, now_s: float) -> None:
+    """A character of a phrase that has not begun went back to the queue: so do the others
+    dispatched with it (their vehicles told to stop), to be dispatched together again."""
+    for other in phrases.siblings(book, job):
+        if other.active and other.vehicle_id is not None:
+            stop = VehicleCommand(command="cancel", job_id=other.job_id)
+            eff.commands.append((other.vehicle_id, stop))
+            why = f"{job.label} of its phrase went back to the queue; they start together"
+            hand_back(book, eff, other, now_s, why)
 
 
 def hand_back(book: Book, eff: Effects, job: Job, now_s: float, reason: str) -> None:

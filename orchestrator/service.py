@@ -47,12 +47,13 @@ from bus.pubsub import (
     watch_liveliness,
     watch_router_link,
 )
-from bus.rpc import serve_async, serve_async_keyed
+from bus.rpc import serve, serve_async, serve_async_keyed
+from orchestrator.clock_offsets import clock_reply
 from orchestrator.disk_room import storage_full
-from orchestrator.operator import signed_by
+from orchestrator.operator import refused, signed_by
 from orchestrator.outputs import BookOutputs
 from orchestrator.quotas import OPERATOR, SubmitQuotas, quota_policy
-from orchestrator.submissions import SubmissionError, validate_submission
+from orchestrator.submissions import Accepted, SubmissionError, validate_submission
 from orchestrator.written import attach_written
 from showfile import Show
 
@@ -124,7 +125,9 @@ class OrchestratorService(BookOutputs):
         self._record(key + "#request", request)
         reply = self._repeated_submission(request)
         if reply is None:
-            refusal = self.quotas.refusal(identity, self.book.waiting_of(identity), self.clock())
+            count = len(request.text or "") if request.phrase else 1  # a phrase: its characters
+            waiting = self.book.waiting_of(identity)
+            refusal = self.quotas.refusal(identity, waiting, self.clock(), count=count)
             if refusal is None:
                 reply = self._take_submission(request, identity)
             else:  # debug: a flood must not flood the log too
@@ -142,6 +145,8 @@ class OrchestratorService(BookOutputs):
             accepted = validate_submission(request, self.show)
         except SubmissionError as exc:
             return SubmitReply(ok=False, error=exc.info)
+        if accepted.characters:
+            return self._take_phrase(request, accepted, identity)
         job_id = new_job_id()
         reply, eff = self.book.submit(
             job_id,
@@ -155,6 +160,21 @@ class OrchestratorService(BookOutputs):
         if reply.ok:
             key = f"text:{request.text}" if request.text is not None else None
             self._spawn(self._refine_estimate(job_id, accepted.glyph, key))
+        return reply
+
+    def _take_phrase(
+        self, request: SubmitRequest, accepted: Accepted, identity: str
+    ) -> SubmitReply:
+        """A phrase: one job per character (``orchestrator/phrases.py``), stored first."""
+        job_ids = [new_job_id() for _ in accepted.characters]
+        estimates_s = [c.estimate_s for c in accepted.characters]
+        reply, eff = self.book.submit_phrase(
+            job_ids, request, estimates_s, now_s=self.clock(), submitted_by=identity
+        )
+        self.apply(eff)
+        if reply.ok and reply.job_id == job_ids[0]:
+            for job_id, char in zip(job_ids, accepted.characters, strict=True):
+                self._spawn(self._refine_estimate(job_id, char.glyph, f"text:{char.label}"))
         return reply
 
     def _repeated_submission(self, request: SubmitRequest) -> SubmitReply | None:
@@ -193,8 +213,10 @@ class OrchestratorService(BookOutputs):
         self._record(key + "#request", command)
         who = signed_by(identity, command.operator)
         command = msgspec.structs.replace(command, operator=who)
-        reply, eff = self.book.operator(command, self.clock())
-        self.apply(eff)
+        reply = refused(identity, command)
+        if reply is None:
+            reply, eff = self.book.operator(command, self.clock())
+            self.apply(eff)
         log.info("%s %s -> %s", command.operator, command.command, reply.message)
         self._record(key + "#reply", reply)
         return reply
@@ -354,6 +376,7 @@ class OrchestratorService(BookOutputs):
                 for vehicle in self.show.vehicles
             ),
             serve_async(s, keys.snapshot, None, self.on_snapshot),
+            serve(s, keys.clock, None, lambda _: clock_reply(self.clock)),  # on Zenoh's thread
             declare_token(s, keys.orchestrator_alive),
         ]
         self._spawn(self._follow_presence(presence))

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import msgspec
 import numpy as np
 
 from bus.messages import ErrorInfo, SubmitRequest
@@ -44,6 +45,9 @@ class Accepted:
     """What will be written, in its source units."""
     estimate_s: float
     """Rough writing duration in sim seconds (before the planner has run)."""
+    characters: tuple[Accepted, ...] = ()
+    """A phrase's characters, each accepted as a job of its own, in reading order (empty: not a
+    phrase)."""
 
 
 def _planner_error(exc: PlannerError, code: str, field_prefix: str) -> SubmissionError:
@@ -91,11 +95,37 @@ def validate_submission(request: SubmitRequest, show: Show) -> Accepted:
                 code="invalid", message=f"priority must be in {low}..{high}", field="priority"
             )
         )
+    if request.phrase:
+        return _phrase(request, show)
     glyph = _glyph(request)
     _check_fits(glyph, request, show)
     text = request.text
     label = text.strip() if text is not None else drawing_label(len(glyph.strokes))
     return Accepted(label=label[:80], glyph=glyph, estimate_s=rough_duration_s(glyph, show))
+
+
+def _phrase(request: SubmitRequest, show: Show) -> Accepted:
+    """A phrase: typed characters, no spaces, at most one per board of the row; each a job."""
+    text = request.text or ""
+    row = len(show.boards)
+    if request.strokes is not None or not text:
+        why = "a phrase is typed text: give text, not strokes"
+    elif any(char.isspace() for char in text):
+        why = "a phrase has no spaces: one character per board"
+    elif len(text) > row:
+        why = f"a phrase of {len(text)} characters is longer than the row: at most {row}"
+    else:
+        why = None
+    if why is not None:
+        raise SubmissionError(ErrorInfo(code="invalid_text", message=why, field="text"))
+    characters = []
+    for char in text:
+        one = msgspec.structs.replace(request, text=char, phrase=False)
+        characters.append(validate_submission(one, show))
+    estimate_s = max(c.estimate_s for c in characters)
+    return Accepted(
+        label=text, glyph=_glyph(request), estimate_s=estimate_s, characters=tuple(characters)
+    )
 
 
 def _check_fits(glyph: Glyph, request: SubmitRequest, show: Show) -> None:

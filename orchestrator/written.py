@@ -37,9 +37,10 @@ def attach_written(
     lookup: Callable[[Iterable[str]], Mapping[str, WrittenInk]],
     budget_bytes: int,
 ) -> ShowSnapshot:
-    """``snapshot`` with the ink pictures of its newest done jobs, newest first, while their
-    JSON fits ``budget_bytes``; ``lookup``: job ids -> stored pictures (e.g. the job store)."""
-    done = [j.job_id for j in reversed(snapshot.jobs) if j.state == "done"]
+    """``snapshot`` with the ink pictures of its newest done jobs (and failed ones: written out
+    of their bounds), newest first, while their JSON fits ``budget_bytes``; ``lookup``: job
+    ids -> stored pictures (e.g. the job store)."""
+    done = [j.job_id for j in reversed(snapshot.jobs) if j.state in ("done", "failed")]
     if not done or budget_bytes <= 0:
         return snapshot
     found = lookup(done)

@@ -22,7 +22,14 @@ from showfile import paths
 from showfile.model_base import ID_PATTERN, Identifier, ShowModel
 from showfile.safety import SafetySettings
 from showfile.security import RESERVED_IDS, SecuritySettings
-from showfile.services import KioskSettings, PolicySettings, StorageSettings, ZenohSettings
+from showfile.services import (
+    BatterySettings,
+    KioskSettings,
+    PolicySettings,
+    PreflightSettings,
+    StorageSettings,
+    ZenohSettings,
+)
 from vehicles import DEFAULT_KIND, ROOMS, UnknownKindError
 from vehicles.hexarotor_sponge.show_section import HexarotorKindSettings
 from vehicles.omni_wheel.show_section import OmniWheelSettings
@@ -298,6 +305,10 @@ class Show(ShowModel):
     """Moderation and queue policy."""
     kiosk: KioskSettings = Field(default_factory=KioskSettings)
     """Public kiosk settings."""
+    battery: BatterySettings = Field(default_factory=BatterySettings)
+    """The reserve every job must leave in a vehicle's battery, and the crew's swap time."""
+    preflight: PreflightSettings = Field(default_factory=PreflightSettings)
+    """The bounds of the agent's checks before a vehicle takes jobs (link, mocap, clock)."""
     boards: tuple[Board, ...] = Field(min_length=1)
     """Writing boards."""
     vehicles: tuple[Vehicle, ...] = Field(min_length=1)

@@ -230,3 +230,42 @@ class KioskSettings(ShowModel):
                 f"max_points"
             )
         return self
+
+
+class BatterySettings(ShowModel):
+    """How the orchestrator plans around batteries (``orchestrator/batteries.py``)."""
+
+    reserve_fraction: float = Field(default=0.20, ge=0.0, lt=1.0)
+    """Charge a vehicle must still hold after writing a job, returning and landing, over its
+    pack's rated capacity; below it the vehicle is sent for a swap. 0.20: the LiPo users' "80 %
+    rule" (a pack is not drawn below a fifth of its charge, for its cells' life), which also
+    keeps every landing above PX4's low-battery warning (``BAT_LOW_THR`` 0.15 by default)."""
+    swap_s: float = Field(default=60.0, gt=0.0)
+    """Show seconds the crew is expected to take to swap a battery, from the vehicle's wait to
+    their confirmation, for the ETAs until it has swapped some (then the median of its last ten,
+    as for sheets). Not from the papers: a first guess (walk to the vehicle, unplug, swap, plug in,
+    step back), replaced by the day's own pace."""
+
+
+class PreflightSettings(ShowModel):
+    """The agent's preflight before a vehicle takes jobs (``vehicle_agent/preflight.py``); the
+    battery's bound is ``battery.reserve_fraction``."""
+
+    link_age_max_s: float = Field(default=2.0, gt=0.0)
+    """Oldest autopilot heartbeat in [s] a vehicle may take off on. MAVLink's heartbeat is 1 Hz
+    and a ground station takes a link as lost after four or five missed
+    (mavlink.io/en/services/heartbeat.html); 2 s is one missed, enough to wait before a take-off
+    and below the agent's own lost-link fault (``heartbeat_timeout_s``, 3 s)."""
+    link_loss_max_fraction: float = Field(default=0.05, ge=0.0, le=1.0)
+    """Most autopilot messages lost (counted from their MAVLink sequence numbers) over the
+    recent window. A healthy IP link loses under 1e-3 (ITU-T Y.1541's objective for its
+    classes 0-4) and a wired serial link none: 5 % is a link that is failing, not a noisy one."""
+    mocap_age_max_s: float = Field(default=0.2, gt=0.0)
+    """Oldest mocap pose in [s] forwarded to the autopilot (a vehicle with ``mavlink_mocap``):
+    half of PX4 EKF2's vision timeout (2 x ``EV_MAX_INTERVAL``, 0.4 s) and under ArduPilot's
+    0.3 s, so the vehicle is held before its estimator drops its position source."""
+    clock_offset_max_s: float = Field(default=0.05, gt=0.0)
+    """Largest offset in [s] of the agent's clock from the orchestrator's, measured by a
+    request and its reply. NTP keeps hosts on a LAN within a millisecond (RFC 5905, ntp.org)
+    and PTP within microseconds: 50 ms is a clock that is not synchronised at all, and one
+    telemetry period (20 Hz), so recordings and the event log still line up within a sample."""

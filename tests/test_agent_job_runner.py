@@ -62,6 +62,8 @@ class Run:
     ticks: int = 0
     reports: list[AgentReport] = field(default_factory=list)
     telemetry: list[Telemetry] = field(default_factory=list)
+    telemetry_phases: list[str] = field(default_factory=list)
+    """The runner's phase when each telemetry message was made."""
     finished: list[JobTrace] = field(default_factory=list)
     states: list[str] = field(default_factory=list)
     positions: list[Vec3] = field(default_factory=list)
@@ -95,6 +97,7 @@ class Run:
         self.reports.extend(actions.reports)
         if actions.telemetry is not None:
             self.telemetry.append(actions.telemetry)
+            self.telemetry_phases.append(self.runner.phase)
         if actions.finished is not None:
             self.finished.append(actions.finished)
         if not self.states or self.states[-1] != self.runner.state:
@@ -235,8 +238,8 @@ def test_pre_arm_checks_failing_are_in_the_status_with_one_event_as_they_fail_an
         if k == 100:
             assert runner.status().preflight == why
     assert events == [
-        ("warning", f"uav1 waiting for its pre-arm checks: {why}"),
-        ("info", "uav1 pre-arm checks pass after 34 s"),
+        ("warning", f"uav1 held by its preflight: {why}"),
+        ("info", "uav1 preflight passes after 34 s"),
     ]
     assert runner.status().preflight == ""
 
@@ -349,6 +352,25 @@ def test_telemetry_comes_at_its_period() -> None:
     t = [m.t_s for m in run.telemetry]
     assert np.diff(t) == pytest.approx(np.full(39, 0.05))
     assert {m.job_id for m in run.telemetry} == {"j1"}
+
+
+class ShortClimber(KinematicVehicle):
+    """A vehicle whose take-off ends 8 cm short of the hover height (PX4 on its own climb ramp
+    trails it, and the take-off counts as complete within ``takeoff_tolerance_m``)."""
+
+    def takeoff(self, hover_m_enu: Vec3) -> None:
+        super().takeoff((hover_m_enu[0], hover_m_enu[1], hover_m_enu[2] - 0.08))
+
+
+def test_the_transit_starts_where_the_climb_left_the_vehicle() -> None:
+    """Not at the hover point it was climbing to: a reference 8 cm away at the first tracked
+    tick was an orchestrator alert (0.05 m) at every PX4 take-off."""
+    run = Run(vehicle=ShortClimber(HOME, dt_s=DT))
+    run.assign()
+    run.until(lambda: "land" in run.commands and run.runner.phase == "ground")
+    told = list(zip(run.telemetry_phases, run.telemetry, strict=True))
+    transit = [m.tracking_error_m for phase, m in told if phase == "transit"]
+    assert transit and max(transit) < 0.01
 
 
 def test_status_follows_the_state() -> None:

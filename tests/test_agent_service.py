@@ -332,11 +332,11 @@ def test_pre_arm_checks_are_published_in_the_status_with_an_event_as_they_fail_a
             await asyncio.sleep(0.3)
             backend.preflight = None
             await wait_for(lambda: orch.statuses[-1].preflight == "")  # published on change
-            await wait_for(lambda: any("pass after" in e.message for e in events))
+            await wait_for(lambda: any("passes after" in e.message for e in events))
             said = [(e.level, e.message) for e in events if e.kind == "preflight"]
-            assert said[0] == ("warning", f"uav1 waiting for its pre-arm checks: {why}")
+            assert said[0] == ("warning", f"uav1 held by its preflight: {why}")
             assert said[1][0] == "info" and len(said) == 2  # one each, not one per tick
-            assert said[1][1].startswith("uav1 pre-arm checks pass after ")
+            assert said[1][1].startswith("uav1 preflight passes after ")
 
     asyncio.run(scenario())
 

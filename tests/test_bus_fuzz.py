@@ -2,8 +2,8 @@
 
 A solo show runs as in ``skyquill up`` (router in this process, the orchestrator and the agent as
 supervised child processes). A seeded generator sends 10,000+ messages, concurrently in batches,
-to every request key of the orchestrator (submit, command, report/<vehicle>, snapshot) and of the
-agent (vehicles/<id>/command, vehicles/<id>/assign): valid-looking requests with mutations
+to every request key of the orchestrator (submit, command, report/<vehicle>, snapshot, clock) and of
+the agent (vehicles/<id>/command, vehicles/<id>/assign): valid-looking requests with mutations
 (unknown fields, wrong types, missing fields, huge and non-finite numbers, overlong strings, deep
 nesting, invalid UTF-8, out-of-range stroke coordinates), byte-level damage, random bytes and a
 few oversized payloads. Every message must be answered (a malformed one with an error), no
@@ -119,6 +119,7 @@ def targets(show: Show, keys: Any) -> list[Target]:
         Target("command", keys.command, OperatorCommand, commands, command_ok),
         Target("report", keys.report(vid), AgentReport, [report], lambda _: True, vid),
         Target("snapshot", keys.snapshot, None, [{}, {"v": 1}], lambda _: True, zenoh_errors=True),
+        Target("clock", keys.clock, None, [{}, {"v": 1}], lambda _: True, vid, zenoh_errors=True),
         Target("agent command", keys.vehicle_command(vid), VehicleCommand, vehicle, only_cancel),
         Target(
             "agent assign",
@@ -281,7 +282,7 @@ def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveShow]:
 def generate(show: Show, keys: Any) -> list[Message]:
     fuzzer = Fuzzer(SEED)
     all_targets = targets(show, keys)
-    weights = [30, 20, 15, 5, 15, 15]
+    weights = [30, 20, 15, 5, 5, 15, 15]
     messages: list[Message] = []
     while len(messages) < MESSAGES:
         target = fuzzer.rng.choices(all_targets, weights)[0]

@@ -296,4 +296,5 @@ def test_messages_encode_to_plain_json() -> None:
         "field": None,
         "stroke_index": None,
         "point_index": None,
+        "reason": None,
     }

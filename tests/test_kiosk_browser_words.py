@@ -17,6 +17,7 @@ import time
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import msgspec
 import numpy as np
@@ -36,9 +37,9 @@ from test_kiosk_browser import (
 from test_kiosk_support import done_metrics
 
 from bus.keys import ShowKeys
-from bus.session import free_tcp_endpoint, open_session
+from bus.session import ZenohSettings, free_tcp_endpoint, open_session
 from kiosk.service import serving
-from kiosk.settings import settings_from_show
+from kiosk.settings import KioskSettings, settings_from_show
 from showfile import load_show
 from vehicle_agent.written_ink import ink_pixels, written_ink
 
@@ -54,6 +55,8 @@ __all__ = ["browser"]  # the browser fixture, shared
 PHONE = {"viewport": {"width": 320, "height": 568}, "is_mobile": True, "has_touch": True}
 TABLET = {"viewport": {"width": 1024, "height": 768}, "has_touch": True}
 SHORT_FLIGHT_S = 5.0
+HAN_TOUCHING_LATIN = re.compile(r"[\u3400-\u9fff][A-Za-z0-9]|[A-Za-z0-9][\u3400-\u9fff]")
+"""A Han character run into a Latin letter or digit (Chinese sets a space between them)."""
 PLAN_WAIT_MS = 60_000
 """Upper bound for planning a long drawing on a loaded machine; never a timing assertion."""
 
@@ -63,6 +66,9 @@ class Shows:
     show: Show
     short_url: str
     """A kiosk of the same show allowing :data:`SHORT_FLIGHT_S` per character."""
+    settings: KioskSettings
+    """The first kiosk's settings (to serve another one on the show)."""
+    zenoh: ZenohSettings
 
 
 @pytest.fixture(scope="module")
@@ -88,7 +94,9 @@ def shows(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Shows]:
                 serving(settings, loaded.zenoh, role="client") as server,
                 serving(short, loaded.zenoh, role="client") as short_server,
             ):
-                yield Shows(Show(server.url, bus, keys, proc), short_server.url)
+                yield Shows(
+                    Show(server.url, bus, keys, proc), short_server.url, settings, loaded.zenoh
+                )
     finally:
         proc.terminate()
         try:
@@ -137,15 +145,16 @@ def open_page(browser: object, url: str, locale: str, device: dict[str, object])
     return page
 
 
-def hand_in_typed(page: object, text: str) -> str:
-    """Type ``text``, preview it, hand it in; the job id its status page shows."""
-    page.tap("#tab-type")  # type: ignore[attr-defined]
-    page.fill("#text", text)  # type: ignore[attr-defined]
-    page.tap("#preview")  # type: ignore[attr-defined]
-    page.wait_for_selector("#confirm:not([hidden])", timeout=UI_WAIT_MS)  # type: ignore[attr-defined]
-    page.tap("#submit")  # type: ignore[attr-defined]
-    page.wait_for_selector("#status:not([hidden])", timeout=UI_WAIT_MS)  # type: ignore[attr-defined]
-    return str(page.inner_text("#job-id")).strip()  # type: ignore[attr-defined]
+def hand_in_typed(page: Any, text: str) -> str:
+    """Type ``text``, preview it, hand it in; its job id (the API's: the page shows its code)."""
+    page.tap("#tab-type")
+    page.fill("#text", text)
+    page.tap("#preview")
+    page.wait_for_selector("#confirm:not([hidden])", timeout=UI_WAIT_MS)
+    with page.expect_response("**/api/submit") as submitted:
+        page.tap("#submit")
+    page.wait_for_selector("#status:not([hidden])", timeout=UI_WAIT_MS)
+    return str(submitted.value.json()["job_id"])
 
 
 def lang(page: object) -> str:
@@ -251,6 +260,8 @@ def test_the_finished_page_shows_the_ink_the_drone_left(
     if locale == "zh-CN":
         assert "左起第 1 块板" in facts and "1.2 厘米" in facts and "80%" in facts
         assert "写好了" in page.inner_text("#status-text")
+        assert "由 1 号无人机" in page.inner_text("#status-text")  # a space, as Chinese sets it
+        assert not HAN_TOUCHING_LATIN.search(page.inner_text("#status-text") + facts)
     else:
         assert "board 1 from the left" in facts and "1.2 cm" in facts and "actually left" in facts
     page.locator("#result").scroll_into_view_if_needed()
@@ -277,10 +288,12 @@ def test_a_drawing_longer_than_the_flight_limit_is_refused_before_it_is_sent(
     message = page.locator("#message")
     # the kiosk plans the whole drawing before it can say (slow on a busy machine)
     message.filter(has_text="5 seconds").wait_for(timeout=PLAN_WAIT_MS)
-    assert "longer than" in message.inner_text() and page.is_hidden("#confirm")
+    # how long it would take against the show's limit, never "cannot fly this one"
+    took = re.search(r"take the drone about (\d+) seconds", message.inner_text())
+    assert took and int(took[1]) > SHORT_FLIGHT_S and page.is_hidden("#confirm")
     page.screenshot(path=str(SHOTS_DIR / f"too-long-{device['viewport']['width']}.png"))
     page.tap("button.lang[data-lang='zh-Hans']")
-    assert "5 秒" in message.inner_text()  # the reason, in the other language too
+    assert f"大约需要 {took[1]} 秒" in message.inner_text() and "5 秒" in message.inner_text()
     assert sent == [] and len(shows.show.snapshot().jobs) == jobs_before  # nothing was sent
     assert page.errors == []
     page.context.close()

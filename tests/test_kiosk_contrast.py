@@ -1,7 +1,9 @@
 """WCAG AA contrast of the kiosk page's colours, computed from kiosk.css itself.
 
 Text needs 4.5:1 against its background; the drawing area's border and other parts of controls
-need 3:1 (WCAG 2.1, 1.4.3 and 1.4.11). The ratio follows the WCAG definition of relative luminance.
+need 3:1 (WCAG 2.1, 1.4.3 and 1.4.11), and so does the focus ring against what surrounds it
+(WCAG 2.2, 2.4.13: the page behind the header's buttons, the panels, white fields). The ratio
+follows the WCAG definition of relative luminance.
 """
 
 from __future__ import annotations
@@ -52,6 +54,9 @@ def test_contrast_formula_matches_known_values() -> None:
         ("border", "white", 3.0),  # drawing area, inputs, secondary buttons
         ("border", "paper", 3.0),
         ("air", "white", 3.0),  # dashed air moves of the path pictures
+        ("focus", "page", 3.0),  # the focus ring: 4.00 (was #3a86ff: 2.95)
+        ("focus", "paper", 3.0),  # 4.52
+        ("focus", "white", 3.0),  # 4.71
     ],
 )
 def test_colour_pairs_meet_wcag_aa(fore: str, back: str, minimum: float) -> None:
@@ -70,3 +75,6 @@ def test_the_rules_use_the_checked_colours() -> None:
     js = (Path(__file__).resolve().parents[1] / "kiosk" / "static" / "pictures.js").read_text()
     assert _variables()["air"] in js and _variables()["ink"] in js  # the canvas uses them too
     assert "--line" not in CSS  # the old low-contrast border colour is gone
+    outlines = re.findall(r"outline:\s*([^;]+);", CSS)
+    assert "3px solid var(--focus)" in rule(":focus-visible {")
+    assert outlines and all(o == "none" or "var(--focus)" in o for o in outlines), outlines

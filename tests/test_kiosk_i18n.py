@@ -16,7 +16,7 @@ import pytest
 
 STATIC = Path(__file__).resolve().parents[1] / "kiosk" / "static"
 LANGS = ("en", "zh-Hans")
-SCRIPTS = ("i18n.js", "pictures.js", "widths.js", "status.js", "kiosk.js")
+SCRIPTS = ("i18n.js", "pictures.js", "widths.js", "status.js", "phrase.js", "kiosk.js")
 WORDED_ATTRS = ("aria-label", "placeholder", "alt", "title")
 CJK = re.compile(r"[\u3400-\u9fff]")
 WORDS = re.compile(r"[A-Za-z]{2,}[,.!?:;'’]? [A-Za-z]{2,}")
@@ -93,7 +93,7 @@ def test_the_scripts_say_nothing_outside_the_catalogue(name: str) -> None:
     assert sentences == []
     assert [s for s in literals if CJK.search(s)] == []
     keys = set(catalogue("en"))
-    named = {s for s in literals if re.fullmatch(r"(st|err|acc|dur|pic|why)_[a-z_]+", s)}
+    named = {s for s in literals if re.fullmatch(r"(st|err|acc|dur|pic|why|ph|phrase)_[a-z_]+", s)}
     assert named <= keys, named - keys
 
 

@@ -37,7 +37,7 @@ from vehicle_agent.backends.mavlink_errors import (
 )
 from vehicle_agent.backends.mavlink_mocap import MocapPose
 from vehicle_agent.backends.mavlink_settings import MavlinkSettings, settings_from_show
-from vehicle_agent.backends.mavlink_state import ARDUPILOT, PX4
+from vehicle_agent.backends.mavlink_state import ARDUPILOT, PX4, PX4_OFFBOARD_ON_GROUND
 from vehicle_agent.motion import plan_move
 
 pytestmark = pytest.mark.timeout(60)
@@ -63,7 +63,11 @@ def vehicle(**overrides: Any) -> Iterator[MavsimServer]:
 
 
 class Driver:
-    """The agent's fixed-rate loop, reduced to what the backend sees."""
+    """The agent's fixed-rate loop, reduced to what the backend sees: paced against the wall
+    clock (x ``SCALE``) and, as the agent does for a real vehicle (``TickClock``'s
+    ``skip_when_late``), jumping ahead after a stall, e.g. an awaited take-off, rather than
+    running the missed ticks back to back (agent time seconds ahead of the autopilot's
+    heartbeats: a lost link that is the harness's own, seen on a loaded machine)."""
 
     def __init__(self, backend: MavlinkBackend) -> None:
         self.backend = backend
@@ -76,6 +80,8 @@ class Driver:
         return EPOCH_S + self.k * self.dt
 
     async def tick(self, setpoint: Setpoint | None = None) -> VehicleSnapshot:
+        due = math.floor((time.monotonic() - self.t0) * SCALE / self.dt)
+        self.k = max(self.k, due - 1)  # late by more than a tick: skip to now
         snapshot = await self.backend.tick(setpoint, self.now)
         self.k += 1
         await asyncio.sleep(max(0.0, self.t0 + self.k * self.dt / SCALE - time.monotonic()))
@@ -186,6 +192,26 @@ def test_a_vehicle_waits_out_its_pre_arm_checks_then_takes_off(autopilot: str, s
         asyncio.run(scenario(server))
 
 
+def test_px4_found_in_offboard_on_the_ground_is_put_in_hold_and_then_judged() -> None:
+    """A PX4 left disarmed in OFFBOARD (an earlier agent, a refused arming) shows its pre-arm
+    bit clear whatever its checks say: not ready, said so, until the agent has it in Hold."""
+
+    async def scenario(server: MavsimServer) -> None:
+        ap = server.endpoints[0].autopilot
+        ap.mode = ap.chosen_mode = CopterMode.GUIDED  # OFFBOARD, with no stream
+        async with connected(server) as (backend, driver):
+            first = await driver.until(lambda s: s.autopilot_mode is not None, 2.0)
+            assert first.autopilot_mode == "OFFBOARD"
+            assert first.preflight == PX4_OFFBOARD_ON_GROUND and first.mode == "idle"
+            ready = await driver.until(lambda s: s.preflight is None, 4.0)
+            assert ready.autopilot_mode == "AUTO.LOITER" and ap.mode == CopterMode.LOITER
+            await airborne(backend, driver)
+            assert ap.armed and ap.mode == CopterMode.GUIDED
+
+    with vehicle(autopilot="px4", guided_timeout_s=1.0) as server:
+        asyncio.run(scenario(server))
+
+
 def test_take_off_follow_a_move_and_land_over_udp() -> None:
     async def scenario(server: MavsimServer) -> None:
         ap = server.endpoints[0].autopilot
@@ -270,8 +296,15 @@ def test_px4_offboard_take_off_fly_land_and_offboard_loss() -> None:
             await driver.until(lambda s: math.dist(s.position_m_enu, goal) < 0.02, 4.0,
                                lambda _t: Setpoint(goal))  # fmt: skip
             await backend.land()
-            landed = await driver.until(lambda s: s.mode == "idle", 6.0)
+            seen: list[VehicleSnapshot] = []
+            landed = await driver.until(lambda s: seen.append(s) or s.mode == "idle", 9.0)
             assert math.dist(landed.position_m_enu[:2], goal[:2]) < 0.03 and not landed.armed
+            # PX4 shows OFFBOARD again once disarmed; the landing ends when the agent has it in
+            # Hold, where its pre-arm bit says what its checks say (in OFFBOARD it stays clear:
+            # no stream), and no pre-arm state is told before
+            assert landed.autopilot_mode == "AUTO.LOITER" and landed.preflight is None
+            assert "OFFBOARD" in {s.autopilot_mode for s in seen if not s.armed}
+            assert all(s.preflight is None for s in seen)
             await airborne(backend, driver)
             driver.pause(1.5)
             snapshot = await driver.tick(Setpoint(HOVER))

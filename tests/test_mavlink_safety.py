@@ -214,8 +214,9 @@ async def write_jobs(
 
 @pytest.mark.slow
 def test_a_px4_landing_is_not_a_takeover_and_the_next_job_flies() -> None:
-    """PX4 disarms after AUTO.LAND and reports OFFBOARD again in the same heartbeat: two jobs in
-    a row without a fault, the mode changes in the events."""
+    """PX4 disarms after AUTO.LAND and reports OFFBOARD again in the same heartbeat, where its
+    pre-arm bit says nothing: the agent puts it in Hold. Two jobs in a row without a fault, the
+    mode changes in the events."""
     show = parse_show(SHOW.format(port=free_udp_port()))
     # landings and the next job, not PX4's tune: the paper's stiff loop (PX4's default MPC gains
     # leave 一 at IoU 0.08, below the show's writing bound)
@@ -226,8 +227,9 @@ def test_a_px4_landing_is_not_a_takeover_and_the_next_job_flies() -> None:
     assert isinstance(backend, MavlinkBackend)
     with MavsimServer(configs, time_scale=SCALE) as server:
         results, events = asyncio.run(write_jobs(backend, setup, ["一", "一"], SCALE))
-        assert server.endpoints[0].autopilot.mode == CopterMode.GUIDED  # OFFBOARD again
+        assert server.endpoints[0].autopilot.mode == CopterMode.LOITER  # Hold
     assert [r.event for r in results] == ["done", "done"], results
     modes = [e.message for e in events if e.kind == "vehicle_mode"]
     assert modes.count("mav1 autopilot mode AUTO.LAND -> OFFBOARD") == 2, modes
+    assert modes.count("mav1 autopilot mode OFFBOARD -> AUTO.LOITER") == 2, modes
     assert not [e for e in events if e.kind == "vehicle_fault"]

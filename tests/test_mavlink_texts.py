@@ -12,6 +12,7 @@ from vehicle_agent.backends.mavlink_state import (
     MAV_SYS_STATUS_PREARM_CHECK,
     PREARM_UNSAID,
     PX4,
+    PX4_OFFBOARD_ON_GROUND,
     STATUSTEXT_CHARS,
     STATUSTEXT_JOIN_WAIT_S,
     LinkState,
@@ -78,6 +79,29 @@ def test_a_text_in_two_chunks_is_handed_on_once_whole() -> None:
     assert state.take_texts() == [(WARNING, PX4_DENIAL)]
 
 
+def test_px4s_first_text_of_a_link_joins_although_its_id_is_0() -> None:
+    """PX4 numbers texts per link from 0: its first one, if chunked, has id 0 (the one that was
+    seen split as "...health failures firs" and "t")."""
+    state, _ = connected(mavlink.MAV_AUTOPILOT_PX4)
+    first, last = chunks(PX4_DENIAL, 0)
+    assert [state.absorb(first), state.absorb(last)] == ["", "STATUSTEXT"]
+    assert state.take_texts() == [(WARNING, PX4_DENIAL)]
+
+
+def test_a_full_text_of_id_0_is_whole_from_ardupilot_and_waits_its_time_from_px4() -> None:
+    """ArduPilot numbers chunked texts from 1: its id 0 of exactly 50 characters is one text,
+    handed on at once (an arming refusal's reason is heard in time). From PX4 it may go on."""
+    full = "z" * STATUSTEXT_CHARS
+    ardupilot, _ = connected(mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA)
+    (message,) = chunks(full, 0)
+    assert ardupilot.absorb(message) == "STATUSTEXT"
+    assert ardupilot.take_texts() == [(WARNING, full)]
+    px4, clock = connected(mavlink.MAV_AUTOPILOT_PX4)
+    assert px4.absorb(message) == ""
+    clock.now_s += STATUSTEXT_JOIN_WAIT_S
+    assert px4.take_texts() == [(WARNING, full)]
+
+
 def test_a_cut_sequence_is_handed_on_as_far_as_it_came_when_the_next_text_begins() -> None:
     state, _ = connected(mavlink.MAV_AUTOPILOT_PX4)
     long_text = "x" * STATUSTEXT_CHARS + "y" * STATUSTEXT_CHARS + "z"
@@ -132,11 +156,12 @@ def test_texts_of_another_system_are_not_joined_into_ours() -> None:
     assert state.take_texts() == [(WARNING, PX4_DENIAL)]
 
 
+@pytest.mark.parametrize("text_id", [0, 77])
 @pytest.mark.parametrize("length", [1, 49, 50, 51, 99, 100, 101, 149, 250])
-def test_every_length_comes_back_whole(length: int) -> None:
+def test_every_length_comes_back_whole(length: int, text_id: int) -> None:
     state, clock = connected(mavlink.MAV_AUTOPILOT_PX4)
     text = "".join(chr(ord("a") + i % 26) for i in range(length))
-    for message in chunks(text, 77):
+    for message in chunks(text, text_id):
         state.absorb(message)
     clock.now_s += STATUSTEXT_JOIN_WAIT_S  # a full last chunk is handed on after the wait
     assert state.take_texts() == [(WARNING, text)]
@@ -173,13 +198,31 @@ def test_the_pre_arm_explanation_is_the_autopilots_latest_while_the_checks_fail(
 
 def test_px4_in_offboard_on_the_ground_is_not_judged_by_its_pre_arm_bit() -> None:
     """PX4 sets the bit for the mode it is in; back in OFFBOARD after a landing, with no
-    setpoints streaming, it stays clear for good although arming (which the agent does only
-    once it streams) passes: that bit says nothing of a take-off. In another mode it counts."""
+    setpoints streaming, it stays clear whatever the checks say: not ready, but not for a
+    failing check (the agent puts it in Hold). In Hold the bit counts, and armed in OFFBOARD
+    (flying) the vehicle is not on the ground."""
     state, _ = connected(mavlink.MAV_AUTOPILOT_PX4)
-    for mode, wanted in ((PX4.offboard_mode, None), (PX4.land_mode, PREARM_UNSAID)):
+    hold = PX4.ground_mode
+    assert hold is not None
+    cases = [(PX4.offboard_mode, False, False, PX4_OFFBOARD_ON_GROUND),
+             (PX4.offboard_mode, True, False, PX4_OFFBOARD_ON_GROUND),
+             (hold, False, False, PREARM_UNSAID), (hold, True, False, None),
+             (PX4.offboard_mode, True, True, None)]  # fmt: skip
+    for mode, good, armed, wanted in cases:
+        flags = mavlink.MAV_MODE_FLAG_SAFETY_ARMED if armed else 0
         beat = mavlink.MAVLink_heartbeat_message(
-            mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_PX4, 1, mode, 3, 3
+            mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_PX4, 1 | flags, mode, 3, 3
         )
         state.absorb(wire(beat))
-        state.absorb(sys_status(prearm_good=False))
-        assert state.preflight == wanted
+        state.absorb(sys_status(prearm_good=good))
+        assert state.preflight == wanted, (mode, good, armed)
+
+
+def test_ardupilot_in_guided_on_the_ground_is_judged_by_its_bit() -> None:
+    state, _ = connected(mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA)
+    beat = mavlink.MAVLink_heartbeat_message(
+        mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, 1, 4, 3, 3
+    )
+    state.absorb(wire(beat))
+    state.absorb(sys_status(prearm_good=True))
+    assert state.in_offboard_on_ground and state.preflight is None

@@ -113,6 +113,19 @@ def test_a_failsafe_landing_ends_disarmed_with_offboard_shown() -> None:
     assert sim.mode() == CopterMode.GUIDED
 
 
+def test_the_prearm_bit_is_for_the_mode_it_is_in() -> None:
+    """PX4 v1.16 (SYS_STATUS.hpp): the bit is ``can_arm`` of the current mode, so in OFFBOARD
+    on the ground it is clear while no setpoints stream, and set in Hold, checks passing."""
+    sim = Sim()
+    sim.run(0.5)
+    assert sim.ap.set_mode(CopterMode.GUIDED) == Result.ACCEPTED and sim.ap.prearm_bit
+    sim.hold = None
+    sim.run(1.2)
+    assert sim.mode() == CopterMode.GUIDED and not sim.ap.prearm_bit
+    assert sim.ap.prearm_failure() is None  # the checks themselves pass
+    assert sim.ap.set_mode(CopterMode.LOITER) == Result.ACCEPTED and sim.ap.prearm_bit
+
+
 def test_terminate_and_disarm_actions_stop_the_motors() -> None:
     for action in (6, 7):
         sim = Sim(COM_OBL_RC_ACT=action)

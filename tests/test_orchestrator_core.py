@@ -266,7 +266,7 @@ def test_a_vehicle_waiting_for_its_pre_arm_checks_gets_no_job_until_they_pass() 
     assert not _assigned(_submit(book, "j1", 0.2))
     assert not _assigned(book.tick(40.0)) and not _assigned(book.status(waiting, 40.0))
     (summary,) = [v for v in book.snapshot(40.0).vehicles if v.vehicle_id == "uav1"]
-    assert summary.message == f"waiting for its pre-arm checks: {why}"
+    assert summary.message == f"held by its preflight: {why}"
     job = book.jobs["j1"]
     assert (job.state, job.attempts, view.refused_until_s) == ("queued", 0, 0.0)  # no back-off
     ready = msgspec.structs.replace(waiting, preflight="")

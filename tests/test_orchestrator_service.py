@@ -317,7 +317,7 @@ def test_a_vehicle_gets_no_job_while_its_autopilot_waits_for_its_pre_arm_checks(
         def summary() -> Any:
             return {v.vehicle_id: v for v in _snapshot(client, keys).vehicles}["uav1"]
 
-        said = f"waiting for its pre-arm checks: {why}"
+        said = f"held by its preflight: {why}"
         eventually(lambda: summary().message == said, "the operator told why")
         job = _submit(client, keys, SubmitRequest(text="L"))
         time.sleep(1.0)  # heartbeats come and go: no job is offered meanwhile

@@ -24,6 +24,7 @@ from bus.rpc import JSON
 from bus.session import SessionOpenError, free_tcp_endpoint, open_session
 from cli.main import main
 from showfile import Show, ShowError, dump_show, load_show
+from showfile.roles import RESERVED_IDS
 from trust.acl import access_control
 from trust.pki import KeysError, identity_files, is_valid, issue_client
 from trust.settings import ensure_show_keys, identities, secured, session_settings
@@ -56,7 +57,7 @@ def _common_name(path: Path) -> str:
 def test_keys_are_made_once_private_and_named_after_their_identity(tmp_path: Path) -> None:
     _, show = _show(tmp_path)
     assert ensure_show_keys(show) == ["router", "orchestrator", "kiosk", "operator",
-                                      "uav1", "uav2", "uav3", "uav4"]  # fmt: skip
+                                      "crew", "uav1", "uav2", "uav3", "uav4"]  # fmt: skip
     assert ensure_show_keys(show) == []  # idempotent: nothing stale
     for identity in identities(show):
         files = identity_files(show.keys_dir, identity)
@@ -116,6 +117,9 @@ def test_access_control_gives_each_identity_only_its_part() -> None:
     assert _may(acl, "uav1", "query", k.report("uav1"))
     assert not _may(acl, "uav1", "query", k.report("uav2"))
     assert not _may(acl, "uav1", "query", k.command)
+    assert _may(acl, "uav1", "query", k.clock) and _may(acl, "uav2", "query", k.clock)
+    for identity in ("kiosk", "submitter@booth", "watcher@press", "operator", "crew"):
+        assert not _may(acl, identity, "query", k.clock)  # only vehicles measure their clocks
     for identity in ("kiosk", "submitter@booth"):
         assert _may(acl, identity, "query", k.submit_as(identity))  # its own submit key only
         assert not _may(acl, identity, "query", k.submit)
@@ -142,9 +146,7 @@ def test_access_control_gives_each_identity_only_its_part() -> None:
 
 
 vehicle_ids = st.lists(
-    st.from_regex(r"[a-z][a-z0-9_-]{0,8}", fullmatch=True).filter(
-        lambda v: v not in ("router", "orchestrator", "kiosk", "operator", "watcher", "submitter")
-    ),
+    st.from_regex(r"[a-z][a-z0-9_-]{0,8}", fullmatch=True).filter(lambda v: v not in RESERVED_IDS),
     min_size=1,
     max_size=6,
     unique=True,
@@ -166,6 +168,7 @@ def test_a_vehicle_never_sends_under_another_vehicles_keys(ids: list[str]) -> No
                     expr.startswith(f"{k.prefix}/vehicles/{vehicle}/")
                     or expr == k.report(vehicle)
                     or expr == k.orchestrator_alive
+                    or expr == k.clock  # a query only: the orchestrator answers it
                 ), (vehicle, expr)
     assert len({s["id"] for s in acl["subjects"]}) == len(acl["subjects"])  # type: ignore[union-attr]
 

@@ -7,7 +7,8 @@
 - ``trust.clients``: the outside clients issued and revoked (the router re-reads it live).
 
 Identities are certificate common names: ``router``, ``orchestrator``, ``kiosk``, ``operator``
-(console and CLI), each vehicle's id, ``router@<host>`` for the router of each companion host of
-a show across machines, and ``<role>@<name>`` for each outside client (``operator@alice``,
-``submitter@booth``, ``watcher@press``).
+(console and CLI), ``crew`` (the kiosk's crew page: sheets and batteries only), each vehicle's
+id, ``router@<host>`` for the router of each companion host of a show across machines, and
+``<role>@<name>`` for each outside client (``operator@alice``, ``submitter@booth``,
+``watcher@press``).
 """

@@ -10,7 +10,8 @@ What each identity may send:
 
 - ``orchestrator``: anything under ``skyquill/<show>/**``;
 - each vehicle: telemetry, status, events and its liveliness token under its own keys; replies
-  of its own ``command`` and ``assign`` queryables; reports on its own report key;
+  of its own ``command`` and ``assign`` queryables; reports on its own report key; queries of
+  the orchestrator's ``clock`` (its clock against the orchestrator's, for its preflight);
 - ``kiosk`` and each outside ``submitter``: submissions on their own submit key
   (``orchestrator/submit/<identity>``, so the orchestrator's quotas count by certificate), and
   snapshot queries; they follow jobs and the fleet;
@@ -19,6 +20,10 @@ What each identity may send:
   one's on its own keys, ``command/<identity>`` and ``submit/<identity>``, so the event log names
   who sent each command), snapshots and vehicle commands (never an assignment); they watch
   everything;
+- ``crew`` (the kiosk's second session, behind its crew page): commands on its own key
+  (``orchestrator/command/crew``, where the orchestrator takes ``fresh_sheet`` and
+  ``battery_swapped`` from it and refuses anything else); it follows the
+  fleet; never a vehicle's key, a submission or the operators' ``command``;
 - each outside ``watcher``: snapshot queries; it watches everything;
 - ``router``: anything (the ground station's router, as a companion host's router sees it);
 - ``router@<host>``, a companion host's router: what the vehicles on that host may send, and
@@ -78,6 +83,14 @@ def _operator(keys: ShowKeys, name: str, command_key: str, submit_key: str) -> l
     ]
 
 
+def _crew(keys: ShowKeys) -> list[dict[str, Any]]:
+    return [
+        _rule("crew: confirm", QUERY, [keys.command_as("crew")]),
+        _rule("crew: follow", SUBSCRIBE, [keys.fleet]),
+        _rule("crew: presence", WATCH_PRESENCE, [keys.orchestrator_alive]),
+    ]
+
+
 def _client(keys: ShowKeys, common_name: str, role: str) -> list[dict[str, Any]]:
     """An outside client's rules: its role's, submitting on its own key."""
     if role == "operator":
@@ -98,6 +111,7 @@ def _vehicle(keys: ShowKeys, vehicle_id: str) -> list[dict[str, Any]]:
         _rule(f"{name}: take jobs", SERVE, [keys.vehicle_assign(vehicle_id)]),
         _rule(f"{name}: alive", TOKEN, [keys.vehicle_alive(vehicle_id)]),
         _rule(f"{name}: report", QUERY, [keys.report(vehicle_id)]),
+        _rule(f"{name}: clock", QUERY, [keys.clock]),
         _rule(f"{name}: orchestrator", WATCH_PRESENCE, [keys.orchestrator_alive]),
     ]
 
@@ -134,6 +148,7 @@ def access_control(
         "orchestrator": [_rule("orchestrator: anything in the show", ALL_MESSAGES, everything)],
         "kiosk": _follow_jobs(keys, "kiosk"),
         "operator": _operator(keys, "operator", keys.command, keys.submit),
+        "crew": _crew(keys),
     }
     for common_name, role in (clients or {}).items():
         per_subject[common_name] = _client(keys, common_name, role)

@@ -80,6 +80,7 @@ class ConsoleApp(App[None]):
         Binding("F", "clear_all", "reset all", show=False),
         Binding("U", "release_all", "release all", show=False),
         Binding("s", "fresh_sheet", "fresh sheet", show=False),
+        Binding("b", "vehicle('battery_swapped')", "battery swapped", show=False),
         Binding("d", "detail", "detail", show=False),
         Binding("p", "toggle_pause", "pause"),
         Binding("P", "vehicle('pause')", "pause vehicle", show=False),
@@ -319,10 +320,12 @@ class ConsoleApp(App[None]):
         self.refresh_bindings()
 
     def action_approve(self) -> None:
-        self._request(cmd.job_request("approve", self._selected_job()))
+        job = self._selected_job()
+        self._request(cmd.job_request("approve", job, self.model.phrase_of(job)))
 
     def action_reject(self) -> None:
-        self._request(cmd.job_request("reject", self._selected_job()))
+        job = self._selected_job()
+        self._request(cmd.job_request("reject", job, self.model.phrase_of(job)))
 
     def action_cancel_job(self) -> None:
         self._request(cmd.job_request("cancel", self._selected_job()))
@@ -353,7 +356,8 @@ class ConsoleApp(App[None]):
         self.send(OperatorCommand(command="resume" if self.model.queue_paused else "pause"))
 
     def action_vehicle(self, command: str, vehicle_id: str | None = None) -> None:
-        """``land``, ``release`` or ``clear_fault`` of the selected (or the named) vehicle."""
+        """``land``, ``release``, ``clear_fault``, ``pause`` or ``battery_swapped`` of the
+        selected (or the named) vehicle."""
         vid = vehicle_id or self._fleet.selected_vehicle
         row = self.model.vehicle_row(vid, self.clock()) if vid else None
         self._request(cmd.vehicle_request(command, row))

@@ -7,7 +7,9 @@ The question and the refusal name their target with :func:`~tui.safe_text.clean`
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 from bus.messages import MAX_BULK_JOBS, MAX_PRIORITY, JobState, OperatorCommand
 from tui.records import ACTIVE_JOB_STATES, AWAITING_JOB_STATES, FINAL_JOB_STATES
@@ -42,13 +44,16 @@ def _name(identifier: str) -> str:
     return clean(identifier, 40)
 
 
-def job_request(command: str, job: JobState | None) -> Request:
-    """``approve``, ``reject``, ``cancel``, ``raise`` or ``lower`` on the selected job."""
+def job_request(command: str, job: JobState | None, phrase: Sequence[JobState] = ()) -> Request:
+    """``approve``, ``reject``, ``cancel``, ``raise`` or ``lower`` on the selected job;
+    ``phrase``: the characters of its phrase the console knows, in reading order."""
     if job is None:
         return Refusal(f"{command}: no job selected (Tab to the queue, arrows to pick one)")
     what = f"{_name(job.job_id)} ({_name(job.label)})"
     if command in ("approve", "reject") and job.state not in AWAITING_JOB_STATES:
         return Refusal(f"{command}: {what} is {job.state}, not awaiting approval")
+    if command in ("approve", "reject") and job.phrase is not None:
+        return _moderate_phrase(command, job, phrase)
     if command == "approve":
         return OperatorCommand(command="approve", job_id=job.job_id)
     if command == "reject":
@@ -69,6 +74,31 @@ def job_request(command: str, job: JobState | None) -> Request:
             reason_prompt="reason (optional)",
         )
     return _prioritize(command, job, what)
+
+
+def _moderate_phrase(command: str, job: JobState, phrase: Sequence[JobState]) -> Ask:
+    """A character of a phrase: the orchestrator approves or rejects the whole phrase (it is
+    moderated as one submission), and the question says so before anything is sent."""
+    assert job.phrase is not None
+    size = job.phrase.size
+    text = "".join(j.label for j in phrase) if len(phrase) == size else job.label
+    what = f"the phrase {_name(text)} ({size} characters, {_name(job.phrase.phrase_id)})"
+    verb: Literal["approve", "reject"] = "approve" if command == "approve" else "reject"
+    send = (OperatorCommand(command=verb, job_id=job.job_id),)
+    if verb == "approve":
+        return Ask(
+            f"Approve {what}?\nA phrase is one submission: all {size} characters are approved"
+            " and written together.",
+            "Approve phrase",
+            send,
+        )
+    return Ask(
+        f"Reject {what}?\nA phrase is one submission: all {size} characters are rejected, and"
+        " the reason goes to every one.",
+        "Reject phrase",
+        send,
+        reason_prompt="reason (optional, shown to the visitor)",
+    )
 
 
 def bulk_request(marked: list[JobState]) -> Request:
@@ -109,8 +139,8 @@ def _prioritize(command: str, job: JobState, what: str) -> Request:
 
 
 def vehicle_request(command: str, row: VehicleRow | None) -> Request:
-    """``land``, ``release``, ``clear_fault`` or ``pause`` (pause or resume: a toggle) on the
-    selected vehicle."""
+    """``land``, ``release``, ``clear_fault``, ``pause`` (pause or resume: a toggle) or
+    ``battery_swapped`` on the selected vehicle."""
     if row is None:
         return Refusal(f"{command}: no vehicle selected")
     name = _name(row.vehicle_id)
@@ -136,12 +166,25 @@ def vehicle_request(command: str, row: VehicleRow | None) -> Request:
             "Release",
             (OperatorCommand(command="release", vehicle_id=row.vehicle_id),),
         )
+    if command == "battery_swapped":
+        return _battery_swapped(row, name)
     if row.state != "fault":
         return Refusal(f"reset: {name} is {row.state}, not in fault")
     return Ask(
         f"Reset the fault of {name}?\nCheck the vehicle first. It stays held until released (u).",
         "Reset fault",
         (clear_fault(row.vehicle_id),),
+    )
+
+
+def _battery_swapped(row: VehicleRow, name: str) -> Request:
+    if row.state != "battery_swap":
+        return Refusal(f"battery: {name} is not waiting for a battery swap")
+    return Ask(
+        f"Battery swapped on {name}?\nSay yes once its fresh battery is in: it takes jobs "
+        "again when the battery reports.",
+        "Swapped",
+        (OperatorCommand(command="battery_swapped", vehicle_id=row.vehicle_id),),
     )
 
 

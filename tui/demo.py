@@ -111,7 +111,16 @@ def demo_mixed_model() -> ConsoleModel:
     for item in demo_wall_telemetry("hexa1", wall, "j-0008", 0.4):
         model.apply(item, now - 0.1)
     model.apply(
-        VehicleStatus(vehicle_id="rover1", kind="omni-wheel", state="idle", board_id="floor1"),
+        VehicleStatus(
+            vehicle_id="rover1",
+            kind="omni-wheel",
+            state="idle",
+            board_id="floor1",
+            battery_fraction=0.18,
+            battery_minutes_left=2.5,
+            preflight="battery: 18% left, at or below the 20% reserve",
+            flight_s_today=2950.0,
+        ),
         now - 0.2,
     )
     model.apply(VehiclePresence("rover1", alive=True), now - 0.2)
@@ -286,6 +295,8 @@ def demo_model(settings: ConsoleSettings | None = None) -> ConsoleModel:
                 kind=specs[1].kind,
                 state="taking_off",
                 board_id=specs[1].board_id,
+                link_loss_fraction=0.0,
+                flight_s_today=1260.0,
             ),
             now - 0.3,
         )

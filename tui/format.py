@@ -19,6 +19,7 @@ STATE_STYLES = {
     "landed": "green",
     "fault": "bold red",
     "lost": "bold white on red",
+    "battery_swap": "bold black on yellow",
     "unknown": "dim",
 }
 """Style of each vehicle state name."""
@@ -63,6 +64,31 @@ def link_age(row: VehicleRow) -> Text:
     return Text(shown, style="bold red" if row.stale or row.state == "lost" else "")
 
 
+def link(row: VehicleRow) -> Text:
+    """Link quality: :func:`link_age`, then the share of its autopilot's messages lost when it
+    has an autopilot link (``<1s 2%``); yellow from 1 % lost, red from 5 %."""
+    age = link_age(row)
+    loss = row.link_loss_fraction
+    if loss is None:
+        return age
+    style = "bold red" if loss >= 0.05 else "yellow" if loss >= 0.01 else age.style
+    return Text(f"{age.plain} {100 * loss:.0f}%", style=style)
+
+
+def preflight(row: VehicleRow, *, full: bool = False) -> Text:
+    """``ok``, or what holds it on the ground: the failing check's name (``✗ mocap``), the
+    whole reason with ``full``; ``-`` while it is away or unknown."""
+    if row.state in ("lost", "unknown"):
+        return Text("-", style="dim")
+    if not row.preflight:
+        return Text("ok", style="green")
+    if full:
+        return Text(f"✗ {row.preflight}", style="bold yellow")
+    check, colon, _ = row.preflight.partition(":")
+    named = colon and check.isalpha() and check.islower() and len(check) <= 9
+    return Text(f"✗ {check if named else 'pre-arm'}", style="bold yellow")
+
+
 def tracking_error(row: VehicleRow) -> Text:
     """Tracking error in centimetres; reversed red above the show's threshold."""
     if row.tracking_error_m is None:
@@ -94,12 +120,14 @@ def force_detail(row: VehicleRow) -> Text:
     return Text(text, style="bold white on red" if row.force_off else "")
 
 
-def battery(fraction: float | None) -> Text:
-    """Battery in percent; yellow under 30 %, red under 15 %."""
+def battery(fraction: float | None, minutes_left: float | None = None) -> Text:
+    """Battery in percent and, when known, minutes left (``73% 12m``); yellow under 30 %, red
+    under 15 %."""
     if fraction is None:
         return Text("-", style="dim")
     style = "bold red" if fraction < 0.15 else "yellow" if fraction < 0.30 else ""
-    return Text(f"{100 * fraction:.0f}%", style=style)
+    minutes = "" if minutes_left is None else f" {minutes_left:.0f}m"
+    return Text(f"{100 * fraction:.0f}%{minutes}", style=style)
 
 
 def progress(fraction: float, width: int = 6) -> str:

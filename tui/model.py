@@ -113,6 +113,8 @@ class ConsoleModel:
         job = self._jobs.get(v.job_id) if v.job_id else None
         age = None if v.heard_s is None else max(0.0, now_s - v.heard_s)
         state = "lost" if v.alive is False else v.state
+        if v.swap_note and state in ("idle", "landed"):
+            state = "battery_swap"
         return VehicleRow(
             vehicle_id=v.vehicle_id,
             kind=v.kind,
@@ -123,10 +125,14 @@ class ConsoleModel:
             progress=job.progress if job and v.progress == 0.0 else v.progress,
             tracking_error_m=v.tracking_error_m,
             battery_fraction=v.battery_fraction,
+            battery_minutes_left=v.battery_minutes_left,
             link_age_s=age,
+            link_loss_fraction=v.link_loss_fraction,
+            preflight=v.preflight,
+            flight_s_today=v.flight_s_today,
             stale=age is not None and age > self.settings.lost_after_s,
             over_threshold=over_threshold(v, self.settings),
-            message=v.message,
+            message=v.swap_note or v.message,
             position_m_enu=v.position_m_enu,
             held=v.held,
             paused=v.paused,
@@ -183,6 +189,14 @@ class ConsoleModel:
 
     def job(self, job_id: str | None) -> JobState | None:
         return self._jobs.get(job_id) if job_id else None
+
+    def phrase_of(self, job: JobState | None) -> list[JobState]:
+        """The known characters of ``job``'s phrase in reading order (none: not a phrase)."""
+        if job is None or job.phrase is None:
+            return []
+        pid = job.phrase.phrase_id
+        mine = [j for j in self._jobs.values() if j.phrase and j.phrase.phrase_id == pid]
+        return sorted(mine, key=lambda j: j.phrase.index if j.phrase else 0)
 
     def queue_rows(self) -> list[QueueRow]:
         """Awaiting approval, queued (in queue order), active, then ended (newest first)."""
@@ -320,6 +334,11 @@ class ConsoleModel:
             v.progress = 0.0
         v.job_id = s.job_id
         v.message = s.message
+        if s.battery_fraction is not None:
+            v.battery_fraction = s.battery_fraction
+            v.battery_minutes_left = s.battery_minutes_left
+        v.preflight, v.link_loss_fraction = s.preflight, s.link_loss_fraction
+        v.flight_s_today = s.flight_s_today if s.flight_s_today is not None else v.flight_s_today
         v.heard_s = now_s
         if v.alive is None:
             v.alive = True
@@ -332,10 +351,17 @@ class ConsoleModel:
         v.board_id = v.board_id or s.board_id
         v.held = s.held
         v.paused = s.paused
+        v.swap_note = s.message if s.state == "battery_swap" else ""
+        if v.battery_fraction is None:
+            v.battery_fraction = s.battery_fraction
+            v.battery_minutes_left = s.battery_minutes_left
         if v.alive is None:
             v.alive = s.alive
         recent = v.heard_s is not None and now_s - v.heard_s <= self.settings.lost_after_s
+        if v.flight_s_today is None:
+            v.flight_s_today = s.flight_s_today
         if s.state == "lost" or not recent:
+            v.preflight = s.preflight
             v.state = s.state
             v.job_id = s.job_id
             v.message = s.message or v.message

@@ -39,6 +39,14 @@ class VehicleRecord:
         self.progress = 0.0
         self.tracking_error_m: float | None = None
         self.battery_fraction: float | None = None
+        self.battery_minutes_left: float | None = None
+        self.preflight = ""
+        """Why it may not take off now (its status's ``preflight``); empty: it may."""
+        self.link_loss_fraction: float | None = None
+        self.flight_s_today: float | None = None
+        self.swap_note = ""
+        """Why the orchestrator sent it for a battery swap (its summary's message); empty: it
+        did not."""
         self.heard_s: float | None = None
         self.alive: bool | None = None
         self.message = ""
@@ -130,7 +138,7 @@ def vehicle_alert(
     v: VehicleRecord, limit_m: float, *, over_threshold: bool, force_off: bool = False
 ) -> Alert | None:
     """The one alert a vehicle raises now (lost before fault before tracking error before a
-    contact force off its target), if any."""
+    contact force off its target before a battery swap), if any."""
     vid = v.vehicle_id
     if v.alive is False or v.state == "lost":
         return Alert(f"lost:{vid}", "vehicle_lost", f"{vid} lost")
@@ -150,6 +158,8 @@ def vehicle_alert(
             "force_error",
             f"{vid} force {v.force_n or 0.0:.1f} N, target {v.force_reference_n or 0.0:.1f} N",
         )
+    if v.swap_note:
+        return Alert(f"swap:{vid}", "battery_swap", f"{vid} {v.swap_note}; swap it, then b")
     return None
 
 

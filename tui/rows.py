@@ -29,6 +29,8 @@ class VehicleRow:
     """Latest tracking error in [m]; None before the first telemetry."""
     battery_fraction: float | None
     """0..1 when known."""
+    battery_minutes_left: float | None
+    """Minutes until its battery is empty, when known."""
     link_age_s: float | None
     """Seconds since the vehicle's last telemetry or status; None if never heard."""
     stale: bool
@@ -49,6 +51,12 @@ class VehicleRow:
     """Latest wanted normal contact force in [N], for kinds that control it."""
     force_off: bool = False
     """Writing with a contact force further from its target than the console's alert margin."""
+    link_loss_fraction: float | None = None
+    """Share of its autopilot's messages lost on its link, when it has one."""
+    preflight: str = ""
+    """Why it may not take off now (its preflight's failing check); empty: it may."""
+    flight_s_today: float | None = None
+    """Its time off the ground today in [s], when reported."""
 
 
 @dataclass(frozen=True)
@@ -73,6 +81,7 @@ class Alert:
         "job_failed",
         "awaiting_approval",
         "fresh_sheet",
+        "battery_swap",
         "orchestrator_lost",
         "vehicle_held",
         "show_alert",

@@ -45,6 +45,7 @@ from bus.messages import (
     VehicleCommand,
 )
 from vehicle_agent.backends.base import Vec3, VehicleSnapshot
+from vehicle_agent.preflight import PreflightReadings, preflight_problem
 from vehicle_agent.runner_io import (
     ACTIVE_PHASES,
     BackendCommand,
@@ -316,23 +317,38 @@ class JobRunner(RunnerPhases):
             if snap.fault is not None:
                 self._event("alert", "vehicle_fault", f"{vid} fault: {snap.fault}")
             self._seen_fault = snap.fault
-        if (snap.preflight is None) != (self.preflight is None):
-            self._preflight_event(snap.preflight)
-        self.preflight = snap.preflight
+        preflight = self._preflight_of(snap)
+        if (preflight is None) != (self.preflight is None):
+            self._preflight_event(preflight)
+        self.preflight = preflight
+
+    def _preflight_of(self, snap: VehicleSnapshot) -> str | None:
+        """Why the vehicle may not take off now: on the ground between jobs or about to take
+        off, the agent's preflight (``vehicle_agent/preflight.py``), which ends with the
+        autopilot's own pre-arm checks; otherwise those alone."""
+        limits = self.config.preflight
+        if limits is None or self.phase not in ("ground", "preflight") or not snap.on_ground:
+            return snap.preflight
+        readings = PreflightReadings(
+            health=snap.health,
+            battery_fraction=snap.battery_fraction,
+            has_fence=self.safety.fence is not None,
+            clock_offset_s=self.clock_offset_s,
+            autopilot=snap.preflight,
+        )
+        return preflight_problem(readings, limits)
 
     def _preflight_event(self, preflight: str | None) -> None:
-        """One event when the pre-arm checks begin to fail (``preflight``: why) and one when
-        they pass again (None), with how long the vehicle waited: the log shows how long
-        vehicles wait for their autopilots."""
+        """One event when the preflight begins to fail (``preflight``: why) and one when it
+        passes again (None), with how long the vehicle waited: the log shows how long vehicles
+        wait for their checks."""
         vid = self.config.vehicle_id
         if preflight is None:
             waited_s = self._now_s - self._preflight_since_s
-            self._event("info", "preflight", f"{vid} pre-arm checks pass after {waited_s:.0f} s")
+            self._event("info", "preflight", f"{vid} preflight passes after {waited_s:.0f} s")
         else:
             self._preflight_since_s = self._now_s
-            self._event(
-                "warning", "preflight", f"{vid} waiting for its pre-arm checks: {preflight}"
-            )
+            self._event("warning", "preflight", f"{vid} held by its preflight: {preflight}")
 
     def _take_plan_request(self) -> JobAssignment | None:
         if self._job is None or self._job.plan_requested or self.phase == "stopped":

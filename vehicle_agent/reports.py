@@ -25,6 +25,9 @@ RETRY_CODES = frozenset({"internal", "unavailable", "busy"})
 """Error replies to a report after which it is sent again (the orchestrator could not take it)."""
 BEST_EFFORT = frozenset({"progress", "holding"})
 """Reports sent once, and superseded by a newer report of the same job not yet sent."""
+PHRASE_WAITS = "phrase_waits"
+"""The answer to a *ready* report while the other characters of its phrase are not all ready
+(``orchestrator/phrases.py``): the vehicle holds at the start and asks again, no fault."""
 RESULTS = frozenset({"done", "failed"})
 """Reports that end a job: ``settled`` is called once the orchestrator has answered one."""
 
@@ -99,6 +102,9 @@ class ReportOutbox:
         if reply.ok:
             ready = report.planned_duration_s if report.event == "holding" else None
             self._lease.acknowledged(report.job_id, sent_at_s, ready)
+        elif reply.error is not None and reply.error.code == PHRASE_WAITS:
+            # the answer every ready period while its phrase's other vehicles get ready
+            log.debug("%s: %s holds for its phrase: %s", vid, report.job_id, reply.message)
         else:
             log.warning("%s: report %s not accepted: %s", vid, report.event, reply.message)
             refused = reply.error is not None and reply.error.code == "not_assigned"

@@ -20,6 +20,7 @@ from bus.messages import (
 )
 from planner.samples import TrajectorySamples
 from vehicle_agent.backends.base import Setpoint, Vec3, VehicleSnapshot
+from vehicle_agent.preflight import PreflightLimits
 from vehicle_agent.safety.limits import SafetyLimits
 from vehicle_agent.trace import JobTrace
 from vehicles.verdict import WritingBounds, writing_verdict
@@ -68,6 +69,9 @@ class RunnerConfig:
     """...doubled at each refusal in a row, up to this many [s]."""
     safety: SafetyLimits = field(default_factory=SafetyLimits)
     """Deviation bound, geofence, writing bounds, settling and the abort policy."""
+    preflight: PreflightLimits | None = None
+    """The bounds of the agent's preflight before each job (None: only the autopilot's own
+    pre-arm checks, e.g. unit tests of other things)."""
 
     @property
     def hover_home_m_enu(self) -> Vec3:

@@ -78,12 +78,15 @@ class RunnerPhases:
         self._seen_mode: str | None = None
         self._seen_fault: str | None = None
         self.preflight: str | None = None
-        """Why the vehicle cannot take off now, in its autopilot's words (the latest snapshot's,
-        published in the status); None: it can."""
+        """Why the vehicle cannot take off now (its preflight's first failing check, or its
+        autopilot's words), published in the status; None: it can."""
+        self.clock_offset_s: float | None = None
+        """The agent's clock minus the orchestrator's in [s], as last measured (set by the
+        service; None: not yet)."""
         self._preflight_since_s = 0.0
+        """Agent time in [s] since when ``preflight`` has been set."""
         self._planned_at_s = 0.0
         """Agent time in [s] the current job's plan came back (the pre-arm wait counts from it)."""
-        """Agent time in [s] since when ``preflight`` has been set."""
         self._now_s = 0.0
 
     @property
@@ -172,7 +175,8 @@ class RunnerPhases:
             else:
                 self.phase = "wait_plan"
                 if self._job is not None and self._job.prepared is not None:
-                    self._start_transit(top)
+                    # from where the climb left it, within the take-off's tolerance of top
+                    self._start_transit(snap.position_m_enu)
             return self._reference_now(self._now_s)
         if self.phase == "land" and snap.on_ground and snap.mode == "idle":
             stopped = self._after_landing == "fault"
@@ -348,6 +352,7 @@ class RunnerPhases:
             message=self.message,
             incarnation=incarnation,
             preflight=self.preflight or "",
+            clock_offset_ms=None if (off_s := self.clock_offset_s) is None else round(1e3 * off_s),
         )
 
 

@@ -21,6 +21,9 @@ Tasks of a running agent (one process, one event loop):
 - commands: the ``vehicles/<id>/command`` queryable answered by ``runner.handle_command``;
 - events: what the vehicle says (autopilot STATUSTEXT, a refused take-off) published as Event on
   ``vehicles/<id>/events``, which the orchestrator relays into the show's event log.
+- clock: this machine's wall clock measured against the orchestrator's on
+  ``orchestrator/clock`` (:class:`vehicle_agent.clock_sync.ClockSync`), at start and about every
+  ``clock_period_s``, into ``runner.clock_offset_s`` for the preflight and the status.
 """
 
 from __future__ import annotations
@@ -32,7 +35,9 @@ import math
 import secrets
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import replace
+from datetime import date
 
 import msgspec
 
@@ -56,9 +61,12 @@ from vehicle_agent.backends.base import (
     VehicleBackend,
     VehicleSnapshot,
 )
+from vehicle_agent.battery import swap_battery, with_battery
 from vehicle_agent.clock import TickClock
+from vehicle_agent.clock_sync import ClockSample, ClockSync
 from vehicle_agent.events import EventOutbox
 from vehicle_agent.fault import clear_fault
+from vehicle_agent.flight_day import FlightDay, with_day
 from vehicle_agent.job_guard import JobGuard
 from vehicle_agent.job_runner import JobRunner, PreparedJob, TickActions
 from vehicle_agent.lease import JobLease
@@ -92,7 +100,10 @@ class AgentService:
         work: JobWork,
         events: EventOutbox | None = None,
         pacer: Pacer | None = None,
+        wall_clock: Callable[[], float] = time.time,
     ) -> None:
+        """``wall_clock``: the machine's clock (Unix time in [s]) compared with the
+        orchestrator's (``vehicle_agent/clock_sync.py``); tests shift it."""
         self.settings = settings
         self.runner = runner
         self.backend = backend
@@ -143,6 +154,12 @@ class AgentService:
         """Wall (monotonic) time in [s] of the latest status or telemetry published."""
         self._progress = 0.0
         self._snapshot: VehicleSnapshot | None = None
+        self.flight = FlightDay()
+        """The vehicle's time off the ground today, for its status."""
+        self.clock_sync = ClockSync(
+            self.keys, wall_clock=wall_clock, period_s=settings.clock_period_s
+        )
+        """Measures this machine's clock against the orchestrator's, for the preflight."""
 
     async def run(self, stop: asyncio.Event) -> None:
         """Join the bus, fly until ``stop`` is set, then leave it cleanly."""
@@ -183,6 +200,7 @@ class AgentService:
             asyncio.create_task(self.reports.send_forever(session)),
             asyncio.create_task(self._follow_presence(presence)),
             asyncio.create_task(self._status_heartbeat()),
+            asyncio.create_task(self.clock_sync.run(session, self._clock_measured)),
         ]
         stopping = asyncio.create_task(stop.wait())
         await asyncio.wait([stopping, *workers], return_when=asyncio.FIRST_COMPLETED)
@@ -219,6 +237,10 @@ class AgentService:
         self._wake_up()
         if command.command == "clear_fault":
             return await self._clear_fault()
+        if command.command == "battery_swapped":
+            reply = await swap_battery(self.backend, self.vehicle_id)
+            log.info("%s battery_swapped -> %s", self.vehicle_id, reply.message)
+            return reply
         reply = self.runner.handle_command(command, self.clock.now_s)
         log.info("%s %s -> %s", self.vehicle_id, command.command, reply.message)
         self._publish_status()
@@ -230,6 +252,10 @@ class AgentService:
             self._wake_up()
             self.runner.set_orchestrator_alive(alive, self.clock.now_s)
             self._publish_status()
+
+    def _clock_measured(self, best: ClockSample) -> None:
+        """The clock filter's best sample: the preflight checks it from the next tick on."""
+        self.runner.clock_offset_s = best.offset_s
 
     async def _clear_fault(self) -> CommandReply:
         """The operator's ``clear_fault``: leave ``fault`` only when the vehicle is at rest."""
@@ -264,6 +290,7 @@ class AgentService:
             actions = self.runner.step(snapshot, now_s)
             snapshot = await self._fly(actions, snapshot, now_s)
             self._snapshot = snapshot
+            self.flight.tick(snapshot, now_s, date.today().toordinal())
             self.clock.advance()
             self._carry_out(actions)
             self._lease.tick_done(time.monotonic())
@@ -374,7 +401,8 @@ class AgentService:
 
     # --- outputs -------------------------------------------------------------------------------
     def _publish_status(self, *, only_if_changed: bool = False) -> None:
-        status = self.runner.status(self.incarnation)
+        status = with_battery(self.runner.status(self.incarnation), self._snapshot)
+        status = with_day(status, self._snapshot, self.flight)
         pending = self.results.pending() if status.job_id is None else None
         if pending is not None:  # not over until the orchestrator has its result
             status = msgspec.structs.replace(status, job_id=pending)

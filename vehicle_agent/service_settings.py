@@ -36,3 +36,6 @@ class ServiceSettings:
     results_dir: Path | None = None
     """Where the results of written jobs wait for the orchestrator's answer, surviving a restart
     (``vehicle_agent/results.py``); None: in memory only."""
+    clock_period_s: float = 10.0
+    """Wall time in [s] between two measurements of the agent's clock against the
+    orchestrator's after the start burst (``vehicle_agent/clock_sync.py``)."""

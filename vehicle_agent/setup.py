@@ -11,6 +11,7 @@ from showfile import Board, PlanningSettings, Show
 from showfile.checks import footprint
 from vehicle_agent.backends.base import Vec3
 from vehicle_agent.job_runner import RunnerConfig
+from vehicle_agent.preflight import PreflightLimits
 from vehicle_agent.safety import DeviationLimit, SafetyLimits, WritingBounds, vehicle_fence
 from vehicles.jobs import board_surface
 from vehicles.kind import AutopilotWorld, JobPhases, VehicleKind
@@ -76,6 +77,7 @@ def vehicle_setup(show: Show, vehicle_id: str, *, time_scale: float | None = Non
         telemetry_period_s=scale / TELEMETRY_RATE_HZ,
         progress_period_s=scale * PROGRESS_PERIOD_S,
         safety=safety_limits(show, vehicle_id, cruise_z_m, route=phases.route),
+        preflight=preflight_limits(show),
     )
     return VehicleSetup(
         show=show,
@@ -100,6 +102,19 @@ def cruise_height_m(
     if phases.cruise == "above_area":
         return centre_z_m + 0.5 * board.writing_area_m[1] + planning.clearance_m
     return max(home_m_enu[2], centre_z_m)
+
+
+def preflight_limits(show: Show) -> PreflightLimits:
+    """The bounds of the vehicle's preflight: the show's ``preflight`` section and its battery
+    reserve."""
+    p = show.preflight
+    return PreflightLimits(
+        link_age_max_s=p.link_age_max_s,
+        link_loss_max_fraction=p.link_loss_max_fraction,
+        mocap_age_max_s=p.mocap_age_max_s,
+        battery_reserve_fraction=show.battery.reserve_fraction,
+        clock_offset_max_s=p.clock_offset_max_s,
+    )
 
 
 def safety_limits(

@@ -36,12 +36,31 @@ window.SkyquillI18n = (() => {
     let text = words[key];
     if (text === undefined && "n" in args) text = words[`${key}_${args.n === 1 ? "one" : "other"}`];
     if (text === undefined) text = (catalogues.en || {})[key] || key;
-    return text.replace(/\{(\w+)\}/g, (m, name) => (name in args ? inner(args[name]) : m));
+    const parts = text.split(/\{(\w+)\}/);  // text, name, text, name, ..., text
+    let out = parts[0];
+    for (let i = 1; i < parts.length; i += 2) {
+      const value = args[parts[i]];
+      if (!(parts[i] in args)) out += `{${parts[i]}}${parts[i + 1]}`;
+      else if (value && typeof value === "object") out = meet(meet(out, inner(value)), parts[i + 1]);
+      else out += String(value) + parts[i + 1];  // data (a number, the operator's words) as is
+    }
+    return out;
   }
 
   // An argument that is itself words ({ key, args }) is said in the same language.
   function inner(value) {
-    return value && typeof value === "object" ? t(value.key, value.args || {}) : String(value);
+    return t(value.key, value.args || {});
+  }
+
+  // Where worded pieces meet, a Han character and a Latin letter or digit are set apart by a
+  // space (Chinese typography): "由 2 号无人机", not "由2 号无人机".
+  const HAN = /\p{Script=Han}/u;
+  const LATIN = /[A-Za-z0-9]/;
+  function meet(left, right) {
+    const a = left.slice(-1);
+    const b = right.charAt(0);
+    const apart = (HAN.test(a) && LATIN.test(b)) || (LATIN.test(a) && HAN.test(b));
+    return apart ? `${left} ${right}` : left + right;
   }
 
   function argsOf(el) {
@@ -81,10 +100,11 @@ window.SkyquillI18n = (() => {
     for (const fn of listeners) fn(lang);
   }
 
-  async function load() {
+  // The catalogues under ``base`` (the crew page keeps its own words apart).
+  async function load(base = "/static/i18n") {
     await Promise.all(LANGS.map(async (name) => {
       try {
-        const reply = await fetch(`/static/i18n/${name}.json`, { credentials: "same-origin" });
+        const reply = await fetch(`${base}/${name}.json`, { credentials: "same-origin" });
         catalogues[name] = await reply.json();
       } catch (err) { catalogues[name] = {}; }
     }));

@@ -6,6 +6,7 @@
   const $ = (id) => document.getElementById(id);
   const { t, set: word } = window.SkyquillI18n;
   const { fitCanvas, drawGuides, drawPath, animatePath, drawInk } = window.SkyquillPictures;
+  const phrase = window.SkyquillPhrase;
   const config = {
     max_strokes: 60, max_points: 5000, max_text_chars: 1, writing_area_m: [1.2, 1.2],
     idle_reset_s: 60, width_range_m: null,
@@ -18,11 +19,11 @@
     lastT: 0,
     pending: null,      // what the preview was made of: { text } or { strokes }
     preview: null,
-    job: null,          // { ticket, token, job_id, code, preview, text }
+    job: null,          // { ticket, token, code, preview, text }: followed by its ticket
     lastJob: null,      // the latest view of that job (reworded after a language switch)
     events: null,       // EventSource
     lastLive: 0,        // Date.now() of the last frame of the status stream
-    serverStale: false, // the kiosk says the orchestrator's news stopped
+    serverStale: false, // the kiosk says the orchestrator's news stopped (the show is slow)
     watchdog: null,     // interval that notices a silent stream
   };
   const STALE_AFTER_MS = 2500;   // the kiosk sends a frame every 0.5 s
@@ -44,15 +45,18 @@
   function errorWords(error, context = {}) {
     const code = (error && error.code) || "internal";
     const args = {
-      n: code === "too_many_strokes" ? config.max_strokes : config.max_text_chars,
+      n: code === "too_many_strokes" ? config.max_strokes
+        : code.startsWith("phrase_") ? config.max_phrase_chars : config.max_text_chars,
       secs: Math.max(1, Math.round((error && error.retry_after_s) || 60)),
       limit: Math.round(config.max_flight_s || 90),
+      flight: Math.round((error && error.flight_s) || 0),
       char: context.text || "",
     };
     if (code === "text_too_long" && config.max_text_chars === 1) return ["err_text_one_char", args];
     if (code === "unknown_job" && context.byCode) return ["err_unknown_code", args];
     if (code === "no_glyph" && !context.text) return ["err_unplannable", args];
     if (code === "paused" || code === "storage_full") return ["err_queue_full", args];
+    if (code === "too_long" && args.flight) return ["err_too_long_s", args];
     const key = `err_${code}`;
     return [t(key) === key ? "err_refused" : key, args];
   }
@@ -196,6 +200,7 @@
   }
 
   function currentSubmission() {
+    if (state.mode === "phrase") return phrase.submission();
     if (state.mode === "type") {
       const text = $("text").value.trim();
       return text ? { text } : null;
@@ -221,11 +226,11 @@
     const empty = currentSubmission() === null;
     $("preview").disabled = empty;
     $("preview-why").hidden = !empty;  // a disabled button says why
-    word($("preview-why"), state.mode === "type" ? "why_type" : "why_draw");
+    word($("preview-why"), `why_${state.mode}`);
   }
 
   // --- tabs (ARIA tabs pattern: one tab stop, arrow keys move between tabs) -----------------
-  const tabs = [["draw", $("tab-draw")], ["type", $("tab-type")]];
+  const tabs = [["draw", $("tab-draw")], ["type", $("tab-type")], ["phrase", $("tab-phrase")]];
   function setMode(mode, fromKeyboard = false) {
     state.mode = mode;
     for (const [name, tab] of tabs) {
@@ -234,26 +239,31 @@
     }
     $("draw-pane").hidden = mode !== "draw";
     $("type-pane").hidden = mode !== "type";
+    $("phrase-pane").hidden = mode !== "phrase";
     say("");
-    if (mode === "draw") redrawPad(); else if (!fromKeyboard) $("text").focus();
+    if (mode === "draw") redrawPad();
+    else if (!fromKeyboard) $(mode === "type" ? "text" : "phrase-text").focus();
     updateControls();
   }
   for (const [name, tab] of tabs) {
     tab.addEventListener("click", () => setMode(name));
     tab.addEventListener("keydown", (e) => {
-      const i = tabs.findIndex(([n]) => n === name);
-      const next = { ArrowRight: i + 1, ArrowLeft: i - 1, Home: 0, End: tabs.length - 1 }[e.key];
+      const shown = tabs.filter(([, t]) => !t.hidden);
+      const i = shown.findIndex(([n]) => n === name);
+      const next = { ArrowRight: i + 1, ArrowLeft: i - 1, Home: 0, End: shown.length - 1 }[e.key];
       if (next === undefined) return;
       e.preventDefault();
-      const [mode, target] = tabs[(next + tabs.length) % tabs.length];
+      const [mode, target] = shown[(next + shown.length) % shown.length];
       setMode(mode, true);
       target.focus();
     });
   }
-  $("text").addEventListener("input", updateControls);
-  $("text").addEventListener("keydown", (e) => {
-    if (e.key === "Enter" && !e.isComposing && !$("preview").disabled) $("preview").click();
-  });
+  for (const input of [$("text"), $("phrase-text")]) {
+    input.addEventListener("input", updateControls);
+    input.addEventListener("keydown", (e) => {
+      if (e.key === "Enter" && !e.isComposing && !$("preview").disabled) $("preview").click();
+    });
+  }
 
   function show(section) {
     for (const id of ["compose", "confirm", "status"]) $(id).hidden = id !== section;
@@ -271,6 +281,8 @@
     state.pending = submission;
     state.preview = reply.preview;
     show("confirm");
+    if (reply.preview.phrase) { phrase.showPreview(reply.preview); $("confirm-title").focus(); return; }
+    phrase.hidePreview();
     animatePath($("preview-canvas"), reply.preview);
     const facts = {
       n: reply.preview.stroke_count,
@@ -312,8 +324,9 @@
     if (!reply.ok) { sayError(reply.error, state.pending); return; }
     say("");
     state.job = {
-      ticket: reply.ticket, token: reply.token, job_id: reply.job_id, code: reply.code,
+      ticket: reply.ticket, token: reply.token, code: reply.code,
       preview: reply.preview || state.preview, text: state.pending.text || null,
+      phrase: Boolean(state.pending.phrase),
     };
     saveTicket(state.job);
     showJob(reply.job);
@@ -354,25 +367,26 @@
 
   function showJob(job) {
     show("status");
-    $("job-id").textContent = state.job.job_id || "-";
     titleOf($("status-title"), state.job);
     showCode(state.job);
-    $("result").hidden = !state.job.preview;
+    const single = state.job.preview && !state.job.preview.phrase;
+    $("result").hidden = !single;
     $("written-figure").hidden = true;
     $("planned-caption").hidden = true;
     word($("result-facts"), "plan_note");
-    if (state.job.preview) drawPath($("result-canvas"), state.job.preview);
+    phrase.hide();
+    if (single) drawPath($("result-canvas"), state.job.preview);
     render(job);
     follow(state.job.ticket, state.job.token);
   }
 
-  // The short code and its QR code: the same ticket on another device (/t/<code>).
+  // The ticket's one identifier on screen, its short code, and its QR code: the same ticket on
+  // another device (/t/<code>).
   function showCode(job) {
     $("elsewhere").hidden = !job.code;
+    $("code").textContent = job.code ? `${job.code.slice(0, 4)}-${job.code.slice(4)}` : "-";
     if (!job.code) return;
     const link = `${location.origin}/t/${job.code}`;
-    const pretty = `${job.code.slice(0, 4)}-${job.code.slice(4)}`;
-    $("code").textContent = pretty;
     $("code-link").textContent = link;
     $("qr").src = `/api/jobs/${encodeURIComponent(job.ticket)}/qr.svg?token=${encodeURIComponent(job.token)}`;
     word($("qr"), "qr_alt", { link }, "alt");
@@ -382,6 +396,7 @@
     if (state.events) { state.events.close(); state.events = null; }
     if (state.watchdog) { clearInterval(state.watchdog); state.watchdog = null; }
     $("stale").hidden = true;
+    delete $("stale").dataset.i18n;
   }
 
   function follow(ticket, token) {
@@ -405,20 +420,22 @@
     state.watchdog = setInterval(checkStale, 500);
   }
 
-  // Old news must not look current: say so as soon as the stream or the show goes quiet.
+  // Old news must not look current: say so as soon as the stream or the show goes quiet. A
+  // silent stream is a lost connection to this kiosk; a kiosk that says the orchestrator's news
+  // stopped is reachable: only the show is slow to answer.
   function checkStale() {
-    const stale = state.serverStale || Date.now() - state.lastLive > STALE_AFTER_MS;
-    if ($("stale").hidden === stale) $("stale").hidden = !stale;
+    const lost = Date.now() - state.lastLive > STALE_AFTER_MS;
+    const key = lost ? "stale" : state.serverStale ? "show_slow" : null;
+    const box = $("stale");
+    if (key && box.dataset.i18n !== key) word(box, key);
+    box.hidden = !key;
   }
 
   function render(job) {
     if (!job) return;
     state.lastJob = job;
-    if (job.job_id && state.job) {
-      state.job.job_id = job.job_id;
-      $("job-id").textContent = job.job_id;
-    }
-    word($("status-text"), ...window.SkyquillStatus.words(job, errorWords));
+    const said = job.phrase ? phrase.words(job) : window.SkyquillStatus.words(job, errorWords);
+    word($("status-text"), ...said);
     const waiting = job.state === "queued";
     $("queue-place").textContent = waiting && job.queue_position ? `${job.queue_position}` : "-";
     if (waiting && job.eta_s != null) {
@@ -428,11 +445,14 @@
     const bar = $("progress");
     bar.hidden = job.state !== "writing";
     bar.value = job.progress || 0;
-    if (job.final && job.state !== "done") $("result").hidden = true;
-    if (job.state === "done" && state.job) showResult(job);
+    if (job.phrase) { phrase.render(job, state.job && state.job.preview); return; }
+    // a character written, well or out of the show's bounds: its pictures, never hidden
+    const written = job.state === "done" || (job.state === "failed" && job.metrics);
+    if (written && state.job) showResult(job);
+    else if (job.final) $("result").hidden = true;
   }
 
-  // The finished character: the plan and the ink the drone left, with words a visitor reads.
+  // The written character: the plan and the ink the drone left, with words a visitor reads.
   function showResult(job) {
     const written = job.metrics && job.metrics.written;
     const area = state.job.preview ? state.job.preview.writing_area_m : null;
@@ -459,7 +479,8 @@
   }
 
   function titleOf(el, job) {
-    if (job.text) word(el, "title_text", { text: job.text }); else word(el, "title_drawing");
+    if (job.phrase) word(el, "title_phrase", { text: job.text });
+    else if (job.text) word(el, "title_text", { text: job.text }); else word(el, "title_drawing");
   }
 
   $("again").addEventListener("click", () => {
@@ -468,7 +489,7 @@
     state.job = null;
     renderSaved();
     resetDrawing();
-    $("text").value = "";
+    $("text").value = $("phrase-text").value = "";
     show("compose");
     redrawPad();
   });
@@ -496,8 +517,9 @@
     history.replaceState(null, "", "/");
     if (!reply.ok) { sayError(reply.error, { byCode: true }); return; }
     state.job = {
-      ticket: reply.ticket, token: reply.token, job_id: reply.job.job_id, code: reply.code,
+      ticket: reply.ticket, token: reply.token, code: reply.code,
       preview: reply.preview, text: reply.label.startsWith("drawing (") ? null : reply.label,
+      phrase: Boolean(reply.preview && reply.preview.phrase),
     };
     saveTicket(state.job);
     showJob(reply.job);
@@ -526,7 +548,7 @@
     try { localStorage.removeItem(CURRENT); } catch (err) { /* private mode */ }
     state.job = null;
     resetDrawing();
-    $("text").value = "";
+    $("text").value = $("phrase-text").value = "";
     setMode("draw", true);
     show("compose");
     redrawPad();
@@ -542,6 +564,7 @@
     if (config.max_text_chars > 1) {
       word(document.querySelector(".type-label"), "type_label_many", { n: config.max_text_chars });
     }
+    phrase.setup(config);
     // pictures are drawn, not worded: draw the finished one again after a switch (sizes move)
     window.SkyquillI18n.onChange(() => { if (state.lastJob) render(state.lastJob); });
     new ResizeObserver(() => { if (!$("compose").hidden) redrawPad(); }).observe(pad);

@@ -36,6 +36,8 @@ window.SkyquillStatus = (() => {
   // [key, args] of the sentence about ``job``; errorWords words a late refusal's code.
   function words(job, errorWords) {
     const who = { drone: drone(job), where: where(job), pct: pct(job.progress) };
+    // the operator's reason: plain text the kiosk cut to a line, shown as text (never markup)
+    const said = { reason: job.reason };
     switch (job.state) {
       case "submitted": case "awaiting_approval": return ["st_approval", {}];
       case "queued": return queued(job);
@@ -44,9 +46,10 @@ window.SkyquillStatus = (() => {
       case "writing":
         return [job.attempts >= 2 ? "st_restarted_pct" : "st_writing", who];
       case "done": return ["st_done", who];
-      case "failed": return ["st_failed", {}];
-      case "cancelled": return ["st_cancelled", {}];
-      case "rejected": return ["st_rejected", {}];
+      case "failed":
+        return job.failure === "writing_bounds" ? ["st_failed_bounds", who] : ["st_failed", {}];
+      case "cancelled": return job.reason ? ["st_cancelled_reason", said] : ["st_cancelled", {}];
+      case "rejected": return job.reason ? ["st_rejected_reason", said] : ["st_rejected", {}];
       case "sending": return ["st_sending", {}];
       case "checking": return ["st_checking", {}];
       case "refused": return errorWords({ code: job.refusal || "refused" });
@@ -54,7 +57,8 @@ window.SkyquillStatus = (() => {
     }
   }
 
-  // Sentences under the finished pictures: time, where to look, how close, how much overlaps.
+  // Sentences under the pictures of a written character (done, or failed on its bounds): time,
+  // where to look, how close, how much overlaps.
   function resultWords(job) {
     const out = [];
     const m = job.metrics;
@@ -70,5 +74,5 @@ window.SkyquillStatus = (() => {
     return out;
   }
 
-  return { words, resultWords };
+  return { words, resultWords, duration };
 })();

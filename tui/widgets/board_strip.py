@@ -35,13 +35,18 @@ def board_entry(model: ConsoleModel, board_id: str, now_s: float) -> Text:
     return entry
 
 
-SYMBOLS = {"fault": ("!", "bold red"), "lost": ("✖", "bold white on red"), "idle": ("·", "green")}
+SYMBOLS = {
+    "fault": ("!", "bold red"),
+    "lost": ("✖", "bold white on red"),
+    "idle": ("·", "green"),
+    "battery_swap": ("B", "bold black on yellow"),
+}
 """Compact marks of a board's vehicle states (others: ``^``, in the air)."""
 
 
 def compact_entry(model: ConsoleModel, board_id: str, now_s: float) -> Text:
-    """``b1工`` writing, ``b2^`` flying, ``b3✖`` lost, ``b4·`` idle, ``H`` held, ``P`` paused,
-    ``✎`` new sheet (the legend: ``help_screen.BOARD_MARKS``)."""
+    """``b1工`` writing, ``b2^`` flying, ``b3✖`` lost, ``b4·`` idle, ``B`` battery swap, ``H``
+    held, ``P`` paused, ``✎`` new sheet (the legend: ``help_screen.BOARD_MARKS``)."""
     entry = Text(clean(board_id, 8), style="bold")
     for vid in model.vehicles_on_board(board_id):
         row = model.vehicle_row(vid, now_s)

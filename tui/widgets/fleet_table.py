@@ -32,13 +32,20 @@ COLUMNS = (
     ("error", "Error"),
     ("force", "Force"),
     ("battery", "Batt"),
+    ("preflight", "Pre"),
     ("age", "Link"),
+    ("flown", "Flown"),
     ("job", "Job"),
     ("kind", "Kind"),
 )
 """Column keys and headings; the most urgent first, so narrow terminals still show them. ``On``
 says what the vehicle writes on (``board``, ``wall``, ``floor``), so a wall or ground writer reads
-as one at once; ``Force`` is the contact force against its target (kinds that control force)."""
+as one at once; ``Force`` is the contact force against its target (kinds that control force);
+``Batt`` is the charge left and the minutes until empty; ``Pre`` its preflight (``ok``, or the
+check that holds it: the detail screen has the reason); ``Link`` how long since it was heard and
+the share of its autopilot's messages lost; ``Flown`` its time off the ground today. At 80
+columns ``Kind``, ``Job`` and ``Flown`` drop first (``Link`` too when its text is long): the
+detail screen (Enter) shows them all, with the preflight's whole reason."""
 _COLUMN_INDEX = {key: i for i, (key, _) in enumerate(COLUMNS)}
 
 Cell = tuple[str, str]
@@ -69,8 +76,10 @@ def row_cells(row: VehicleRow) -> Cells:
         fmt.progress(row.progress, 5) if row.job_id else "",
         fmt.tracking_error(row),
         fmt.force(row),
-        fmt.battery(row.battery_fraction),
-        fmt.link_age(row),
+        fmt.battery(row.battery_fraction, row.battery_minutes_left),
+        fmt.preflight(row),
+        fmt.link(row),
+        fmt.duration(row.flight_s_today),
         fmt.short_id(row.job_id) if row.job_id else "-",
         fmt.short_id(row.kind, ID_CHARS) if row.kind else "-",
     )

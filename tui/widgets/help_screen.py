@@ -29,6 +29,7 @@ HELP: tuple[tuple[str, str, str], ...] = (
     ("F", "reset every vehicle in fault (confirmed)", "whole fleet"),
     ("U", "release every held vehicle (confirmed)", "whole fleet"),
     ("s", "fresh sheet: a board waiting for one is written on again", "selected vehicle's board"),
+    ("b", "battery swapped: a vehicle in battery swap flies again (confirmed)", "selected vehicle"),
     ("Enter / d", "details of the vehicle", "selected vehicle (fleet focused)"),
     ("p", "pause / resume the queue (held vehicles stay held)", "queue"),
     ("P", "pause a vehicle: no new job / resume it (confirmed)", "selected vehicle"),
@@ -44,7 +45,7 @@ HELP: tuple[tuple[str, str, str], ...] = (
 
 BOARD_MARKS = (
     "boards line (small terminals): b1工 writing 工 · b2^ in the air · b4· idle · ! fault · "
-    "✖ lost · H held · P paused · ✎ waits for a fresh sheet (s)"
+    "✖ lost · B battery swap (b) · H held · P paused · ✎ waits for a fresh sheet (s)"
 )
 """The legend of the compact board strip (``tui/widgets/board_strip.py``)."""
 

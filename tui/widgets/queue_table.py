@@ -39,11 +39,19 @@ def row_cells(row: QueueRow, marked: bool = False) -> Cells:
     """The cells of one job: Text only, as DataTable reads a ``str`` cell as markup."""
     return (
         MARK + fmt.section_text(row) if marked else fmt.section_text(row),
-        Text(fmt.short_id(row.job.label, 12), style="bold"),
+        _char(row.job),
         Text(f"{row.job.priority:+d}" if row.job.priority else "", style="bold"),
         Text(fmt.short_id(row.job.job_id)),
         Text(fmt.job_detail(row)),
     )
+
+
+def _char(job: JobState) -> Text:
+    """The character; a phrase's with its place in it (``新 ⁞1/4``), so its jobs read as one."""
+    text = Text(fmt.short_id(job.label, 12), style="bold")
+    if job.phrase is not None:
+        text.append(f" ⁞{job.phrase.index + 1}/{job.phrase.size}", style="cyan")
+    return text
 
 
 class QueueTable(DataTable[Text]):

@@ -44,8 +44,10 @@ def detail_table(row: VehicleRow) -> Table:
         ("progress", Text(fmt.progress(row.progress, 10))),
         ("tracking err", fmt.tracking_error(row)),
         ("force", fmt.force_detail(row)),
-        ("battery", fmt.battery(row.battery_fraction)),
-        ("link age", fmt.link_age(row)),
+        ("battery", fmt.battery(row.battery_fraction, row.battery_minutes_left)),
+        ("preflight", fmt.preflight(row, full=True)),
+        ("link", fmt.link(row)),
+        ("flown today", Text(fmt.duration(row.flight_s_today))),
         ("position", Text(position)),
         ("message", plain(row.message or "-")),
     ]

@@ -77,6 +77,25 @@ class Setpoint:
 
 
 @dataclass(frozen=True)
+class LinkHealth:
+    """What a backend measures of its link to the vehicle and the vehicle's estimator, for the
+    agent's preflight (``vehicle_agent/preflight.py``); a figure it does not measure is None."""
+
+    link_age_s: float | None = None
+    """Age in [s] of the autopilot's latest heartbeat."""
+    link_loss_fraction: float | None = None
+    """Share of the autopilot's recent messages lost on the link, 0..1 (from their sequence
+    numbers); None until enough have come to say."""
+    estimator: str | None = None
+    """What the autopilot's estimator lacks, in words (None: healthy, or not reported)."""
+    mocap_age_s: float | None = None
+    """Age in [s] of the latest mocap pose forwarded to the autopilot (None: no mocap
+    forwarded); infinite while none has been."""
+    fence: str | None = None
+    """Why the autopilot's own fence is not in place, in words (None: it is, or not asked)."""
+
+
+@dataclass(frozen=True)
 class VehicleSnapshot:
     """The vehicle at the end of one control period."""
 
@@ -93,7 +112,12 @@ class VehicleSnapshot:
     on_ground: bool
     """Resting on the ground (landed or never took off)."""
     battery_fraction: float | None = None
-    """Remaining battery 0..1 when known."""
+    """Charge left in the battery over its rated capacity, 0..1, when known."""
+    battery_voltage_v: float | None = None
+    """Battery terminal voltage in [V] (under the present load), when known."""
+    battery_minutes_left: float | None = None
+    """Minutes until the battery is empty, when known: at the kind's cruise draw (the sim), or
+    as the autopilot predicts from its recent draw (MAVLink ``time_remaining``)."""
     fault: str | None = None
     """A fault that stops flying (lost link, failsafe, crash), in words; None when healthy."""
     pen_contact: bool | None = None
@@ -116,6 +140,9 @@ class VehicleSnapshot:
     ``Preflight Fail: horizontal velocity unstable``); None: it can (or the backend has no
     autopilot). The agent publishes it, and no job is given to the vehicle meanwhile: arming
     would only be refused."""
+    health: LinkHealth | None = None
+    """The link and estimator figures of the agent's preflight (None: the backend has no link
+    to check, e.g. the in-process simulator)."""
 
 
 @runtime_checkable
@@ -175,6 +202,16 @@ class SynchronousVehicle(Protocol):
     def estop(self) -> None: ...
 
     def recover(self) -> None: ...
+
+
+@runtime_checkable
+class BatterySwap(Protocol):
+    """A backend whose battery the crew can change: the simulator (a full pack), an autopilot
+    (told where it keeps a count: ``mavlink_battery.py``)."""
+
+    async def swap_battery(self) -> None:
+        """A fresh pack is in: only at rest on the ground (raises :class:`BackendError`)."""
+        ...
 
 
 V = TypeVar("V", bound=SynchronousVehicle)

@@ -32,6 +32,7 @@ from collections.abc import Callable
 from typing import Any
 
 from vehicle_agent.backends.base import BackendError, BackendMode, Setpoint, Vec3, VehicleSnapshot
+from vehicle_agent.backends.mavlink_battery import reset_after_swap
 from vehicle_agent.backends.mavlink_commands import REASON_GRACE_S, CommandChannel
 from vehicle_agent.backends.mavlink_connect import (
     GCS_HEARTBEAT_PERIOD_S,
@@ -48,6 +49,7 @@ from vehicle_agent.backends.mavlink_errors import (
     VehicleFaultError,
 )
 from vehicle_agent.backends.mavlink_frames import LocalFrame
+from vehicle_agent.backends.mavlink_health import fence_problem, link_health
 from vehicle_agent.backends.mavlink_link import MavlinkLink
 from vehicle_agent.backends.mavlink_mocap import MocapForwarder, MocapSource, TickTime
 from vehicle_agent.backends.mavlink_params import ParamChannel
@@ -67,6 +69,11 @@ CMD_NAV_LAND, CMD_NAV_TAKEOFF, CMD_DO_SET_MODE = 21, 22, 176
 CMD_ARM_DISARM, CMD_RUN_PREARM_CHECKS = 400, 401
 PREARM_ASK_PERIOD_S = 5.0
 """How often in [s] an autopilot whose pre-arm checks fail unexplained is asked why."""
+GROUND_MODE_ASK_PERIOD_S = 0.5
+"""How often in [s] a PX4 disarmed in OFFBOARD is asked to go to Hold (a heartbeat is 1 s)."""
+GROUND_MODE_WAIT_S = 3.0
+"""How long in [s] a landing waits for the ground mode before the vehicle is idle anyway (its
+pre-arm state then says it is not in Hold yet)."""
 FORCE_DISARM = 21196.0
 TextHandler = Callable[[int, str], None]
 
@@ -114,6 +121,8 @@ class MavlinkBackend:
         self._commanded_at = 0  # heartbeat count when our last mode/arming change was accepted
         self._last_gcs_heartbeat_s = -math.inf
         self._prearm_asked_s = -math.inf
+        self._ground_mode_asked_s = -math.inf
+        self._ground_mode_since_s = math.inf  # when we began to ask for it (inf: not asking)
         self._hold: Setpoint | None = None
         self._climb: Move | None = None
         self._climb_to: tuple[Vec3, Vec3] | None = None  # (from, to): planned at the next tick
@@ -333,6 +342,11 @@ class MavlinkBackend:
         self._commanded_at = st.heartbeats
         self._set_backend_mode("idle")
 
+    async def swap_battery(self) -> None:
+        """The crew's fresh pack, told to the autopilot where it keeps a count
+        (:mod:`~vehicle_agent.backends.mavlink_battery`)."""
+        await reset_after_swap(self.commands, self.state)
+
     def close_link(self) -> None:
         self._mocap.stop()
         self.commands.cancel_all()
@@ -371,6 +385,7 @@ class MavlinkBackend:
     def _set_backend_mode(self, mode: BackendMode) -> None:
         self.mode = mode
         self.watchdog.mode_changed()
+        self._ground_mode_since_s = math.inf
 
     def _fail(self, reason: str) -> None:
         """Stop streaming for good; the autopilot (or the pilot) flies from here."""
@@ -411,8 +426,29 @@ class MavlinkBackend:
                 self._climb = None
                 self._set_backend_mode("hold")
         elif self.mode == "landing" and not st.armed and st.heartbeats > self._commanded_at:
+            in_hold_unsaid = st.prearm_mode != st.custom_mode  # no SYS_STATUS in Hold yet
+            if (st.in_offboard_on_ground or in_hold_unsaid) and self._to_ground_mode(
+                now_s, GROUND_MODE_WAIT_S
+            ):
+                return  # landed; idle once in Hold and its pre-arm checks said there
             self._set_backend_mode("idle")
             self._hold = None
+        elif self.mode == "idle" and st.in_offboard_on_ground:
+            self._to_ground_mode(now_s, math.inf)  # a refused arming, or found so at connect
+
+    def _to_ground_mode(self, now_s: float, wait_s: float) -> bool:
+        """Ask for the autopilot's ground mode (PX4: Hold) now and then, not awaited (a refusal
+        leaves it where it is); False once asked for longer than ``wait_s``, or when it has
+        none."""
+        flavor = self._flavor()
+        if flavor.ground_mode is None:
+            return False
+        if math.isinf(self._ground_mode_since_s):
+            self._ground_mode_since_s = now_s
+        if now_s - self._ground_mode_asked_s >= GROUND_MODE_ASK_PERIOD_S:
+            self._ground_mode_asked_s = now_s
+            self.commands.send(CMD_DO_SET_MODE, *flavor.set_mode_params(flavor.ground_mode))
+        return now_s - self._ground_mode_since_s < wait_s
 
     def _stream(self, setpoint: Setpoint | None, now_s: float) -> None:
         if setpoint is not None and self.mode in ("takeoff", "hold", "offboard"):
@@ -443,5 +479,10 @@ class MavlinkBackend:
 
     def _snapshot(self, now_s: float) -> VehicleSnapshot:
         position = self._position_m_enu()
+        fence = fence_problem(self.settings, self.params_set, self._flavor().name)
+        losses = None if self._link is None else self._link.losses
+        health = link_health(self.state, losses, self.watchdog.link_silent_s(now_s),
+                             self._mocap.age_s(now_s), fence)  # fmt: skip
         return vehicle_snapshot(self.state, now_s, position, self.aid.true_state(now_s),
-                                mode=self.mode, fault=self.fault, pen=self.pen)  # fmt: skip
+                                mode=self.mode, fault=self.fault, pen=self.pen,
+                                health=health)  # fmt: skip

@@ -16,6 +16,7 @@ from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from vehicle_agent.backends.mavlink_health import SequenceLoss, seq_of
 from vehicle_agent.backends.mavlink_url import LinkAddress, MavlinkUrlError
 
 log = logging.getLogger(__name__)
@@ -52,6 +53,8 @@ class MavlinkLink:
         self.messages_in = 0
         self.messages_out = 0
         self.bad_data = 0
+        self.losses = SequenceLoss()
+        """Messages lost on the link, from the senders' sequence numbers."""
 
     async def open(self) -> None:
         """Open the transport; raises :class:`MavlinkUrlError` (a BackendError) on failure."""
@@ -102,6 +105,7 @@ class MavlinkLink:
                 self.bad_data += 1
                 continue
             self.messages_in += 1
+            self.losses.saw(*seq_of(message))
             try:
                 self.on_message(message)
             except Exception:  # a bad message must not kill the link

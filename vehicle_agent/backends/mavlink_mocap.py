@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import math
 import time
 from collections import deque
 from collections.abc import Callable
@@ -110,6 +111,8 @@ class MocapForwarder:
         self.source = source
         self.sent = 0
         self.failed = 0
+        self.pose_at_s = -math.inf
+        """Capture time in [s] (agent clock) of the latest pose sent."""
 
     def start(self, link: Callable[[], MavlinkLink | None], clock: TickTime) -> None:
         """Forward from a task of its own (:meth:`run`) when the settings ask for mocap."""
@@ -120,6 +123,11 @@ class MocapForwarder:
         if self._task is not None:
             self._task.cancel()
             self._task = None
+
+    def age_s(self, now_s: float) -> float | None:
+        """Age in [s] at agent time ``now_s`` of the latest pose sent (infinite: none yet);
+        None when no mocap is forwarded."""
+        return None if self.kind == "none" else now_s - self.pose_at_s
 
     def set_ekf_origin(self, link: MavlinkLink, system_id: int) -> None:
         """An autopilot fusing our mocap: give its EKF an origin (once), before its GPS does."""
@@ -170,3 +178,4 @@ class MocapForwarder:
             message = link.mav.att_pos_mocap_encode(usec, q, x, y, z)
         if link.send(message):
             self.sent += 1
+            self.pose_at_s = usec * 1e-6

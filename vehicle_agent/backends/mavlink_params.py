@@ -50,6 +50,13 @@ PX4_EV_CTRL_VELOCITY = 4
 PX4_MOCAP_VELOCITY_NOISE_MPS = 0.02
 """EKF2_EVV_NOISE in [m/s] (default 0.1): the velocity of poses 20 ms apart with the show's
 0.2 mm mocap noise is ~0.014 m/s off."""
+PX4_MOCAP_VELOCITY_GATE_SD = 5.0
+"""EKF2_EVV_GATE in standard deviations (default 3). PX4 1.16 refuses to arm while the velocity
+innovation test ratio, innovation^2 / (gate^2 * variance), exceeds 0.5 (EKF2.cpp,
+kMinTestRatioPreflight). With the mocap's velocity trusted to EKF2_EVV_NOISE, SIH on the ground
+after a landing showed ratios 0.05-0.6 flipping every few seconds ("Preflight Fail: horizontal
+velocity unstable"), and arming refused in the moment it passed. The ratio goes as 1/gate^2: 5
+SD puts those readings at 0.02-0.22; an innovation still needs 3.5 SD to hold arming."""
 PX4_MOCAP_ACC_NOISE_MPS2 = 1.0
 """EKF2_ACC_NOISE in [m/s^2] (default 0.35): how far EKF2 lets the accelerometer carry the state
 between mocap samples. PX4 SIH's accelerometer is a vibrating airframe's (std 0.5 / 1.7 /
@@ -232,6 +239,8 @@ def _px4_mocap_params(with_velocity: bool) -> list[ParamSpec]:
         specs += [
             ParamSpec("EKF2_EVV_NOISE", PX4_MOCAP_VELOCITY_NOISE_MPS, MAV_PARAM_TYPE_REAL32,
                       why="velocity differenced from millimetre-grade poses"),
+            ParamSpec("EKF2_EVV_GATE", PX4_MOCAP_VELOCITY_GATE_SD, MAV_PARAM_TYPE_REAL32,
+                      why="its pre-arm velocity check holds still on the ground"),
             ParamSpec("EKF2_ACC_NOISE", PX4_MOCAP_ACC_NOISE_MPS2, MAV_PARAM_TYPE_REAL32,
                       why="the mocap, not the vibrating accelerometer, carries the motion"),
         ]  # fmt: skip

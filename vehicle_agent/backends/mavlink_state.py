@@ -22,6 +22,8 @@ MAV_AUTOPILOT_INVALID = 8
 MAV_AUTOPILOT_PX4 = 12
 MAV_TYPE_GCS = 6
 MAV_MODE_FLAG_SAFETY_ARMED = 128
+UNKNOWN_MV = 65535
+"""UINT16_MAX: a voltage the autopilot does not send (BATTERY_STATUS cells, SYS_STATUS)."""
 SEVERITY_WARNING = 4
 STATUSTEXT_CHARS = 50
 """Characters in one STATUSTEXT's ``text`` (common.xml: char[50]); a chunk this full may go on."""
@@ -51,6 +53,11 @@ class Flavor:
     setpoint_timeout_s: float
     """Default time without setpoints after which the autopilot stops following us [s]
     (ArduPilot GUID_TIMEOUT 3 s; PX4 COM_OF_LOSS_T 1 s)."""
+    ground_mode: int | None = None
+    """HEARTBEAT custom_mode to put the vehicle in once it has landed and disarmed (None: leave
+    it in the landing mode). PX4: AUTO.LOITER (Hold), because after a landing it goes back to
+    OFFBOARD, where its pre-arm bit stays clear until setpoints stream; in Hold the bit says
+    what its checks say (SYS_STATUS.hpp: ``can_arm_mode_flags`` of the current ``nav_state``)."""
 
     def set_mode_params(self, custom_mode: int) -> tuple[float, float, float]:
         """(param1, param2, param3) of MAV_CMD_DO_SET_MODE for ``custom_mode``."""
@@ -68,7 +75,13 @@ class Flavor:
 
 
 ARDUPILOT = Flavor("ardupilot", offboard_mode=4, land_mode=9, setpoint_timeout_s=3.0)
-PX4 = Flavor("px4", offboard_mode=6 << 16, land_mode=(4 << 16) | (6 << 24), setpoint_timeout_s=1.0)
+PX4 = Flavor(
+    "px4",
+    offboard_mode=6 << 16,
+    land_mode=(4 << 16) | (6 << 24),
+    setpoint_timeout_s=1.0,
+    ground_mode=(4 << 16) | (3 << 24),
+)
 
 
 def flavor_for(autopilot: int) -> Flavor | None:
@@ -94,11 +107,13 @@ class StatustextJoiner:
 
     MAVLink 2 sends a text longer than 50 characters as STATUSTEXTs with the same ``id`` and
     ``chunk_seq`` 0, 1, 2...; the last is shorter than 50 (NUL-terminated). ``id`` 0 means a text
-    of one chunk (common.xml), as ArduPilot and mavsim send every text. (PX4 numbers its texts
-    from 0, ``_id++``: its first text after boot, if chunked, comes as separate texts.) Part
-    of a text is handed on as it is when a chunk of another text (or out of sequence) arrives, or
-    once it has waited :data:`STATUSTEXT_JOIN_WAIT_S`: no words are lost to a chunk that never
-    comes.
+    of one chunk (common.xml), as ArduPilot (GCS_Common.cpp numbers chunked texts from 1) and
+    mavsim send it; but PX4 numbers its texts from 0 on each link (``_id++`` in STATUSTEXT.hpp),
+    so its first text, if longer, comes as id 0 in chunks: with ``zero_chunks`` (PX4) an id-0
+    text that fills its 50 characters waits like any chunk, and one that says ``chunk_seq`` 1
+    goes on it. Part of a text is handed on as it is when a chunk of another text
+    (or out of sequence) arrives, or once it has waited :data:`STATUSTEXT_JOIN_WAIT_S`: no words
+    are lost to a chunk that never comes.
     """
 
     def __init__(self, wait_s: float = STATUSTEXT_JOIN_WAIT_S) -> None:
@@ -106,7 +121,14 @@ class StatustextJoiner:
         self._partial: _PartialText | None = None
 
     def add(
-        self, severity: int, text: str, text_id: int, chunk_seq: int, now_s: float
+        self,
+        severity: int,
+        text: str,
+        text_id: int,
+        chunk_seq: int,
+        now_s: float,
+        *,
+        zero_chunks: bool = False,
     ) -> list[tuple[int, str]]:
         """The texts (severity, text), oldest first, that are whole once this chunk is in:
         usually none (it waits for the rest) or one."""
@@ -114,7 +136,8 @@ class StatustextJoiner:
         partial = self._partial
         if partial is not None and (text_id, chunk_seq) != (partial.text_id, partial.next_chunk):
             done += self._hand_on()
-        if text_id == 0:
+        whole = chunk_seq == 0 and (len(text) < STATUSTEXT_CHARS or not zero_chunks)
+        if text_id == 0 and whole:
             return [*done, (severity, text)]
         if self._partial is None:  # chunk_seq > 0: its beginning was lost, the rest still joins
             self._partial = _PartialText(severity, text_id, chunk_seq, [], now_s)
@@ -165,10 +188,17 @@ class LinkState:
         self.position_time_ms = 0
         self.attitude_ned: Vec3 | None = None
         self.battery_fraction: float | None = None
+        self.battery_voltage_v: float | None = None
+        self.battery_minutes_left: float | None = None
+        """BATTERY_STATUS ``time_remaining`` in [min] (None: not sent, or 0: unknown)."""
         self._battery_from_status = False
         self.landed_state: int | None = None
+        self.estimator_flags: int | None = None
+        """ESTIMATOR_STATUS / EKF_STATUS_REPORT ``flags`` (None: neither sent)."""
         self.prearm_good: bool | None = None
         """SYS_STATUS says the pre-arm checks pass (None: no SYS_STATUS yet)."""
+        self.prearm_mode: int | None = None
+        """The HEARTBEAT custom_mode as the last SYS_STATUS came (PX4's bit is for that mode)."""
         self.prearm_text: str | None = None
         """The autopilot's latest explanation of a failing pre-arm check (a STATUSTEXT that
         begins as :data:`PREARM_EXPLANATIONS`), forgotten whenever SYS_STATUS says they pass."""
@@ -192,17 +222,24 @@ class LinkState:
     def preflight(self) -> str | None:
         """Why the autopilot would refuse to arm now, in its own words (:data:`PREARM_UNSAID`
         when it has not said); None while SYS_STATUS says its pre-arm checks pass, or before
-        the first SYS_STATUS. None too while PX4 sits in OFFBOARD on the ground: its bit says
-        whether it could arm in the mode it is in, and OFFBOARD needs the setpoint stream the
-        agent starts only to take off (PX4 goes back to OFFBOARD after each landing; the bit then
-        stayed clear for good, measured on 1.16 SIH: SYS_STATUS.hpp sets it from
-        ``can_arm_mode_flags`` of the current ``nav_state``); arming says then."""
+        the first SYS_STATUS. PX4 sets the bit for the mode it is in (SYS_STATUS.hpp:
+        ``can_arm_mode_flags`` of the current ``nav_state``), and in OFFBOARD on the ground,
+        with no setpoints streaming, it is clear whatever the checks say (PX4 goes back to
+        OFFBOARD after each landing, measured on 1.16 SIH): then :data:`PX4_OFFBOARD_ON_GROUND`,
+        until the agent has it in Hold (:attr:`Flavor.ground_mode`), where the bit means them."""
+        flavor = self.flavor
+        if self.in_offboard_on_ground and flavor is not None and flavor.ground_mode is not None:
+            return PX4_OFFBOARD_ON_GROUND
         if self.prearm_good is not False:
             return None
-        flavor = self.flavor
-        if flavor is not None and flavor.name == "px4" and self.custom_mode == flavor.offboard_mode:
-            return None
         return self.prearm_text or PREARM_UNSAID
+
+    @property
+    def in_offboard_on_ground(self) -> bool:
+        """Disarmed in the mode that follows our setpoints (PX4 after a landing, or after its
+        arming was refused there)."""
+        flavor = self.flavor
+        return flavor is not None and not self.armed and self.custom_mode == flavor.offboard_mode
 
     @property
     def connected(self) -> bool:
@@ -264,16 +301,29 @@ class LinkState:
         self.attitude_ned = (float(m.roll), float(m.pitch), float(m.yaw))
 
     def _battery_status(self, m: Any) -> None:
+        """BATTERY_STATUS: charge left, the pack voltage (the cells sent, summed: ArduPilot puts
+        the whole pack in the first, PX4 one cell in each), the autopilot's time left."""
         if m.battery_remaining >= 0:
             self.battery_fraction = m.battery_remaining / 100.0
             self._battery_from_status = True
+        cells_mv = [int(v) for v in m.voltages if int(v) not in (0, UNKNOWN_MV)]
+        if cells_mv:
+            self.battery_voltage_v = sum(cells_mv) / 1000.0
+        time_remaining_s = int(getattr(m, "time_remaining", 0) or 0)
+        self.battery_minutes_left = time_remaining_s / 60.0 if time_remaining_s > 0 else None
 
     def _sys_status(self, m: Any) -> None:
         self.prearm_good = bool(m.onboard_control_sensors_health & MAV_SYS_STATUS_PREARM_CHECK)
+        self.prearm_mode = self.custom_mode
         if self.prearm_good:  # an explanation said since belongs to a new failure
             self.prearm_text = None
         if m.battery_remaining >= 0 and not self._battery_from_status:
             self.battery_fraction = m.battery_remaining / 100.0
+        if m.voltage_battery not in (0, UNKNOWN_MV) and not self._battery_from_status:
+            self.battery_voltage_v = m.voltage_battery / 1000.0
+
+    def _estimator_status(self, m: Any) -> None:
+        self.estimator_flags = int(m.flags)
 
     def _extended_sys_state(self, m: Any) -> None:
         self.landed_state = int(m.landed_state)
@@ -286,6 +336,7 @@ class LinkState:
             int(getattr(m, "id", 0)),  # MAVLink 1 has neither field: one chunk
             int(getattr(m, "chunk_seq", 0)),
             self._clock(),
+            zero_chunks=self.flavor is PX4,
         )
         self._keep_texts(whole)
         return bool(whole)
@@ -323,6 +374,8 @@ PREARM_DENIAL = "Arming denied:"
 an explanation only until a better one comes."""
 PREARM_UNSAID = "pre-arm checks failing"
 """The explanation while SYS_STATUS says the checks fail and the autopilot has not said why."""
+PX4_OFFBOARD_ON_GROUND = "in OFFBOARD on the ground, its pre-arm checks unknown: going to Hold"
+"""The explanation while PX4 sits disarmed in OFFBOARD (see :attr:`LinkState.preflight`)."""
 
 _HANDLERS = {
     "LOCAL_POSITION_NED": LinkState._local_position,
@@ -330,6 +383,8 @@ _HANDLERS = {
     "BATTERY_STATUS": LinkState._battery_status,
     "SYS_STATUS": LinkState._sys_status,
     "EXTENDED_SYS_STATE": LinkState._extended_sys_state,
+    "ESTIMATOR_STATUS": LinkState._estimator_status,
+    "EKF_STATUS_REPORT": LinkState._estimator_status,
     "STATUSTEXT": LinkState._statustext,
     "COMMAND_ACK": LinkState._command_ack,
     "POSITION_TARGET_LOCAL_NED": LinkState._position_target,

@@ -22,6 +22,7 @@ import math
 from collections.abc import Callable
 from typing import Any
 
+from sim.battery import BatteryState, Phase, discharge, full, minutes_left
 from vehicle_agent.backends.base import (
     BackendError,
     BackendMode,
@@ -33,6 +34,7 @@ from vehicle_agent.backends.base import (
 from vehicle_agent.backends.sim_round import StepRound
 from vehicle_agent.motion import Move, plan_move
 from vehicles import DEFAULT_KIND
+from vehicles.batteries import kind_battery
 from vehicles.kind import LiveReference, SimulatedFleet, SimulatedVehicle, VehicleKind
 from vehicles.registry import vehicle_kind
 
@@ -80,6 +82,10 @@ class SimVehicle:
         self._move: Move | None = None
         self._hold: Setpoint = Setpoint(position_m_enu=home_m_enu)
         self._flights = 0
+        self.battery = kind_battery(self.kind.name)
+        """Its kind's pack and draw per phase (``vehicles/<room>/battery.py``)."""
+        self.battery_state: BatteryState = full(self.battery.pack)
+        """Its pack now: drawn each tick at the power of what it does (:meth:`phase`)."""
 
     # --- mode commands -------------------------------------------------------------------------
     def takeoff(self, hover_m_enu: Vec3) -> None:
@@ -122,6 +128,12 @@ class SimVehicle:
         if self.mode not in ("idle", "estop"):
             raise BackendError(f"cannot recover in mode {self.mode}: it is not at rest")
         self.mode = "idle"
+
+    def swap_battery(self) -> None:
+        """The crew put a fresh pack in: only into a vehicle at rest on the ground."""
+        if self._vehicle is not None or self.mode not in ("idle", "estop"):
+            raise BackendError(f"cannot swap the battery in mode {self.mode}: it is not at rest")
+        self.battery_state = full(self.battery.pack)
 
     def close(self) -> None:
         """Leave the fleet, if in flight in one (the agent stops)."""
@@ -169,8 +181,20 @@ class SimVehicle:
         """The second half of :meth:`tick`: time goes on, a finished move ends, the vehicle
         now."""
         self.t_s += self.dt_s
+        power_w = self.battery.power_w.of(self.phase())
+        self.battery_state = discharge(self.battery.pack, self.battery_state, power_w, self.dt_s)
         self._finish_move()
         return self.snapshot()
+
+    def phase(self) -> Phase:
+        """What it does now, as its battery sees it: at rest on the ground, holding (hovering,
+        climbing, descending; a ground vehicle standing with its motors on), moving with the pen
+        up, or writing."""
+        if self._vehicle is None:
+            return "rest"
+        if self.mode != "offboard":
+            return "hover"
+        return "writing" if self._hold.pen_down else "transit"
 
     def _reference(self) -> Setpoint | None:
         if self._vehicle is None:
@@ -217,6 +241,7 @@ class SimVehicle:
 
     def snapshot(self) -> VehicleSnapshot:
         """The vehicle now."""
+        fraction, voltage_v, minutes = self._battery_now()
         if self._vehicle is None:
             return VehicleSnapshot(
                 t_s=self.t_s,
@@ -225,9 +250,11 @@ class SimVehicle:
                 armed=False,
                 mode=self.mode,
                 on_ground=True,
-                battery_fraction=None,
                 pen_contact=False,
                 pen_width_m=0.0,
+                battery_fraction=fraction,
+                battery_voltage_v=voltage_v,
+                battery_minutes_left=minutes,
             )
         state = self._vehicle.state()
         tip, contact = state.pen_tip_m_enu, state.pen_contact
@@ -240,12 +267,22 @@ class SimVehicle:
             armed=True,
             mode=self.mode,
             on_ground=False,
-            battery_fraction=None,
             pen_contact=contact,
             pen_tip_m_enu=tip,
             pen_width_m=state.pen_width_m if contact else 0.0,
             force_n=state.force_n,
+            battery_fraction=fraction,
+            battery_voltage_v=voltage_v,
+            battery_minutes_left=minutes,
         )
+
+    def _battery_now(self) -> tuple[float, float, float]:
+        """Its battery: charge left (0..1), terminal voltage [V], minutes left at its cruise
+        draw [min]."""
+        state, battery = self.battery_state, self.battery
+        cruise_w = battery.power_w.of(battery.cruise)
+        minutes = minutes_left(battery.pack, state.charge_fraction, cruise_w)
+        return state.charge_fraction, state.voltage_v, minutes
 
 
 class SimBackend(SynchronousBackend[SimVehicle]):
@@ -262,6 +299,9 @@ class SimBackend(SynchronousBackend[SimVehicle]):
         if self.vehicle.begin_tick(setpoint):
             await self.step_round.stepped()
         return self.vehicle.end_tick()
+
+    async def swap_battery(self) -> None:
+        self.vehicle.swap_battery()
 
     async def close(self) -> None:
         self.vehicle.close()
