@@ -462,12 +462,19 @@ class Book:
         return self.settle(eff, now_s) if eff.fleet_changed or eff.jobs or eff.events else eff
 
     def telemetry(
-        self, vehicle_id: str, tracking_error_m: float, job_id: str | None, now_s: float
+        self,
+        vehicle_id: str,
+        tracking_error_m: float,
+        job_id: str | None,
+        now_s: float,
+        *,
+        writing: bool,
     ) -> Effects:
-        """A telemetry sample: liveness, and an alert (at most every 5 s) on large errors.
-
-        Not settled (the service applies these effects only when they hold events)."""
-        return presence.telemetry(self, vehicle_id, tracking_error_m, job_id, now_s)
+        """A telemetry sample: liveness, and an alert (at most every 5 s) on a large error while
+        it writes. Not settled (the service applies these effects only when they hold events)."""
+        return presence.telemetry(
+            self, vehicle_id, tracking_error_m, job_id, now_s, writing=writing
+        )
 
     def vehicle_event(self, vehicle_id: str, event: Event, now_s: float) -> Effects:
         """An event an agent published about its vehicle: into the show's log (rate-limited)."""

@@ -149,16 +149,26 @@ def _restarted_since(view: VehicleView, assigned_at_s: float | None) -> bool:
 
 
 def telemetry(
-    book: Book, vehicle_id: str, tracking_error_m: float, job_id: str | None, now_s: float
+    book: Book,
+    vehicle_id: str,
+    tracking_error_m: float,
+    job_id: str | None,
+    now_s: float,
+    *,
+    writing: bool,
 ) -> Effects:
-    """A telemetry sample: liveness, and an alert (at most every 5 s) on large errors."""
+    """A telemetry sample: liveness, and an alert (at most every 5 s) on a large error while the
+    vehicle writes, as the console's alert line does (``tui/records.py``). Not in transit: an
+    autopilot's take-off ends within its tolerance of the hover point and its loop lags a move
+    by 5-6 cm (ArduCopter and PX4 SITL, issue 31), an alert at every take-off that spoils no
+    character; the agent's deviation bound aborts a runaway there."""
     eff = Effects()
     view = book.vehicles.get(vehicle_id)
     if view is None:
         return eff
     view.last_seen_s = view.heard_at_s = now_s
     limit = book.config.tracking_error_alert_m
-    if tracking_error_m > limit and now_s - view.last_alert_s >= 5.0:
+    if writing and tracking_error_m > limit and now_s - view.last_alert_s >= 5.0:
         view.last_alert_s = now_s
         book.event(
             eff,

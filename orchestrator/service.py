@@ -291,7 +291,11 @@ class OrchestratorService(BookOutputs):
         while True:
             for sample in (await latest.take()).values():
                 eff = self.book.telemetry(
-                    sample.vehicle_id, sample.tracking_error_m, sample.job_id, self.clock()
+                    sample.vehicle_id,
+                    sample.tracking_error_m,
+                    sample.job_id,
+                    self.clock(),
+                    writing=sample.state == "writing",
                 )
                 if eff.events:
                     self.apply(eff)

@@ -141,7 +141,7 @@ class PolicySettings(ShowModel):
     the moment of the cut (the fence runs at least ``lost_after_s`` past it), and a restart of
     the router or the orchestrator many times over, without troubling the operator."""
     tracking_error_alert_m: float = Field(default=0.05, gt=0.0)
-    """Tracking error that raises an alert event, in [m]."""
+    """Tracking error that raises an alert event while a vehicle writes, in [m]."""
     max_queue: int = Field(default=200, ge=1)
     """Submissions beyond this many queued jobs are refused (``queue_full``); jobs awaiting
     approval count apart (``max_awaiting``). The operator's own are never refused."""

@@ -224,3 +224,16 @@ def test_without_the_router_link_a_lost_token_counts_from_when_it_went() -> None
     assert [(e.vehicle_id, e.time_s) for e in merged.events if e.kind == "vehicle_lost"] == [
         ("uav1", 2.5)
     ]
+
+
+def test_a_tracking_alert_is_raised_only_while_the_vehicle_writes() -> None:
+    """An autopilot's take-off and transit lag its reference by 5-6 cm (SITL, issue 31): that
+    spoils no character and was an alert at every take-off; with the brush down it is one."""
+    book = _book()
+    _online(book, "uav1", 0.0)
+    for t_s in (1.0, 7.0, 13.0):
+        assert book.telemetry("uav1", 0.08, "j1", t_s, writing=False).events == []
+    said = book.telemetry("uav1", 0.08, "j1", 14.0, writing=True).events
+    assert [(e.kind, e.level) for e in said] == [("limit", "alert")]
+    assert "0.080 m" in said[0].message
+    assert book.telemetry("uav1", 0.03, "j1", 20.0, writing=True).events == []  # within

@@ -86,7 +86,8 @@ def test_lost_fault_and_half_written_board_alerts_close_with_their_cause() -> No
     assert _open(book) == [("vehicle_fault", "uav1")]  # not a status sent after the fault
     _status(book, "uav1", "idle", 6.0)
     assert _open(book) == []
-    book.telemetry("uav1", 1.0, None, 7.0)  # an alert of a moment: in the log only
+    said = book.telemetry("uav1", 1.0, None, 7.0, writing=True).events
+    assert [e.kind for e in said] == ["limit"]  # an alert of a moment: in the log only
     assert _open(book) == []
     reply, _ = book.submit("j1", SubmitRequest(text="L"), label="L", estimate_s=20.0, now_s=8.0)
     job = book.jobs["j1"]
