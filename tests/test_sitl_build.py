@@ -5,16 +5,15 @@ steps' failures, on a fake ``./waf``. The builds themselves are run by hand (REA
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import re
 import subprocess
-import sys
 from pathlib import Path
 from types import ModuleType
 from typing import Any
 
 import pytest
+from module_by_path import load_module
 
 SITL_SCRIPTS = Path(__file__).resolve().parents[1] / "scripts" / "sitl"
 STOCK_ARMED_NOISE = {"accel": (0.5, 1.7, 1.4), "gyro": (0.14, 0.07, 0.03)}
@@ -23,14 +22,7 @@ STOCK_DISARMED_NOISE = {"accel": (0.1, 0.1, 0.1), "gyro": (0.01, 0.01, 0.01)}
 
 
 def by_path(name: str) -> ModuleType:
-    module = sys.modules.get(name)
-    if module is None:
-        spec = importlib.util.spec_from_file_location(name, SITL_SCRIPTS / f"{name}.py")
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-    return module
+    return load_module(name, SITL_SCRIPTS / f"{name}.py")
 
 
 @pytest.fixture(scope="module")

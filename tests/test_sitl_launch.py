@@ -4,7 +4,6 @@ processes themselves run in tests/test_sitl_side_by_side.py and the conformance 
 
 from __future__ import annotations
 
-import importlib.util
 import math
 import os
 import socket
@@ -16,6 +15,7 @@ from pathlib import Path
 from types import ModuleType
 
 import pytest
+from module_by_path import load_module
 from test_sitl_side_by_side import with_ports
 
 from vehicle_agent.backends.mavlink_params import PX4_DELAY_MAX_MS, mocap_params
@@ -26,15 +26,7 @@ START_PY = ROOT / "scripts" / "sitl" / "start.py"
 
 @pytest.fixture(scope="module")
 def launch() -> ModuleType:
-    name = "skyquill_sitl_start"
-    module = sys.modules.get(name)
-    if module is None:
-        spec = importlib.util.spec_from_file_location(name, START_PY)
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-    return module
+    return load_module("skyquill_sitl_start", START_PY)
 
 
 @pytest.fixture(scope="module")

@@ -4,26 +4,20 @@ tests/test_sitl_side_by_side.py)."""
 
 from __future__ import annotations
 
-import importlib.util
 import sys
 from pathlib import Path
 from types import ModuleType, SimpleNamespace
 from typing import Any
 
 import pytest
+from module_by_path import load_module
 
 START_PY = Path(__file__).resolve().parents[1] / "scripts" / "sitl" / "start.py"
 
 
 @pytest.fixture(scope="module")
 def readiness() -> ModuleType:
-    name = "skyquill_sitl_start"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, START_PY)
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
+    load_module("skyquill_sitl_start", START_PY)
     return sys.modules["readiness"]  # as start.py imported it
 
 

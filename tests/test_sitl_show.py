@@ -9,13 +9,12 @@ $SKYQUILL_PX4_SITL; README "Real autopilot SITL").
 
 from __future__ import annotations
 
-import importlib.util
 import os
-import sys
 from pathlib import Path
 from types import ModuleType
 
 import pytest
+from module_by_path import load_module
 
 ROOT = Path(__file__).resolve().parents[1]
 SHOWS = {"ardupilot": "sitl-ardupilot.yaml", "px4": "sitl-px4.yaml"}
@@ -23,12 +22,7 @@ VARIABLES = {"ardupilot": "SKYQUILL_ARDUCOPTER_SITL", "px4": "SKYQUILL_PX4_SITL"
 
 
 def sitl_show() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("sitl_show", ROOT / "benchmarks/sitl_show.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["sitl_show"] = module  # its dataclasses look themselves up there
-    spec.loader.exec_module(module)
-    return module
+    return load_module("sitl_show", ROOT / "benchmarks/sitl_show.py")
 
 
 @pytest.mark.sitl

@@ -11,13 +11,12 @@ scripts/sitl/build.py, skipped with the reason otherwise.
 
 from __future__ import annotations
 
-import importlib.util
 import os
-import sys
 from pathlib import Path
 from types import ModuleType
 
 import pytest
+from module_by_path import load_module
 
 ROOT = Path(__file__).resolve().parents[1]
 RMSE_MAX_M = 0.015
@@ -25,14 +24,7 @@ IOU_MIN = 0.6
 
 
 def writing() -> ModuleType:
-    spec = importlib.util.spec_from_file_location(
-        "mavlink_writing", ROOT / "benchmarks" / "mavlink_writing.py"
-    )
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["mavlink_writing"] = module  # its dataclasses look themselves up there
-    spec.loader.exec_module(module)
-    return module
+    return load_module("mavlink_writing", ROOT / "benchmarks" / "mavlink_writing.py")
 
 
 @pytest.mark.sitl
