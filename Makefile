@@ -22,7 +22,7 @@ demo: setup
 
 ## Lint, types, layer contracts, then the whole test suite.
 test: setup lint
-	$(BIN)/pytest
+	$(BIN)/pytest -n 2 --dist loadgroup
 
 lint: setup
 	$(BIN)/ruff check .

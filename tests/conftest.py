@@ -38,3 +38,12 @@ def wall_kiosk() -> Iterator[str]:
     )
     with serving(settings, loopback_settings(), role="peer") as server:
         yield server.url
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Under xdist (`-n 2 --dist loadgroup`), tests that start processes or a browser run one at
+    a time on one worker: they wait far more than they compute, and their timing bounds were set
+    for a machine with a core to spare. Every other test is spread over the workers."""
+    for item in items:
+        if item.get_closest_marker("multiprocess") or item.get_closest_marker("browser"):
+            item.add_marker(pytest.mark.xdist_group("processes"))

@@ -240,7 +240,8 @@ def test_a_character_written_in_full_is_never_given_to_another_vehicle(
             for result in journal.recover():
                 assert result.job_id == "j1"
         t = cut_s
-        while t < (back_s or cut_s) + 60.0:
+        last_news_s = max(cut_s if back_s is None else back_s, end_s + measure_s)
+        while t < last_news_s + 60.0:
             t += 0.5
             book.tick(t)
             book.status(_status("uav2", _job_of(book, "uav2")), t)
