@@ -27,7 +27,7 @@ test: setup lint
 lint: setup
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
-	$(BIN)/mypy planner sim vehicles bus showfile trust orchestrator vehicle_agent tui kiosk mavsim cli
+	$(BIN)/mypy planner sim vehicles bus showfile trust orchestrator vehicle_agent tui kiosk mavsim cli scene
 	$(BIN)/lint-imports
 
 bench: setup

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import os
 import random
 import sqlite3
@@ -120,6 +121,15 @@ def run_show(args: argparse.Namespace, out: Path, chaos: bool) -> Result:
         return _run_show(args, out, chaos, disk)
 
 
+def _whole(job_dir: Path) -> bool:
+    """Whether a job folder holds an attempt written to its end (its metrics name no abort)."""
+    try:
+        summary = json.loads((job_dir / "metrics.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return summary.get("abort_reason") is None
+
+
 def _run_show(args: argparse.Namespace, out: Path, chaos: bool, disk: OwnDisk | None) -> Result:
     path, show = derived_show(SHOW, out, time_scale=args.time_scale)
     path, show, relay_port, router_port = _through_relay(path, show)
@@ -189,8 +199,8 @@ def _run_show(args: argparse.Namespace, out: Path, chaos: bool, disk: OwnDisk | 
     finally:
         stored.close()
     job_dirs = show.database_path.parent / "jobs"
-    folders = (
-        Counter(p.name.split("-")[0] for p in job_dirs.iterdir())
+    folders = (  # attempts written to their end: a broken-off one keeps its folder too
+        Counter(p.name.split("-")[0] for p in job_dirs.iterdir() if _whole(p))
         if job_dirs.is_dir()
         else Counter()
     )

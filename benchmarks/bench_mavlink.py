@@ -45,8 +45,8 @@ import mavlink_writing  # noqa: E402  (beside this file)
 from mavsim.config import VehicleConfig  # noqa: E402
 from mavsim.server import MavsimServer  # noqa: E402
 from vehicle_agent.backends.base import Setpoint  # noqa: E402
-from vehicle_agent.backends.mavlink import MavlinkBackend  # noqa: E402
-from vehicle_agent.backends.mavlink_settings import MavlinkSettings  # noqa: E402
+from vehicle_agent.backends.mavlink.backend import MavlinkBackend  # noqa: E402
+from vehicle_agent.backends.mavlink.settings import MavlinkSettings  # noqa: E402
 
 CONTROL_HZ = 100.0
 RADIUS_M = 0.3

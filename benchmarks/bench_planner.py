@@ -5,7 +5,8 @@
     python benchmarks/bench_planner.py --clearance 0.05   # pen-up hop of the shows
 
 Characters are laid out on a 1 m x 1 m area (5 cm margin) with the default limits. Each stage is
-timed once per character after a warm-up; printed: median and worst [ms] per character.
+timed once per character after a warm-up; printed: median and worst [ms] per character (wall
+time; ``plan_strokes`` also in CPU time, steadier on a shared machine).
 Stages: fixed-time closed-form fit (eq. 43) at the initial times; acceleration-constrained QP
 (lazy working set, PIQP); the full QP for PIQP / Clarabel / OSQP; full re-segmentation (the
 default: per-segment re-timing at the limits, planner.timescale, then the QP); the paper's
@@ -148,12 +149,14 @@ class _Results:
 
 def _measure(char: str, options: PlanOptions, res: _Results, peer: bool, numeric: bool) -> None:
     strokes = _strokes(char)
+    cpu_start = time.process_time()
     try:
         traj, plan_ms = _timed(lambda: plan_strokes(strokes, options))
     except PlannerError as exc:
         res.failures.append(f"{char}: {exc}")
         return
     res.add("plan_strokes (everything)", plan_ms)
+    res.add("plan_strokes, CPU time", (time.process_time() - cpu_start) * 1e3)
     res.refine_rounds.append(int(traj.info.get("refine_rounds", 0)))
     prep = prepare(strokes, options)
     problem, limits = prep.problem, prep.qp_limits

@@ -26,11 +26,14 @@ after another: ``4 * 3600 / mean(cycle)``.
 ETAs (``--eta``, a real run): the Airshow show (router, orchestrator, four simulated agents as
 child processes, real Zenoh on loopback) at ``--eta-scale``; the corpus is submitted at once
 once every vehicle is ready, and after ``--settle`` seconds (planned durations replace the rough
-estimates) one snapshot gives each queued job's ETA. Predicted start = snapshot time + ETA;
-predicted finish = predicted start + the job's planned duration (as the vehicle reports it) over
-the time scale. Actual start and finish: the job's ``writing`` and ``done`` publications. Errors
-are (predicted - actual) / actual, both counted from the snapshot. The phases measured on the
-way (assignment -> writing, done -> the vehicle's next assignment) are printed in sim seconds.
+estimates) one snapshot gives each queued job's ETA. The show's crew is the benchmark's
+Stagehand, and the show is told its turnaround (``STAGEHAND_TURNAROUND_S``). Predicted start =
+snapshot time + ETA; predicted finish = predicted start + the job's planned duration (as the
+vehicle reports it) over the time scale. Actual start and finish: the job's ``writing`` and
+``done`` publications. Errors are (predicted - actual) / actual, both counted from the snapshot.
+The phases measured on the way (assignment -> writing, done -> the vehicle's next assignment)
+are printed in sim seconds, and the writing (``writing`` -> ``done``) against the planned
+duration.
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ from __future__ import annotations
 import argparse
 import itertools
 import math
+import os
 import statistics
 import sys
 import tempfile
@@ -81,6 +85,11 @@ VERTICAL_SPEED_MPS = 0.5
 VERTICAL_ACCEL_MPS2 = 0.8
 """Climb and descent acceleration limit of those moves (SimVehicle default)."""
 PACES = ("nominal", "limits")
+STAGEHAND_TURNAROUND_S = 0.5
+"""Wall time in [s] this run's crew (``cli.showrun.Stagehand``: it looks every 0.3 s, then sends
+``fresh_sheet``) takes to change a sheet; the show is told so (``policy.sheet_change_s``, in show
+seconds), as a show is told its crew's pace: the default 40 s put every ETA of a 16-job queue late
+by 60-100 % (the ETAs count a sheet after every character, the Stagehand changed it at once)."""
 
 
 def quintic_s(distance_m: float, v_max_mps: float, a_max_mps2: float) -> float:
@@ -202,8 +211,13 @@ def _spread(name: str, errors: list[float]) -> str:
 def eta_run(chars: str, scale: float, settle_s: float) -> None:
     """Run the show, predict every queued job's start and finish, compare with what happened."""
     timeline = JobTimeline()
+    load = os.getloadavg()
     with tempfile.TemporaryDirectory() as tmp:
-        path, show = derived_show(SHOW, Path(tmp), time_scale=scale)
+        base = load_show(SHOW)
+        crew = {"sheet_change_s": STAGEHAND_TURNAROUND_S * scale}
+        path, show = derived_show(
+            SHOW, Path(tmp), time_scale=scale, policy=base.policy.model_copy(update=crew)
+        )
         with (
             ShowRun(path, show, log_dir=Path(tmp) / "logs") as run,
             run.client() as session,
@@ -221,7 +235,8 @@ def eta_run(chars: str, scale: float, settle_s: float) -> None:
     predicted = {j.job_id: t0 + j.eta_s for j in snap.jobs if j.eta_s is not None}
     print(
         f"ETAs: {len(chars)} characters at time_scale {scale:g}, {len(predicted)} queued at the"
-        f" snapshot ({settle_s:g} s after submission); seconds after the snapshot:"
+        f" snapshot ({settle_s:g} s after submission); load (1 min) {load[0]:.1f} at the start,"
+        f" {os.getloadavg()[0]:.1f} at the end; seconds after the snapshot:"
     )
     print("  job  char vehicle   start: predicted actual  error   finish: predicted actual  error")
     start_err, finish_err = [], []
@@ -264,10 +279,20 @@ def _phases(timeline: JobTimeline, final: list[JobState], scale: float) -> None:
     for jobs in turns.values():
         jobs.sort()
         after += [(b[0] - a[1]) * scale for a, b in itertools.pairwise(jobs)]
-    if approach and after:
+    stretch = [
+        (timeline.first[(j.job_id, "done")] - timeline.first[(j.job_id, "writing")])
+        * scale
+        / j.planned_duration_s
+        for j in final
+        if (j.job_id, "writing") in timeline.first
+        and (j.job_id, "done") in timeline.first
+        and j.planned_duration_s
+    ]
+    if approach and after and stretch:
         print(
             f"  measured (sim s): assignment -> writing median {statistics.median(approach):.1f};"
-            f" done -> next assignment median {statistics.median(after):.1f}"
+            f" done -> next assignment median {statistics.median(after):.1f};"
+            f" writing -> done / planned duration median {statistics.median(stretch):.2f}"
         )
 
 

@@ -108,7 +108,7 @@ def fly_corpus(
         )
         log = fly([planned[c] for c in chars], dataclasses.replace(config, world=world), seed=seed)
         for i, char in enumerate(chars):
-            m = flight_metrics(flown_of(log, i), world.brush)
+            m = flight_metrics(flown_of(log, i), world.brush, planned[char])
             scores.append((char, m.rmse_pen_down_m, m.iou))
     return scores
 

@@ -21,6 +21,11 @@ The warm-up (``--warmup-minutes``) is by default half the run, up to 25 min: the
 keeps the latest 500 finished jobs and snapshot replies list as many, so its memory rises until
 about 500 characters are written (25 min at time scale 4), then stays flat.
 
+Every finished job should have its ``report.png``, drawn later when the machine is busy: after
+the soak the show runs on until every picture is drawn (``--picture-wait-s`` at most), and the
+pictures drawn, still waiting and how late they came after their job's ``metrics.json`` are
+printed, the last job's among them.
+
 ``--trace-memory DIR`` says what grows in the orchestrator (or the ``--trace`` processes), by
 allocation site (``memtrace.py``).
 """
@@ -193,6 +198,55 @@ def keep_waiting(
             jobs.submitted(str(reply.job_id), str(reply.state))
 
 
+@dataclass(frozen=True)
+class Pictures:
+    """The job pictures of a run, read from the job directories."""
+
+    jobs: int
+    """Job directories with their ``metrics.json`` (pruned ones are not counted)."""
+    waiting: int
+    """Of them, those whose picture is ordered but not drawn yet."""
+    late_s: list[tuple[float, float]]
+    """Per drawn picture, oldest job first: when its job was recorded (``metrics.json``'s
+    mtime, epoch [s]) and how much later in [s] its ``report.png`` was written."""
+
+    @classmethod
+    def of(cls, jobs_dir: Path) -> Pictures:
+        jobs, waiting, late = 0, 0, []
+        for job in jobs_dir.glob("*/metrics.json"):
+            try:
+                done_s = job.stat().st_mtime
+                jobs += 1
+                if (job.parent / "picture.order").exists():
+                    waiting += 1
+                elif (picture := job.parent / "report.png").exists():
+                    late.append((done_s, picture.stat().st_mtime - done_s))
+            except FileNotFoundError:
+                continue  # pruned meanwhile
+        return cls(jobs, waiting, sorted(late))
+
+
+PICTURE_STALL_S = 180.0
+"""Waiting for pictures stops when none was drawn for this long in [s]: an idle agent's planning
+worker stops after 120 s (``vehicle_agent/worker_client.py``), the orders it left are drawn at
+the vehicle's next job."""
+
+
+def wait_for_pictures(jobs_dir: Path, timeout_s: float) -> tuple[Pictures, float]:
+    """The pictures once none waits (or none was drawn for ``PICTURE_STALL_S``, or after
+    ``timeout_s``), and the seconds waited."""
+    start = progress = time.monotonic()
+    pictures = Pictures.of(jobs_dir)
+    while pictures.waiting and time.monotonic() - start < timeout_s:
+        time.sleep(2.0)
+        before, pictures = pictures.waiting, Pictures.of(jobs_dir)
+        if pictures.waiting < before:
+            progress = time.monotonic()
+        elif time.monotonic() - progress > PICTURE_STALL_S:
+            break
+    return pictures, time.monotonic() - start
+
+
 def traced(
     trace_dir: Path | None, names: list[str], period_s: float
 ) -> Callable[[ChildSpec], ChildSpec] | None:
@@ -213,8 +267,11 @@ def traced(
     return adjust
 
 
-def soak(args: argparse.Namespace, out_dir: Path) -> tuple[Samples, Jobs, dict[str, int]]:
-    """Run the show for ``args.minutes``; the samples, the jobs and restarts per process."""
+def soak(
+    args: argparse.Namespace, out_dir: Path
+) -> tuple[Samples, Jobs, dict[str, int], Pictures, float]:
+    """Run the show for ``args.minutes``; the samples, the jobs, restarts per process, the job
+    pictures and how long in [s] the show ran on for the last ones."""
     path, show = derived_show(SHOW, out_dir, time_scale=args.time_scale)
     if args.database_budget_mb is not None:
         storage = show.storage.model_copy(update={"database_budget_mb": args.database_budget_mb})
@@ -245,8 +302,9 @@ def soak(args: argparse.Namespace, out_dir: Path) -> tuple[Samples, Jobs, dict[s
                 _progress(samples, jobs)
         stop.set()
         feeder.join(timeout=30.0)
+        pictures = wait_for_pictures(show.database_path.parent / "jobs", args.picture_wait_s)
         restarts = {name: run.supervisor.restarts(name) for name in run.supervisor.names}
-    return samples, jobs, restarts
+    return samples, jobs, restarts, *pictures
 
 
 def _progress(samples: Samples, jobs: Jobs) -> None:
@@ -307,6 +365,21 @@ def report(
         )
 
 
+def report_pictures(pictures: Pictures, waited_s: float) -> None:
+    """Print how many jobs have their picture and how late the pictures came."""
+    late = [s for _, s in pictures.late_s]
+    drawn = len(late)
+    print(
+        f"  pictures: {drawn} of {pictures.jobs} job directories ({pictures.waiting} still"
+        f" waiting after {waited_s:.0f} s more)"
+    )
+    if late:
+        print(
+            f"  picture after its job: median {statistics.median(late):.1f} s, max"
+            f" {max(late):.1f} s; the last job's {late[-1]:.1f} s"
+        )
+
+
 def _slope(points: list[tuple[float, int]], after_s: float) -> str:
     slope = slope_per_h(points, after_s)
     return "-" if slope is None else f"{slope / MIB:+7.1f} MiB/h"
@@ -346,6 +419,12 @@ def main() -> int:
         help="the show's storage.database_budget_mb (default: the show's; small to see the"
         " database compacted within a short run)",
     )
+    parser.add_argument(
+        "--picture-wait-s",
+        type=float,
+        default=600.0,
+        help="after the soak, how long the show runs on for pictures still waiting (600 s)",
+    )
     parser.add_argument("--out-dir", type=Path, help="keep the show's files here (default: tmp)")
     parser.add_argument(
         "--trace-memory",
@@ -364,11 +443,12 @@ def main() -> int:
         args.warmup_minutes = min(25.0, args.minutes / 2.0)
     if args.out_dir is not None:
         args.out_dir.mkdir(parents=True, exist_ok=True)
-        samples, jobs, restarts = soak(args, args.out_dir)
+        samples, jobs, restarts, pictures, waited_s = soak(args, args.out_dir)
     else:
         with tempfile.TemporaryDirectory() as tmp:
-            samples, jobs, restarts = soak(args, Path(tmp))
+            samples, jobs, restarts, pictures, waited_s = soak(args, Path(tmp))
     report(args, samples, jobs, restarts)
+    report_pictures(pictures, waited_s)
     if args.png is not None:
         plot(samples, args.png, args.warmup_minutes * 60.0)
         print(f"  RSS plot: {args.png}")

@@ -27,7 +27,7 @@ from bus.messages import JobAssignment, JobMetrics, VehicleCommand
 from showfile import parse_show
 from vehicle_agent.agent import make_backend
 from vehicle_agent.backends.base import CommandRefusedError, VehicleBackend
-from vehicle_agent.backends.mavlink import MavlinkBackend
+from vehicle_agent.backends.mavlink.backend import MavlinkBackend
 from vehicle_agent.clock import TickClock
 from vehicle_agent.job_runner import JobRunner
 from vehicle_agent.jobs import job_metrics, planned_job, prepared_job
@@ -124,6 +124,8 @@ async def fly_jobs(
             failed = [r for r in actions.reports if r.event == "failed"]
             if failed:
                 raise RuntimeError(f"job {k} failed: {failed[0]}")
+            if actions.aborted is not None:  # its failed report waits for the metrics
+                raise RuntimeError(f"job {k} failed: {actions.aborted.report}")
             if actions.backend_command is not None:
                 name, hover = actions.backend_command
                 if name == "takeoff":

@@ -1,16 +1,19 @@
-"""The wall planner's eq. 7 as it was solved before the cached solvers: the peer of
+"""The wall planner's eq. 7 built the plain way: the peer of
 ``vehicles.hexarotor_sponge.nlp.solve_period`` in ``bench_wall.py``.
 
-Same model, cost and constraints (the planner's own ``rk4_step``, ``stage_cost`` and
-``rotor_thrusts``, so the two cannot drift apart), with the IPOPT options, steps and step counts
-of then (adaptive barrier, 0.1 s steps, no rounding of the count); a new ``casadi.Opti`` with
-``expand`` is built for every period, so every period pays for building the MX graph in Python,
-expanding it to SX and deriving it.
+The same problem as the planner's, term for term: the planner's own ``rk4_step``, ``stage_cost``,
+``rotor_thrusts`` and corridor rows (``corridor_terms``), the same steps (its step counts on the
+ladder, ``h_init``), the same time-step change cost (``weight_dh``), the same start and IPOPT's
+same options; only built as the planner was before its solvers were cached: a new
+``casadi.Opti`` with ``expand`` for every period, so every period pays for building the MX graph
+in Python, expanding it to SX and deriving it, and every bound is a constraint row. (Before issue
+33 the peer solved another problem, 0.1 s steps and no step-change cost, so its speed ratio mixed
+the problem with the implementation.) The rotor thrust rows are always in (the planner screens
+them out when no rotor reaches its range).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -20,34 +23,30 @@ import numpy as np
 from numpy.typing import NDArray
 
 from vehicles.hexarotor_sponge.contact_model import hover_control_n, rk4_step, rotor_thrusts
+from vehicles.hexarotor_sponge.corridor import corridor_rows
 from vehicles.hexarotor_sponge.diagnosis import Iterate, infeasible_error
 from vehicles.hexarotor_sponge.nlp import (
     Limits,
     PeriodSolution,
     cost_weights,
-    linear_states,
+    force_rows,
+    initial_guess,
     period_solution,
-    steps_per_segment,
+    unpack,
 )
-from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
-from vehicles.hexarotor_sponge.period_nlp import stage_cost
+from vehicles.hexarotor_sponge.params import HexarotorParams
+from vehicles.hexarotor_sponge.period_nlp import (
+    NODE,
+    STATE,
+    corridor_terms,
+    stage_cost,
+    wanted_force,
+)
+from vehicles.hexarotor_sponge.solver_cache import IPOPT_OPTIONS
+from vehicles.hexarotor_sponge.steps import steps_per_segment, waypoint_nodes
 from vehicles.hexarotor_sponge.waypoints import Period
 
 FloatArray = NDArray[np.float64]
-
-PAPER_STEP_S = 0.1
-"""The paper's step in [s], which the planner allocated steps at before it took 0.15 s."""
-
-
-IPOPT_OPTIONS: dict[str, Any] = {
-    "print_level": 0,
-    "sb": "yes",
-    "max_iter": 600,
-    "tol": 1e-6,
-    "acceptable_tol": 1e-4,
-    "mu_strategy": "adaptive",
-}
-"""IPOPT's options of then: the adaptive barrier and tol 1e-6."""
 
 
 @dataclass(frozen=True)
@@ -63,18 +62,24 @@ class _Variables:
 
 
 def solve_period_opti(period: Period, params: HexarotorParams, limits: Limits) -> PeriodSolution:
-    """The planner before the cached solvers: a fresh ``casadi.Opti`` (expanded) per period,
-    every bound as a constraint, the paper's hover-thrust start from its 0.1 s steps."""
-    limits = dataclasses.replace(limits, h_init_s=PAPER_STEP_S)
-    steps = steps_per_segment(period, limits)
-    nodes = np.concatenate([[0], np.cumsum(steps)]).astype(int)
+    """The planner's period NLP in a fresh ``casadi.Opti`` (expanded), every bound a
+    constraint, from the planner's start."""
+    needed = steps_per_segment(period, limits)
+    nodes = waypoint_nodes(needed)
     n = int(nodes[-1])
     opti = ca.Opti()
     var = _Variables(opti.variable(7, n + 1), opti.variable(4, n), opti.variable(n))
-    force_path = np.interp(np.arange(n + 1), nodes, period.force_n)
-    opti.minimize(_dynamics_and_cost(opti, var, force_path, params, limits))
+    forces = force_rows(period, nodes, corridor=limits.corridor_m is not None)
+    rows, _, _ = corridor_rows(period, nodes, limits.corridor_m)
+    wanted = [wanted_force(var.x[0:2, k], ca.DM(forces[k]), ca.DM(rows[k])) for k in range(n)]
+    opti.minimize(_dynamics_and_cost(opti, var, wanted, params, limits))
     _bounds(opti, var, period, nodes, limits)
-    _initial_guess(opti, var, period, nodes, limits, params.mass_kg)
+    _corridor(opti, var, period, nodes, limits)
+    guess = initial_guess(period, nodes, limits.h_init_s * sum(needed) / n, params)
+    xs, us, hs = unpack(guess, n)
+    opti.set_initial(var.x, xs)
+    opti.set_initial(var.u, us)
+    opti.set_initial(var.h, hs)
     opti.solver("ipopt", {"print_time": False, "expand": True, "record_time": True}, IPOPT_OPTIONS)
     started = time.perf_counter()
     try:
@@ -84,8 +89,8 @@ def solve_period_opti(period: Period, params: HexarotorParams, limits: Limits) -
     solve_s = time.perf_counter() - started
     stats = opti.stats()
     status = str(stats.get("return_status", "unknown"))
-    xs = np.asarray(values(var.x)).reshape(7, n + 1)
-    us = np.asarray(values(var.u)).reshape(4, n)
+    xs = np.asarray(values(var.x)).reshape(STATE, n + 1)
+    us = np.asarray(values(var.u)).reshape(NODE - STATE - 1, n)
     hs = np.asarray(values(var.h)).reshape(n)
     if not bool(stats.get("success", False)):
         raise infeasible_error(period, nodes, status, Iterate(xs, us, hs), params, limits)
@@ -94,10 +99,10 @@ def solve_period_opti(period: Period, params: HexarotorParams, limits: Limits) -
 
 
 def _dynamics_and_cost(
-    opti: Any, var: _Variables, force_path: FloatArray, params: HexarotorParams, limits: Limits
+    opti: Any, var: _Variables, wanted: list[Any], params: HexarotorParams, limits: Limits
 ) -> Any:
     """Per step: the RK4 defect, acceleration and rotor thrust constraints; returns the cost
-    (the planner's own dynamics and stage cost)."""
+    (the planner's own dynamics, stage cost and time-step change cost)."""
     x, u, h = var.x, var.u, var.h
     weights = cost_weights(limits)
     hover = hover_control_n(params)
@@ -107,9 +112,11 @@ def _dynamics_and_cost(
         x_end, rate = rk4_step(xk, uk, hk, params)
         opti.subject_to(x[:, k + 1] == x_end)
         u_prev = u[0:3, k - 1] if k > 0 else hover
-        cost += stage_cost(xk, uk, u_prev, force_path[k], params, weights) * hk
+        cost += stage_cost(xk, uk, u_prev, wanted[k], params, weights) * hk
+        if k > 0:
+            cost += limits.weight_dh * (hk - h[k - 1]) ** 2
         opti.subject_to(ca.sumsqr(rate[3:6]) <= limits.a_max_mps2**2)
-        _thrust_limits(opti, xk, uk, params)
+        opti.subject_to(opti.bounded(0.0, rotor_thrusts(xk, uk, params), params.thrust_max_n))
     return cost
 
 
@@ -117,12 +124,13 @@ def _bounds(
     opti: Any, var: _Variables, period: Period, nodes: NDArray[np.int_], limits: Limits
 ) -> None:
     """Time steps (7c), force rate and speed (7g), rest at both ends, the waypoints (7d) and the
-    contact mode (7e), each as a constraint."""
+    contact mode (7e), each as a constraint (the planner's variable bounds)."""
     x, u, h = var.x, var.u, var.h
     n = int(nodes[-1])
     opti.subject_to(opti.bounded(0.02, h, limits.h_max_s))
-    opti.subject_to(opti.bounded(-limits.force_rate_max_nps, u[3, :], limits.force_rate_max_nps))
-    for k in range(n + 1):
+    rate = limits.force_rate_max_nps if period.contact else 0.0
+    opti.subject_to(opti.bounded(-rate, u[3, :], rate))
+    for k in range(n):
         opti.subject_to(ca.sumsqr(x[3:6, k]) <= limits.v_max_mps**2)
     opti.subject_to(x[3:6, 0] == 0)
     opti.subject_to(x[3:6, n] == 0)
@@ -135,27 +143,14 @@ def _bounds(
     else:
         opti.subject_to(x[2, :] >= 0)
         opti.subject_to(x[6, :] == 0)
-        opti.subject_to(u[3, :] == 0)
 
 
-def _thrust_limits(opti: Any, xk: Any, uk: Any, params: HexarotorParams) -> None:
-    """0 <= each rotor's thrust <= its maximum (the planner's own allocation)."""
-    opti.subject_to(opti.bounded(0.0, rotor_thrusts(xk, uk, params), params.thrust_max_n))
-
-
-def _initial_guess(
-    opti: Any,
-    var: _Variables,
-    period: Period,
-    nodes: NDArray[np.int_],
-    limits: Limits,
-    mass_kg: float,
+def _corridor(
+    opti: Any, var: _Variables, period: Period, nodes: NDArray[np.int_], limits: Limits
 ) -> None:
-    """The paper's start: 0.1 s steps, states linear between waypoints, hover thrust."""
-    n = int(nodes[-1])
-    p0, v0, f0 = linear_states(period, nodes, limits.h_init_s)
-    opti.set_initial(var.x, np.vstack([p0.T, v0.T, f0]))
-    rate = np.diff(f0) / limits.h_init_s
-    hover = np.tile([[0.0], [mass_kg * GRAVITY_MPS2], [0.0]], (1, n))
-    opti.set_initial(var.u, np.vstack([hover, rate]))
-    opti.set_initial(var.h, np.full(n, limits.h_init_s))
+    """The planner's corridor rows at the nodes of a contact period (none in free flight or
+    in the paper's eq. 7)."""
+    rows, lower, upper = corridor_rows(period, nodes, limits.corridor_m)
+    for k in np.flatnonzero(np.isfinite(lower[:, 0])):
+        terms = corridor_terms(var.x[0:2, int(k)], ca.DM(rows[k]))
+        opti.subject_to(opti.bounded(lower[k], terms, upper[k]))

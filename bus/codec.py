@@ -145,6 +145,14 @@ def _check_raw(raw: bytes, max_bytes: int) -> None:
         raise _refuse("too_deep", f"JSON nested {depth} deep; at most {MAX_DEPTH} levels")
 
 
+@functools.cache
+def _decoder(message_type: type[M]) -> msgspec.json.Decoder[M]:
+    """One decoder per message type, made once: ``msgspec.json.decode(raw, type=...)`` looks the
+    type up on every call (Telemetry, timeit on the shared 2-core machine: 2.8-3.5 us a call
+    against 2.6-3.0 us; ``bench_bus``'s intake decodes 1,000 a second at 50 vehicles)."""
+    return msgspec.json.Decoder(message_type)
+
+
 def decode(
     payload: bytes | bytearray | memoryview | str,
     message_type: type[M],
@@ -160,7 +168,7 @@ def decode(
     raw = payload.encode("utf-8", "surrogatepass") if isinstance(payload, str) else bytes(payload)
     _check_raw(raw, max_bytes)
     try:
-        return msgspec.json.decode(raw, type=message_type)
+        message: M = _decoder(message_type).decode(raw)
     except msgspec.ValidationError as exc:
         text = str(exc)
         field = text.rsplit("at `", 1)[1].rstrip("`") if "at `" in text else None
@@ -169,3 +177,4 @@ def decode(
         raise _refuse("bad_json", f"not valid JSON: {exc}") from None
     except (ValueError, RecursionError, OverflowError, MemoryError) as exc:
         raise _refuse("bad_json", f"not valid JSON: {type(exc).__name__}: {exc}") from None
+    return message

@@ -212,10 +212,14 @@ class WrittenInk(State, frozen=True, kw_only=True):
 class JobMetrics(State, frozen=True):
     """How well a character was written (see the simulator's metrics.json)."""
 
-    rmse_pen_down_m: float
+    rmse_pen_down_m: float | None
+    """RMSE in [m] of the writing point while the pen was meant to be down; None: the pen never
+    came down, so nothing was measured (null on the wire, v1 addition: was always a number)."""
     rmse_m: float
     max_error_m: float
     iou: float | None
+    """Ink IoU of what was written against the whole target character (0: nothing of it
+    written); None: the backend does not know its brush."""
     duration_s: float
     written: WrittenInk | None = None
     """The ink left on the board, when the vehicle knows its brush (sent with the ``done``
@@ -223,6 +227,9 @@ class JobMetrics(State, frozen=True):
     extra: dict[str, float] = {}
     """The kind's own figures, names with units: the wall hexarotor's ``rmse_ee_m``,
     ``rmse_base_m``, ``force_rmse_n``, ``width_rmse_m``; empty for kinds without any."""
+    flown_fraction: float = 1.0
+    """Fraction 0..1 of the plan's duration flown; below 1 the job was written in part (an abort):
+    the errors cover what was flown, the IoU the whole target (v1 addition)."""
 
 
 class PhrasePlace(State, frozen=True):

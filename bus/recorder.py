@@ -25,7 +25,8 @@ import logging
 import queue
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
 from typing import IO, Any
@@ -104,6 +105,26 @@ def message_type_for_topic(keys: ShowKeys, topic: str) -> type[msgspec.Struct] |
     return None
 
 
+@dataclass(frozen=True)
+class DerivedMessage:
+    """A message the recording adds beside the bus's own, already encoded: a view of the show
+    in another schema (Foxglove's scene, ``scene.show_scene``), on its own topic."""
+
+    topic: str
+    schema_name: str
+    """e.g. ``foxglove.SceneUpdate``."""
+    schema_encoding: str
+    """``protobuf`` (a FileDescriptorSet) or ``jsonschema``."""
+    schema_data: bytes
+    message_encoding: str
+    """``protobuf`` or ``json``."""
+    payload: bytes
+
+
+Derive = Callable[[str, bytes, int], Iterable[DerivedMessage]]
+"""Called on the writer thread with each recorded bus message (topic, JSON payload, receive time
+in [ns]): the messages to record beside it."""
+
 log = logging.getLogger(__name__)
 
 RETRY_AFTER_FULL_S = 10.0
@@ -129,16 +150,21 @@ class McapRecorder:
         max_file_bytes: int | None = None,
         on_part_done: Callable[[Path, Path], None] | None = None,
         chunk_size_bytes: int = CHUNK_SIZE_BYTES,
+        derive: Derive | None = None,
     ) -> None:
         """``path``: the first file; ``max_file_bytes``: begin a new part past this size (None:
         one file); ``on_part_done``: called on the writer thread with each finished part and the
-        one begun after it."""
+        one begun after it; ``derive``: messages to record beside each bus message (a failure
+        there is logged once and counted in ``derive_failures``, the recording goes on)."""
         self.first_path = Path(path)
         self.first_path.parent.mkdir(parents=True, exist_ok=True)
         self.keys = keys
         self.max_file_bytes = max_file_bytes
         self._on_part_done = on_part_done
         self._chunk_size_bytes = chunk_size_bytes
+        self._derive = derive
+        self.derive_failures = 0
+        """Bus messages whose derived messages could not be made."""
         self.parts = 1
         """Files begun so far."""
         self._queue: queue.SimpleQueue[tuple[str, bytes, int] | str | None] = queue.SimpleQueue()
@@ -280,6 +306,40 @@ class McapRecorder:
             self._channel_id(topic), stamp_ns, payload, stamp_ns, self._sequence
         )
         self.messages += 1
+        if self._derive is not None:
+            self._write_derived(topic, payload, stamp_ns)
+
+    def _write_derived(self, topic: str, payload: bytes, stamp_ns: int) -> None:
+        assert self._derive is not None
+        try:
+            derived = list(self._derive(topic, payload, stamp_ns))
+        except Exception:  # a view of the show must never stop its recording
+            if not self.derive_failures:
+                log.exception("derived messages of %s failed (logged once)", topic)
+            self.derive_failures += 1
+            return
+        for message in derived:
+            self._sequence += 1
+            channel_id = self._derived_channel_id(message)
+            self._writer.add_message(
+                channel_id, stamp_ns, message.payload, stamp_ns, self._sequence
+            )
+            self.messages += 1
+
+    def _derived_channel_id(self, message: DerivedMessage) -> int:
+        if message.topic not in self._channels:
+            if message.schema_name not in self._schemas:
+                self._schemas[message.schema_name] = self._writer.register_schema(
+                    name=message.schema_name,
+                    encoding=message.schema_encoding,
+                    data=message.schema_data,
+                )
+            self._channels[message.topic] = self._writer.register_channel(
+                topic=message.topic,
+                message_encoding=message.message_encoding,
+                schema_id=self._schemas[message.schema_name],
+            )
+        return self._channels[message.topic]
 
     def record_message(self, topic: str, message: msgspec.Struct) -> None:
         """Record a message struct."""

@@ -1,9 +1,10 @@
 """``skyquill demo``: the Airshow show, simulated, with a few characters; prints how they came out.
 
 Runs a copy of ``shows/airshow-2014.yaml`` (four quadrotors) headless on a free loopback port with
-its own storage under ``out/demo/<time>/``, submits the characters, waits until every one is
-written, prints a table (job, vehicle, RMSE, IoU) and where the recording and logs are, then stops
-everything. Needs no configuration.
+its own storage under ``out/demo/<time>/``, submits the characters, lays a fresh sheet on each
+board after its character as the Airshow's crew did, waits until every one is written, prints a
+table (job, vehicle, RMSE, IoU, simulated flight time) and where the recording, the jobs' files
+and logs are, then stops everything. Needs no configuration.
 """
 
 from __future__ import annotations
@@ -43,7 +44,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cli.showrun import ShowRun, derived_show, submit_texts, wait_for_jobs
+    from cli.interrupt import hurry_on_ctrl_c
+    from cli.showrun import ShowRun, Stagehand, derived_show, submit_texts, wait_for_jobs
     from showfile import ShowError
 
     if not args.time_scale > 0.0:
@@ -61,7 +63,12 @@ def run(args: argparse.Namespace) -> int:
         f"Zenoh router on {show.zenoh.router_listen[0]}"
     )
     started = time.monotonic()
-    with ShowRun(show_path, show, log_dir=out_dir / "logs") as run_, run_.client() as session:
+    with (
+        ShowRun(show_path, show, log_dir=out_dir / "logs") as run_,
+        hurry_on_ctrl_c(run_.supervisor),  # Ctrl-C: one line, stopped in a second or two
+        run_.client() as session,
+        Stagehand(session, run_.keys),  # the crew: a sheet after each character
+    ):
         replies = submit_texts(session, run_.keys, texts)
         for text, reply in zip(texts, replies, strict=True):
             print(f"submitted {text!r}: job {reply.job_id}")
@@ -81,10 +88,14 @@ def run(args: argparse.Namespace) -> int:
     print()
     print(
         f"{sum(j.state == 'done' for j in jobs)}/{len(jobs)} written in "
-        f"{time.monotonic() - started:.0f} s"
+        f"{time.monotonic() - started:.0f} s of wall-clock time"
+    )
+    print(
+        f"sim time: each flight's simulated duration (time scale {args.time_scale:g}: up to "
+        f"{args.time_scale:g} simulated seconds per wall second)"
     )
     print(f"recording: {show.recordings_dir}/  (MCAP; read it with the mcap Python package)")
-    print(f"reports:   {reports_dir}/  (per job: metrics, plan, flight, report.png)")
+    print(f"reports:   {reports_dir}/  (per job: {job_files(reports_dir)})")
     for picture in pictures:
         print(f"  {picture}")
     print(f"database:  {show.database_path}")
@@ -120,20 +131,33 @@ class _Progress:
                 print(f"  {job.label!s:>6}  {job.job_id}  {job.state}{on}", flush=True)
 
 
+def job_files(reports_dir: Path) -> str:
+    """The files the jobs' directories hold (what was written, not what might be), in the
+    order the agents write them."""
+    order = ("metrics.json", "TRAJ.json", "flight.npz", "report.png")
+    names = {p.name for p in reports_dir.glob("*/*") if p.is_file()}
+    shown = [n for n in order if n in names] + sorted(names - set(order))
+    return ", ".join(shown) or "none written"
+
+
 def _table(texts: list[str], jobs: list[JobState]) -> str:
-    rows = [("text", "job", "vehicle", "state", "RMSE pen down", "RMSE", "IoU", "time")]
+    """One row per job; a job not ``done`` claims no ink (IoU 0), its errors stay measured."""
+    from cli.summary import length, ratio, seconds
+
+    rows = [("text", "job", "vehicle", "state", "pen-down RMSE", "RMSE", "ink IoU", "sim time")]
     for text, job in zip(texts, jobs, strict=True):
         m = job.metrics
+        iou = (m.iou if job.state == "done" else 0.0) if m else None
         rows.append(
             (
                 text,
                 job.job_id,
                 job.vehicle_id or "-",
                 job.state,
-                f"{m.rmse_pen_down_m * 1000:.1f} mm" if m else "-",
-                f"{m.rmse_m * 1000:.1f} mm" if m else "-",
-                f"{m.iou:.2f}" if m and m.iou is not None else "-",
-                f"{m.duration_s:.1f} s" if m else "-",
+                length(m.rmse_pen_down_m) if m else "-",
+                length(m.rmse_m) if m else "-",
+                ratio(iou),
+                seconds(m.duration_s) if m else "-",
             )
         )
     widths = [max(_width(str(row[i])) for row in rows) for i in range(len(rows[0]))]

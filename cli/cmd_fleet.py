@@ -41,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
 
     from showfile import ShowError, load_show
     from vehicle_agent.fleet import FleetError, FleetHost
-    from vehicle_agent.signals import run_until_signalled
+    from vehicle_agent.stop_signals import run_landing_first
 
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,
@@ -62,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"skyquill fleet: {exc}", file=sys.stderr)
         return 2
     with contextlib.suppress(KeyboardInterrupt):
-        asyncio.run(run_until_signalled(host))
+        asyncio.run(run_landing_first(host))
     # Every session is closed and the pictures written: skip the interpreter's teardown (about a
     # second of CPU unloading modules), as an agent does.
     logging.shutdown()

@@ -53,7 +53,7 @@ def _client_config(endpoints: list[str], folder: Path) -> dict[str, object]:
     }
 
 
-def _issue_client(show: Show, name: str, role: str) -> Path:
+def issue_client_folder(show: Show, name: str, role: str) -> Path:
     """Issue ``name``'s certificate, admit it, write its Zenoh config; returns its folder."""
     from trust.clients import record_client
     from trust.hosts import endpoints
@@ -105,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
                 f"issued {', '.join(made)}" if made else "all present and valid"
             ))  # fmt: skip
             return 0
-        folder = _issue_client(show, name, args.role)
+        folder = issue_client_folder(show, name, args.role)
     except (KeysError, OSError) as exc:
         print(f"skyquill keys: {exc}", file=sys.stderr)
         return 1

@@ -1,7 +1,9 @@
 """``skyquill plan``: strokes file or text -> checked minimum-jerk trajectory (TRAJ.json, plot).
 
 ``--kind`` plans for another vehicle kind through its room (:mod:`cli.plan_kind`); the options
-marked [brush] are the brush quadrotor's own and refused for another kind."""
+marked [brush] are the brush quadrotor's own and refused for another kind. The character is laid
+out as ``skyquill fly`` lays it (:mod:`cli.writing_args`). Prints a human summary with the
+verdict ``feasible: yes/no`` (:mod:`cli.summary`); ``--json`` the same facts as one JSON line."""
 
 from __future__ import annotations
 
@@ -14,6 +16,16 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from cli.writing_args import (
+    add_area_arguments,
+    add_source_arguments,
+    area_of,
+    cannot_write,
+    ink_size_m,
+    print_error,
+    read_glyph,
+    source_of,
+)
 from planner import defaults
 from planner.limits import VehicleLimits
 from vehicles import DEFAULT_KIND
@@ -22,7 +34,7 @@ from vehicles.quadrotor_brush import KIND_NAME as BRUSH_KIND
 NAME = "plan"
 HELP = "Plan a flyable minimum-jerk writing trajectory for a strokes file or text."
 
-_PROG = "skyquill plan"
+PROG = "skyquill plan"
 
 
 class _BrushOption(argparse.Action):
@@ -53,9 +65,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"vehicle kind ({DEFAULT_KIND}); the options marked [brush] are {BRUSH_KIND}'s own",
     )
     parser.set_defaults(brush_options_given=())
-    source = parser.add_mutually_exclusive_group(required=True)
-    source.add_argument("--strokes", metavar="FILE", help="strokes JSON (docs/formats.md)")
-    source.add_argument("--text", metavar="TEXT", help="Latin (Hershey) or Chinese text")
+    add_source_arguments(parser)
+    parser.add_argument("--json", action="store_true", help="print the summary as one JSON line")
     parser.add_argument(
         "--out", metavar="TRAJ.json", help="write the trajectory here (another kind: PLAN.json)"
     )
@@ -69,15 +80,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _add_board_arguments(parser: argparse.ArgumentParser) -> None:
     """Where on which board the text is laid out, and the heights the brush flies at."""
-    board = parser.add_argument_group("writing area (board-local metres)")
-    board.add_argument("--width", type=float, default=1.0, help="area width [m] (1.0)")
-    board.add_argument("--height", type=float, default=1.0, help="area height [m] (1.0)")
-    board.add_argument(
-        "--margin",
-        type=float,
-        default=defaults.MARGIN_M,
-        help=f"margin inside the area [m] ({defaults.MARGIN_M})",
-    )
+    add_area_arguments(parser)
+    board = parser.add_argument_group("board")
     board.add_argument(
         "--board-center",
         type=float,
@@ -195,46 +199,6 @@ def _add_planner_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def source_of(args: argparse.Namespace) -> str:
-    """What errors name as the input: the strokes file, or ``<text>``."""
-    return str(args.strokes) if args.strokes is not None else "<text>"
-
-
-def read_glyph(args: argparse.Namespace) -> Any:
-    """The glyph of ``--strokes`` or ``--text``: ValueError ``cannot read: ...`` for a file that
-    cannot be read, PlannerError naming the stroke and point of a bad one."""
-    from planner.glyphs import parse_strokes_json, text_glyph
-
-    if args.strokes is None:
-        return text_glyph(args.text)
-    try:
-        text = Path(args.strokes).read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ValueError(f"cannot read: {exc}") from None
-    return parse_strokes_json(text, source_name=args.strokes)
-
-
-def print_error(source: str, exc: Exception) -> int:
-    """One line on stderr naming ``source`` and, for a PlannerError, its stroke and point or
-    its field; the exit status 2."""
-    from planner.errors import PlannerError
-
-    where = [source]
-    message = str(exc)
-    if isinstance(exc, PlannerError):
-        message = exc.message.removeprefix(f"{source}: ")
-        if exc.stroke_index is not None:
-            where.append(f"stroke {exc.stroke_index}")
-        if exc.point_index is not None:
-            where.append(f"point {exc.point_index}")
-        if exc.stroke_index is None and exc.field is not None:
-            where.append(f"field {exc.field!r}")
-    location = ", ".join(where[1:])
-    prefix = f"{source}: {location}" if location else source
-    print(f"{_PROG}: error: {prefix}: {message}", file=sys.stderr)
-    return 2
-
-
 def _settings(args: argparse.Namespace, base: Any) -> Any:
     """The brush quadrotor's settings ``base`` (a show file's defaults) with this run's limits
     and planner options."""
@@ -300,9 +264,9 @@ def run(args: argparse.Namespace) -> int:
         settings = _settings(args, kind.settings(None, None))
         centre = tuple(args.board_center or (0.0, 0.0, 0.0))
         surface = Surface.of("horizontal", centre, math.radians(args.board_yaw_deg))
-        job = plan_glyph(kind, settings, surface, glyph, (args.width, args.height), args.margin)
+        job = plan_glyph(kind, settings, surface, glyph, area_of(args), args.margin)
     except (PlannerError, ValueError) as exc:
-        return print_error(source, exc)
+        return print_error(PROG, source, exc)
     traj = job.plan.detail
     if not isinstance(traj, PlannedTrajectory):
         raise TypeError(f"the {kind.name} plan holds no planner trajectory")
@@ -314,29 +278,54 @@ def run(args: argparse.Namespace) -> int:
 
             plot_trajectory(traj, job.glyph.strokes).savefig(args.plot, dpi=100)
     except OSError as exc:
-        return cannot_write(exc)
-    _summary(traj)
+        return cannot_write(PROG, exc)
+    if args.json:
+        print(json.dumps(_summary_json(job.glyph, traj), ensure_ascii=False))
+    else:
+        print("\n".join(summary_lines(job.glyph, traj)))
     return 0
 
 
-def cannot_write(exc: OSError) -> int:
-    """An output file that cannot be written, in one line (exit status 2)."""
-    print(f"{_PROG}: error: cannot write {exc.filename}: {exc.strerror or exc}", file=sys.stderr)
-    return 2
-
-
-def _summary(traj: Any) -> None:
+def _summary_json(glyph: Any, traj: Any) -> dict[str, Any]:
+    """What ``--json`` prints: the summary's facts (the trajectory itself: ``--out``)."""
     f = traj.feasibility
-    acc = ", ".join(f"{a:.2f}" for a in f.peak_accel_mps2)
-    print(f"duration {traj.duration_s:.2f} s, {len(traj.turning_points_board_m)} strokes")
-    print(
-        f"peak |a| x,y,z {acc} m/s^2; peak speed {f.peak_speed_mps:.2f} m/s;"
-        f" thrust {f.min_thrust_n:.1f}..{f.peak_thrust_n:.1f} N;"
-        f" body-rate bound {f.body_rate_bound_radps:.2f} rad/s"
+    return {
+        "label": glyph.label,
+        "kind": BRUSH_KIND,
+        "ink_size_m": ink_size_m(glyph),
+        "duration_s": traj.duration_s,
+        "strokes": len(traj.turning_points_board_m),
+        "feasible": f.feasible,
+        "violations": [str(v) for v in f.violations()],
+        "feasibility": f.to_json_dict(),
+        "timing_ms": dict(traj.timing_ms),
+    }
+
+
+def summary_lines(glyph: Any, traj: Any) -> list[str]:
+    """The human summary of a brush quadrotor plan (:mod:`cli.summary`'s voice)."""
+    from cli.summary import length, numbers, plan_headline, sig
+
+    f = traj.feasibility
+    strokes = len(traj.turning_points_board_m)
+    size_m = ink_size_m(glyph)
+    lines = [plan_headline(glyph.label, BRUSH_KIND, size_m, traj.duration_s, strokes, f.feasible)]
+    lines.extend(f"  {violation}" for violation in f.violations())
+    lines.append(
+        f"  peak acceleration x, y, z {numbers(f.peak_accel_mps2)} of"
+        f" {numbers(f.accel_upper_mps2)} m/s^2; peak speed {sig(f.peak_speed_mps)} of"
+        f" {sig(f.v_max_mps)} m/s"
     )
-    print(
-        f"fit error at turning points: max {f.fit_error_max_m * 1e3:.1f} mm,"
-        f" rms {f.fit_error_rms_m * 1e3:.1f} mm; pen-down path within"
-        f" {f.path_error_max_m * 1e3:.1f} mm of the strokes"
+    lines.append(
+        f"  thrust {sig(f.min_thrust_n)} to {sig(f.peak_thrust_n)} of {sig(f.thrust_max_n)} N;"
+        f" body-rate bound {sig(f.body_rate_bound_radps)} of {sig(f.body_rate_max_radps)} rad/s"
     )
-    print("timing ms: " + ", ".join(f"{k} {v:.1f}" for k, v in traj.timing_ms.items()))
+    lines.append(
+        f"  fit error at turning points: max {length(f.fit_error_max_m)},"
+        f" rms {length(f.fit_error_rms_m)}; pen-down path within {length(f.path_error_max_m)}"
+        " of the strokes"
+    )
+    timing = traj.timing_ms
+    parts = ", ".join(f"{k} {sig(v, 2)}" for k, v in timing.items() if k != "total")
+    lines.append(f"  planned in {sig(timing.get('total'), 2)} ms ({parts})")
+    return lines

@@ -48,10 +48,33 @@ def _show_bus(path: Path) -> ShowBus:
 
 
 def _snapshot(path: Path, timeout_s: float) -> ShowSnapshot:
-    """The orchestrator's current view."""
+    """The orchestrator's current view; BusError saying what is not running, with the way
+    out, when nobody answers."""
+    from bus.rpc import NoReplyError
+    from bus.session import SessionOpenError
     from orchestrator.client import snapshot
 
-    return snapshot(_show_bus(path), timeout_s=timeout_s)
+    bus = _show_bus(path)
+    zenoh = bus.zenoh
+    where = ", ".join(zenoh.connect or zenoh.router_listen[:1])
+    try:
+        return snapshot(bus, timeout_s=timeout_s)
+    except SessionOpenError:
+        raise SessionOpenError(
+            f"no show running at {where}: start it with `skyquill up {path}`"
+        ) from None
+    except NoReplyError:
+        raise NoReplyError(
+            f"the router at {where} answers, but no orchestrator of show {bus.show_id} did "
+            f"within {timeout_s:g} s: starting, or stopped? `skyquill up {path}` starts it"
+        ) from None
+
+
+def vehicle_note(job_id: str | None, message: str) -> str:
+    """A vehicle's message without the job it names again (``job j1 written``: ``written``)."""
+    if job_id and message.startswith(f"job {job_id}"):
+        return message.removeprefix(f"job {job_id}").strip()
+    return message
 
 
 def run(args: argparse.Namespace) -> int:
@@ -61,6 +84,10 @@ def run(args: argparse.Namespace) -> int:
     from bus.session import SessionOpenError
     from showfile.errors import ShowError
 
+    if not args.timeout > 0.0:
+        print(f"skyquill status: --timeout must be above 0 s, not {args.timeout:g}",
+              file=sys.stderr)  # fmt: skip
+        return 2
     try:
         snap = _snapshot(args.show, args.timeout)
     except (ShowError, SessionOpenError, NoReplyError, RemoteError) as exc:
@@ -88,13 +115,15 @@ def run(args: argparse.Namespace) -> int:
     print(f"  jobs: {sum(snap.job_counts.values())} ({counts or 'none'})")
     for v in snap.vehicles:
         alive = "up" if v.alive else "down"
-        print(
+        note = vehicle_note(v.job_id, v.message)
+        line = (
             f"  {v.vehicle_id:8} {alive:4} {v.state:11} board {v.board_id or '-':4} "
-            f"job {v.job_id or '-'} {v.message}"
+            f"job {v.job_id or '-'} {note}"
         )
+        print(line.rstrip())
     for j in snap.jobs:
         where = f"#{j.queue_position}" if j.queue_position else (j.vehicle_id or "")
-        eta = f" eta {j.eta_s:.0f}s" if j.eta_s is not None else ""
+        eta = f" eta {j.eta_s:.0f} s" if j.eta_s is not None else ""
         print(f"  {j.job_id} {j.state:17} {where:6} {j.label}{eta}")
     for alert in snap.alerts:  # open: their cause lasts, however long ago they were raised
         raised = time.strftime("%H:%M:%S", time.localtime(alert.time_s))

@@ -227,6 +227,7 @@ def _supervise(
         _announce(
             output, show.show_id, plan.host, [spec.name for spec in specs], plan.log_dir, args.show
         )
+        _announce_addresses(output, args.show, kiosk_url(show) if kiosk else None, tui=tui)
         if tui:
             viewer = ConsoleViewer(
                 skyquill_argv("tui", str(args.show)),
@@ -252,6 +253,26 @@ def _announce(
     where = "" if host is None else f" (host {host})"
     output.say(f"show {show_id}{where}: {', '.join(names)}")
     output.say(f"logs in {log_dir}/; stop with Ctrl-C or `skyquill down {show}{_host_arg(host)}`")
+
+
+def kiosk_url(show: Show) -> str:
+    """The kiosk's address as a browser on this machine reaches it (a wildcard bind: through
+    loopback)."""
+    host = show.kiosk.host
+    if host in ("0.0.0.0", "::", ""):
+        host = "127.0.0.1"
+    if ":" in host:
+        host = f"[{host}]"
+    return f"http://{host}:{show.kiosk.port}/"
+
+
+def _announce_addresses(output: UpOutput, show: Path, kiosk: str | None, *, tui: bool) -> None:
+    """Say where the kiosk answers and how to open the operator console (again)."""
+    if kiosk is not None:
+        output.say(f"kiosk: {kiosk}")
+    here = " (open here now; Enter reopens it once quit)" if tui else ""
+    output.say(f"console: `skyquill tui {show}` from any shell{here}")
+    output.say(f"summary: `skyquill status {show}`")
 
 
 def _record(runfile: RunFile, name: str, pid: int) -> None:

@@ -1,17 +1,28 @@
-"""When ``skyquill up`` stops: at once on SIGTERM (``skyquill down``, a script), and on Ctrl-C
+"""Ctrl-C in the commands that run a show: :func:`hurry_on_ctrl_c` for a simulated one (the demo),
+:class:`StopRequests` for ``skyquill up``. Every command ends a Ctrl-C with one line
+(``cli/main.py``), never a traceback.
+
+When ``skyquill up`` stops: at once on SIGTERM (``skyquill down``, a script), and on Ctrl-C
 only once nothing is in the air, or on a second Ctrl-C after it has said what is.
 
 A Ctrl-C in a terminal is easily pressed by mistake (into the wrong window, to copy text, after
-quitting the console). Stopping the show stops every agent: a simulated vehicle simply stops,
-an autopilot left without its setpoint stream falls back on its own failsafe, wherever it is.
-So, like a build tool's "press again to force", the first Ctrl-C with vehicles in the air only
-names them and says how to land them; a second within :data:`CONFIRM_WINDOW_S` stops the show.
+quitting the console). Stopping the show stops every agent, each landing its vehicle first
+(``vehicle_agent/stop_signals.py``), which interrupts the characters being written. So, like a
+build tool's "press again to force", the first Ctrl-C with vehicles in the air only names them;
+a second within :data:`CONFIRM_WINDOW_S` stops the show.
 """
 
 from __future__ import annotations
 
+import contextlib
+import signal
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from types import FrameType
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from cli.supervisor import Supervisor
 
 CONFIRM_WINDOW_S = 10.0
 """How long after the question a second Ctrl-C stops the show anyway, wall [s]: time to read two
@@ -66,9 +77,31 @@ class StopRequests:
             else "the orchestrator does not answer: vehicles may be in the air"
         )
         self._say(
-            f"{what}. `skyquill command {self._show} land-all` lands them first; Ctrl-C again "
-            f"within {CONFIRM_WINDOW_S:.0f} s stops the show anyway (an autopilot then falls "
-            "back on its own failsafe, a simulated vehicle stops where it is)"
+            f"{what}. Ctrl-C again within {CONFIRM_WINDOW_S:.0f} s lands them and stops the "
+            f"show (`skyquill down {self._show}` does too, and requeues their jobs; "
+            "`--now` stops without landing)"
         )
         self._asked_at_s = self._clock()
         return False
+
+
+@contextlib.contextmanager
+def hurry_on_ctrl_c(supervisor: Supervisor) -> Iterator[None]:
+    """Within: a Ctrl-C stops the supervised show in a hurry (:meth:`Supervisor.hurry`: a
+    simulation, nothing to land; every process at once) and raises ``KeyboardInterrupt``; from
+    then on Ctrl-C is ignored, so that the stop runs to its end."""
+    interrupted = False
+
+    def on_ctrl_c(_signum: int, _frame: FrameType | None) -> None:
+        nonlocal interrupted
+        interrupted = True
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        supervisor.hurry()
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, on_ctrl_c)
+    try:
+        yield
+    finally:
+        if not interrupted:
+            signal.signal(signal.SIGINT, previous)

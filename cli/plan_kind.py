@@ -2,9 +2,11 @@
 the kind's surface and plan it through the kind's interface only (``vehicles/kind.py``), so a new
 room plans here without a change to this file.
 
-Writes ``PLAN.json`` (docs/formats.md) and prints the duration, the stroke count and the plan's
-own feasibility report. Exit status 0, or 2 for bad input: a plan the kind cannot make, a brush
-quadrotor option, or ``--plot`` (a kind draws a figure of a flown job only: ``skyquill fly``).
+Writes ``PLAN.json`` (docs/formats.md) and prints the summary every plan prints (the character,
+duration, strokes, ``feasible: yes/no``, each peak against its limit; ``--json``: those and the
+kind's whole feasibility report, one line). Exit status 0, or 2 for bad input: a plan the kind
+cannot make, a brush quadrotor option, or ``--plot`` (a kind draws a figure of a flown job only:
+``skyquill fly``).
 """
 
 from __future__ import annotations
@@ -13,21 +15,27 @@ import argparse
 import json
 import math
 import sys
-from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from vehicles.kind import WritingPlan
 
+PROG = "skyquill plan"
 PLAN_FORMAT = "skyquill.plan/1"
 """``format`` of ``PLAN.json``; a reader refuses a major version it does not know."""
 
 
 def run_kind(args: argparse.Namespace) -> int:
     """Plan ``args.kind`` and report it (``args`` as ``skyquill plan`` parses them)."""
-    from cli.cmd_plan import cannot_write, print_error, read_glyph, source_of
-    from cli.fly_kind import WALL_CENTRE_HEIGHT_M
+    from cli.writing_args import (
+        WALL_CENTRE_HEIGHT_M,
+        area_of,
+        cannot_write,
+        print_error,
+        read_glyph,
+        source_of,
+    )
     from planner.errors import PlannerError
     from vehicles.jobs import plan_glyph
     from vehicles.quadrotor_brush import KIND_NAME as BRUSH_KIND
@@ -50,24 +58,56 @@ def run_kind(args: argparse.Namespace) -> int:
         centre_z_m = WALL_CENTRE_HEIGHT_M if kind.orientation == "vertical" else 0.0
         centre = tuple(args.board_center or (0.0, 0.0, centre_z_m))
         surface = Surface.of(kind.orientation, centre, math.radians(args.board_yaw_deg))
-        job = plan_glyph(kind, settings, surface, glyph, (args.width, args.height), args.margin)
+        job = plan_glyph(kind, settings, surface, glyph, area_of(args), args.margin)
     except (PlannerError, ValueError) as exc:
-        return print_error(source, exc)
+        return print_error(PROG, source, exc)
     if args.out:
         doc = plan_json_dict(kind.name, job.plan)
         try:
             Path(args.out).write_text(json.dumps(doc, default=_plain), encoding="utf-8")
         except OSError as exc:
-            return cannot_write(exc)
-    print(f"{kind.name}: duration {job.plan.duration_s:.2f} s, {len(job.plan.strokes)} strokes")
-    for line in feasibility_lines(job.plan.feasibility):
-        print(line)
+            return cannot_write(PROG, exc)
+    if args.json:
+        print(json.dumps(summary_json(job.glyph, kind.name, job.plan), default=_plain,
+                         ensure_ascii=False))  # fmt: skip
+    else:
+        print("\n".join(summary_lines(job.glyph, kind.name, job.plan)))
     return 0
 
 
 def _refuse(message: str) -> int:
-    print(f"skyquill plan: {message}", file=sys.stderr)
+    print(f"{PROG}: {message}", file=sys.stderr)
     return 2
+
+
+def summary_json(glyph: Any, kind_name: str, plan: WritingPlan) -> dict[str, Any]:
+    """What ``--json`` prints of a kind's plan of ``glyph`` (as laid out)."""
+    from cli.summary import feasible
+    from cli.writing_args import ink_size_m
+
+    return {
+        "label": glyph.label,
+        "kind": kind_name,
+        "ink_size_m": ink_size_m(glyph),
+        "duration_s": plan.duration_s,
+        "strokes": len(plan.strokes),
+        "feasible": feasible(plan.feasibility),
+        "feasibility": dict(plan.feasibility),
+    }
+
+
+def summary_lines(glyph: Any, kind_name: str, plan: WritingPlan) -> list[str]:
+    """The human summary of a kind's plan of ``glyph``: the headline and each peak against its
+    limit."""
+    from cli.summary import feasible, limits_line, plan_headline
+    from cli.writing_args import ink_size_m
+
+    report = plan.feasibility
+    ok = feasible(report)
+    size_m = ink_size_m(glyph)
+    head = plan_headline(glyph.label, kind_name, size_m, plan.duration_s, len(plan.strokes), ok)
+    limits = limits_line(report)
+    return [head, f"  peak {limits}"] if limits else [head]
 
 
 def plan_json_dict(kind_name: str, plan: WritingPlan) -> dict[str, Any]:
@@ -100,26 +140,3 @@ def _plain(value: Any) -> Any:
     if hasattr(value, "tolist"):
         return value.tolist()
     raise TypeError(f"not JSON: {type(value).__name__}")
-
-
-def feasibility_lines(feasibility: Mapping[str, Any]) -> list[str]:
-    """``key: value`` lines of a plan's feasibility report, floats to four significant digits;
-    a list of mappings (the sponge's periods) one indented line per item."""
-    lines = []
-    for key, value in feasibility.items():
-        if isinstance(value, list | tuple) and value and all(isinstance(v, Mapping) for v in value):
-            lines.append(f"{key}:")
-            lines.extend(f"  - {_shown(item)}" for item in value)
-        else:
-            lines.append(f"{key}: {_shown(value)}")
-    return lines
-
-
-def _shown(value: Any) -> str:
-    if isinstance(value, float):
-        return repr(float(f"{value:.4g}"))
-    if isinstance(value, Mapping):
-        return ", ".join(f"{k}: {_shown(v)}" for k, v in value.items())
-    if isinstance(value, list | tuple):
-        return "[" + ", ".join(_shown(v) for v in value) + "]"
-    return str(value)

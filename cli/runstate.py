@@ -46,6 +46,40 @@ def cpu_ticks(pid: int) -> int | None:
     return int(fields[11]) + int(fields[12])
 
 
+def descendants(pid: int) -> list[int]:
+    """The processes ``pid`` started and those they started, from ``/proc`` (a process stopping
+    may be waiting for one: an agent for its planning worker's last picture)."""
+    children: dict[int, list[int]] = {}
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+        except OSError:
+            continue
+        parent = int(stat.rsplit(")", 1)[1].split()[1])
+        children.setdefault(parent, []).append(int(entry.name))
+    found, todo = [], [pid]
+    while todo:
+        for child in children.get(todo.pop(), ()):
+            found.append(child)
+            todo.append(child)
+    return found
+
+
+def family_cpu_ticks(pid: int) -> int | None:
+    """CPU time of process ``pid`` and its descendants now running, in clock ticks (None: gone)."""
+    own = cpu_ticks(pid)
+    if own is None:
+        return None
+    return own + sum(cpu_ticks(child) or 0 for child in descendants(pid))
+
+
+def family_runnable(pid: int) -> bool:
+    """Whether process ``pid`` or one of its descendants is running or waiting for a CPU."""
+    return any(runnable(one) for one in (pid, *descendants(pid)))
+
+
 def runnable(pid: int) -> bool:
     """Whether a thread of process ``pid`` is running or waiting for a CPU (state ``R``): busy,
     even when a loaded machine gives it no CPU time for a while."""

@@ -126,7 +126,15 @@ class ShowRun:
         self._stop.set()
         if self._watcher is not None:
             self._watcher.join()
+        if self.simulated:
+            self.supervisor.hurry()  # nothing real flies: no landing to wait for
         self.supervisor.stop()
+
+    @property
+    def simulated(self) -> bool:
+        """Every vehicle is simulated: in process, or by the show's own MAVLink simulator."""
+        sim = self.show.mavlink_sim.enabled
+        return all(v.backend == "sim" or sim for v in self.show.vehicles)
 
     def client(self, open_timeout_s: float = 30.0) -> Session:
         """An operator's client session on the show's router (use it in a ``with`` block);

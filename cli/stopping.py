@@ -4,7 +4,9 @@ grace, and SIGKILL only the ones that outlived it and sit idle.
 The grace is measured against the child's progress: past it, a child still using CPU or waiting
 for one (stopping, only slowed by the others stopping beside it on a busy machine) is given up to
 its limit; one that sits idle (stuck) is killed. Fifty agents stopping at once on two cores each
-need many seconds of wall time for about one of CPU.
+need many seconds of wall time for about one of CPU. A child's own children count as its
+progress: an agent waiting for its planning worker to draw a finished job's picture is stopping
+(at load 23 a picture took over 8 s, and the agent waiting for it was killed as stuck).
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import ClassVar, Protocol
 
-from cli.runstate import AdoptedProcess, cpu_ticks, runnable
+from cli.runstate import AdoptedProcess, family_cpu_ticks, family_runnable
 
 
 class ProcessHandle(Protocol):
@@ -68,7 +70,7 @@ class Stopping:
     grace_s: float
     limit_s: float
     cpu_ticks: int | None = None
-    """Its CPU time at the last look (None: unknown)."""
+    """Its CPU time and its children's at the last look (None: unknown)."""
     looked_s: float = field(default_factory=time.monotonic)
 
     PROGRESS_WINDOW_S: ClassVar[float] = 0.5
@@ -86,20 +88,21 @@ class Stopping:
         """A child's own grace and limit, or ``grace_s`` for both when the caller fixes one."""
         grace = own_grace_s if grace_s is None else grace_s
         limit = max(grace, own_limit_s) if grace_s is None else grace_s
-        return cls(name, process, grace, limit, cpu_ticks(process.pid))
+        return cls(name, process, grace, limit, family_cpu_ticks(process.pid))
 
     def overdue(self, elapsed_s: float, now_s: float) -> bool:
         """Whether to kill it now: past its limit, or past its grace, idle since the last look and
-        not waiting for a CPU either (a stuck process, not a busy or a starved one)."""
+        not waiting for a CPU either, nor any of its children (a stuck process, not a busy or a
+        starved one)."""
         if elapsed_s >= self.limit_s:
             return True
         if elapsed_s < self.grace_s or now_s - self.looked_s < self.PROGRESS_WINDOW_S:
             return False
         pid = self.process.pid
-        before, self.cpu_ticks = self.cpu_ticks, cpu_ticks(pid)
+        before, self.cpu_ticks = self.cpu_ticks, family_cpu_ticks(pid)
         self.looked_s = now_s
         worked = before is not None and self.cpu_ticks is not None and self.cpu_ticks > before
-        return not worked and not runnable(pid)
+        return not worked and not family_runnable(pid)
 
     def why_killed(self, elapsed_s: float) -> str:
         if self.limit_s > self.grace_s and elapsed_s >= self.limit_s:

@@ -8,6 +8,11 @@ its own grace period, and only a child that outlives its own grace gets SIGKILL.
 measured against the child's progress: past it, a child still using CPU or waiting for one
 is given up to ``stop_limit_s``; one that sits idle (stuck) is killed (``cli/stopping.py``).
 
+An agent that gets SIGTERM with its vehicle in the air lands it before it stops
+(``vehicle_agent/stop_signals.py``); a stop in a hurry (:meth:`Supervisor.hurry`: Ctrl-C in the
+demo, ``skyquill down --now``) first gives those children their signal to stop without landing
+(``ChildSpec.lands_on_stop``), then stops every group at once.
+
 Whether children outlive the supervisor is a choice (``die_with_supervisor``): ``ShowRun`` (the
 demo, tests) has them get SIGTERM when it dies (``PR_SET_PDEATHSIG``), so nothing is left behind;
 ``skyquill up`` lets them run on, so that vehicles in the air never depend on the supervisor
@@ -28,6 +33,7 @@ from pathlib import Path
 from typing import IO
 
 from cli.stopping import ProcessHandle, Stopping, StopReport, describe_end, stop_group
+from vehicle_agent.stop_signals import NOW_SIGNAL
 
 PR_SET_PDEATHSIG = 1
 
@@ -77,6 +83,9 @@ class ChildSpec:
     """How long in [s] a child still using CPU may take to stop before it gets SIGKILL."""
     stop_group: int = 0
     """Lower groups are stopped first; the children of one group are stopped together."""
+    lands_on_stop: bool = False
+    """Whether it lands its vehicle on SIGTERM before it stops (an agent): a hurried stop sends
+    it ``NOW_SIGNAL`` first (``vehicle_agent/stop_signals.py``)."""
 
 
 @dataclass
@@ -125,6 +134,8 @@ class Supervisor:
         self._die_with_supervisor = die_with_supervisor
         self._on_spawn = on_spawn
         self.stopping = False
+        self.hurried = False
+        """Whether stops are hurried (:meth:`hurry`)."""
 
     @property
     def names(self) -> list[str]:
@@ -199,15 +210,29 @@ class Supervisor:
                 self._spawn(child)
                 self._say(f"{name} restarted (pid {self.pid(name)})")
 
+    def hurry(self) -> None:
+        """From now on (a stop under way included) stop without landing and every group at
+        once: each child that lands on SIGTERM gets ``NOW_SIGNAL`` at once. Safe to call from a
+        signal handler (it only signals and sets flags)."""
+        self.hurried = self.stopping = True
+        for child in list(self._children.values()):
+            process = child.process
+            if child.spec.lands_on_stop and process is not None and process.poll() is None:
+                process.send_signal(NOW_SIGNAL)
+
     def stop(self, grace_s: float | None = None) -> StopReport:
-        """Stop every child, group by group (``ChildSpec.stop_group``): SIGTERM, then wait for
-        each child its own grace (``grace_s`` if given, else its ``stop_grace_s``), then SIGKILL
-        only the children that outlived theirs. Returns how long each took."""
+        """Stop every child, group by group (``ChildSpec.stop_group``; all at once when
+        hurried): SIGTERM, then wait for each child its own grace (``grace_s`` if given, else its
+        ``stop_grace_s``), then SIGKILL only the children that outlived theirs. Returns how long
+        each took."""
         self.stopping = True
+        if self.hurried:
+            self.hurry()  # children started since the hurry was asked
         started = time.monotonic()
         report = StopReport()
-        for group in sorted({c.spec.stop_group for c in self._children.values()}):
-            members = [c for c in self._children.values() if c.spec.stop_group == group]
+        groups = sorted({c.spec.stop_group for c in self._children.values()})
+        for group in [None] if self.hurried else groups:
+            members = [c for c in self._children.values() if group in (None, c.spec.stop_group)]
             stopping = [
                 Stopping.of(
                     c.spec.name, c.process, c.spec.stop_grace_s, c.spec.stop_limit_s, grace_s
@@ -310,7 +335,11 @@ def show_children(
         if verbose:
             argv.append("--verbose")
         spec = ChildSpec(
-            f"agent {vehicle_id}", skyquill_argv(*argv), log(vehicle_id), stop_grace_s=8.0
+            f"agent {vehicle_id}",
+            skyquill_argv(*argv),
+            log(vehicle_id),
+            stop_grace_s=8.0,
+            lands_on_stop=True,
         )
         specs.append(spec)
     for number, group in enumerate(fleets, start=1):
@@ -321,7 +350,10 @@ def show_children(
             argv.append("--verbose")
         grace_s = fleet_stop_grace_s(len(group))
         name = f"fleet {number}"
-        specs.append(ChildSpec(name, skyquill_argv(*argv), log(f"fleet{number}"), None, grace_s))
+        log_path = log(f"fleet{number}")
+        specs.append(
+            ChildSpec(name, skyquill_argv(*argv), log_path, None, grace_s, lands_on_stop=True)
+        )
     if kiosk and services:
         specs.append(ChildSpec("kiosk", skyquill_argv("kiosk", show), log("kiosk")))
     return specs

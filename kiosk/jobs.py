@@ -9,7 +9,6 @@ Pure bookkeeping: no I/O. The bus link feeds :class:`JobState` messages in; the 
 
 from __future__ import annotations
 
-import base64
 import hmac
 import secrets
 from collections import OrderedDict
@@ -19,8 +18,9 @@ from typing import Any
 
 import msgspec
 
-from bus.messages import JobMetrics, JobState, WrittenInk
+from bus.messages import JobMetrics, JobState
 from kiosk import wording
+from kiosk.ink_view import written_view
 from kiosk.phrase_view import phrase_view
 
 FINAL_STATES = frozenset({"done", "failed", "cancelled", "rejected"})
@@ -75,21 +75,9 @@ class KioskJob:
         return self.job_id is None and self.refusal is None
 
 
-def written_view(ink: WrittenInk | None) -> dict[str, Any] | None:
-    """The ink picture for the page (drawn on a canvas as data; see docs/protocol.md)."""
-    if ink is None:
-        return None
-    return {
-        "format": ink.format,
-        "width_px": ink.width_px,
-        "height_px": ink.height_px,
-        "extent_m_board": list(ink.extent_m_board),
-        "bits": base64.b64encode(ink.bits).decode("ascii"),
-    }
-
-
 def metrics_view(m: JobMetrics | None) -> dict[str, Any] | None:
-    """The public part of a job's result: errors, overlap, time and the ink picture."""
+    """The public part of a job's result: errors (``rmse_pen_down_m`` None: not measured, the
+    pen never came down), overlap, time, how much of the plan was flown and the ink picture."""
     if m is None:
         return None
     return {
@@ -97,6 +85,7 @@ def metrics_view(m: JobMetrics | None) -> dict[str, Any] | None:
         "max_error_m": m.max_error_m,
         "iou": m.iou,
         "duration_s": m.duration_s,
+        "flown_fraction": m.flown_fraction,
         "written": written_view(m.written),
     }
 

@@ -5,7 +5,9 @@ phrase's id is its first character's job id; ``orchestrator/phrases.py``). The v
 ticket with one short code; its view sums the characters up (waiting together for enough free
 drones, being written, written) and lists each one: waiting, being written by drone k (named by
 its board's place from the left, never by its internal id), written, or failed and written
-again alone. No character's job id reaches the page.
+again alone; a character written (done, or failed out of its bounds) carries the ink its drone
+left, which the page draws on its board in place of the plan. No character's job id reaches the
+page.
 """
 
 from __future__ import annotations
@@ -15,8 +17,12 @@ from typing import Any
 
 from bus.messages import JobState
 from kiosk import wording
+from kiosk.ink_view import written_view
 
 FINAL = frozenset({"done", "failed", "cancelled", "rejected"})
+PHRASE_INCOMPLETE = "phrase_incomplete"
+"""Error code of a character ended, before its phrase began, because another of it could not be
+written (docs/protocol.md): the page says the phrase goes whole or not at all."""
 AWAITING = frozenset({"submitted", "awaiting_approval"})
 
 
@@ -71,6 +77,8 @@ def character_view(
             "progress": 0.0,
             "again": False,
             "failure": None,
+            "with_phrase": False,
+            "written": None,
         }
     on_board = state.state in ("assigned", "writing", "done", "failed")
     failure = state.error.code if state.error is not None and state.state == "failed" else None
@@ -83,6 +91,8 @@ def character_view(
         "progress": 1.0 if state.state == "done" else state.progress,
         "again": written_again(state, others),
         "failure": failure,
+        "with_phrase": state.error is not None and state.error.code == PHRASE_INCOMPLETE,
+        "written": written_view(state.metrics.written) if state.metrics is not None else None,
     }
 
 

@@ -26,6 +26,8 @@ from mavsim.autopilot import Autopilot
 from mavsim.autopilot_core import Result
 from mavsim.config import VehicleConfig
 from mavsim.errors import MavsimError
+from mavsim.estimator import DEFAULT_INTERVAL_S as ESTIMATOR_INTERVAL_S
+from mavsim.estimator import estimator_status
 from mavsim.frames import attitude_enu_to_ned, enu_to_ned
 from mavsim.mocap import odometry_is_pose
 from mavsim.modes import CopterMode, from_px4, px4_custom_mode
@@ -85,6 +87,8 @@ class VehicleEndpoint:
             mavlink.MAVLINK_MSG_ID_ATTITUDE: telemetry_s,
             mavlink.MAVLINK_MSG_ID_POSITION_TARGET_LOCAL_NED: telemetry_s,
         }
+        if self.px4:  # ArduPilot reports its EKF in EKF_STATUS_REPORT, not simulated here
+            self.intervals_s[mavlink.MAVLINK_MSG_ID_ESTIMATOR_STATUS] = ESTIMATOR_INTERVAL_S
         self._defaults_s = dict(self.intervals_s)
         self._next_due_s: dict[int, float] = dict.fromkeys(self.intervals_s, 0.0)
         self.next_step_s = self.autopilot.airframe.dt_s
@@ -352,6 +356,8 @@ class VehicleEndpoint:
             return self._position_target()
         if message_id == mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE:
             return self._mav.extended_sys_state_encode(0, ap.landed_state)
+        if message_id == mavlink.MAVLINK_MSG_ID_ESTIMATOR_STATUS:
+            return estimator_status(self._mav, ap)
         return self._battery(message_id)
 
     def _heartbeat(self) -> mavlink.MAVLink_message:

@@ -17,6 +17,7 @@ from orchestrator.disk_room import DiskReserve
 from orchestrator.recordings import prune_recordings
 from orchestrator.service import OrchestratorService, recording_path
 from orchestrator.store import JobStore
+from scene.show_scene import ShowScene
 from showfile import Show
 from trust.settings import session_settings
 
@@ -52,6 +53,7 @@ async def serve_show(
                     ShowKeys(show.show_id),
                     max_file_bytes=int(show.storage.recording_part_mb * 1e6),
                     on_part_done=functools.partial(_prune, show),
+                    derive=ShowScene(show).derive if show.storage.record_scene else None,
                 )
             )
             log.info("recording the bus to %s", path)

@@ -15,17 +15,17 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from bus.messages import CommandReply, JobAssignment, VehicleCommand
-from orchestrator import battery_swaps, holders, phrases
+from orchestrator import battery_swaps, holders, phrase_rows, phrases
 from orchestrator.core_types import Effects
 from orchestrator.fleet import VehicleView, ready_for_job
 from orchestrator.jobs import Job, transition
 from orchestrator.requeue import hand_back
 
 if TYPE_CHECKING:
-    from orchestrator.core import Book
+    from orchestrator.book_protocol import BookProtocol
 
 
-def assign(book: Book, eff: Effects, now_s: float) -> None:
+def assign(book: BookProtocol, eff: Effects, now_s: float) -> None:
     """Give queued jobs, in order, to ready vehicles whose board is free; a phrase's characters
     all at once to adjacent boards, or none (``orchestrator/phrases.py``)."""
     battery_swaps.check_reserves(book, eff, now_s)
@@ -39,8 +39,8 @@ def assign(book: Book, eff: Effects, now_s: float) -> None:
     held_back: set[str] = set()
     """Boards that a phrase waiting ahead could use: no job behind it goes there."""
     singles: list[Job] = []
-    for unit in phrases.units(queue):
-        if not phrases.together(unit[0]):
+    for unit in phrase_rows.units(queue):
+        if not phrase_rows.together(unit[0]):
             singles.append(unit[0])
             continue
         _give_singles(book, eff, singles, free, held_back, now_s)
@@ -51,7 +51,9 @@ def assign(book: Book, eff: Effects, now_s: float) -> None:
     _give_singles(book, eff, singles, free, held_back, now_s)
 
 
-def _free(book: Book, view: VehicleView, busy: tuple[set[str], set[str]], now_s: float) -> bool:
+def _free(
+    book: BookProtocol, view: VehicleView, busy: tuple[set[str], set[str]], now_s: float
+) -> bool:
     """Ready for a job, without one, on a board that is free, clean and has its sheet
     (``busy``: the vehicles with a job, and the boards busy or half-written)."""
     board_id = view.info.board_id
@@ -64,7 +66,7 @@ def _free(book: Book, view: VehicleView, busy: tuple[set[str], set[str]], now_s:
 
 
 def _give_singles(
-    book: Book,
+    book: BookProtocol,
     eff: Effects,
     queue: list[Job],
     free: list[VehicleView],
@@ -91,7 +93,7 @@ def _give_singles(
 
 
 def _give_phrase(
-    book: Book,
+    book: BookProtocol,
     eff: Effects,
     unit: tuple[Job, ...],
     free: list[VehicleView],
@@ -113,7 +115,7 @@ def _give_phrase(
         )
         return None if vid is None else (0.0, vid)
 
-    best = phrases.best_window(unit, phrases.board_row(book.config), option)
+    best = phrase_rows.best_window(unit, phrases.board_row(book.config), option)
     if best is None:
         return False
     seats = [(job, book.vehicles[vid]) for job, vid in best[1]]
@@ -128,7 +130,7 @@ def _give_phrase(
     return True
 
 
-def _could_use(book: Book, unit: tuple[Job, ...]) -> set[str]:
+def _could_use(book: BookProtocol, unit: tuple[Job, ...]) -> set[str]:
     """The boards a phrase could be written on by vehicles usable now or later (present, not
     paused nor held): none when no window of them could."""
     usable = {
@@ -137,11 +139,16 @@ def _could_use(book: Book, unit: tuple[Job, ...]) -> set[str]:
         if v.alive and not v.lost and not (v.paused or v.held) and v.info.cannot_write is None
     }
     row = phrases.board_row(book.config)
-    return phrases.could_use(unit, row, usable, book.kinds.may_take)
+    return phrase_rows.could_use(unit, row, usable, book.kinds.may_take)
 
 
 def _give(
-    book: Book, eff: Effects, job: Job, view: VehicleView, free: list[VehicleView], now_s: float
+    book: BookProtocol,
+    eff: Effects,
+    job: Job,
+    view: VehicleView,
+    free: list[VehicleView],
+    now_s: float,
 ) -> None:
     """Assign ``job`` to ``view``'s vehicle: stored, sent, logged; its board is no longer free
     for the others in ``free`` (one job per board)."""
@@ -173,7 +180,7 @@ def _give(
     eff.fleet_changed = True
 
 
-def _may_take(book: Book, job: Job, vehicle_id: str, now_s: float) -> bool:
+def _may_take(book: BookProtocol, job: Job, vehicle_id: str, now_s: float) -> bool:
     """Its kind writes it, it waits for no lost vehicle, it fits the vehicle's full battery; a
     character rewritten alone goes to its own board only."""
     return (
@@ -185,7 +192,7 @@ def _may_take(book: Book, job: Job, vehicle_id: str, now_s: float) -> bool:
 
 
 def answered(
-    book: Book, vehicle_id: str, job_id: str, reply: CommandReply | None, now_s: float
+    book: BookProtocol, vehicle_id: str, job_id: str, reply: CommandReply | None, now_s: float
 ) -> Effects:
     """The agent's answer to an assign command (None: no answer); then assign again."""
     eff = Effects()

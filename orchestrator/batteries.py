@@ -3,25 +3,28 @@ job and keep the show's reserve, the swaps the crew makes and how long they take
 
 A job costs its vehicle the energy of its approach (``EtaModel.before_write_s``, counted at the
 kind's transit draw although part of it is planning on the ground), of its writing (the planned
-duration at the writing draw) and of its return and landing (``after_write_s``, transit draw);
-the energy is turned into charge along the pack's own open-circuit curve from the charge the
-vehicle reported (:mod:`sim.battery`: each Wh costs more charge as the voltage falls), with the
-internal resistance's loss at that draw. A vehicle whose charge after the job would fall below
-``battery.reserve_fraction`` takes no job: it is sent for a swap (it is on the ground: vehicles
-land after every job) and waits, in ``battery_swap``, for the crew's ``battery_swapped``; then
-until it reports a charge above the one it was sent with (a fresh pack; a vehicle that reports
-no battery is let go at once). The crew's turnaround (from the vehicle's wait to the
-confirmation, show seconds) is the median of its last :data:`TURNAROUNDS_KEPT`, ``battery.swap_s``
-until there is one; the ETAs count a swap wherever a vehicle's charge would run out.
+duration at the writing draw) and of its return and landing (``after_write_s``, transit draw),
+times what the vehicle draws over its kind's model as learned from its own reports
+(``orchestrator/battery_drain.py``); the energy is turned into charge along the pack's own
+open-circuit curve from the charge the vehicle reported (:mod:`sim.battery`: each Wh costs more
+charge as the voltage falls), with the internal resistance's loss at that draw. A vehicle whose
+charge after the job would fall below ``battery.reserve_fraction`` takes no job: it is sent for a
+swap (it is on the ground: vehicles land after every job) and waits, in ``battery_swap``, for the
+crew's ``battery_swapped``; then until it reports a charge above the one it was sent with (a fresh
+pack; a vehicle that reports no battery is let go at once). The crew's turnaround (from the
+vehicle's wait to the confirmation, show seconds) is the median of its last
+:data:`TURNAROUNDS_KEPT`, ``battery.swap_s`` until there is one; the ETAs count a swap wherever a
+vehicle's charge would run out.
 """
 
 from __future__ import annotations
 
 import statistics
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 
+from orchestrator.battery_records import SwapRecord
 from orchestrator.jobs import Job
 from sim.battery import VehicleBattery
 
@@ -76,16 +79,22 @@ def charge_after(battery: VehicleBattery, charge_fraction: float, energy_wh: flo
 
 
 def shortfall(
-    battery: VehicleBattery, charge_fraction: float, leg: JobLeg, reserve_fraction: float
+    battery: VehicleBattery,
+    charge_fraction: float,
+    leg: JobLeg,
+    reserve_fraction: float,
+    drain_factor: float = 1.0,
 ) -> str | None:
     """Why a vehicle with ``charge_fraction`` may not take a job (one line), None if it may:
-    the charge left after it must be at least ``reserve_fraction``."""
-    left = charge_after(battery, charge_fraction, job_energy_wh(battery, leg))
+    the charge left after it must be at least ``reserve_fraction``; ``drain_factor``: what the
+    vehicle draws over its kind's model (``orchestrator/battery_drain.py``)."""
+    left = charge_after(battery, charge_fraction, drain_factor * job_energy_wh(battery, leg))
     if left >= reserve_fraction:
         return None
+    drawing = f", drawing {drain_factor:.2f}x its model" if drain_factor != 1.0 else ""
     return (
         f"{100 * charge_fraction:.0f}% left, the next job would leave {100 * left:.0f}% "
-        f"(reserve {100 * reserve_fraction:.0f}%)"
+        f"(reserve {100 * reserve_fraction:.0f}%{drawing})"
     )
 
 
@@ -142,6 +151,36 @@ class Swaps:
             return False
         del self.fresh_above[vehicle_id]
         return True
+
+    def records(
+        self, reasons: Mapping[str, str]
+    ) -> tuple[tuple[SwapRecord, ...], tuple[float, ...]]:
+        """What a restart keeps: each vehicle waiting (``reasons``: vehicle id -> why it was sent)
+        and the crew's turnarounds (``orchestrator/battery_records.py``)."""
+        vids = sorted(self.waiting.keys() | self.fresh_above.keys())
+        swaps = tuple(
+            SwapRecord(
+                vid,
+                reasons.get(vid, ""),
+                waiting_since_s=self.waiting.get(vid),
+                sent_with_fraction=self._sent_with.get(vid),
+                fresh_above_fraction=self.fresh_above.get(vid),
+            )
+            for vid in vids
+        )
+        return swaps, tuple(self._turnarounds_s)
+
+    def restore(self, swaps: Iterable[SwapRecord], turnarounds_s: Iterable[float]) -> None:
+        """Take up what :meth:`records` kept."""
+        for record in swaps:
+            vid = record.vehicle_id
+            if record.waiting_since_s is not None:
+                self.waiting[vid] = record.waiting_since_s
+            if record.sent_with_fraction is not None:
+                self._sent_with[vid] = record.sent_with_fraction
+            if record.fresh_above_fraction is not None:
+                self.fresh_above[vid] = record.fresh_above_fraction
+        self._turnarounds_s.extend(turnarounds_s)
 
     def free_at_s(self, vehicle_id: str, now_s: float) -> float:
         """When ``vehicle_id`` may take a job as far as its battery goes, Unix time [s] (an

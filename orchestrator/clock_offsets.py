@@ -21,7 +21,7 @@ from orchestrator.core_types import Effects
 from orchestrator.fleet import VehicleView
 
 if TYPE_CHECKING:
-    from orchestrator.core import Book
+    from orchestrator.book_protocol import BookProtocol
 
 
 def clock_reply(wall_clock: Callable[[], float]) -> ClockReply:
@@ -32,7 +32,7 @@ def clock_reply(wall_clock: Callable[[], float]) -> ClockReply:
 
 
 def heard(
-    book: Book, eff: Effects, view: VehicleView, offset_ms: float | None, now_s: float
+    book: BookProtocol, eff: Effects, view: VehicleView, offset_ms: float | None, now_s: float
 ) -> None:
     """A status's ``clock_offset_ms``: the alert when it passes the bound, the all-clear when
     it comes back within it."""

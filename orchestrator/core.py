@@ -41,6 +41,8 @@ from orchestrator import (
 )
 from orchestrator.alerts import OpenAlerts
 from orchestrator.batteries import Swaps
+from orchestrator.battery_drain import Drains
+from orchestrator.battery_records import BatteryRecords
 from orchestrator.core_types import CoreConfig, Effects, Level
 from orchestrator.finished import MAX_FINAL_JOBS, FinishedJobs
 from orchestrator.fleet import VehicleView, queue_etas
@@ -70,11 +72,12 @@ class Book:
         job_counts: Mapping[str, int] | None = None,
         max_final_jobs: int = MAX_FINAL_JOBS,
         open_alerts: Iterable[Event] = (),
+        batteries: BatteryRecords | None = None,
     ) -> None:
         """``jobs``: the stored ones (every unfinished job and at least the latest finished);
         ``job_counts``: jobs per state in the database (default: counted from ``jobs``);
         ``open_alerts``: the alerts open when the orchestrator stopped; ``sheet_boards``: the
-        boards that waited for the crew's sheet."""
+        boards that waited for the crew's sheet; ``batteries``: the swaps and drains stored."""
         self.config = config
         self.queue_paused = queue_paused
         self.vehicles = {v.vehicle_id: VehicleView(v, gone_since_s=now_s) for v in config.vehicles}
@@ -122,6 +125,10 @@ class Book:
         """Boards waiting for the crew's sheet or drying (``orchestrator/sheets.py``)."""
         self.swaps = Swaps(time_scale=config.eta.time_scale, swap_s=config.battery_swap_s)
         """Vehicles waiting for the crew's battery swap (``orchestrator/batteries.py``)."""
+        stored = batteries or BatteryRecords()
+        self.drains = Drains(r for r in stored.drains if r.vehicle_id in self.vehicles)
+        """Each vehicle's drain learned from its reports (``orchestrator/battery_drain.py``)."""
+        battery_swaps.restore(self, stored)
         self.router_down_since_s: float | None = None
         """Since when the orchestrator has had no link to the router, [s] (None: it has one)."""
         self.told_overdue: set[str] = set()
@@ -300,6 +307,8 @@ class Book:
         eff.jobs[job.job_id] = job
         self.kinds.forget(job)
         self._forget(self.finished.changed(previous, job))
+        if job.final and previous is not None and not previous.final:
+            phrases.ended_unbegun(self, eff, job)  # a phrase is written whole or not at all
         return job
 
     def _forget(self, job_ids: Iterable[str]) -> None:

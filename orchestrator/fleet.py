@@ -6,7 +6,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from bus.messages import VehicleStateName, VehicleSummary
-from orchestrator import phrases
+from orchestrator import phrase_rows
 from orchestrator.batteries import EtaCharges
 from orchestrator.jobs import Job
 
@@ -266,9 +266,9 @@ def queue_etas(
         ]
         return min((can_start(job, v) for v in takers), default=None)
 
-    for unit in phrases.units(queue):
-        if phrases.together(unit[0]):  # all start when a window of them is free
-            best = phrases.best_window(unit, row, option)
+    for unit in phrase_rows.units(queue):
+        if phrase_rows.together(unit[0]):  # all start when a window of them is free
+            best = phrase_rows.best_window(unit, row, option)
         else:
             first = option(unit[0])
             best = None if first is None else (first[0], [(unit[0], first[1])])
@@ -283,8 +283,8 @@ def queue_etas(
             etas[job.job_id] = start - now_s
             board_free[usable_boards[vid]] = done + after_s(usable_boards[vid])
             vehicle_free[vid] = done + model.after_write_s / scale
-        if phrases.together(unit[0]):  # nothing behind it goes first where it could go
-            held = phrases.could_use(unit, row, usable_boards, may_take)
+        if phrase_rows.together(unit[0]):  # nothing behind it goes first where it could go
+            held = phrase_rows.could_use(unit, row, usable_boards, may_take)
             for v, board_id in usable_boards.items():
                 if board_id in held:
                     vehicle_free[v] = max(vehicle_free[v], assigned)

@@ -35,12 +35,12 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from bus.fence import unheard_writing_s
-from orchestrator import phrases
+from orchestrator import phrase_rows
 from orchestrator.core_types import CoreConfig, Effects
 from orchestrator.jobs import Job, transition, update
 
 if TYPE_CHECKING:
-    from orchestrator.core import Book
+    from orchestrator.book_protocol import BookProtocol
 
 
 def writing_fence_s(config: CoreConfig, job: Job) -> float | None:
@@ -60,7 +60,7 @@ def hold_until_s(config: CoreConfig, job: Job, now_s: float) -> float:
     return max(now_s, fence or now_s) + config.lost_job_hold_s
 
 
-def left_half_written(book: Book, eff: Effects, job: Job, now_s: float) -> None:
+def left_half_written(book: BookProtocol, eff: Effects, job: Job, now_s: float) -> None:
     """``job``'s board has a half-written character on it: no job there until a fresh sheet."""
     if job.board_id is None:
         return
@@ -90,7 +90,7 @@ def overdue(job: Job, now_s: float) -> bool:
     return waits_for(job, now_s) is not None and until is not None and now_s >= until
 
 
-def tell_overdue(book: Book, eff: Effects, now_s: float) -> None:
+def tell_overdue(book: BookProtocol, eff: Effects, now_s: float) -> None:
     """Alert once for each job that has begun waiting for its holder beyond its hold (and
     forget the alerted jobs that wait no more)."""
     book.told_overdue &= {j.job_id for v in book.vehicles if (j := book.awaited_by(v))}
@@ -110,7 +110,7 @@ def tell_overdue(book: Book, eff: Effects, now_s: float) -> None:
         )
 
 
-def overdue_boards(book: Book) -> set[str]:
+def overdue_boards(book: BookProtocol) -> set[str]:
     """Boards of the vehicles whose job has been alerted as overdue and still waits for them."""
     return {
         view.info.board_id
@@ -119,7 +119,9 @@ def overdue_boards(book: Book) -> set[str]:
     }
 
 
-def free_on_fresh_sheet(book: Book, eff: Effects, board_id: str, now_s: float) -> Job | None:
+def free_on_fresh_sheet(
+    book: BookProtocol, eff: Effects, board_id: str, now_s: float
+) -> Job | None:
     """The operator put a fresh sheet on ``board_id``: an overdue job waiting for that board's
     vehicle is free for anyone, its old holder no longer heard about it; returns it."""
     for view in book.vehicles.values():
@@ -146,7 +148,7 @@ def assignable(job: Job, now_s: float) -> bool:
 
 
 def heard_without(
-    book: Book, eff: Effects, vehicle_id: str, job_id: str | None, now_s: float
+    book: BookProtocol, eff: Effects, vehicle_id: str, job_id: str | None, now_s: float
 ) -> None:
     """The vehicle spoke, naming ``job_id``: a job waiting for it that it does not name is free."""
     job = book.awaited_by(vehicle_id)
@@ -163,7 +165,7 @@ def heard_without(
     )
 
 
-def reclaim(book: Book, eff: Effects, job: Job, vehicle_id: str, now_s: float) -> bool:
+def reclaim(book: BookProtocol, eff: Effects, job: Job, vehicle_id: str, now_s: float) -> bool:
     """``vehicle_id`` named ``job`` (a status or a report): if the job is back in the queue with
     it as the last holder and nobody else has it, the vehicle has it again; True if so."""
     view = book.vehicles.get(vehicle_id)
@@ -171,7 +173,7 @@ def reclaim(book: Book, eff: Effects, job: Job, vehicle_id: str, now_s: float) -
         return False  # only the last holder, only while nobody else has it
     if not view.alive or view.held or book.active_job_of(vehicle_id) is not None:
         return False  # held: the operator took the job away (sent before the agent knew)
-    if view.info.board_id in book.busy_boards() or phrases.together(job):
+    if view.info.board_id in book.busy_boards() or phrase_rows.together(job):
         return False  # a character of a phrase not begun goes out again with its phrase
     reclaimed = transition(
         job,

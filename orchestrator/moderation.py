@@ -28,7 +28,7 @@ from orchestrator.holders import waits_for
 from orchestrator.jobs import transition
 
 if TYPE_CHECKING:
-    from orchestrator.core import Book
+    from orchestrator.book_protocol import BookProtocol
     from orchestrator.core_types import Effects
     from orchestrator.jobs import Job
 
@@ -55,7 +55,9 @@ def _why_not(job: Job, command: str, now_s: float) -> str | None:
     return f"already {job.state}"
 
 
-def _chosen(book: Book, cmd: OperatorCommand) -> list[tuple[str, Job | None]] | OperatorReply:
+def _chosen(
+    book: BookProtocol, cmd: OperatorCommand
+) -> list[tuple[str, Job | None]] | OperatorReply:
     """The jobs the command names, in submission order (unknown ids last), or why none."""
     if cmd.job_id is not None or (cmd.job_ids is not None and cmd.client_id is not None):
         return _refused("invalid", f"{cmd.command} takes one of job_id, job_ids, client_id")
@@ -74,7 +76,7 @@ def _chosen(book: Book, cmd: OperatorCommand) -> list[tuple[str, Job | None]] | 
     return [(j.job_id, j) for j in known] + [(i, None) for i in ids if i not in book.jobs]
 
 
-def moderated_together(book: Book, job: Job) -> list[Job]:
+def moderated_together(book: BookProtocol, job: Job) -> list[Job]:
     """What one approval or rejection of ``job`` decides: a phrase is moderated as one
     submission (its characters are dispatched together), so every character of its phrase
     awaiting approval, in reading order; else ``job`` alone."""
@@ -93,7 +95,7 @@ def moderated_together(book: Book, job: Job) -> list[Job]:
     )
 
 
-def _phrase_of(book: Book, job_id: str) -> list[Job]:
+def _phrase_of(book: BookProtocol, job_id: str) -> list[Job]:
     """The characters awaiting approval of the phrase of ``job_id`` (none: not a phrase)."""
     job = book.jobs.get(job_id)
     return moderated_together(book, job) if job is not None and job.phrase is not None else []
@@ -105,7 +107,9 @@ def _refused(code: str, message: str, field: str = "job_ids") -> OperatorReply:
     )
 
 
-def apply_bulk(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> OperatorReply:
+def apply_bulk(
+    book: BookProtocol, cmd: OperatorCommand, eff: Effects, now_s: float
+) -> OperatorReply:
     """``reject`` or ``cancel`` every waiting job ``cmd`` names (see the module)."""
     chosen = _chosen(book, cmd)
     if isinstance(chosen, OperatorReply):

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Literal
 from bus.messages import CommandReply, ErrorInfo, OperatorCommand, VehicleCommand
 
 if TYPE_CHECKING:
-    from orchestrator.core import Book
+    from orchestrator.book_protocol import BookProtocol
     from orchestrator.core_types import Effects, Level
     from orchestrator.jobs import Job
 
@@ -72,7 +72,7 @@ def _error(code: str, message: str, field: str | None = None) -> CommandReply:
     )
 
 
-def _job(book: Book, cmd: OperatorCommand) -> Job | CommandReply:
+def _job(book: BookProtocol, cmd: OperatorCommand) -> Job | CommandReply:
     if cmd.job_id is None:
         return _error("missing_field", f"{cmd.command} needs job_id", "job_id")
     job = book.jobs.get(cmd.job_id)
@@ -81,7 +81,7 @@ def _job(book: Book, cmd: OperatorCommand) -> Job | CommandReply:
     return job
 
 
-def _vehicle_ok(book: Book, cmd: OperatorCommand, required: bool) -> CommandReply | None:
+def _vehicle_ok(book: BookProtocol, cmd: OperatorCommand, required: bool) -> CommandReply | None:
     if cmd.vehicle_id is None:
         return (
             _error("missing_field", f"{cmd.command} needs vehicle_id", "vehicle_id")
@@ -98,7 +98,11 @@ def _vehicle_ok(book: Book, cmd: OperatorCommand, required: bool) -> CommandRepl
 
 
 def _stop_vehicles(
-    book: Book, cmd: OperatorCommand, eff: Effects, now_s: float, order: Literal["land", "estop"]
+    book: BookProtocol,
+    cmd: OperatorCommand,
+    eff: Effects,
+    now_s: float,
+    order: Literal["land", "estop"],
 ) -> list[str]:
     everyone = cmd.command == "land_all" or cmd.vehicle_id is None
     vids = list(book.vehicle_ids(None if everyone else cmd.vehicle_id))
@@ -112,7 +116,7 @@ def _stop_vehicles(
     return vids
 
 
-def _moderate(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> CommandReply:
+def _moderate(book: BookProtocol, cmd: OperatorCommand, eff: Effects, now_s: float) -> CommandReply:
     job = _job(book, cmd)
     if isinstance(job, CommandReply):
         return job
@@ -138,7 +142,7 @@ def _what(job: Job, together: list[Job]) -> str:
     return f"phrase {text} ({len(together)} characters, {job.phrase.phrase_id})"
 
 
-def _cancel(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> CommandReply:
+def _cancel(book: BookProtocol, cmd: OperatorCommand, eff: Effects, now_s: float) -> CommandReply:
     job = _job(book, cmd)
     if isinstance(job, CommandReply):
         return job
@@ -153,7 +157,9 @@ def _cancel(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> Com
     return CommandReply(ok=True, message=f"{job.job_id} cancelled")
 
 
-def _prioritize(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> CommandReply:
+def _prioritize(
+    book: BookProtocol, cmd: OperatorCommand, eff: Effects, now_s: float
+) -> CommandReply:
     job = _job(book, cmd)
     if isinstance(job, CommandReply):
         return job
@@ -165,7 +171,7 @@ def _prioritize(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) ->
     return CommandReply(ok=True, message=f"{job.job_id} priority {cmd.priority}")
 
 
-def _pause_resume(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandReply:
+def _pause_resume(book: BookProtocol, cmd: OperatorCommand, eff: Effects) -> CommandReply:
     paused = cmd.command == "pause"
     if cmd.vehicle_id is not None:
         view = book.vehicles[cmd.vehicle_id]
@@ -183,7 +189,7 @@ def _pause_resume(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandRepl
     return CommandReply(ok=True, message=f"{what} {'paused' if paused else 'resumed'}{note}")
 
 
-def _release(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandReply:
+def _release(book: BookProtocol, cmd: OperatorCommand, eff: Effects) -> CommandReply:
     """The only way out of a hold: one vehicle, named."""
     assert cmd.vehicle_id is not None  # checked by _vehicle_ok
     view = book.vehicles[cmd.vehicle_id]
@@ -194,7 +200,7 @@ def _release(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandReply:
     return CommandReply(ok=True, message=f"{cmd.vehicle_id} released")
 
 
-def _release_all(book: Book, eff: Effects) -> CommandReply:
+def _release_all(book: BookProtocol, eff: Effects) -> CommandReply:
     """Every held vehicle may take jobs again (after an e-stop or a land of the whole fleet)."""
     held = sorted(vid for vid, view in book.vehicles.items() if view.held)
     if not held:
@@ -206,7 +212,7 @@ def _release_all(book: Book, eff: Effects) -> CommandReply:
     return CommandReply(ok=True, message=f"released {', '.join(held)}{note}")
 
 
-def _clear_fault(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandReply:
+def _clear_fault(book: BookProtocol, cmd: OperatorCommand, eff: Effects) -> CommandReply:
     """Forward to the agent, which alone knows whether its vehicle is safe (it answers in the
     event log: ``fault_cleared``, or ``fault_kept`` with the reason)."""
     assert cmd.vehicle_id is not None  # checked by _vehicle_ok
@@ -217,7 +223,9 @@ def _clear_fault(book: Book, cmd: OperatorCommand, eff: Effects) -> CommandReply
     )
 
 
-def _fresh_sheet(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -> CommandReply:
+def _fresh_sheet(
+    book: BookProtocol, cmd: OperatorCommand, eff: Effects, now_s: float
+) -> CommandReply:
     """A board waiting for a sheet has one: half-written, or with a character the crew takes
     away (``orchestrator/sheets.py``); a job overdue for its lost holder there is free
     (``orchestrator/holders.py``)."""
@@ -235,7 +243,7 @@ def _fresh_sheet(book: Book, cmd: OperatorCommand, eff: Effects, now_s: float) -
     return CommandReply(ok=True, message=f"{cmd.board_id}: fresh sheet")
 
 
-def apply_operator(book: Book, command: object, eff: Effects, now_s: float) -> CommandReply:
+def apply_operator(book: BookProtocol, command: object, eff: Effects, now_s: float) -> CommandReply:
     """Carry out one operator command; the reply says what happened or what was wrong."""
     if not isinstance(command, OperatorCommand):
         return _error("invalid", "not an operator command")

@@ -24,6 +24,7 @@ from bus.pubsub import publish
 from bus.recorder import McapRecorder
 from bus.rpc import NoReplyError, RemoteError, aquery_one
 from bus.session import Session
+from orchestrator import battery_swaps
 from orchestrator.compaction import CompactionSchedule, HistoryPolicy
 from orchestrator.core import MAX_FINAL_JOBS, Book, CoreConfig, Effects
 from orchestrator.estimates import DurationEstimates
@@ -104,6 +105,7 @@ class BookOutputs:
             dirty_boards=stored.dirty_boards,
             sheet_boards=stored.sheet_boards,
             open_alerts=stored.open_alerts,
+            batteries=stored.batteries,
         )
         self.estimates = DurationEstimates(show)
         """Planned durations for queue ETAs (``orchestrator/estimates.py``)."""
@@ -139,6 +141,7 @@ class BookOutputs:
                 "dirty_boards": self.book.dirty_boards,
                 "sheet_boards": list(self.book.sheets.waiting),
                 "open_alerts": self.book.open_alerts(),
+                "batteries": battery_swaps.records(self.book),
             }
         try:
             changed = [job for job_id, job in eff.jobs.items() if job_id not in eff.progressed]

@@ -16,11 +16,11 @@ from orchestrator.jobs import Job, transition
 from orchestrator.quotas import is_operator
 
 if TYPE_CHECKING:
-    from orchestrator.core import Book
+    from orchestrator.book_protocol import BookProtocol
 
 
 def submit(
-    book: Book,
+    book: BookProtocol,
     job_ids: Sequence[str],
     request: SubmitRequest,
     estimates_s: Sequence[float],
@@ -76,7 +76,7 @@ def submit(
     return book.submit_reply(job_ids[0], now_s), eff
 
 
-def _full(book: Book, count: int, submitted_by: str | None) -> ErrorInfo | None:
+def _full(book: BookProtocol, count: int, submitted_by: str | None) -> ErrorInfo | None:
     """Why the state the phrase's jobs enter has no room for ``count`` more (None: it has), as
     ``Book._full`` says for one job."""
     if submitted_by is not None and is_operator(submitted_by):

@@ -18,6 +18,13 @@ to right as the public sees them (the kiosk names boards by that place too).
   the others dispatched with it back too (cancelled on their vehicles, handed back uncounted), so
   the phrase is dispatched together again; after it began, the character is written again alone
   on its own board (``Job.rewrite_alone``), its sheet changed first if it was half-written.
+- **Ending before the start** (:func:`ended_unbegun`): a character that fails (no vehicle could
+  write it, or it was lost too often) or is cancelled before its phrase began ends the phrase:
+  a phrase is written whole or not at all, as its visitor handed it in and as the operator
+  approved it, never with a hole or shifted along the row. Its other characters end with it
+  (their vehicles told to cancel): ``cancelled`` with the operator's reason when it was
+  cancelled, else ``failed`` with :data:`PHRASE_INCOMPLETE` naming the character and why; the
+  operator gets one alert, and the visitor's ticket says the phrase could not be written.
 - **ETAs** (``orchestrator/fleet.py``): the characters of a phrase start at the earliest time a
   window of adjacent boards has a vehicle free for each, and the boards it could use take no job
   behind it before then.
@@ -26,14 +33,19 @@ to right as the public sees them (the kiosk names boards by that place too).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING
 
-from orchestrator.jobs import Job
+from bus.messages import ErrorInfo, VehicleCommand
+from orchestrator.jobs import Job, transition
+from orchestrator.phrase_rows import phrase_index, together
 
 if TYPE_CHECKING:
-    from orchestrator.core import Book
-    from orchestrator.core_types import CoreConfig
+    from orchestrator.book_protocol import BookProtocol
+    from orchestrator.core_types import CoreConfig, Effects
+
+PHRASE_INCOMPLETE = "phrase_incomplete"
+"""Error code of a character ended because another of its phrase could not be written before
+the phrase began (:func:`ended_unbegun`)."""
 
 
 def board_row(config: CoreConfig) -> list[str]:
@@ -43,82 +55,7 @@ def board_row(config: CoreConfig) -> list[str]:
     return list(dict.fromkeys(declared or (v.board_id for v in config.vehicles)))
 
 
-def together(job: Job) -> bool:
-    """Whether ``job`` is dispatched and started with its phrase (not a character rewritten
-    alone, not a job of its own)."""
-    return job.phrase is not None and not job.rewrite_alone
-
-
-def units(queue: Sequence[Job]) -> list[tuple[Job, ...]]:
-    """The queue as it is dispatched: each job on its own, and the queued characters of each
-    phrase together, in reading order, at the place of its first in the queue."""
-    groups: dict[str, list[Job]] = {}
-    out: list[list[Job]] = []
-    for job in queue:
-        if job.phrase is None or not together(job):
-            out.append([job])
-            continue
-        group = groups.get(job.phrase.phrase_id)
-        if group is None:
-            group = groups[job.phrase.phrase_id] = []
-            out.append(group)
-        group.append(job)
-    return [tuple(sorted(g, key=_index)) for g in out]
-
-
-def _index(job: Job) -> int:
-    return job.phrase.index if job.phrase is not None else 0
-
-
-def windows(row: Sequence[str], n: int) -> list[Sequence[str]]:
-    """Every run of ``n`` adjacent boards of ``row``, from the left (none when ``n`` is 0)."""
-    return [row[start : start + n] for start in range(len(row) - n + 1)] if n > 0 else []
-
-
-def best_window(
-    members: Sequence[Job],
-    row: Sequence[str],
-    option: Callable[[Job, str], tuple[float, str] | None],
-) -> tuple[float, list[tuple[Job, str]]] | None:
-    """The window of ``len(members)`` adjacent boards of ``row`` whose latest seat is the
-    earliest (leftmost on ties), and its seats (job, vehicle id) in reading order; None when
-    no window has a seat for each. ``option(job, board)``: (cost, vehicle) of the best vehicle
-    on ``board`` for ``job``, or None."""
-    best: tuple[float, list[tuple[Job, str]]] | None = None
-    for window in windows(row, len(members)):
-        picks = [option(job, board) for job, board in zip(members, window, strict=True)]
-        chosen = [p for p in picks if p is not None]
-        if len(chosen) < len(members):
-            continue
-        cost = max(c for c, _ in chosen)
-        if best is None or cost < best[0]:
-            best = (cost, [(job, vid) for job, (_, vid) in zip(members, chosen, strict=True)])
-    return best
-
-
-def could_use(
-    unit: Sequence[Job],
-    row: Sequence[str],
-    usable_boards: Mapping[str, str],
-    may_take: Callable[[Job, str], bool] | None,
-) -> set[str]:
-    """The boards of every window that the vehicles of ``usable_boards`` (vehicle id -> board)
-    could write the phrase ``unit`` on (``may_take(job, vehicle)``, default: any); empty when
-    none could."""
-    boards: set[str] = set()
-    for window in windows(row, len(unit)):
-        if all(
-            any(
-                b == board and (may_take is None or may_take(j, v))
-                for v, b in usable_boards.items()
-            )
-            for j, board in zip(unit, window, strict=True)
-        ):
-            boards.update(window)
-    return boards
-
-
-def siblings(book: Book, job: Job) -> list[Job]:
+def siblings(book: BookProtocol, job: Job) -> list[Job]:
     """The other characters of ``job``'s phrase held by the Book, started together with it."""
     phrase = job.phrase
     if phrase is None:
@@ -138,13 +75,13 @@ def began(job: Job) -> bool:
     return job.writing_since_s is not None or job.state in ("writing", "done") or job.progress > 0
 
 
-def not_begun(book: Book, job: Job) -> bool:
+def not_begun(book: BookProtocol, job: Job) -> bool:
     """Whether ``job`` is a character of a phrase of which no character has begun: taken back,
     it takes the others back with it."""
     return together(job) and not began(job) and not any(began(j) for j in siblings(book, job))
 
 
-def may_write(book: Book, job: Job, now_s: float) -> bool:
+def may_write(book: BookProtocol, job: Job, now_s: float) -> bool:
     """A *ready* report of ``job`` (active, from its vehicle) came at ``now_s``: whether to
     acknowledge it (the vehicle then begins writing). Yes for a job alone or a phrase that has
     begun; else only once every character dispatched with it has reported ready within
@@ -168,9 +105,46 @@ def may_write(book: Book, job: Job, now_s: float) -> bool:
     return True
 
 
-def waiting_for(book: Book, job: Job) -> str:
+def waiting_for(book: BookProtocol, job: Job) -> str:
     """Why a *ready* report of ``job`` is not acknowledged yet, in one line."""
     late = [
         j.label for j in siblings(book, job) if not j.final and j.job_id not in book.phrase_ready
     ]
     return f"{job.label} waits for {' '.join(late) or 'its phrase'} to start together"
+
+
+def ended_unbegun(book: BookProtocol, eff: Effects, job: Job) -> None:
+    """``job`` has just ended (``Book.put``): if it is a character of a phrase that had not
+    begun, ended unwritten (failed or cancelled), its phrase's other characters end with it."""
+    if job.state not in ("failed", "cancelled") or not together(job):
+        return
+    if job.error is not None and job.error.code == PHRASE_INCOMPLETE:
+        return  # one of those ended here
+    others = [j for j in siblings(book, job) if not j.final]
+    if began(job) or not others or any(began(j) for j in siblings(book, job)):
+        return
+    assert job.phrase is not None
+    now_s, why = job.updated_at_s, job.error.message if job.error else "no reason given"
+    if job.state == "cancelled":  # the operator's reason, for the visitor
+        message = f"{job.label} of its phrase was cancelled: written whole or not at all"
+        reason = job.error.reason if job.error else None
+    else:
+        message = f"{job.label} of its phrase could not be written ({why}): written whole or not"
+        reason = None
+    info = ErrorInfo(code=PHRASE_INCOMPLETE, message=message, reason=reason)
+    for other in sorted(others, key=phrase_index):
+        if other.active and other.vehicle_id is not None:
+            stop = VehicleCommand(command="cancel", job_id=other.job_id)
+            eff.commands.append((other.vehicle_id, stop))
+        book.put(eff, transition(other, job.state, now_s, error=info))
+    text = "".join(j.label for j in sorted([job, *others], key=phrase_index))
+    book.event(
+        eff,
+        now_s,
+        "alert" if job.state == "failed" else "info",
+        "phrase_ended",
+        f"phrase {text}: {job.label} {job.state} before it began ({why}); the other"
+        f" {len(others)} end with it",
+        job_id=job.phrase.phrase_id,
+    )
+    eff.fleet_changed = True

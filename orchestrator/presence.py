@@ -41,10 +41,10 @@ MAX_KIND_CHARS = 40
 MAX_MESSAGE_CHARS = 300
 
 if TYPE_CHECKING:
-    from orchestrator.core import Book
+    from orchestrator.book_protocol import BookProtocol
 
 
-def liveliness(book: Book, vehicle_id: str, alive: bool, now_s: float) -> Effects:
+def liveliness(book: BookProtocol, vehicle_id: str, alive: bool, now_s: float) -> Effects:
     """A vehicle's token appeared or disappeared."""
     eff = Effects()
     view = book.vehicles.get(vehicle_id)
@@ -72,7 +72,7 @@ def liveliness(book: Book, vehicle_id: str, alive: bool, now_s: float) -> Effect
     return eff
 
 
-def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
+def status(book: BookProtocol, status: VehicleStatus, now_s: float) -> Effects:
     """A vehicle's published status: that vehicle checked, and jobs assigned if anything changed.
     Other vehicles are left to ``tick`` (the timer): sweeping the fleet on every heartbeat cost
     the orchestrator most of a core at 250 vehicles (``benchmarks/bench_heartbeat.py``)."""
@@ -89,7 +89,7 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
     view.battery_fraction = status.battery_fraction
     view.battery_minutes_left = status.battery_minutes_left
     view.link_loss_fraction, view.flight_s_today = status.link_loss_fraction, status.flight_s_today
-    changed = battery_swaps.heard(book, view) or changed
+    changed = battery_swaps.heard(book, eff, view) or changed
     clock_offsets.heard(book, eff, view, status.clock_offset_ms, now_s)
     if status.incarnation != view.incarnation:
         if view.incarnation is not None:
@@ -120,7 +120,7 @@ def status(book: Book, status: VehicleStatus, now_s: float) -> Effects:
 
 
 def _hold_if_unsafe(
-    book: Book, eff: Effects, view: VehicleView, status: VehicleStatus, now_s: float
+    book: BookProtocol, eff: Effects, view: VehicleView, status: VehicleStatus, now_s: float
 ) -> None:
     """Hold a vehicle in ``fault``, or back from a loss in the air without a job of its own."""
     lost_in, view.lost_in_state = view.lost_in_state, None
@@ -149,7 +149,7 @@ def _restarted_since(view: VehicleView, assigned_at_s: float | None) -> bool:
 
 
 def telemetry(
-    book: Book,
+    book: BookProtocol,
     vehicle_id: str,
     tracking_error_m: float,
     job_id: str | None,
@@ -182,7 +182,7 @@ def telemetry(
     return eff
 
 
-def vehicle_event(book: Book, vehicle_id: str, event: Event, now_s: float) -> Effects:
+def vehicle_event(book: BookProtocol, vehicle_id: str, event: Event, now_s: float) -> Effects:
     """An event an agent published about its vehicle (``vehicles/<id>/events``), relayed into the
     show's log with the orchestrator's time; ``RELAY_BURST`` at once, then ``RELAY_RATE_PER_S``."""
     eff = Effects()
@@ -207,7 +207,7 @@ def vehicle_event(book: Book, vehicle_id: str, event: Event, now_s: float) -> Ef
     return eff
 
 
-def _maybe_back(book: Book, eff: Effects, view: VehicleView, now_s: float) -> bool:
+def _maybe_back(book: BookProtocol, eff: Effects, view: VehicleView, now_s: float) -> bool:
     """A lost vehicle with its token that spoke within ``lost_after_s`` is present again."""
     heard = view.heard_at_s
     fresh = heard is not None and now_s - heard < book.config.lost_after_s
@@ -227,7 +227,7 @@ def silent_for_s(view: VehicleView, now_s: float) -> float | None:
     return now_s - max(marks) if marks else None
 
 
-def router_link(book: Book, up: bool, now_s: float) -> Effects:
+def router_link(book: BookProtocol, up: bool, now_s: float) -> Effects:
     """The orchestrator's own link to the router went (a router restart, a cut cable) or came
     back. Meanwhile nobody can be heard, so nobody is taken as lost for it; once it is back,
     every vehicle has ``lost_after_s`` from then to be heard again: the clients reconnect to
@@ -252,7 +252,7 @@ def router_link(book: Book, up: bool, now_s: float) -> Effects:
     return eff
 
 
-def _why_lost(book: Book, view: VehicleView, now_s: float) -> str | None:
+def _why_lost(book: BookProtocol, view: VehicleView, now_s: float) -> str | None:
     """Why the vehicle is to be taken as lost now (None: it is not, or it cannot be heard: the
     orchestrator has no link to the router)."""
     if book.router_down_since_s is not None:
@@ -270,7 +270,7 @@ def _why_lost(book: Book, view: VehicleView, now_s: float) -> str | None:
     return None
 
 
-def tick_into(book: Book, eff: Effects, now_s: float) -> None:
+def tick_into(book: BookProtocol, eff: Effects, now_s: float) -> None:
     """Lost vehicles give their job back; so do vehicles that do not confirm it; then assign."""
     for view in book.vehicles.values():
         check_vehicle(book, eff, view, now_s)
@@ -278,7 +278,7 @@ def tick_into(book: Book, eff: Effects, now_s: float) -> None:
     book.assign(eff, now_s)
 
 
-def check_vehicle(book: Book, eff: Effects, view: VehicleView, now_s: float) -> None:
+def check_vehicle(book: BookProtocol, eff: Effects, view: VehicleView, now_s: float) -> None:
     """One vehicle lost gives its job back; so does one that did not confirm it in time."""
     vid = view.info.vehicle_id
     why = _why_lost(book, view, now_s)

@@ -3,7 +3,9 @@
 A report counts only from the vehicle the job was last given to (the service has already checked
 that the report came on that vehicle's own key): ``done`` from any other vehicle is refused
 (``not_assigned``), so no agent can finish another's job; from the last holder it is accepted
-even after a requeue (the character is written) and whoever took the job over is told to stop.
+even after a requeue (the character is written) and whoever took the job over is told to stop,
+unless its metrics say nothing was written or the plan was flown in part: then the job fails
+(``writing_bounds``, ``orchestrator/unwritten.py``).
 ``holding``/``started``/``progress`` from the last holder reclaim a job that is back in the queue
 and not yet given to another vehicle (a liveliness flap; ``orchestrator/holders.py`` keeps it from
 others a while), otherwise the vehicle is told to stop (``not_assigned``); ``holding`` (before
@@ -25,11 +27,14 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+import msgspec
+
 from bus.messages import AgentReport, CommandReply, ErrorInfo, VehicleCommand
 from orchestrator import holders, phrases
 from orchestrator.core_types import Effects
 from orchestrator.jobs import Job, transition, update
 from orchestrator.requeue import hand_back, requeue
+from orchestrator.unwritten import unwritten
 from orchestrator.written import split_written
 
 PLAN_FAILED = "plan_failed"
@@ -42,10 +47,10 @@ UNCOUNTED = frozenset({"takeoff_refused", PLAN_FAILED})
 kind cannot write the job and another kind may."""
 
 if TYPE_CHECKING:
-    from orchestrator.core import Book
+    from orchestrator.book_protocol import BookProtocol
 
 
-def apply_report(book: Book, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
+def apply_report(book: BookProtocol, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
     """Record one report; the reply acknowledges it (or tells the vehicle to stop)."""
     job = book.jobs.get(rep.job_id)
     if job is None:
@@ -88,7 +93,13 @@ def _not_assigned(job: Job, rep: AgentReport, eff: Effects) -> CommandReply:
     return CommandReply(ok=False, error=info)
 
 
-def _done(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
+def _done(
+    book: BookProtocol, job: Job, rep: AgentReport, eff: Effects, now_s: float
+) -> CommandReply:
+    if (why := unwritten(rep.metrics)) is not None:  # the floor under the agent's verdict
+        info = ErrorInfo(code="writing_bounds", message=f"written out of bounds: {why}")
+        failed = msgspec.structs.replace(rep, event="failed", error=info)
+        return _fail(book, job, failed, eff, now_s, _failure(job, failed))
     owner = job.vehicle_id if job.active else None
     planned = rep.planned_duration_s or job.planned_duration_s
     metrics, written = split_written(rep.metrics)
@@ -121,7 +132,7 @@ def _done(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) ->
     return CommandReply(ok=True, message="done recorded")
 
 
-def _left_on_its_sheet(book: Book, job: Job, eff: Effects, now_s: float) -> None:
+def _left_on_its_sheet(book: BookProtocol, job: Job, eff: Effects, now_s: float) -> None:
     """``job`` is on its board in full: that board may now wait for the crew's sheet."""
     if job.board_id is None or not book.sheets.written(job.board_id, now_s):
         return
@@ -132,7 +143,9 @@ def _left_on_its_sheet(book: Book, job: Job, eff: Effects, now_s: float) -> None
     )
 
 
-def _failed(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
+def _failed(
+    book: BookProtocol, job: Job, rep: AgentReport, eff: Effects, now_s: float
+) -> CommandReply:
     if rep.retry_after_s is not None:
         return _handed_back(book, job, rep, eff, now_s, rep.retry_after_s)
     if (
@@ -148,7 +161,7 @@ def _failed(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) 
     return _fail(book, job, rep, eff, now_s, _failure(job, rep))
 
 
-def _rewrite_alone(book: Book, job: Job, rep: AgentReport) -> bool:
+def _rewrite_alone(book: BookProtocol, job: Job, rep: AgentReport) -> bool:
     """A character of a phrase that has begun failed before it was written in full, with tries
     left: it is written again alone on its board (the others stay as they are)."""
     return (
@@ -165,7 +178,7 @@ def _failure(job: Job, rep: AgentReport) -> str:
 
 
 def _handed_back(
-    book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float, retry_after_s: float
+    book: BookProtocol, job: Job, rep: AgentReport, eff: Effects, now_s: float, retry_after_s: float
 ) -> CommandReply:
     """The vehicle gave the job back before its brush touched, and is healthy: the job goes back to
     the queue and the vehicle gets no job for ``retry_after_s``. A take-off refusal or a plan its
@@ -189,7 +202,7 @@ def _handed_back(
 
 
 def _fail(
-    book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float, message: str
+    book: BookProtocol, job: Job, rep: AgentReport, eff: Effects, now_s: float, message: str
 ) -> CommandReply:
     metrics, written = split_written(rep.metrics)  # written out of its bounds: what it left
     book.put(eff, transition(job, "failed", now_s, error=rep.error, metrics=metrics))
@@ -205,7 +218,7 @@ def _fail(
     return CommandReply(ok=True, message="failure recorded")
 
 
-def _ready(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> None:
+def _ready(book: BookProtocol, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> None:
     """The vehicle is at the start of its writing and asks to write (a *ready* report): from
     the acknowledgement on it may write unheard until the write fence (``bus/fence.py``), so the
     fence's start is stored before the answer, the latest receipt (``Job.writing_since_s``)."""
@@ -215,7 +228,9 @@ def _ready(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -
     )
 
 
-def _writing(book: Book, job: Job, rep: AgentReport, eff: Effects, now_s: float) -> CommandReply:
+def _writing(
+    book: BookProtocol, job: Job, rep: AgentReport, eff: Effects, now_s: float
+) -> CommandReply:
     book.vehicles[rep.vehicle_id].mismatch_since_s = None
     if job.state == "assigned":
         book.event(

@@ -26,11 +26,11 @@ from orchestrator.holders import hold_until_s, left_half_written
 from orchestrator.jobs import Job, transition, update
 
 if TYPE_CHECKING:
-    from orchestrator.core import Book
+    from orchestrator.book_protocol import BookProtocol
 
 
 def requeue(
-    book: Book,
+    book: BookProtocol,
     eff: Effects,
     job: Job,
     now_s: float,
@@ -93,7 +93,7 @@ def requeue(
         _with_its_phrase(book, eff, job, now_s)
 
 
-def _with_its_phrase(book: Book, eff: Effects, job: Job, now_s: float) -> None:
+def _with_its_phrase(book: BookProtocol, eff: Effects, job: Job, now_s: float) -> None:
     """A character of a phrase that has not begun went back to the queue: so do the others
     dispatched with it (their vehicles told to stop), to be dispatched together again."""
     for other in phrases.siblings(book, job):
@@ -104,13 +104,13 @@ def _with_its_phrase(book: Book, eff: Effects, job: Job, now_s: float) -> None:
             hand_back(book, eff, other, now_s, why)
 
 
-def hand_back(book: Book, eff: Effects, job: Job, now_s: float, reason: str) -> None:
+def hand_back(book: BookProtocol, eff: Effects, job: Job, now_s: float, reason: str) -> None:
     """Take an active job back without counting its attempt (see the module docstring): queued
     again, or failed once it has been handed back ``max_handbacks`` times."""
     requeue(book, eff, update(job, now_s, handbacks=job.handbacks + 1), now_s, reason, lost=False)
 
 
-def _gave_up(book: Book, job: Job, lost: bool) -> str | None:
+def _gave_up(book: BookProtocol, job: Job, lost: bool) -> str | None:
     """Why a job taken back fails instead of going back to the queue (None: it goes back)."""
     if lost and job.counted_attempts >= book.config.max_attempts:
         return f"{job.counted_attempts} attempts"

@@ -10,7 +10,8 @@ telemetry) is never written here; only state changes are.
 One transaction per decision (:meth:`JobStore.save`): the jobs it changed, its events and the
 queue settings commit together, before the service replies or publishes. Every event is stored,
 so the latest ones (:meth:`JobStore.events`, a ``snapshot`` reply's) outlive a restart; so do the
-open alerts (``orchestrator/alerts.py``), kept with the settings.
+open alerts (``orchestrator/alerts.py``) and the batteries' swaps and drains
+(``orchestrator/battery_records.py``), kept with the settings.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from types import TracebackType
 import msgspec
 
 from bus.messages import Event, JobStateName, WrittenInk
+from orchestrator.battery_records import BatteryRecords
 from orchestrator.compaction import (
     FOLD_TABLES,
     FULL_FINISHED_INDEX,
@@ -75,6 +77,7 @@ _job_decoder = msgspec.json.Decoder(Job)
 _event_decoder = msgspec.json.Decoder(Event)
 _events_decoder = msgspec.json.Decoder(list[Event])
 _ink_decoder = msgspec.json.Decoder(WrittenInk)
+_batteries_decoder = msgspec.json.Decoder(BatteryRecords)
 
 
 class StoreError(RuntimeError):
@@ -102,6 +105,9 @@ class StoredState:
     """Boards waiting for the crew's sheet after a character (``orchestrator/sheets.py``)."""
     open_alerts: list[Event]
     """Alerts whose cause lasted when they were last stored, oldest first."""
+    batteries: BatteryRecords
+    """Battery swaps under way, the crew's pace, each vehicle's learned drain
+    (``orchestrator/battery_records.py``)."""
 
 
 @dataclass(frozen=True)
@@ -181,6 +187,7 @@ class JobStore:
         sheet_boards: Iterable[str] | None = None,
         open_alerts: Iterable[Event] | None = None,
         written: Mapping[str, WrittenInk] | None = None,
+        batteries: BatteryRecords | None = None,
     ) -> None:
         """Write changed jobs, new events, settings (``open_alerts`` replaces those stored) and
         ink pictures (job id -> picture of a job in ``jobs`` or stored before) in one durable
@@ -203,6 +210,8 @@ class JobStore:
                 settings.append((key, json.dumps(sorted(names))))
         if open_alerts is not None:
             settings.append(("open_alerts", msgspec.json.encode(list(open_alerts)).decode()))
+        if batteries is not None:
+            settings.append(("batteries", msgspec.json.encode(batteries).decode()))
         if not (job_rows or event_rows or settings or ink_rows):
             return
         try:
@@ -266,6 +275,7 @@ class JobStore:
             dirty_boards=list(json.loads(settings.get("dirty_boards", "[]"))),
             sheet_boards=list(json.loads(settings.get("sheet_boards", "[]"))),
             open_alerts=_events_decoder.decode(settings.get("open_alerts", "[]")),
+            batteries=_batteries_decoder.decode(settings.get("batteries", "{}")),
         )
 
     def job(self, job_id: str) -> Job | None:

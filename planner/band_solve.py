@@ -26,24 +26,46 @@ BLOCK_SIZE = 48
 bands of 88 to 5750 rows."""
 
 
-@lru_cache(maxsize=64)
-def _layout(n: int, bandwidth: int, b: int) -> tuple[NDArray[np.int64], ...]:
-    """Flat indices for blocks of ``b`` rows: band entries within one block (source in ``ab``,
-    destination in the diagonal blocks, upper and mirrored), band entries across blocks (source,
-    destination in the super-diagonal blocks), and the padding of the last diagonal block."""
-    k = np.repeat(np.arange(bandwidth + 1), n)
-    col = np.tile(np.arange(n), bandwidth + 1)
-    row = col - k
-    inside = row >= 0
-    k, col, row = k[inside], col[inside], row[inside]
-    source = (bandwidth - k) * n + col
-    block, r, c = row // b, row % b, col % b
-    same = block == col // b
-    upper = block * b * b + r * b + c
-    mirrored = block * b * b + c * b + r
-    pad = np.arange(n, -(-n // b) * b)
-    padding = (pad // b) * b * b + (pad % b) * (b + 1)
-    return source[same], upper[same], mirrored[same], source[~same], upper[~same], padding
+@lru_cache(maxsize=4)
+def _block_pattern(bandwidth: int, b: int) -> tuple[NDArray[np.int64], ...]:
+    """Where the band sits in a block of ``b`` rows (the same in every block): for each entry of
+    the diagonal block its band row and its row and column in the block; then for each entry
+    crossing into the next block its band row, its row in this block and column in the next."""
+    band_k, rows, cols = [], [], []
+    for k in range(min(bandwidth, b - 1) + 1):  # entry (i, i + k) is ab[bandwidth - k, i + k]
+        r = np.arange(b - k)
+        band_k.append(np.full(b - k, bandwidth - k))
+        rows.append(r)
+        cols.append(r + k)
+    across_k = [np.full(k, bandwidth - k) for k in range(1, min(bandwidth, b) + 1)]
+    across_c = [np.arange(k) for k in range(1, min(bandwidth, b) + 1)]
+    across_r = [b - k + c for k, c in zip(range(1, min(bandwidth, b) + 1), across_c, strict=True)]
+    return tuple(
+        np.concatenate(parts).astype(np.int64) if parts else np.zeros(0, dtype=np.int64)
+        for parts in (band_k, rows, cols, across_k, across_r, across_c)
+    )
+
+
+def _blocks(
+    ab_upper: NDArray[np.float64], b: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The diagonal blocks (n_blocks, b, b) of ``b`` rows (the last one padded with the
+    identity) and the super-diagonal blocks (the band crossing from one block into the next):
+    the band cut into blocks of ``b`` columns, each scattered by the same pattern."""
+    bandwidth, n = ab_upper.shape[0] - 1, ab_upper.shape[1]
+    n_blocks = -(-n // b)
+    padded = np.zeros((bandwidth + 1, n_blocks * b))
+    padded[:, :n] = ab_upper
+    padded[bandwidth, n:] = 1.0
+    bands = padded.reshape(bandwidth + 1, n_blocks, b).transpose(1, 0, 2)
+    band_k, rows, cols, across_k, across_r, across_c = _block_pattern(bandwidth, b)
+    diagonal = np.zeros((n_blocks, b, b))
+    values = bands[:, band_k, cols]
+    diagonal[:, cols, rows] = values
+    diagonal[:, rows, cols] = values
+    upper = np.zeros((n_blocks, b, b))
+    upper[:-1, across_r, across_c] = bands[1:, across_k, across_c]
+    return diagonal, upper
 
 
 def solve_symmetric_band(
@@ -53,18 +75,8 @@ def solve_symmetric_band(
     ``rhs`` (n,) or (n, d). Raises ``numpy.linalg.LinAlgError`` where a block is singular."""
     bandwidth, n = ab_upper.shape[0] - 1, ab_upper.shape[1]
     b = min(BLOCK_SIZE, n)
-    n_blocks = -(-n // b)
-    layout = _layout(n, bandwidth, b)
-    within_src, within_up, within_mirror, across_src, across_dst, padding = layout
-    flat = np.ascontiguousarray(ab_upper).ravel()
-    diagonal = np.zeros(n_blocks * b * b)
-    diagonal[within_mirror] = flat[within_src]
-    diagonal[within_up] = flat[within_src]
-    diagonal[padding] = 1.0
-    diagonal = diagonal.reshape(n_blocks, b, b)
-    upper = np.zeros(n_blocks * b * b)
-    upper[across_dst] = flat[across_src]
-    upper = upper.reshape(n_blocks, b, b)
+    diagonal, upper = _blocks(ab_upper, b)
+    n_blocks = diagonal.shape[0]
     columns = rhs.reshape(n, -1)
     d = columns.shape[1]
     # Block row i: diagonal[i] x_i + upper[i] x_{i+1} + upper[i - 1]^T x_{i-1} = rhs_i, where

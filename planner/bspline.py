@@ -198,6 +198,19 @@ def basis_rows_pair(u: FloatArray, n_spans: int) -> tuple[BasisRows, BasisRows]:
 # --- control-point difference operators (eq. 45-52) -------------------------------------------
 
 
+def apply_band(values: FloatArray, x: FloatArray) -> FloatArray:
+    """``B @ x`` for the band matrix ``B`` whose row ``i`` holds ``values[i]`` in columns
+    ``i .. i + width - 1`` (the operators below), by shifted slices: each row's terms are summed
+    in column order, as the :class:`CooMatrix` product sums them (the same numbers, bit for bit),
+    without its gathers. ``x`` shape (n_cols,) or (n_cols, d)."""
+    n_rows, width = values.shape
+    columns = values if x.ndim == 1 else values[:, :, None]
+    total = columns[:, 0] * x[:n_rows]
+    for a in range(1, width):
+        total = total + columns[:, a] * x[a : a + n_rows]
+    return np.asarray(total)
+
+
 def _band(values: FloatArray, n_cols: int) -> CooMatrix:
     """The matrix whose row ``i`` holds ``values[i]`` in columns ``i .. i + width - 1``."""
     n_rows, width = values.shape
@@ -222,6 +235,14 @@ def velocity_operator(n_spans: int) -> CooMatrix:
     Shape ``(m + 2, m + 3)``. Multiply by ``alpha`` for the time derivative.
     """
     return _band(_difference_values(n_spans, 1), n_spans + DEGREE)
+
+
+@lru_cache(maxsize=64)
+def velocity_values(n_spans: int) -> FloatArray:
+    """Rows of ``K_u`` (:func:`velocity_operator`) for :func:`apply_band`, shape ``(m + 2, 2)``."""
+    values = _difference_values(n_spans, 1)
+    values.setflags(write=False)
+    return values
 
 
 @lru_cache(maxsize=64)
@@ -254,6 +275,11 @@ def _jerk_values(n_spans: int) -> FloatArray:
     return np.hstack([zero, accel[1:]]) - np.hstack([accel[:-1], zero])
 
 
+def span_jerk_u(control_points: FloatArray) -> FloatArray:
+    """``D3_u @ control_points``: the constant third derivative w.r.t. ``u`` on each span."""
+    return apply_band(_jerk_values(int(control_points.shape[0]) - DEGREE), control_points)
+
+
 @lru_cache(maxsize=64)
 def jerk_operator(n_spans: int) -> CooMatrix:
     """``D3_u``: constant third derivative on each span, shape ``(m, m + 3)``.
@@ -264,13 +290,39 @@ def jerk_operator(n_spans: int) -> CooMatrix:
     return _band(_jerk_values(n_spans), n_spans + DEGREE)
 
 
+_GRAM_EDGE = 8
+"""Columns at each end of :func:`jerk_gram_banded` that the boundary spans reach (3 spans of
+4 columns, plus margin); the columns between hold the interior value."""
+
+
 @lru_cache(maxsize=64)
 def jerk_gram_banded(n_spans: int) -> FloatArray:
     """Upper banded storage (LAPACK ``ab``, 3 super-diagonals) of ``G_u = D3_u^T D3_u``.
 
     ``G = alpha**5 * G_u`` is eq. (34): ``int (d^3 S/dt^3)^2 dt = tau^T G tau``. Each span has
     unit length in ``u``, so the integral of the squared constant jerk is the plain sum.
+    Long splines are assembled from the ``4 * _GRAM_EDGE``-span one (the same sums, so the same
+    numbers, bit for bit), as a spline of a new length appears at nearly every re-timing step.
     """
+    reference_spans = 4 * _GRAM_EDGE
+    if n_spans <= reference_spans:
+        return _jerk_gram_summed(n_spans)
+    reference = jerk_gram_banded(reference_spans)
+    middle = n_spans + DEGREE - 2 * _GRAM_EDGE
+    ab = np.concatenate(
+        [
+            reference[:, :_GRAM_EDGE],
+            np.repeat(reference[:, _GRAM_EDGE : _GRAM_EDGE + 1], middle, axis=1),
+            reference[:, -_GRAM_EDGE:],
+        ],
+        axis=1,
+    )
+    ab.setflags(write=False)
+    return ab
+
+
+def _jerk_gram_summed(n_spans: int) -> FloatArray:
+    """:func:`jerk_gram_banded` summed span by span."""
     jerk = _jerk_values(n_spans)
     n = n_spans + DEGREE
     ab = np.zeros((4, n))
@@ -322,9 +374,9 @@ class ClampedCubicSpline:
 
     def acceleration_at_knots(self) -> FloatArray:
         """Exact acceleration at the knots (it is linear in between), shape (m + 1, d)."""
-        accel = acceleration_operator(self.n_spans) @ self.control_points
-        return np.asarray(accel) * self.alpha**2
+        accel = apply_band(_acceleration_values(self.n_spans), self.control_points)
+        return accel * self.alpha**2
 
     def jerk_per_span(self) -> FloatArray:
         """Constant jerk on each span, shape (m, d), in units per s^3."""
-        return np.asarray(jerk_operator(self.n_spans) @ self.control_points) * self.alpha**3
+        return span_jerk_u(self.control_points) * self.alpha**3

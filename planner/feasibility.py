@@ -11,7 +11,6 @@ holds with up to 11 % to spare; acceleration bounds are exact).
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -196,37 +195,36 @@ def _span_polynomials(spline: ClampedCubicSpline) -> FloatArray:
     return np.asarray(np.einsum("sap,sad->spd", table, spline.control_points[idx]))
 
 
-def _span_derivatives(
-    poly: FloatArray, x: FloatArray, alpha: float
-) -> tuple[FloatArray, FloatArray]:
-    """Velocity and acceleration (m, K, 3) at ``x`` (K,) on every span, in time units."""
-    zero, one = np.zeros_like(x), np.ones_like(x)
-    vel = np.einsum("spd,pk->skd", poly, np.stack([zero, one, 2 * x, 3 * x**2])) * alpha
-    acc = np.einsum("spd,pk->skd", poly, np.stack([zero, zero, 2 * one, 6 * x])) * alpha**2
-    return vel, acc
+def _speeds_sq(spline: ClampedCubicSpline, x: FloatArray) -> FloatArray:
+    """Squared speed (m, K) at ``x`` (K,) in [0, 1] on every span, in u units (times alpha^2
+    for time units): the hodograph polynomials (m, 3, 4) times the power rows (4, K)."""
+    powers = np.stack([np.ones_like(x), 2.0 * x, 3.0 * x**2])  # d/dx of x, x^2, x^3
+    hodograph = np.swapaxes(_span_polynomials(spline)[:, 1:], 1, 2) @ powers
+    return np.asarray(np.einsum("sdk,sdk->sk", hodograph, hodograph))
 
 
 def _speed_peak(spline: ClampedCubicSpline, samples_per_span: int = 33) -> tuple[float, float]:
     x = np.linspace(0.0, 1.0, samples_per_span)
-    vel, _ = _span_derivatives(_span_polynomials(spline), x, spline.alpha)
-    speed = np.linalg.norm(vel, axis=2)
-    s, k = np.unravel_index(int(np.argmax(speed)), speed.shape)
-    return float(speed[s, k]), float((s + x[k]) / spline.alpha)
+    speed_sq = _speeds_sq(spline, x)
+    s, k = np.unravel_index(int(np.argmax(speed_sq)), speed_sq.shape)
+    return math.sqrt(float(speed_sq[s, k])) * spline.alpha, float((s + x[k]) / spline.alpha)
 
 
 def sampled_shares(
     spline: ClampedCubicSpline, limits: VehicleLimits, rate_hz: float = SAMPLED_RATE_HZ
 ) -> tuple[float, float]:
     """Largest share of its bound of the acceleration (per axis) and of the speed, sampled at
-    ``rate_hz`` or faster (every span from end to end)."""
+    ``rate_hz`` or faster (every span from end to end).
+
+    The acceleration is linear on each span, so its samples are extreme at the span ends, which
+    are samples too: it is read at the knots (the same values, without the dense samples)."""
     per_span = max(2, math.ceil(rate_hz * spline.duration_s / spline.n_spans) + 1)
-    vel, acc = _span_derivatives(
-        _span_polynomials(spline), np.linspace(0.0, 1.0, per_span), spline.alpha
-    )
+    acc = spline.acceleration_at_knots()
     lower, upper = limits.accel_bounds_mps2()
     share_a = np.maximum(acc / np.asarray(upper), acc / np.asarray(lower))
-    speed = np.linalg.norm(vel, axis=2)
-    return float(np.max(share_a)), float(np.max(speed)) / limits.v_max_mps
+    speed_sq = np.max(_speeds_sq(spline, np.linspace(0.0, 1.0, per_span)))
+    speed = math.sqrt(float(speed_sq)) * spline.alpha
+    return float(np.max(share_a)), speed / limits.v_max_mps
 
 
 def _min_norm_on_segments(a0: FloatArray, a1: FloatArray) -> float:
@@ -304,15 +302,16 @@ def assess(
 
 def distance_to_polyline(xy: FloatArray, polyline: FloatArray) -> FloatArray:
     """Distance of points (n, 2) to the polyline (k, 2), shape (n,)."""
-    best = np.full(xy.shape[0], np.inf)
     if polyline.shape[0] == 1:
         return np.asarray(np.linalg.norm(xy - polyline[0], axis=1))
-    for a, b in itertools.pairwise(polyline):
-        ab = b - a
-        length_sq = float(ab @ ab)
-        u = np.clip((xy - a) @ ab / length_sq, 0.0, 1.0) if length_sq > 0 else np.zeros(len(xy))
-        best = np.minimum(best, np.linalg.norm(xy - (a + u[:, None] * ab), axis=1))
-    return best
+    a = polyline[:-1]
+    ab = polyline[1:] - a  # (k - 1, 2)
+    length_sq = np.sum(ab * ab, axis=1)
+    along = np.sum((xy[:, None, :] - a) * ab, axis=2)  # (n, k - 1), every piece at once
+    u = np.clip(along / np.where(length_sq > 0.0, length_sq, 1.0), 0.0, 1.0)
+    u[:, length_sq <= 0.0] = 0.0
+    offset = xy[:, None, :] - (a + u[:, :, None] * ab)
+    return np.asarray(np.sqrt(np.min(np.sum(offset * offset, axis=2), axis=1)))
 
 
 def path_errors(

@@ -19,13 +19,14 @@ import numpy as np
 
 from planner.band_solve import solve_symmetric_band
 from planner.bspline import (
+    BasisRows,
     ClampedCubicSpline,
     FloatArray,
     IntArray,
     basis_rows,
     basis_rows_pair,
     jerk_gram_banded,
-    jerk_operator,
+    span_jerk_u,
 )
 from planner.errors import PlannerError
 
@@ -148,11 +149,15 @@ _PAIR_B = np.array([b for a in range(4) for b in range(a, 4)])
 _AXIS_OFFSET = np.arange(3)[None, None, :]
 
 
-def normal_equations(problem: FitProblem) -> tuple[FloatArray, FloatArray]:
-    """Banded ``R = w_g G + H^T W H`` (upper storage, shape (4, n)) and ``H^T W d`` (n, 3)."""
+def normal_equations(
+    problem: FitProblem, rows: BasisRows | None = None
+) -> tuple[FloatArray, FloatArray]:
+    """Banded ``R = w_g G + H^T W H`` (upper storage, shape (4, n)) and ``H^T W d`` (n, 3);
+    ``rows``: the basis values at the data times when the caller has them."""
     n = problem.n_ctrl
     alpha = problem.alpha
-    rows = basis_rows(alpha * problem.times_s, problem.n_spans)
+    if rows is None:
+        rows = basis_rows(alpha * problem.times_s, problem.n_spans)
     ab = problem.jerk_weight_s5 * alpha**5 * jerk_gram_banded(problem.n_spans)
     wv = problem.weights[:, None] * rows.values  # (N, 4)
     # Entry (first + a, first + b), a <= b, sits in band row 3 - (b - a), column first + b:
@@ -195,16 +200,22 @@ def fixed_control_points(problem: FitProblem) -> FloatArray:
 
 
 def evaluate_fit(
-    problem: FitProblem, control_points: FloatArray, *, method: str = "closed-form"
+    problem: FitProblem,
+    control_points: FloatArray,
+    *,
+    method: str = "closed-form",
+    rows: tuple[BasisRows, BasisRows] | None = None,
 ) -> SplineFit:
-    """Cost, residuals and data-point velocities of given control points (n_ctrl, 3)."""
+    """Cost, residuals and data-point velocities of given control points (n_ctrl, 3);
+    ``rows``: the basis values and slopes at the data times when the caller has them."""
     spline = ClampedCubicSpline(control_points=control_points, duration_s=problem.duration_s)
     alpha = problem.alpha
-    u = alpha * problem.times_s
-    value_rows, slope_rows = basis_rows_pair(u, problem.n_spans)
+    if rows is None:
+        rows = basis_rows_pair(alpha * problem.times_s, problem.n_spans)
+    value_rows, slope_rows = rows
     residuals = value_rows.apply(control_points) - problem.points_m
     velocity = slope_rows.apply(control_points) * alpha
-    jerk_u = jerk_operator(problem.n_spans) @ control_points
+    jerk_u = span_jerk_u(control_points)
     jerk_cost = float(alpha**5 * np.sum(jerk_u**2))
     fit_cost = float(np.sum(problem.weights * np.sum(residuals**2, axis=1)))
     return SplineFit(
@@ -220,8 +231,10 @@ def evaluate_fit(
 
 def fit_closed_form(problem: FitProblem) -> SplineFit:
     """Unconstrained minimum-jerk fit, eq. (43), by one band solve for all three axes."""
-    ab, rhs = normal_equations(problem)
-    return evaluate_fit(problem, closed_form_from_normal_equations(problem, ab, rhs))
+    rows = basis_rows_pair(problem.alpha * problem.times_s, problem.n_spans)
+    ab, rhs = normal_equations(problem, rows[0])
+    tau = closed_form_from_normal_equations(problem, ab, rhs)
+    return evaluate_fit(problem, tau, rows=rows)
 
 
 def closed_form_from_normal_equations(

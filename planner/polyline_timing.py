@@ -75,15 +75,12 @@ def polyline_durations_s(
     accel = np.where(np.isfinite(accel), accel, 1.0)
     v = np.minimum(_vertex_speeds(u, accel, length, corner_time_s), np.append(speed, 0.0))
     v = np.minimum(v, np.concatenate([[0.0], speed]))
-    n = length.shape[0]
+    # the passes run on Python floats (the same IEEE arithmetic, without numpy's scalar costs)
+    vs, a_l, l_l, s_l = v.tolist(), accel.tolist(), length.tolist(), speed.tolist()
+    n = len(l_l)
     for j in range(n):  # forward: reachable from the previous vertex
-        v[j + 1] = min(v[j + 1], math.sqrt(v[j] ** 2 + 2.0 * accel[j] * length[j]))
+        vs[j + 1] = min(vs[j + 1], math.sqrt(vs[j] ** 2 + 2.0 * a_l[j] * l_l[j]))
     for j in range(n - 1, -1, -1):  # backward: can still stop in time
-        v[j] = min(v[j], math.sqrt(v[j + 1] ** 2 + 2.0 * accel[j] * length[j]))
-    times = np.array(
-        [
-            _piece_time_s(float(v[j]), float(v[j + 1]), float(length[j]), accel[j], speed[j])
-            for j in range(n)
-        ]
-    )
+        vs[j] = min(vs[j], math.sqrt(vs[j + 1] ** 2 + 2.0 * a_l[j] * l_l[j]))
+    times = np.array([_piece_time_s(vs[j], vs[j + 1], l_l[j], a_l[j], s_l[j]) for j in range(n)])
     return np.asarray(np.maximum(times, min_duration_s), dtype=np.float64)

@@ -35,11 +35,10 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from functools import lru_cache
 
 import numpy as np
 
-from planner.bspline import FloatArray, velocity_operator
+from planner.bspline import FloatArray, apply_band, velocity_values
 from planner.errors import PlannerError
 from planner.minjerk import FitProblem, SplineFit, fit_closed_form
 from planner.qp_structure import SPEED_DIRECTIONS, SPEED_POLYTOPE_APOTHEM, QpLimits
@@ -62,8 +61,6 @@ ROUND_TOLERANCE = 0.03
 """Rounds stop once every segment factor is within this of ``TARGET``."""
 SCALE_STEPS = 6
 """Secant steps of each global scale at most."""
-
-_velocity_operator = lru_cache(maxsize=64)(velocity_operator)
 
 
 @dataclass(frozen=True)
@@ -100,7 +97,7 @@ def time_factors(fit: SplineFit, limits: QpLimits) -> tuple[FloatArray, FloatArr
     t_a = np.arange(m + 1) / alpha
     if limits.speed_max_mps is None:
         return t_a, factor_a
-    hodograph = np.asarray(_velocity_operator(m) @ spline.control_points) * alpha  # (m + 2, 3)
+    hodograph = apply_band(velocity_values(m), spline.control_points) * alpha  # (m + 2, 3)
     bound = limits.speed_max_mps * SPEED_POLYTOPE_APOTHEM
     factor_v = np.max(np.abs(hodograph @ SPEED_DIRECTIONS.T), axis=1) / bound
     t_v = np.clip(np.arange(m + 2) - 0.5, 0.0, m) / alpha  # where each hodograph point acts

@@ -228,6 +228,7 @@ class Vehicle(ShowModel):
     """One vehicle and the board it writes on."""
 
     id: Identifier = Field(pattern=ID_PATTERN)
+    """Vehicle identifier (also in its Zenoh keys)."""
 
     @field_validator("id")
     @classmethod
@@ -239,7 +240,6 @@ class Vehicle(ShowModel):
             )
         return value
 
-    """Vehicle identifier (also in its Zenoh keys)."""
     kind: KindName = Field(default=DEFAULT_KIND, validate_default=True)
     """What kind of vehicle it is: one of the kinds that have a room (``vehicles.ROOMS``)."""
     backend: Literal["sim", "mavlink"] = "sim"

@@ -95,6 +95,10 @@ class StorageSettings(ShowModel):
     """Directory of the MCAP recordings, one file per run; default ``out/<show_id>/recordings``."""
     record: bool = True
     """Record every message of the show to MCAP."""
+    record_scene: bool = True
+    """Record beside them the show as a 3D scene in Foxglove's schemas (``scene/``: the vehicles'
+    frames, boards, homes, geofences, paths, ink, log and plot series; about half as many bytes
+    again as the bus messages)."""
     recording_part_mb: float = Field(default=25.0, gt=0.0)
     """A recording is finished and the next part begun past this size, in [MB]: each part is a
     whole MCAP file, and the recorder's index (which grows with every job) starts afresh."""

@@ -145,10 +145,12 @@ def _split_long(
 
 
 def iou(written: BoolArray, target: BoolArray) -> float:
-    """Intersection over union of two equally shaped rasters; 1.0 when both are empty."""
+    """Intersection over union of two equally shaped rasters; 0.0 when nothing was written,
+    whatever the target (both empty too: an empty union measures no agreement, and a score
+    of 1.0 for a flight that wrote nothing would claim a quality nobody saw)."""
     if written.shape != target.shape:
         raise SimError(f"shapes differ: {written.shape} vs {target.shape}", field="target")
     union = int(np.count_nonzero(written | target))
     if union == 0:
-        return 1.0
+        return 0.0
     return int(np.count_nonzero(written & target)) / union

@@ -26,8 +26,8 @@ from vehicle_agent.backends.base import (
     VehicleSnapshot,
 )
 from vehicle_agent.backends.kinematic import KinematicVehicle
-from vehicle_agent.backends.mavlink import MavlinkBackend
-from vehicle_agent.backends.mavlink_settings import MavlinkSettings
+from vehicle_agent.backends.mavlink.backend import MavlinkBackend
+from vehicle_agent.backends.mavlink.settings import MavlinkSettings
 from vehicle_agent.backends.sim import SimBackend, SimVehicle
 from vehicle_agent.fault import clear_fault, unsafe_because
 from vehicle_agent.job_runner import JobRunner, PreparedJob, RunnerConfig

@@ -15,6 +15,7 @@ from vehicle_agent.backends.base import Vec3
 from vehicle_agent.backends.kinematic import KinematicVehicle
 from vehicle_agent.job_runner import PREFLIGHT_HOLD_S, JobRunner, PreparedJob, RunnerConfig
 from vehicle_agent.motion import PEAK_ACCEL_FACTOR, PEAK_SPEED_FACTOR, plan_move
+from vehicle_agent.runner_io import AbortedJob
 from vehicle_agent.trace import JobTrace
 
 DT = 0.01
@@ -65,6 +66,7 @@ class Run:
     telemetry_phases: list[str] = field(default_factory=list)
     """The runner's phase when each telemetry message was made."""
     finished: list[JobTrace] = field(default_factory=list)
+    aborted: list[AbortedJob] = field(default_factory=list)
     states: list[str] = field(default_factory=list)
     positions: list[Vec3] = field(default_factory=list)
     samples: TrajectorySamples = field(default_factory=line_samples)
@@ -100,6 +102,8 @@ class Run:
             self.telemetry_phases.append(self.runner.phase)
         if actions.finished is not None:
             self.finished.append(actions.finished)
+        if actions.aborted is not None:
+            self.aborted.append(actions.aborted)
         if not self.states or self.states[-1] != self.runner.state:
             self.states.append(self.runner.state)
         self.positions.append(self.vehicle.position_m_enu)
@@ -204,6 +208,16 @@ def test_cancel_lifts_returns_and_lands_without_a_report() -> None:
     assert run.events() == ["started"]
     lift = [p for p in run.positions[-400:] if p[2] > 0.0]
     assert max(p[2] for p in lift) == pytest.approx(CRUISE_Z)
+    assert_kept_unreported(run, "cancelled")
+
+
+def assert_kept_unreported(run: Run, reason: str) -> None:
+    """What was flown of the job broken off is kept (to measure and archive), with no report."""
+    (aborted,) = run.aborted
+    flown = aborted.trace.flown
+    assert aborted.report is None and flown.abort_reason == reason
+    assert 0.0 <= flown.t_s[-1] < run.samples.duration_s and aborted.trace.job_id == "j1"
+    assert len(flown.t_s) == round(flown.t_s[-1] / DT) + 1  # every tick since writing began
 
 
 def test_cancel_of_another_job_is_ignored() -> None:
@@ -212,7 +226,7 @@ def test_cancel_of_another_job_is_ignored() -> None:
     run.until(lambda: run.runner.state == "writing")
     assert run.command("cancel", job_id="other")
     run.until(lambda: run.runner.phase == "ground")
-    assert len(run.finished) == 1
+    assert len(run.finished) == 1 and not run.aborted
 
 
 def test_estop_cuts_motors_abandons_the_job_and_refuses_new_ones() -> None:
@@ -224,6 +238,7 @@ def test_estop_cuts_motors_abandons_the_job_and_refuses_new_ones() -> None:
     assert run.vehicle.mode == "estop" and run.runner.state == "fault"
     assert run.events() == ["started"] and run.runner.status().job_id is None
     assert not run.assign("j2")
+    assert_kept_unreported(run, "estop")
 
 
 def test_pre_arm_checks_failing_are_in_the_status_with_one_event_as_they_fail_and_pass() -> None:
@@ -342,6 +357,7 @@ def test_land_command_while_writing_ends_landed() -> None:
     run.until(lambda: run.runner.phase == "ground")
     assert run.runner.state == "landed" and run.events() == ["started"]
     assert run.assign("j2")
+    assert_kept_unreported(run, "landed_by_operator")
 
 
 def test_telemetry_comes_at_its_period() -> None:

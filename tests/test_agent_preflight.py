@@ -19,12 +19,12 @@ from test_orchestrator_core import _assigned, _config, _submit
 from bus.messages import VehicleCommand
 from mavsim.server import MavsimServer
 from orchestrator.core import Book
+from showfile.geofence import vehicle_fence
 from vehicle_agent.backends.base import LinkHealth, VehicleSnapshot
-from vehicle_agent.backends.mavlink_health import SequenceLoss, estimator_problem
-from vehicle_agent.backends.mavlink_mocap import MocapPose
+from vehicle_agent.backends.mavlink.health import SequenceLoss, estimator_problem
+from vehicle_agent.backends.mavlink.mocap import MocapPose
 from vehicle_agent.job_runner import JobRunner
 from vehicle_agent.preflight import PreflightLimits, PreflightReadings, preflight_problem
-from vehicle_agent.safety.geofence import vehicle_fence
 
 LIMITS = PreflightLimits()
 HEALTHY = LinkHealth(link_age_s=0.4, link_loss_fraction=0.0, mocap_age_s=0.02)

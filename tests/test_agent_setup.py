@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import threading
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +12,6 @@ from job_traces import recorded_trace, solo_job
 from bus.messages import JobAssignment
 from planner.errors import PlannerError
 from showfile import load_show
-from vehicle_agent.job_picture import PictureWorker
 from vehicle_agent.jobs import job_metrics, prepare_job, write_job_picture, write_job_report
 from vehicle_agent.setup import vehicle_setup
 
@@ -154,18 +152,3 @@ def test_a_flown_job_gets_a_report_picture_and_none_without_brush_data(tmp_path:
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert [p.name for p in tmp_path.iterdir()] == ["report.png"]  # no partial file left
     assert write_job_picture(setup, prepared, recorded_trace(*args, None), tmp_path / "x") is None
-
-
-def test_the_picture_worker_skips_while_busy_and_survives_a_failing_drawing() -> None:
-    worker = PictureWorker("uav1")
-    release = threading.Event()
-    drawn: list[str] = []
-    assert worker.submit(lambda: release.wait(10.0) and drawn.append("first"))
-    assert not worker.submit(lambda: drawn.append("second"))  # skipped, not queued
-    release.set()
-    assert worker.wait(10.0)
-    assert worker.submit(lambda: 1 / 0)
-    assert worker.wait(10.0)
-    assert worker.submit(lambda: drawn.append("third"))
-    assert worker.wait(10.0)
-    assert drawn == ["first", "third"]

@@ -281,6 +281,6 @@ def test_skyquill_up_runs_a_show_and_stops_every_process_on_ctrl_c(tmp_path: Pat
             subprocess.run(skyquill_argv("down", str(show_path)), env=child_env(), timeout=60)
     assert up.returncode == 0, stderr
     assert "skyquill up: stopping" in stderr and "killing" not in stderr
-    assert "uav1 is in the air. `skyquill command" in stderr
+    assert "uav1 is in the air. Ctrl-C again" in stderr
     assert not [pid for pid in children if _alive(pid)]
     assert not run_file_path(show.database_path).exists()

@@ -135,3 +135,38 @@ def test_latest_by_key_wakes_the_loop_only_for_a_waiting_reader() -> None:
 def test_channel_outside_a_loop_needs_an_explicit_loop() -> None:
     with pytest.raises(RuntimeError, match="event loop"):
         FifoChannel()
+
+
+def test_latest_by_key_under_concurrent_pushes_keeps_order_and_the_newest_per_key() -> None:
+    """Four threads (Zenoh's, in a show) push 2,000 numbered items each on two keys of their own
+    while a reader takes as fast as it can: per key the items taken only go forward, the last
+    one pushed is always taken, and every push is either taken or counted as replaced."""
+    per_thread, keys_per_thread, threads = 2000, 2, 4
+
+    async def main() -> tuple[dict[str, list[int]], int]:
+        latest: LatestByKey[str, int] = LatestByKey()
+        taken: dict[str, list[int]] = {}
+
+        def work(t: int) -> None:
+            for n in range(per_thread):
+                latest.push(f"t{t}k{n % keys_per_thread}", n)
+
+        async def read() -> None:
+            while True:
+                for key, item in (await latest.take()).items():
+                    taken.setdefault(key, []).append(item)
+
+        reader = asyncio.create_task(read())
+        await asyncio.gather(*(asyncio.to_thread(work, t) for t in range(threads)))
+        await asyncio.sleep(0.05)  # the reader takes what the last pushes left
+        reader.cancel()
+        for key, item in latest.take_nowait().items():
+            taken.setdefault(key, []).append(item)
+        return taken, latest.replaced
+
+    taken, replaced = asyncio.run(main())
+    assert len(taken) == threads * keys_per_thread
+    for key, items in taken.items():
+        assert items == sorted(set(items)), key
+        assert items[-1] == per_thread - keys_per_thread + int(key[-1])
+    assert sum(map(len, taken.values())) + replaced == threads * per_thread

@@ -31,7 +31,7 @@ def test_ctrl_c_with_vehicles_in_the_air_names_them_and_a_second_one_stops() -> 
     stop.interrupt()
     assert not stop.due() and not stop.due()  # asked once, then it keeps running
     assert said == [said[0]] and said[0].startswith("uav1, uav3 are in the air.")
-    assert "skyquill command show.yaml land-all" in said[0]
+    assert "lands them and stops the show" in said[0] and "skyquill down show.yaml" in said[0]
     clock.now_s += CONFIRM_WINDOW_S - 1.0
     stop.interrupt()
     assert stop.due()

@@ -16,7 +16,7 @@ def test_fly_writes_metrics_and_report(tmp_path: Path, capsys: pytest.CaptureFix
     out = tmp_path / "report"
     status = main(
         ["fly", "--strokes", str(DATA / "l_tick_m_up.json"), "--wind", "1", "--seed", "3",
-         "--height", "0.5", "--report", str(out)]
+         "--height", "0.5", "--report", str(out), "--json"]
     )  # fmt: skip
     assert status == 0
     metrics = json.loads((out / "metrics.json").read_text(encoding="utf-8"))
@@ -31,6 +31,20 @@ def test_fly_writes_metrics_and_report(tmp_path: Path, capsys: pytest.CaptureFix
     assert json.loads(capsys.readouterr().out.strip().splitlines()[-1])["iou"] == metrics["iou"]
 
 
+def test_fly_and_plan_lay_a_character_out_alike(capsys: pytest.CaptureFixture[str]) -> None:
+    """The same defaults: the planned time ``fly`` reports is the one ``plan`` prints."""
+    assert main(["plan", "--text", "I", "--json"]) == 0
+    planned = json.loads(capsys.readouterr().out)
+    assert main(["fly", "--text", "I", "--json"]) == 0
+    flown = json.loads(capsys.readouterr().out)
+    assert flown["planned_duration_s"] == pytest.approx(planned["duration_s"], rel=1e-9)
+    assert flown["within_bounds"] is True and 0.3 < flown["iou"] <= 1.0
+    assert main(["fly", "--text", "I"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("I by quadrotor-brush: written, within bounds: ink IoU 0.")
+    assert "pen-down RMSE" in lines[2] and " mm" in lines[2]
+
+
 def test_fly_reports_a_bad_strokes_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     bad = tmp_path / "bad.json"
     bad.write_text('{"strokes": "nope"}', encoding="utf-8")
@@ -42,14 +56,44 @@ def test_fly_in_a_gale_aborts_on_deviation_and_exits_non_zero(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "gale"
-    status = main(["fly", "--strokes", str(DATA / "l_tick_m_up.json"), "--wind", "50",
+    status = main(["fly", "--strokes", str(DATA / "l_tick_m_up.json"), "--wind", "10",
                    "--height", "0.5", "--report", str(out)])  # fmt: skip
     assert status == 1
-    err = capsys.readouterr().err
+    captured = capsys.readouterr()
+    err = captured.err
     assert "deviation abort of vehicle 0" in err and "above the bound 0.150 m for 0.30 s" in err
     metrics = json.loads((out / "metrics.json").read_text(encoding="utf-8"))
     assert metrics["within_bounds"] is False and "deviation" in metrics["aborted"]
     assert metrics["sim_time_s"] < 1.0  # stopped at once, not flown to the end
+    # it wrote nothing, and claims nothing: IoU 0 (not 1.0), no pen-down RMSE (not 0.0)
+    assert metrics["wrote_ink"] is False
+    assert metrics["iou"] == 0.0 and metrics["rmse_pen_down_m"] is None
+    unmeasured = [k for k in metrics if k.startswith("ink_") or "pen_down" in k]
+    assert unmeasured == ["rmse_pen_down_m"]  # the kind's pen-down and ink figures left out
+    head = captured.out.splitlines()[0]
+    assert "ABORTED at 0.3" in head and "nothing written: ink IoU 0" in head
+    assert "pen-down RMSE not measured" in captured.out
+
+
+@pytest.mark.parametrize(
+    ("flags", "named"),
+    [
+        (["--wind", "50"], "--wind 50 m/s: above 15.3 m/s"),
+        (["--wind", "-1"], "argument --wind: must be at least 0 m/s"),
+        (["--height", "0"], "argument --height: must be above 0 m"),
+        (["--iou-min", "1.5"], "argument --iou-min: must be at least 0 and at most 1"),
+        (["--seed", "-1"], "--seed must be 0 or more"),
+        (["--margin", "0.6"], "<text>: --margin: margins of 0.6 m leave no room"),
+    ],
+)
+def test_fly_refuses_a_flag_out_of_range_naming_it(
+    flags: list[str], named: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as exited:  # argparse's own refusals exit
+        raise SystemExit(main(["fly", "--text", "I", *flags]))
+    assert exited.value.code == 2
+    err = capsys.readouterr().err
+    assert named in err and "Traceback" not in err and "width_m" not in err
 
 
 def test_fly_below_its_ink_bound_exits_non_zero(capsys: pytest.CaptureFixture[str]) -> None:

@@ -93,11 +93,12 @@ def test_default_controller_writes_a_circle_in_wind() -> None:
     paper = dataclasses.replace(config, controller=PAPER_CONFIG)
     ref = samples(**WRITE)
     brush = config.world.brush
-    shipped = flight_metrics(flown_of(fly([ref], config, seed=2)), brush)
-    published = flight_metrics(flown_of(fly([ref], paper, seed=2)), brush)
+    shipped = flight_metrics(flown_of(fly([ref], config, seed=2)), brush, ref)
+    published = flight_metrics(flown_of(fly([ref], paper, seed=2)), brush, ref)
+    assert shipped.rmse_pen_down_m is not None and published.rmse_pen_down_m is not None
     assert shipped.rmse_pen_down_m < 0.005
     assert shipped.iou > 0.8
-    assert shipped.rmse_pen_down_z_m < 0.002
+    assert shipped.rmse_pen_down_z_m is not None and shipped.rmse_pen_down_z_m < 0.002
     assert published.rmse_pen_down_m > 3.0 * shipped.rmse_pen_down_m
     assert published.iou < shipped.iou
 

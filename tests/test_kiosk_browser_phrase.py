@@ -142,6 +142,15 @@ def test_a_phrase_is_handed_in_and_followed_as_one_ticket_until_written(
         f"{c} written by drone {n}" for n, c in enumerate("新年快乐", start=1)
     ]
     assert [j.state for j in _characters(phrase_show, phrase_id)] == ["done"] * 4
+    for page in (phone, tablet):  # each board shows the ink its drone left, not the plan
+        page.wait_for_function(
+            "document.querySelectorAll('#phrase-status-row figure.written').length === 4",
+            timeout=UI_WAIT_MS,
+        )
+        inked = page.eval_on_selector_all(
+            "#phrase-status-row figure.written canvas", "cs => cs.map(c => +c.dataset.inked)"
+        )
+        assert len(inked) == 4 and min(inked) > 0, inked
     phone.screenshot(path=str(SHOTS_DIR / "phrase-zh-320x568-done.png"), full_page=True)
     tablet.screenshot(path=str(SHOTS_DIR / "phrase-en-tablet-done.png"), full_page=True)
 

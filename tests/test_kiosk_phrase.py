@@ -18,7 +18,7 @@ from test_kiosk_api import assert_refused, wait_for
 from test_kiosk_support import WAIT_S, Browser, FakeOrchestrator, sse_events
 
 from bus.keys import ShowKeys
-from bus.messages import ErrorInfo, JobState, PhrasePlace
+from bus.messages import ErrorInfo, JobMetrics, JobState, PhrasePlace, WrittenInk
 from bus.session import BusSettings, loopback_settings, open_session
 from kiosk.errors import RejectedError
 from kiosk.jobs import JobBook
@@ -151,6 +151,29 @@ def test_a_phrase_is_one_ticket_that_follows_every_character() -> None:
     )
     shown = json.dumps(view, ensure_ascii=False)
     assert "uav" not in shown and not any(f'"p{i}"' in shown for i in (1, 2, 3))
+
+
+def test_each_written_character_of_a_phrase_carries_the_ink_its_drone_left() -> None:
+    book = JobBook()
+    job = _ticket(book)
+    ink = WrittenInk(width_px=8, height_px=2, extent_m_board=(-0.1, -0.1, 0.1, 0.1),
+                     bits=bytes([0b10000001, 0b01111110]))  # fmt: skip
+    metrics = JobMetrics(rmse_pen_down_m=0.004, rmse_m=0.005, max_error_m=0.01, iou=0.8,
+                         duration_s=20.0, written=ink)  # fmt: skip
+    for i in range(4):
+        book.update(_state(i, "writing", vehicle_id=f"uav{i + 1}", progress=0.5, attempts=1))
+    book.update(_state(1, "done", vehicle_id="uav2", progress=1.0, attempts=1, metrics=metrics))
+    chars = book.view(job, PLACES)["phrase"]["characters"]
+    assert [c["written"] is not None for c in chars] == [False, True, False, False]
+    assert chars[1]["written"] == {
+        "format": "bitmap1", "width_px": 8, "height_px": 2,
+        "extent_m_board": [-0.1, -0.1, 0.1, 0.1], "bits": "gX4=",
+    }  # fmt: skip
+    # a later state without the picture (a snapshot's) keeps the one the drone reported
+    lean = JobMetrics(rmse_pen_down_m=0.004, rmse_m=0.005, max_error_m=0.01, iou=0.8,
+                      duration_s=20.0)  # fmt: skip
+    book.update(_state(1, "done", vehicle_id="uav2", progress=1.0, attempts=1, metrics=lean))
+    assert book.view(job, PLACES)["phrase"]["characters"][1]["written"] == chars[1]["written"]
 
 
 def test_a_rejected_phrase_tells_the_operators_reason_once() -> None:

@@ -28,16 +28,16 @@ from vehicle_agent.backends.base import (
     VehicleBackend,
     VehicleSnapshot,
 )
-from vehicle_agent.backends.mavlink import MavlinkBackend
-from vehicle_agent.backends.mavlink_errors import (
+from vehicle_agent.backends.mavlink.backend import MavlinkBackend
+from vehicle_agent.backends.mavlink.errors import (
     ArmingRefusedError,
     LinkLostError,
     PrearmFailingError,
     VehicleFaultError,
 )
-from vehicle_agent.backends.mavlink_mocap import MocapPose
-from vehicle_agent.backends.mavlink_settings import MavlinkSettings, settings_from_show
-from vehicle_agent.backends.mavlink_state import ARDUPILOT, PX4, PX4_OFFBOARD_ON_GROUND
+from vehicle_agent.backends.mavlink.mocap import MocapPose
+from vehicle_agent.backends.mavlink.settings import MavlinkSettings, settings_from_show
+from vehicle_agent.backends.mavlink.state import ARDUPILOT, PX4, PX4_OFFBOARD_ON_GROUND
 from vehicle_agent.motion import plan_move
 
 pytestmark = pytest.mark.timeout(60)

@@ -13,9 +13,9 @@ from test_mavlink_backend import Driver, airborne, connected, vehicle
 from mavsim.server import MavsimServer
 from sim.battery import full
 from vehicle_agent.backends.base import BackendError, BatterySwap
-from vehicle_agent.backends.mavlink import MavlinkBackend
-from vehicle_agent.backends.mavlink_battery import CMD_BATTERY_RESET
-from vehicle_agent.backends.mavlink_errors import CommandRejectedError
+from vehicle_agent.backends.mavlink.backend import MavlinkBackend
+from vehicle_agent.backends.mavlink.battery import CMD_BATTERY_RESET
+from vehicle_agent.backends.mavlink.errors import CommandRejectedError
 from vehicles.quadrotor_brush.battery import PACK
 
 pytestmark = pytest.mark.timeout(60)

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import pytest
 
-from vehicle_agent.backends.mavlink import MavlinkBackend
-from vehicle_agent.backends.mavlink_errors import ArmingRefusedError
-from vehicle_agent.backends.mavlink_settings import MavlinkSettings
+from vehicle_agent.backends.mavlink.backend import MavlinkBackend
+from vehicle_agent.backends.mavlink.errors import ArmingRefusedError
+from vehicle_agent.backends.mavlink.settings import MavlinkSettings
 
 pytestmark = pytest.mark.timeout(60)
 

@@ -9,13 +9,13 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from vehicle_agent.backends.mavlink_commands import CommandChannel
-from vehicle_agent.backends.mavlink_errors import (
+from vehicle_agent.backends.mavlink.commands import CommandChannel
+from vehicle_agent.backends.mavlink.errors import (
     ArmingRefusedError,
     CommandRejectedError,
     CommandTimeoutError,
 )
-from vehicle_agent.backends.mavlink_state import LinkState
+from vehicle_agent.backends.mavlink.state import LinkState
 
 
 class ScriptedLink:

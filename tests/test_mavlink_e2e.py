@@ -23,7 +23,7 @@ from mavsim.show import vehicle_configs
 from showfile import parse_show
 from vehicle_agent.agent import make_backend
 from vehicle_agent.backends.base import VehicleBackend
-from vehicle_agent.backends.mavlink import MavlinkBackend
+from vehicle_agent.backends.mavlink.backend import MavlinkBackend
 from vehicle_agent.clock import TickClock
 from vehicle_agent.job_runner import JobRunner
 from vehicle_agent.jobs import job_metrics, prepare_job
@@ -74,6 +74,7 @@ async def write_job(
         if actions.plan_request is not None:
             runner.plan_ready(prepared)
         assert not any(r.event == "failed" for r in actions.reports), actions.reports
+        assert actions.aborted is None, actions.aborted.report
         if actions.backend_command is not None:
             name, hover = actions.backend_command
             await (backend.takeoff(hover) if name == "takeoff" else backend.land())  # type: ignore[arg-type]

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from mavsim import frames as sim_frames
-from vehicle_agent.backends.mavlink_frames import (
+from vehicle_agent.backends.mavlink.frames import (
     LocalFrame,
     attitude_enu_to_ned,
     attitude_ned_to_enu,
@@ -20,8 +20,8 @@ from vehicle_agent.backends.mavlink_frames import (
     quaternion_to_euler,
     yaw_enu_to_ned,
 )
-from vehicle_agent.backends.mavlink_state import ARDUPILOT, PX4, LinkState, flavor_for
-from vehicle_agent.backends.mavlink_url import LinkAddress, MavlinkUrlError, parse_mavlink_url
+from vehicle_agent.backends.mavlink.state import ARDUPILOT, PX4, LinkState, flavor_for
+from vehicle_agent.backends.mavlink.url import LinkAddress, MavlinkUrlError, parse_mavlink_url
 
 coord = st.floats(-100.0, 100.0)
 tilt = st.floats(-1.2, 1.2)

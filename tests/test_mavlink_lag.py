@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vehicle_agent.backends.base import Setpoint
-from vehicle_agent.backends.mavlink_lag import (
+from vehicle_agent.backends.mavlink.lag import (
     JERK_MAX_MPS3,
     DelayFit,
     LagSettings,
@@ -19,9 +19,9 @@ from vehicle_agent.backends.mavlink_lag import (
     lead_setpoint,
     plan_jerk,
 )
-from vehicle_agent.backends.mavlink_response import ResponseAid
-from vehicle_agent.backends.mavlink_settings import MavlinkSettings
-from vehicle_agent.backends.mavlink_truth import TruthSample
+from vehicle_agent.backends.mavlink.response import ResponseAid
+from vehicle_agent.backends.mavlink.settings import MavlinkSettings
+from vehicle_agent.backends.mavlink.truth import TruthSample
 
 DT_S = 0.02
 

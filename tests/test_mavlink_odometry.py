@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from mavsim.mocap import odometry_is_pose
-from vehicle_agent.backends.mavlink_odometry import PoseVelocity, encode_odometry
+from vehicle_agent.backends.mavlink.odometry import PoseVelocity, encode_odometry
 
 MAV = mavlink.MAVLink(None, srcSystem=255, srcComponent=191)
 ANGLE = st.floats(-1.2, 1.2)

@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from showfile import load_show
-from vehicle_agent.backends.mavlink_pen import PenOverBoard
-from vehicle_agent.backends.mavlink_setup import create_backend
+from vehicle_agent.backends.mavlink.create import create_backend
+from vehicle_agent.backends.mavlink.pen import PenOverBoard
 from vehicle_agent.setup import vehicle_setup
 from vehicles.quadrotor_brush.autopilot_pen import BrushPen
 from vehicles.quadrotor_brush.params import BrushParams

@@ -8,7 +8,7 @@ from typing import Any
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from vehicle_agent.backends.mavlink_state import (
+from vehicle_agent.backends.mavlink.state import (
     MAV_SYS_STATUS_PREARM_CHECK,
     PREARM_UNSAID,
     PX4,

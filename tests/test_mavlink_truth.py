@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from vehicle_agent.backends.mavlink_frames import euler_to_quaternion
-from vehicle_agent.backends.mavlink_truth import TruthTracker, geodetic, truth_mocap
+from vehicle_agent.backends.mavlink.frames import euler_to_quaternion
+from vehicle_agent.backends.mavlink.truth import TruthTracker, geodetic, truth_mocap
 
 MAV = mavlink.MAVLink(None, srcSystem=1)
 LAT0, LON0, ALT0 = -35.363261, 149.165230, 584.0

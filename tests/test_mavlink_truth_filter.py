@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
-from vehicle_agent.backends.mavlink_truth import EARTH_RADIUS_M, TruthTracker
-from vehicle_agent.backends.mavlink_truth_filter import SmoothedTruthTracker
+from vehicle_agent.backends.mavlink.truth import EARTH_RADIUS_M, TruthTracker
+from vehicle_agent.backends.mavlink.truth_filter import SmoothedTruthTracker
 
 LAT0, LON0, ALT0 = -35.363261, 149.165230, 584.0
 HOME = (0.0, -1.0, 0.0)

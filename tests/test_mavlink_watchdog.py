@@ -4,8 +4,8 @@ or PX4's mode-to-come one heartbeat before its disarm after a landing) is not.""
 
 from __future__ import annotations
 
-from vehicle_agent.backends.mavlink_state import PX4, LinkState
-from vehicle_agent.backends.mavlink_watchdog import Commanded, Watchdog, WatchLimits
+from vehicle_agent.backends.mavlink.state import PX4, LinkState
+from vehicle_agent.backends.mavlink.watchdog import Commanded, Watchdog, WatchLimits
 
 LIMITS = WatchLimits(
     heartbeat_timeout_s=3.0, setpoint_timeout_s=1.0, takeoff_timeout_s=30.0, land_timeout_s=30.0

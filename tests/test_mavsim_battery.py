@@ -14,7 +14,7 @@ from mavsim.modes import CopterMode
 from mavsim.params import Flavor
 from mavsim.px4 import Px4Autopilot
 from sim.rotor_power import rotor_power_w
-from vehicle_agent.backends.mavlink_state import LinkState
+from vehicle_agent.backends.mavlink.state import LinkState
 from vehicles.quadrotor_brush.battery import AVIONICS_W, PACK
 
 

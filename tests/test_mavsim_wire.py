@@ -10,7 +10,7 @@ import pytest
 from mavsim.guided import climb_rate_mps
 from mavsim.params import INT32, REAL32, Flavor, ParamTable
 from mavsim.wire import GuidedSetpoint, Pose, Stop, decode_position_target, px4_view
-from vehicle_agent.backends.mavlink_params import decode_value, encode_value
+from vehicle_agent.backends.mavlink.params import decode_value, encode_value
 
 POSE = Pose(home_m_enu=(1.0, 2.0, 0.0), position_m_enu=(1.0, 2.0, 1.0), yaw_rad=0.0)
 

@@ -56,9 +56,12 @@ def eventually(fn: Callable[[], T], what: str = "condition") -> T:
 def make_show(tmp_path: Path, show_id: str, endpoint: str, **updates: Any) -> tuple[Path, Show]:
     base = load_show(SHOWS / "airshow-2014.yaml")
     policy = base.policy.model_copy(update=updates.pop("policy", {}))
+    # A vehicle writes several characters on its board here: no crew (sheets have their tests)
+    boards = tuple(b.model_copy(update={"sheets": "when_spoiled"}) for b in base.boards)
     show = base.model_copy(
         update={
             "show_id": show_id,
+            "boards": boards,
             "zenoh": base.zenoh.model_copy(
                 update={"router_listen": (endpoint,), "connect": (endpoint,)}
             ),

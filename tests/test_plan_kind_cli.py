@@ -56,8 +56,10 @@ def test_the_wall_kind_writes_its_forces_and_widths(
     assert doc["surface"]["origin_m_enu"] == [0.0, 0.0, 1.5]  # the wall's centre, as fly lays it
     assert doc["feasibility"]["peak_speed_mps"] <= doc["feasibility"]["v_max_mps"] + 1e-6
     lines = capsys.readouterr().out.splitlines()
-    assert lines[0] == f"hexarotor-sponge: duration {direct.duration_s:.2f} s, 1 strokes"
-    assert "v_max_mps: 0.2" in lines and "periods:" in lines
+    assert lines[0].startswith("I for hexarotor-sponge: ") and lines[0].endswith(
+        ", 1 stroke; feasible: yes"
+    )
+    assert "speed 0.2 of 0.2 m/s" in lines[1] and "force rate" in lines[1]
 
 
 def test_the_ground_kind_plans_in_the_floor_plane(
@@ -72,7 +74,7 @@ def test_the_ground_kind_plans_in_the_floor_plane(
     assert "force_n" not in doc["samples"] and "width_m" not in doc["samples"]
     assert np.allclose(np.asarray(doc["samples"]["p"])[:, 2], 0.0)
     assert doc["feasibility"]["accel_max_mps2"] == [0.25, 0.15]
-    assert "accel_max_mps2: [0.25, 0.15]" in capsys.readouterr().out.splitlines()
+    assert "of 0.25, 0.15 m/s^2" in capsys.readouterr().out.splitlines()[1]
 
 
 @pytest.mark.parametrize(

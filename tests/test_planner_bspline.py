@@ -8,13 +8,17 @@ import pytest
 from planner.bspline import (
     ClampedCubicSpline,
     acceleration_operator,
+    apply_band,
     basis_rows,
     cox_de_boor,
     jerk_gram,
     jerk_gram_banded,
+    jerk_operator,
     knot_vector,
     span_coefficients,
+    span_jerk_u,
     velocity_operator,
+    velocity_values,
 )
 
 
@@ -147,6 +151,28 @@ def test_interior_jerk_gram_row() -> None:
     """Autocorrelation of the uniform cubic's jerk [1, -3, 3, -1]."""
     ab = jerk_gram_banded(14)
     np.testing.assert_allclose(ab[:, 8], [-1, 6, -15, 20])
+
+
+@pytest.mark.parametrize("m", [4, 7, 32, 33, 41, 150, 487])
+def test_banded_jerk_gram_is_the_dense_product(m: int) -> None:
+    """Long splines' Gram (assembled from a shorter one) against ``D3^T D3`` multiplied out."""
+    dense = jerk_gram(m, 1.0)
+    ab = jerk_gram_banded(m)
+    for k in range(4):
+        np.testing.assert_allclose(ab[3 - k, k:], np.diag(dense, k), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("m", [4, 9, 60])
+def test_band_products_are_the_operator_products_bit_for_bit(m: int) -> None:
+    """The shifted-slice products sum each row's terms in the sparse product's order."""
+    spline = _random_spline(m, 2.0, seed=m)
+    ctrl = spline.control_points
+    velocity = np.asarray(velocity_operator(m) @ ctrl)
+    assert np.array_equal(apply_band(velocity_values(m), ctrl), velocity)
+    assert np.array_equal(apply_band(velocity_values(m), ctrl[:, 0]), velocity[:, 0])
+    assert np.array_equal(span_jerk_u(ctrl), np.asarray(jerk_operator(m) @ ctrl))
+    accel = np.asarray(acceleration_operator(m) @ ctrl) * spline.alpha**2
+    assert np.array_equal(spline.acceleration_at_knots(), accel)
 
 
 def test_span_table_interior_is_uniform_for_large_m() -> None:

@@ -31,7 +31,8 @@ def test_plan_text_writes_traj_json_and_png(
     assert doc["feasibility"]["feasible"] is True
     assert [len(tp) for tp in doc["turning_points"]] == [2, 2]  # Hershey L: two strokes
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert "duration" in capsys.readouterr().out
+    head = capsys.readouterr().out.splitlines()[0]
+    assert head.startswith("L for quadrotor-brush: ") and head.endswith("2 strokes; feasible: yes")
 
 
 def test_plan_strokes_file_with_options(tmp_path: Path) -> None:

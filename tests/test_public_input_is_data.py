@@ -48,7 +48,7 @@ from tui.link import ConsoleLink
 from tui.settings import settings_from_show as console_settings
 from tui.widgets.confirm_screen import ConfirmScreen
 from tui.widgets.vehicle_detail_screen import VehicleDetailScreen
-from vehicles.quadrotor_brush.report import TITLE_MAX_CHARS, plain_title
+from vehicles.picture import TITLE_MAX_CHARS, plain_title
 
 pytestmark = [pytest.mark.timeout(120), pytest.mark.slow]
 

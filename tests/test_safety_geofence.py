@@ -12,9 +12,10 @@ from hypothesis import strategies as st
 
 from showfile import load_show
 from showfile.checks import footprint
+from showfile.geofence import convex_hull, show_fence
 from vehicle_agent.backends.base import VehicleSnapshot
 from vehicle_agent.safety import Geofence, GeofenceError, SafetyLimits, vehicle_fence
-from vehicle_agent.safety.geofence import BOUNDARY_TOLERANCE_M, FenceWatch, convex_hull
+from vehicle_agent.safety.geofence import BOUNDARY_TOLERANCE_M, FenceWatch
 from vehicle_agent.safety.guard import Breach, SafetyGuard
 
 BOARD = [(-0.7, -0.7), (0.7, -0.7), (0.7, 0.7), (-0.7, 0.7)]
@@ -104,17 +105,32 @@ def test_a_fence_without_area_or_with_a_bad_margin_is_refused() -> None:
 
 def test_each_shipped_vehicles_fence_holds_its_board_and_home_but_not_its_neighbours() -> None:
     show = load_show("shows/airshow-2014.yaml")
-    s = show.safety
     fences = {}
     for vehicle in show.vehicles:
         board = show.board(vehicle.board)
-        f = vehicle_fence(footprint(board), vehicle.home_m_enu, 1.05, margin_m=s.fence_margin_m,
-                          ceiling_margin_m=s.fence_ceiling_margin_m)  # fmt: skip
+        f = show_fence(show, vehicle.id, 1.05)
         assert f.contains((*board.center_m_enu[:2], 1.0)) and f.contains(vehicle.home_m_enu)
         fences[vehicle.id] = (f, board)
     f1, _ = fences["uav1"]
     _, b3 = fences["uav3"]
     assert not f1.contains((*b3.center_m_enu[:2], 1.0))
+
+
+def test_a_ground_writers_fence_holds_the_corners_of_its_sideways_first_transit() -> None:
+    """The omni-wheel vehicle drives along world y first, then x: the corner of that L lies
+    outside the hull of its board and home alone, and inside its fence."""
+    mixed = load_show("shows/mixed.yaml")
+    i, vehicle = next((i, v) for i, v in enumerate(mixed.vehicles) if v.kind == "omni-wheel")
+    board = mixed.board(vehicle.board)
+    vehicle = vehicle.model_copy(update={"home_m_enu": (board.center_m_enu[0] - 2.5, -1.5, 0.0)})
+    vehicles = [*mixed.vehicles[:i], vehicle, *mixed.vehicles[i + 1 :]]
+    show = mixed.model_copy(update={"vehicles": vehicles})
+    corner_m_enu = (vehicle.home_m_enu[0], board.center_m_enu[1], vehicle.home_m_enu[2])
+    straight = vehicle_fence(
+        footprint(board), vehicle.home_m_enu, 0.5, margin_m=0.0, ceiling_margin_m=0.5
+    )
+    assert not straight.contains(corner_m_enu)
+    assert show_fence(show, vehicle.id, 0.5).contains(corner_m_enu)
 
 
 def judged(f: Geofence, position_m_enu: np.ndarray) -> Breach | None:

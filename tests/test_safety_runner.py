@@ -22,7 +22,7 @@ from planner.samples import TrajectorySamples
 from vehicle_agent.backends.base import Setpoint, Vec3, VehicleSnapshot
 from vehicle_agent.backends.kinematic import KinematicVehicle
 from vehicle_agent.job_runner import JobRunner, PreparedJob, RunnerConfig
-from vehicle_agent.runner_io import RunnerEvent, result_report
+from vehicle_agent.runner_io import AbortedJob, RunnerEvent, result_report
 from vehicle_agent.runner_phases import unsettled_reason
 from vehicle_agent.safety import DeviationLimit, SafetyLimits, WritingBounds, vehicle_fence
 from vehicle_agent.trace import JobTrace
@@ -87,6 +87,7 @@ class Run:
     phases: list[str] = field(default_factory=list)
     contact: list[tuple[float, bool]] = field(default_factory=list)
     finished: list[JobTrace] = field(default_factory=list)
+    aborted: list[AbortedJob] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         config = RunnerConfig(vehicle_id="uav1", kind="quadrotor-brush", board_id="b1",
@@ -112,6 +113,9 @@ class Run:
         self.events.extend(actions.events)
         if actions.finished is not None:
             self.finished.append(actions.finished)
+        if actions.aborted is not None:  # its report goes once measured (the service's part)
+            self.aborted.append(actions.aborted)
+            self.reports.extend(r for r in [actions.aborted.report] if r is not None)
         if not self.phases or self.phases[-1] != self.runner.phase:
             self.phases.append(self.runner.phase)
         self.contact.append((self.now_s, bool(self.vehicle.snapshot().pen_contact)))
@@ -167,6 +171,12 @@ def test_a_runaway_while_writing_lifts_the_brush_fails_the_job_and_backs_off() -
     last_contact = max(t for t, c in run.contact if c and t < tripped_s + 2.0)
     assert last_contact - tripped_s < 0.05  # (the ideal vehicle "touches" again on the floor)
     assert not run.finished and run.commands == ["takeoff", "land"]
+    (aborted,) = run.aborted  # what was flown, to measure: the report waits for its metrics
+    flown = aborted.trace.flown
+    assert aborted.report is report and flown.abort_reason == "deviation"
+    assert 1.5 < flown.t_s[-1] < 4.0 and flown.pen_down.any()  # cut where it tripped
+    assert flown.t_s[-1] == pytest.approx(tripped_s - writing_starts_at(), abs=0.02)
+    assert 0.0 < report.progress < 1.0 and report.metrics is None
     assert (run.runner.state, run.vehicle.mode) == ("idle", "idle")
     reply = run.runner.handle_command(
         VehicleCommand(command="assign", job=JobAssignment(job_id="j2", text="A")), run.now_s

@@ -15,6 +15,7 @@ that flew it to its end), and no vehicle put ink for a job while or after anothe
 from __future__ import annotations
 
 import itertools
+import json
 import os
 import pty
 import signal
@@ -181,9 +182,9 @@ class LiveShow:
         finally:
             stored.close()
         assert all(states[j] == "done" for j in self.acknowledged), states
-        folders = [p.name for p in (show.database_path.parent / "jobs").iterdir()]
-        for job_id in self.acknowledged:
-            written = [name for name in folders if name.startswith(f"{job_id}-")]
+        folders = [p for p in (show.database_path.parent / "jobs").iterdir()]
+        for job_id in self.acknowledged:  # a broken-off attempt keeps its folder too
+            written = [p.name for p in folders if p.name.startswith(f"{job_id}-") and _whole(p)]
             assert len(written) == 1, f"{job_id} written completely {len(written)} times"
         with self.lock:
             ink = list(self.ink)
@@ -191,6 +192,13 @@ class LiveShow:
             spans = sorted(_ink_spans(ink, job_id))
             for earlier, later in itertools.pairwise(spans):
                 assert earlier[1] < later[0], f"{job_id}: {earlier[2]} and {later[2]} both inked"
+
+
+def _whole(job_dir: Path) -> bool:
+    """Whether a job folder holds an attempt written to its end (``metrics.json`` names no
+    abort)."""
+    summary = json.loads((job_dir / "metrics.json").read_text(encoding="utf-8"))
+    return summary.get("abort_reason") is None
 
 
 def _ink_spans(ink: list[Ink], job_id: str) -> list[tuple[float, float, str]]:

@@ -63,6 +63,7 @@ def test_each_rooms_kind_agrees_with_its_record() -> None:
         kind = vehicle_kind(name)
         assert kind.name == name
         assert kind.orientation == room.orientation, name
+        assert kind.phases(kind.settings(None, None)).route == room.transit_route, name
         # the autopilot flag: tests/test_showfile_load.py (it asks each kind's autopilot_world)
 
 

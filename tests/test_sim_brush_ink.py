@@ -109,11 +109,14 @@ def test_iou_is_one_against_itself_and_drops_with_an_offset() -> None:
     assert iou(shifted.pixels, target.pixels) == pytest.approx(15.0 / 25.0, abs=0.03)
 
 
-def test_pen_up_samples_paint_nothing_and_empty_rasters_agree() -> None:
+def test_pen_up_samples_paint_nothing_and_nothing_written_scores_zero() -> None:
     ink = canvas()
     pts = line()
     ink.paint_path(pts, np.full(len(pts), 0.02), np.zeros(len(pts), dtype=bool))
     assert not ink.pixels.any()
-    assert iou(ink.pixels, canvas().pixels) == 1.0
+    assert iou(ink.pixels, canvas().pixels) == 0.0  # nothing against nothing: no agreement seen
+    target = canvas()
+    target.paint_path(pts, np.full(len(pts), 0.02), np.ones(len(pts), dtype=bool))
+    assert iou(ink.pixels, target.pixels) == 0.0
     with pytest.raises(SimError, match="target"):
         iou(ink.pixels, canvas(0.002).pixels)

@@ -18,7 +18,7 @@ import pytest
 from module_by_path import load_module
 from test_sitl_side_by_side import with_ports
 
-from vehicle_agent.backends.mavlink_params import PX4_DELAY_MAX_MS, mocap_params
+from vehicle_agent.backends.mavlink.params import PX4_DELAY_MAX_MS, mocap_params
 
 ROOT = Path(__file__).resolve().parents[1]
 START_PY = ROOT / "scripts" / "sitl" / "start.py"

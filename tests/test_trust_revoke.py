@@ -30,7 +30,7 @@ from bus.messages import (
 from bus.rpc import NoReplyError, query, query_one
 from bus.session import Session, SessionOpenError, free_tcp_endpoint, open_session
 from cli.main import main as skyquill
-from cli.showrun import ShowRun, derived_show, snapshot, wait_for_jobs
+from cli.showrun import ShowRun, Stagehand, derived_show, snapshot, wait_for_jobs
 from showfile import SecuritySettings, Show, load_show
 from trust.files import IdentityFiles, KeysError
 from trust.pki import issue
@@ -128,13 +128,13 @@ def show_run(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[ShowRun
     path, show = derived_show(AIRSHOW, out, time_scale=6.0, vehicles=base.vehicles[:1])
     for name, role in (("alice", "operator"), ("press", "watcher")):
         assert skyquill(["keys", str(path), "--client", name, "--role", role]) == 0
-    with ShowRun(path, show, log_dir=out / "logs") as run:
-        with run.client() as operator:
-            deadline = time.monotonic() + 60.0
-            while not _ready(operator, run.keys):
-                assert time.monotonic() < deadline, "the show did not become ready"
-                time.sleep(0.2)
-        yield run, path
+    with ShowRun(path, show, log_dir=out / "logs") as run, run.client() as operator:
+        deadline = time.monotonic() + 60.0
+        while not _ready(operator, run.keys):
+            assert time.monotonic() < deadline, "the show did not become ready"
+            time.sleep(0.2)
+        with Stagehand(operator, run.keys):  # one board, a fresh sheet per character
+            yield run, path
 
 
 def _ready(session: Session, keys: ShowKeys) -> bool:

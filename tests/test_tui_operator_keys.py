@@ -81,14 +81,24 @@ def test_quit_while_vehicles_fly_asks_and_says_the_show_goes_on() -> None:
     play(scenario)
 
 
-def test_quit_on_the_ground_is_immediate() -> None:
+@pytest.mark.parametrize("key", ["q", "ctrl+c"])
+def test_quit_on_the_ground_is_immediate(key: str) -> None:
     async def scenario(app: ConsoleApp, pilot: Any) -> None:
         for vid in ("uav1", "uav2"):
             status = VehicleStatus(vehicle_id=vid, kind="quadrotor-brush", state="landed")
             app.model.apply(status, DEMO_TIME_S)
-        await pilot.press("q")
+        await pilot.press(key)
         await settle(pilot)
         assert not app.is_running
+
+    play(scenario)
+
+
+def test_ctrl_c_while_vehicles_fly_asks_as_q_does() -> None:
+    async def scenario(app: ConsoleApp, pilot: Any) -> None:
+        await pilot.press("ctrl+c")
+        await settle(pilot)
+        assert isinstance(app.screen, ConfirmScreen) and "keeps running" in app.screen.question
 
     play(scenario)
 
@@ -237,7 +247,13 @@ def test_help_lists_every_key_and_the_preview_fills_the_screen() -> None:
     documented = " ".join(keys for keys, _, _ in HELP).replace("/", " ").split()
     for binding in ConsoleApp.BINDINGS:
         for key in binding.key.split(","):  # type: ignore[union-attr]
-            shown = {"plus": "+", "minus": "-", "question_mark": "?", "f1": "F1"}.get(key, key)
+            shown = {
+                "plus": "+",
+                "minus": "-",
+                "question_mark": "?",
+                "f1": "F1",
+                "ctrl+c": "Ctrl+C",
+            }.get(key, key)
             assert shown in documented, f"key {key!r} missing from the help"
     for mark in [*(m for m, _ in SYMBOLS.values()), "^", "H", "P", "✎"]:
         assert f" {mark} " in BOARD_MARKS or f"{mark} " in BOARD_MARKS, f"{mark!r} unexplained"

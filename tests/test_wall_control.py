@@ -101,3 +101,23 @@ def test_fused_force_estimate_is_unbiased_by_friction(speed_mps: float) -> None:
     )
     ref = Reference(np.zeros(3), speed_mps * along, np.zeros(3), 3.0)
     assert ctrl.estimate_force_n(meas, ref) == pytest.approx(3.0, abs=1e-9)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_contact_aware_force_loop_beats_the_control_baseline(seed: int) -> None:
+    """A short stroke in wind and sensor noise, the force rising and falling at 1-2 N/s while
+    the pen slides at 10 cm/s: the contact-aware loop (the pen's compression rate fed forward,
+    the tip's normal position read off the pen's spring) holds the force with an RMSE at least
+    30 % below the control baseline's (measured 0.63 / 0.67 / 0.60 of it for seeds 0-2)."""
+    t = np.arange(0.0, 4.0, 0.01)
+    x = np.where(t > 0.5, 0.1 * (t - 0.5), 0.0)
+    force = np.interp(t, [0.0, 1.5, 2.5, 3.5, 4.0], [0.0, 3.0, 2.0, 3.0, 2.0])
+    plan = _plan(t, np.column_stack([x, np.zeros_like(x)]), force)
+    rmse = {}
+    for contact_model in (True, False):
+        settings = FlySettings(noise=WorldNoise(), contact_model=contact_model)
+        flown = fly_plan(plan, settings, seed=seed)
+        assert flown.force_n is not None
+        rmse[contact_model] = np.sqrt(np.mean((flown.force_n - force)[force > 0.0] ** 2))
+    assert rmse[True] <= 0.7 * rmse[False]

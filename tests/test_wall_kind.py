@@ -203,7 +203,7 @@ def test_report_draws_images_force_and_width() -> None:
     fig = KIND.report(plan, _flown(plan, WIDTH_M / 2, 2.0), None, "line")
     titles = [ax.get_title() for ax in fig.axes]
     # 2 N draws 7.6 mm: band [1.2, 8.8] mm against [-5, 5] mm -> 3.8 / 13.8 = 0.28.
-    assert titles[0] == "target (light) and written (dark), IoU 0.28"
+    assert titles[0] == "target (light), written (dark), both (blue): IoU 0.28"
     assert [ax.get_ylabel() for ax in fig.axes[1:]] == [
         "tip error [cm]",
         "normal force [N]",

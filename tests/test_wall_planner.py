@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from planner.errors import InfeasibleTrajectoryError, PlannerError
-from vehicles.hexarotor_sponge import nlp, period_cache, period_nlp, solver_cache
+from vehicles.hexarotor_sponge import nlp, period_cache, period_nlp, solver_cache, steps
 from vehicles.hexarotor_sponge.nlp import Limits, solve_period
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
 from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing
@@ -20,6 +20,8 @@ from vehicles.surface import Surface
 
 SURFACE = Surface.of("vertical", (0.0, 3.0, 2.0), 0.0)
 PARAMS = HexarotorParams()
+PAPER = Limits(corridor_m=None)
+"""The paper's eq. 7 (positions pinned at the waypoints only)."""
 
 
 def test_contact_phases_follow_waypoint_forces() -> None:
@@ -176,9 +178,12 @@ def test_step_counts_round_up_to_the_ladder_and_spread_over_segments() -> None:
 @pytest.mark.slow
 def test_periods_of_nearby_step_counts_share_one_solver() -> None:
     """A stroke a few steps longer than another is planned on the same built NLP."""
-    first = _corner_stroke_periods()[1]
-    longer = dataclasses.replace(first, points_m=first.points_m * [1.2, 1.2, 1.0])
-    needs = [sum(nlp.steps_per_segment(p, Limits())) for p in (first, longer)]
+    corner = _corner_stroke_periods()[1]
+    first, longer = (
+        dataclasses.replace(corner, points_m=corner.points_m * [scale, scale, 1.0])
+        for scale in (1.05, 1.2)
+    )
+    needs = [sum(steps.steps_per_segment(p, Limits())) for p in (first, longer)]
     assert needs[0] != needs[1]
     builds = solver_cache.period_solver.cache_info().misses
     a = solve_period(first, PARAMS, Limits())
@@ -192,12 +197,13 @@ def test_periods_of_nearby_step_counts_share_one_solver() -> None:
 def test_rotor_thrust_limit_holds_when_the_plan_without_it_exceeds_it() -> None:
     """The thrust rows are left out of the first solve; a plan beyond the rotors' range is
     solved again with them. 9 N rotors press 3 N while hovering (8.8 N) but the nominal plan
-    of the corner stroke asks 9.2 N."""
+    of the corner stroke asks 9.2 N (the paper's eq. 7: in corridors it turns the corner
+    slower)."""
     period = _corner_stroke_periods()[1]
-    nominal = solve_period(period, PARAMS, Limits())
+    nominal = solve_period(period, PARAMS, PAPER)
     weak = HexarotorParams(thrust_max_n=9.0)
     assert _max_thrust_n(nominal, weak) > 9.1
-    sol = solve_period(period, weak, Limits())
+    sol = solve_period(period, weak, PAPER)
     assert sol.status == "Solve_Succeeded"
     assert _max_thrust_n(sol, weak) <= 9.0 + 1e-5
     assert sol.iterations > nominal.iterations
@@ -215,23 +221,27 @@ def _max_thrust_n(sol: nlp.PeriodSolution, params: HexarotorParams) -> float:
 def test_time_steps_change_smoothly_and_save_iterations() -> None:
     """The cost of a time step's change from the step before keeps neighbouring steps within
     a few hundredths of a second (without it they jump between 0.02 and 0.19 s where the cost
-    is flat) and saves IPOPT iterations for the same duration (within 1 %)."""
+    is flat) and saves IPOPT iterations for the same duration (within 1 %; the paper's eq. 7,
+    where it was measured)."""
     for period in _corner_stroke_periods():
-        smooth = solve_period(period, PARAMS, Limits())
-        free = solve_period(period, PARAMS, Limits(weight_dh=0.0))
+        smooth = solve_period(period, PARAMS, PAPER)
+        free = solve_period(period, PARAMS, dataclasses.replace(PAPER, weight_dh=0.0))
         assert np.abs(np.diff(np.diff(smooth.t_s))).max() < 0.03
         assert smooth.iterations < free.iterations
         assert smooth.t_s[-1] == pytest.approx(free.t_s[-1], rel=0.01)
 
 
-@pytest.mark.parametrize("thrust_rows", [False, True])
-def test_period_nlp_derivatives_are_the_horizons_own(thrust_rows: bool) -> None:
+@pytest.mark.parametrize(
+    "rows", [period_nlp.Rows(thrust=t, corridor=c) for t in (False, True) for c in (False, True)]
+)
+def test_period_nlp_derivatives_are_the_horizons_own(rows: period_nlp.Rows) -> None:
     """The gradient, Jacobian and Hessian scattered from one step's derivatives equal
     CasADi's derivatives of the whole horizon's cost and constraints (at a random point, with
-    the first step's hover force and the time-step change cost between steps)."""
+    the first step's hover force, the time-step change cost between steps and the corridor's
+    parabola rows)."""
     n = 5
     weights = nlp.cost_weights(Limits())
-    problem, derivatives = period_nlp.period_nlp(n, thrust_rows, PARAMS, weights, 10.0)
+    problem, derivatives = period_nlp.period_nlp(n, rows, PARAMS, weights, 10.0)
     w, p, f, g = problem["x"], problem["p"], problem["f"], problem["g"]
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.numel())
     hessian = ca.triu(ca.hessian(lam_f * f + ca.dot(lam_g, g), w)[0])
@@ -239,7 +249,7 @@ def test_period_nlp_derivatives_are_the_horizons_own(thrust_rows: bool) -> None:
     rng = np.random.default_rng(1)
     point = (
         rng.standard_normal(w.numel()),
-        rng.standard_normal(n),
+        rng.standard_normal(period_nlp.STEP_PARAMETERS * n),
         1.7,
         rng.standard_normal(g.numel()),
     )

@@ -70,7 +70,7 @@ def test_a_force_ramp_beyond_the_time_step_bound_names_it_and_the_stroke() -> No
     1.1 s at h_max 0.1 s. Said of the second stroke, with the force rate that sets the time."""
     period = _two_corner_strokes()[3]
     with pytest.raises(InfeasibleTrajectoryError) as info:
-        solve_period(period, PARAMS, Limits(h_max_s=0.1))
+        solve_period(period, PARAMS, Limits(h_max_s=0.1, corridor_m=None))
     err = info.value
     assert str(err) == (
         "stroke 1: writing it: IPOPT found no trajectory (Infeasible_Problem_Detected): "
@@ -88,7 +88,7 @@ def _failing(status: str, iterate: str) -> Any:
 
     def failing(n: int, rows: bool, problem: Any, params: Any, limits: Any) -> Any:
         w, stats, iterations, ipopt_s = solve(n, rows, problem, params, limits)
-        w = w if iterate == "solved" else problem[0]
+        w = w if iterate == "solved" else problem.guess
         return w, {**stats, "success": False, "return_status": status}, iterations, ipopt_s
 
     return failing
@@ -101,7 +101,7 @@ def test_a_last_iterate_beyond_a_limit_is_named_as_the_iterate(
     period is feasible: the message says it is the last iterate's, with IPOPT's status."""
     monkeypatch.setattr(nlp, "_solve", _failing("Maximum_Iterations_Exceeded", "start"))
     with pytest.raises(InfeasibleTrajectoryError) as info:
-        solve_period(_two_corner_strokes()[1], PARAMS, Limits())
+        solve_period(_two_corner_strokes()[1], PARAMS, Limits(corridor_m=None))
     err = info.value
     assert str(err).startswith(
         "stroke 0: writing it: IPOPT found no trajectory (Maximum_Iterations_Exceeded): "

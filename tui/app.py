@@ -43,6 +43,7 @@ from tui.widgets.preview_pane import PreviewPane
 from tui.widgets.preview_screen import PreviewScreen
 from tui.widgets.queue_table import QueueTable
 from tui.widgets.vehicle_detail_screen import VehicleDetailScreen
+from tui.widgets.venue_screen import VenueScreen
 
 JOB_ACTIONS = frozenset(
     {"approve", "reject", "cancel_job", "priority", "preview", "mark", "reject_marked"}
@@ -82,11 +83,13 @@ class ConsoleApp(App[None]):
         Binding("s", "fresh_sheet", "fresh sheet", show=False),
         Binding("b", "vehicle('battery_swapped')", "battery swapped", show=False),
         Binding("d", "detail", "detail", show=False),
+        Binding("m", "venue", "venue plan", show=False),
         Binding("p", "toggle_pause", "pause"),
         Binding("P", "vehicle('pause')", "pause vehicle", show=False),
         Binding("L", "land_all", "land all"),
         Binding("x", "acknowledge", "ack", show=False),
         Binding("q", "quit", "quit", show=False),
+        Binding("ctrl+c", "quit", "quit", show=False, priority=True),  # as q: a terminal's habit
     ]
 
     class BusWake(Message):
@@ -216,7 +219,7 @@ class ConsoleApp(App[None]):
         if self.model.events.seq != self._event_log.last_seq:
             self._event_log.add_events(self.model.events.after(self._event_log.last_seq))
         stack = self.screen_stack  # empty while the app is being torn down
-        if stack and isinstance(stack[-1], VehicleDetailScreen):
+        if stack and isinstance(stack[-1], VehicleDetailScreen | VenueScreen):
             stack[-1].sync(now_s)
         if table_done:  # else the next tick comes back for the table
             self._drawn["all"] = self.model.version
@@ -308,7 +311,7 @@ class ConsoleApp(App[None]):
             return len(self.screen_stack) > 1
         if isinstance(screen, ConfirmScreen | HelpScreen | PreviewScreen):
             return action == "quit" and not isinstance(screen, ConfirmScreen)
-        if isinstance(screen, VehicleDetailScreen):
+        if isinstance(screen, VehicleDetailScreen | VenueScreen):
             return action in ("quit", "land_all", "estop", "help")
         if action in JOB_ACTIONS:
             return self.focused is self._queue
@@ -328,7 +331,8 @@ class ConsoleApp(App[None]):
         self._request(cmd.job_request("reject", job, self.model.phrase_of(job)))
 
     def action_cancel_job(self) -> None:
-        self._request(cmd.job_request("cancel", self._selected_job()))
+        job = self._selected_job()
+        self._request(cmd.job_request("cancel", job, self.model.phrase_of(job)))
 
     def action_mark(self, whole_client: bool = False) -> None:
         """Mark the selected job, or every waiting job of its client, for ``R``."""
@@ -423,6 +427,10 @@ class ConsoleApp(App[None]):
         vehicle_id = self._fleet.selected_vehicle
         if vehicle_id is not None:
             self._open_detail(vehicle_id)
+
+    def action_venue(self) -> None:
+        self.push_screen(VenueScreen(self.settings.venue, self.model))
+        self.redraw()
 
     def action_acknowledge(self) -> None:
         count = self.model.acknowledge_alerts()

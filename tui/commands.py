@@ -66,14 +66,39 @@ def job_request(command: str, job: JobState | None, phrase: Sequence[JobState] =
     if command == "cancel":
         if job.state in FINAL_JOB_STATES:
             return Refusal(f"cancel: {what} is already {job.state}")
-        stop = "\nThe vehicle writing it stops." if job.state in ACTIVE_JOB_STATES else ""
         return Ask(
-            f"Cancel {what}?{stop}",
+            f"Cancel {what}?\n{_cancel_outcome(job, phrase)}",
             "Cancel job",
             (OperatorCommand(command="cancel", job_id=job.job_id),),
-            reason_prompt="reason (optional)",
+            reason_prompt="reason (optional, shown to the visitor)",
         )
     return _prioritize(command, job, what)
+
+
+def _cancel_outcome(job: JobState, phrase: Sequence[JobState]) -> str:
+    """What a cancel does to ``job`` and tells its visitor (``orchestrator/operator.py``: the
+    vehicle is told to cancel, and returns and lands; the kiosk shows the reason;
+    ``orchestrator/phrases.py``: a phrase that has not begun ends whole)."""
+    told = "The visitor's ticket says the operator cancelled it, with your reason if you give one."
+    if job.phrase is not None and not any(_began(j) for j in (job, *phrase)):
+        return (
+            f"Its phrase has not begun: all {job.phrase.size} characters are cancelled (a phrase"
+            f" is written whole or not at all), their drones land.\n{told}"
+        )
+    others = " The other characters of its phrase go on." if job.phrase is not None else ""
+    if job.state == "writing":
+        return (
+            "The vehicle writing it lifts its pen, returns and lands; what it wrote stays on the"
+            f" board, unfinished, and is not written again.{others}\n{told}"
+        )
+    if job.state in ACTIVE_JOB_STATES:
+        return f"Its vehicle returns and lands before writing it.{others}\n{told}"
+    return f"It leaves the queue and will not be written.{others}\n{told}"
+
+
+def _began(job: JobState) -> bool:
+    """Whether a character's drone began writing it (as ``orchestrator/phrases.py`` counts)."""
+    return job.state in ("writing", "done") or job.progress > 0
 
 
 def _moderate_phrase(command: str, job: JobState, phrase: Sequence[JobState]) -> Ask:

@@ -159,12 +159,16 @@ def job_detail(row: QueueRow) -> str:
 
 
 def metrics_text(job: JobState) -> str:
-    """``RMSE 1.2cm IoU 0.84`` of a finished job."""
+    """``RMSE 1.2cm IoU 0.84`` of a finished job: ``-`` for what was not measured (a pen that
+    never came down, a backend that does not know its brush), ``partial 30%`` after a job
+    written in part."""
     m = job.metrics
     if m is None:
         return "no metrics"
     iou = "-" if m.iou is None else f"{m.iou:.2f}"
-    return f"RMSE {100 * m.rmse_pen_down_m:.1f}cm IoU {iou}"
+    rmse = "-" if m.rmse_pen_down_m is None else f"{100 * m.rmse_pen_down_m:.1f}cm"
+    partial = f" partial {m.flown_fraction:.0%}" if m.flown_fraction < 1.0 else ""
+    return f"RMSE {rmse} IoU {iou}{partial}"
 
 
 def section_text(row: QueueRow) -> Text:

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 from showfile import Board, Show
+from tui.venue import Venue, venue_from_show
 
 BoardOrientation = Literal["horizontal", "vertical"]
 
@@ -65,6 +66,8 @@ class ConsoleSettings:
     """Boards, in show-file order."""
     vehicles: tuple[VehicleSpec, ...] = ()
     """Vehicles, in show-file order."""
+    venue: Venue = field(default_factory=Venue)
+    """The plan view of every board, home and geofence (the console's venue plan)."""
     tracking_error_alert_m: float = 0.05
     """Tracking error above which a writing vehicle raises an alert, in [m]."""
     lost_after_s: float = 1.5
@@ -104,6 +107,7 @@ def settings_from_show(show: Show, *, redraw_hz: float = 20.0) -> ConsoleSetting
         vehicles=tuple(
             VehicleSpec(v.id, v.kind, v.board, _surface(show, v.board)) for v in show.vehicles
         ),
+        venue=venue_from_show(show),
         tracking_error_alert_m=show.policy.tracking_error_alert_m,
         lost_after_s=show.policy.lost_after_s,
         redraw_hz=redraw_hz,

@@ -22,7 +22,7 @@ from vehicle_agent.rest import REST_PERIOD_S
 from vehicle_agent.service import AgentService
 from vehicle_agent.service_settings import ServiceSettings
 from vehicle_agent.setup import VehicleSetup, on_board
-from vehicle_agent.signals import run_until_signalled
+from vehicle_agent.stop_signals import run_landing_first
 from vehicle_agent.work import JobWork
 from vehicle_agent.worker_client import ProcessJobWork
 
@@ -49,7 +49,7 @@ def make_backend(
             fleet=None if step_round is None else step_round.fleet,
         )
         return SimBackend(sim, step_round)
-    from vehicle_agent.backends.mavlink_setup import create_backend  # pymavlink: only here
+    from vehicle_agent.backends.mavlink.create import create_backend  # pymavlink: only here
 
     return create_backend(setup, on_text=on_text)
 
@@ -90,11 +90,13 @@ def make_service(
 async def run_agent(
     setup: VehicleSetup, backend: VehicleBackend, events: EventOutbox | None = None
 ) -> None:
-    """Run this vehicle's agent until SIGINT/SIGTERM (the ``skyquill agent`` process), its jobs
-    planned and measured in a planning worker process; ``events``: the outbox the backend's
-    ``on_text`` was given."""
+    """Run this vehicle's agent until SIGINT/SIGTERM (the ``skyquill agent`` process), landing
+    first when it is in the air (``vehicle_agent/stop_signals.py``), its jobs planned and
+    measured in a planning worker process; ``events``: the outbox the backend's ``on_text`` was
+    given."""
     work = ProcessJobWork(setup.show, setup.vehicle_id, setup.time_scale)
-    await run_until_signalled(make_service(setup, backend, work, events))
+    await work.warm()  # before the vehicle is on the bus: its first job plans as fast as any
+    await run_landing_first(make_service(setup, backend, work, events))
 
 
 def run_agent_blocking(

@@ -116,6 +116,7 @@ class FleetHost:
 
     async def run(self, stop: asyncio.Event) -> None:
         """Open every vehicle's session, fly them until ``stop``, then close everything."""
+        await self.pool.warm(self.vehicle_ids)  # before the vehicles join: no cold first job
         fleet = [asyncio.create_task(self._carry(v, stop)) for v in self.setups]
         try:
             await stop.wait()
@@ -124,6 +125,13 @@ class FleetHost:
                 vehicle_stop.set()
             await asyncio.gather(*fleet, return_exceptions=True)
             await self.pool.close()
+
+    async def land_then_stop(self, stop: asyncio.Event, limit_s: float) -> None:
+        """Land every vehicle in the air, all together, each as its own agent would
+        (``vehicle_agent/stop_signals.py``); then set ``stop``."""
+        services = list(self.services.values())
+        await asyncio.gather(*(one.land_then_stop(asyncio.Event(), limit_s) for one in services))
+        stop.set()
 
     async def _carry(self, vehicle_id: str, fleet_stop: asyncio.Event) -> None:
         """One vehicle: its service on its own session, started again when it fails."""

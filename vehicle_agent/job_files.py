@@ -3,7 +3,7 @@
 Each flown job leaves ``<database dir>/jobs/<job>-<vehicle>-<attempt>/``: ``metrics.json``, the
 planned reference, what was flown and ``report.png``. ``compact`` (the default) keeps a job
 under about 100 kB: the reference and the flight at ``COMPACT_RATE_HZ`` in float32 in one
-compressed ``flight.npz``, a small picture; ``full`` keeps every tick (``TRAJ.json`` beside) and a
+compressed ``flight.npz``, a palette picture; ``full`` keeps every tick (``TRAJ.json`` beside) and a
 full-size picture, for engineers tuning a vehicle. ``flight.npz`` holds the job's trace in the
 kinds' format under its field names (``vehicle_agent.jobs.flight_arrays``).
 
@@ -26,8 +26,15 @@ from showfile import Show
 
 COMPACT_RATE_HZ = 20.0
 """Rate in [Hz] of the flight kept in a compact job directory."""
-COMPACT_PICTURE_DPI = 36
-"""Resolution of a compact ``report.png`` (the kinds draw at 100 dpi)."""
+COMPACT_PICTURE_DPI = 100.0
+"""Resolution in [dots/in] of a compact ``report.png``: the kinds' figures are 12.8 in wide
+(``vehicles.picture``), so 1280 px, type 14-18 px high (36 dpi drew 540 px and 5 px type)."""
+COMPACT_PICTURE_COLOURS = 32
+"""Colours of a compact ``report.png``, a palette PNG of lines drawn without anti-aliasing (text
+keeps it): a fifth of the bytes of full colour (a brush job's 1280 px picture ~40 kB against
+~235 kB), every line colour kept, so that a job stays under 100 kB."""
+FULL_PICTURE_DPI = 150.0
+"""Resolution in [dots/in] of a full ``report.png`` (full colour, 1920 px)."""
 
 
 @dataclass(frozen=True)

@@ -26,14 +26,18 @@ tracking error above the bound for longer than its window (``deviation``) lifts 
 where the vehicle is, then holds or returns and lands (``safety.abort_policy``); a vehicle found
 outside its geofence (``geofence``) holds ``fence_hold_s`` and lands where it is, then stays in
 ``fault``. The job is reported ``failed`` with that code, handed back to the queue
-(``retry_after_s``) while writing had not begun, final once it had. After an abort the vehicle
-takes no job for ``safety.abort_backoff_s``.
+(``retry_after_s``) while writing had not begun, final once it had: then the report waits for the
+metrics of what was flown (``TickActions.aborted``). After an abort the vehicle takes no job for
+``safety.abort_backoff_s``.
 
 Reports: ``started``, ``progress`` and, for a job flown to its end, the service's result report
 (``done`` only within the writing bounds); ``failed`` when the job cannot be planned, or with
-``retry_after_s`` when the vehicle refused to take off (pre-arm checks). An interrupted job is
-abandoned without a report: the status drops its ``job_id`` at once, and the orchestrator, which
-asked for the interruption or was away, puts the job back in the queue for another vehicle.
+``retry_after_s`` when the vehicle refused to take off (pre-arm checks). An interrupted or
+stopped job is abandoned without a report: the status drops its ``job_id`` at once, and the
+orchestrator, which asked for the interruption or was away, puts the job back in the queue for
+another vehicle (or cancels it). Whatever breaks a job off after its writing began (an abort, an
+interruption, a stop), what was flown of it goes out in ``TickActions.aborted``: the service
+measures it against the whole plan and keeps its files as a finished job's.
 """
 
 from __future__ import annotations
@@ -220,10 +224,12 @@ class JobRunner(RunnerPhases):
 
     def _estop(self) -> CommandReply:
         self._backend_command = ("estop", None)
-        self._stop("emergency stop")
+        self._stop("estop", "emergency stop")
         return CommandReply(ok=True, message="motors off")
 
-    def _stop(self, message: str) -> None:
+    def _stop(self, reason: str, message: str) -> None:
+        if self._job is not None:
+            self._end_job(self._job, reason)
         self.state, self.phase, self.message = "fault", "stopped", message
         self._move = None
         self._job = None
@@ -233,6 +239,8 @@ class JobRunner(RunnerPhases):
         """Stop writing the current job: lift the brush; what follows depends on ``reason``."""
         self._abort = reason
         self.message = message
+        if self._job is not None:
+            self._end_job(self._job, reason)
         self._job = None  # abandoned: the orchestrator requeues it (it asked, or it was gone)
         if self.phase == "preflight":  # never left the ground
             self.state, self.phase, self._abort = self._after_landing, "ground", None
@@ -249,7 +257,7 @@ class JobRunner(RunnerPhases):
         job = self._job
         self._event(level, code, f"{vid}: {message}")
         if job is not None:
-            self._reports.append(job.aborted(vid, code, message, safety.abort_backoff_s))
+            self._end_job(job, code, job.aborted(vid, code, message, safety.abort_backoff_s))
         self._retry_at_s, self._retry_code = self._now_s + safety.abort_backoff_s, code
         self._retry_reason = f"{code} abort: {message}"
         self._abort, self._job = code, None
@@ -262,7 +270,7 @@ class JobRunner(RunnerPhases):
         self._event("alert", "geofence", f"{vid}: {breach.message}: holding, then landing")
         if job is not None:
             report = job.aborted(vid, "geofence", breach.message, self.safety.abort_backoff_s)
-            self._reports.append(report)
+            self._end_job(job, "geofence", report)
         self._abort, self._job, self._move = "geofence", None, None
         self._after_landing = "fault"
         self.message = f"geofence: {breach.message}; landing where it is"
@@ -276,7 +284,7 @@ class JobRunner(RunnerPhases):
         self._now_s = now_s
         self._watch(snapshot)
         if snapshot.fault is not None and self.phase != "stopped":
-            self._stop(f"vehicle fault: {snapshot.fault}")
+            self._stop("vehicle_fault", f"vehicle fault: {snapshot.fault}")
         self._take_off_when_ready()  # after the fault check: a faulted vehicle has no job
         plan_request = self._take_plan_request()
         breach = self.guard.check(self.phase, snapshot, self._tracked, now_s)
@@ -299,10 +307,11 @@ class JobRunner(RunnerPhases):
             reports=tuple(self._reports),
             telemetry=self._telemetry(snapshot, setpoint, now_s),
             finished=finished,
+            aborted=self._aborted,
             events=tuple(self._events),
         )
         self._backend_command = None
-        self._reports, self._events = [], []
+        self._reports, self._events, self._aborted = [], [], None
         return actions
 
     def _watch(self, snap: VehicleSnapshot) -> None:

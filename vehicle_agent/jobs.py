@@ -4,7 +4,7 @@ through the vehicle's kind, the metrics of what was flown, the job's files and p
 from __future__ import annotations
 
 import json
-from dataclasses import fields
+from dataclasses import fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -12,11 +12,12 @@ import msgspec
 import numpy as np
 
 from bus.messages import JobAssignment, JobMetrics
+from bus.public_text import drawing_label
 from planner.errors import PlannerError
 from planner.glyphs import Glyph, parse_strokes_json, text_glyph
 from planner.samples import FloatArray
-from vehicle_agent.job_files import COMPACT_PICTURE_DPI, JobFilesPolicy, compact_arrays, prune
-from vehicle_agent.job_picture import PICTURE_NAME, PictureWorker
+from vehicle_agent.job_files import JobFilesPolicy, compact_arrays, prune
+from vehicle_agent.job_picture import PictureOrder, PictureWorker, draw_picture
 from vehicle_agent.job_runner import PreparedJob
 from vehicle_agent.pace import (
     PaceSettings,
@@ -32,7 +33,10 @@ from vehicle_agent.trace import JobTrace
 from vehicle_agent.written_ink import written_ink_of_trace
 from vehicles.jobs import plan_job
 from vehicles.kind import WritingPlan
-from vehicles.picture import save_png
+
+TITLE_LABEL_CHARS = 40
+"""A job's label in its picture's title is cut to this many characters, so that the job's id,
+vehicle and attempt stay within the title's line (``vehicles.picture.TITLE_MAX_CHARS``, 160)."""
 
 
 def job_glyph(assignment: JobAssignment) -> Glyph:
@@ -45,10 +49,21 @@ def job_glyph(assignment: JobAssignment) -> Glyph:
     return parse_strokes_json(assignment.strokes, source_name=f"job {assignment.job_id}")
 
 
+def job_label(assignment: JobAssignment, glyph: Glyph) -> str:
+    """What the job writes, for people: its typed text, or ``drawing (N strokes)`` (the
+    orchestrator's ``JobState.label``)."""
+    if assignment.text is not None:
+        return assignment.text.strip()
+    return drawing_label(len(glyph.strokes))
+
+
 def prepare_job(setup: VehicleSetup, assignment: JobAssignment) -> PreparedJob:
     """Lay the job's glyph out on the vehicle's board and plan it with its kind (raises
-    PlannerError); the context is the kind's :class:`vehicles.kind.WritingPlan`."""
-    return prepared_job(setup, assignment.job_id, planned_job(setup, assignment))
+    PlannerError); the context is the kind's :class:`vehicles.kind.WritingPlan`, the label
+    :func:`job_label`."""
+    glyph = job_glyph(assignment)
+    plan = plan_job(setup.show, setup.vehicle_id, glyph).plan
+    return prepared_job(setup, assignment.job_id, plan, label=job_label(assignment, glyph))
 
 
 def planned_job(setup: VehicleSetup, assignment: JobAssignment) -> WritingPlan:
@@ -56,15 +71,23 @@ def planned_job(setup: VehicleSetup, assignment: JobAssignment) -> WritingPlan:
     return plan_job(setup.show, setup.vehicle_id, job_glyph(assignment)).plan
 
 
-def prepared_job(setup: VehicleSetup, job_id: str, plan: WritingPlan) -> PreparedJob:
+def prepared_job(
+    setup: VehicleSetup, job_id: str, plan: WritingPlan, *, label: str = ""
+) -> PreparedJob:
     """``plan`` ready to fly: paced to the vehicle's tracking as last identified (show
     ``planning.pace: tracking``) and the kind's command reference made of it (fast: a job
-    planned long before it flies is paced with what its vehicle flew meanwhile)."""
+    planned long before it flies is paced with what its vehicle flew meanwhile); ``label``:
+    what it writes (:attr:`PreparedJob.label`)."""
     if (pace := PaceSettings.of(setup.show)) is not None:
         plan = paced(plan, pace, load_model(model_path(setup.show, setup.vehicle_id)))
     commands = setup.kind.command_reference(plan, setup.settings)
     return PreparedJob(
-        job_id, plan.samples, command_samples=commands, context=plan, force_n=plan.force_n
+        job_id,
+        plan.samples,
+        command_samples=commands,
+        context=plan,
+        force_n=plan.force_n,
+        label=label,
     )
 
 
@@ -76,19 +99,40 @@ def writing_plan(prepared: PreparedJob) -> WritingPlan:
 
 
 def job_metrics(setup: VehicleSetup, prepared: PreparedJob, trace: JobTrace) -> JobMetrics:
-    """The kind's metrics of the flown job (writing-point errors, ink IoU); for a backend that
-    does not know its pen, errors of the vehicle reference point and no IoU. A paced job's
-    figures (``pace_*``) are added and, flown to its end, it refits the vehicle's tracking
-    with the error the metrics measured at each tick."""
+    """The kind's metrics of the flown job (writing-point errors, ink IoU against the whole
+    target however much was flown, :func:`flown_fraction` of the plan); for a backend that
+    does not know its pen, errors of the vehicle reference point and no IoU. Only what was
+    measured: no pen-down RMSE (None) when the pen never came down, no figure of ``extra``
+    that is not finite. A paced job's figures (``pace_*``) are added and, flown to its end, it
+    refits the vehicle's tracking with the error the metrics measured at each tick."""
     metrics, error_m = _measured(setup, prepared, trace)
+    metrics = msgspec.structs.replace(
+        metrics,
+        extra={name: value for name, value in metrics.extra.items() if np.isfinite(value)},
+        flown_fraction=flown_fraction(prepared, trace),
+    )
     plan = writing_plan(prepared)
     if plan.pace is None:
         return metrics
     flown = trace.flown
-    if flown.abort_reason is None and error_m is not None:
+    whole = flown.abort_reason is None and metrics.flown_fraction >= 1.0
+    if whole and error_m is not None and metrics.rmse_pen_down_m is not None:
         path = model_path(setup.show, setup.vehicle_id)
         learn(path, flown.t_s, flown.reference_m_enu, error_m, flown.pen_down, plan.pace, metrics)
     return msgspec.structs.replace(metrics, extra=metrics.extra | pace_figures(plan.pace))
+
+
+def flown_fraction(prepared: PreparedJob, trace: JobTrace) -> float:
+    """Fraction 0..1 of the plan flown: the trace's last tick (writing time from the start of
+    the plan, as :class:`vehicle_agent.runner_job.RunningJob` records it) over the plan's
+    duration; 1 for a plan of no duration."""
+    duration_s = prepared.samples.duration_s
+    t_s = trace.flown.t_s
+    if duration_s <= 0.0:
+        return 1.0
+    if not t_s.size:
+        return 0.0
+    return float(np.clip(t_s[-1] / duration_s, 0.0, 1.0))
 
 
 def _measured(
@@ -100,7 +144,7 @@ def _measured(
         error = np.linalg.norm(flown.writing_point_m_enu - flown.reference_m_enu, axis=1)
         down = flown.pen_down
         unknown_pen = JobMetrics(
-            rmse_pen_down_m=float(np.sqrt(np.mean(error[down] ** 2))) if down.any() else 0.0,
+            rmse_pen_down_m=float(np.sqrt(np.mean(error[down] ** 2))) if down.any() else None,
             rmse_m=float(np.sqrt(np.mean(error**2))) if error.size else 0.0,
             max_error_m=float(error.max()) if error.size else 0.0,
             iou=None,
@@ -129,8 +173,9 @@ def job_report_dir(setup: VehicleSetup, trace: JobTrace) -> Path:
 def write_job_report(
     setup: VehicleSetup, prepared: PreparedJob, trace: JobTrace, metrics: JobMetrics | None
 ) -> Path:
-    """Write ``metrics.json``, the planned reference (``TRAJ.json``) and ``flight.npz`` (what
-    was flown, every tick: :func:`flight_arrays`) of a job; compact (the show's
+    """Write ``metrics.json`` (the job, its label, why it was broken off or null, its metrics),
+    the planned reference (``TRAJ.json``) and ``flight.npz`` (what was flown, every tick:
+    :func:`flight_arrays`) of a job, flown to its end or broken off; compact (the show's
     ``storage.job_files``): ``flight.npz`` alone holds both at 20 Hz in float32, the reference
     as ``reference_*``; returns the directory."""
     compact = JobFilesPolicy.of(setup.show).compact
@@ -141,6 +186,8 @@ def write_job_report(
         "vehicle_id": setup.vehicle_id,
         "attempt": trace.attempt,
         "board_id": setup.runner_config.board_id,
+        "label": prepared.label,
+        "abort_reason": trace.flown.abort_reason,
         "metrics": None if metrics is None else msgspec.to_builtins(metrics),
     }
     (out / "metrics.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
@@ -179,21 +226,44 @@ def flight_arrays(trace: JobTrace) -> dict[str, Any]:
     return arrays | dict(flown.extra) | {"pen_known": np.asarray(trace.pen_known)}
 
 
+def picture_order(
+    setup: VehicleSetup, prepared: PreparedJob, trace: JobTrace
+) -> PictureOrder | None:
+    """What drawing ``report.png`` of a flown job needs; None for a backend that does not know
+    its pen (nothing to draw the writing from)."""
+    if not trace.pen_known:
+        return None
+    title = picture_title(setup, prepared, trace)
+    plan = writing_plan(prepared)
+    if plan.pace is not None:
+        title += f"\n{pace_line(plan.pace)}"
+    compact = JobFilesPolicy.of(setup.show).compact
+    kept = replace(plan, detail=None)  # the kind's own plan object: not drawn
+    return PictureOrder(setup.kind.name, setup.settings, kept, trace.flown, title, compact)
+
+
+def picture_title(setup: VehicleSetup, prepared: PreparedJob, trace: JobTrace) -> str:
+    """The first line of a job's picture title: what it writes (its label on one line, cut to
+    :data:`TITLE_LABEL_CHARS`), which job, and how much of it was flown when it was broken off:
+    ``永 · job j1 on uav1, attempt 1, broken off (deviation) at 42% of its plan``."""
+    label = " ".join(prepared.label.split())
+    if len(label) > TITLE_LABEL_CHARS:
+        label = label[: TITLE_LABEL_CHARS - 3] + "..."
+    title = f"job {trace.job_id} on {setup.vehicle_id}, attempt {trace.attempt}"
+    if label:
+        title = f"{label} · {title}"
+    if (reason := trace.flown.abort_reason) is not None:
+        title += f", broken off ({reason}) at {flown_fraction(prepared, trace):.0%} of its plan"
+    return title
+
+
 def write_job_picture(
     setup: VehicleSetup, prepared: PreparedJob, trace: JobTrace, out: Path
 ) -> Path | None:
-    """Draw ``report.png`` of a flown job into ``out`` (slow: seconds); None for a backend that
-    does not know its pen (nothing to draw the writing from)."""
-    if not trace.pen_known:
-        return None
-    title = f"job {trace.job_id} on {setup.vehicle_id}, attempt {trace.attempt}"
-    if (pace := writing_plan(prepared).pace) is not None:
-        title += f"\n{pace_line(pace)}"
-    figure = setup.kind.report(writing_plan(prepared), trace.flown, setup.settings, title)
-    path = out / PICTURE_NAME
-    compact = JobFilesPolicy.of(setup.show).compact
-    save_png(figure, path, dpi=COMPACT_PICTURE_DPI if compact else None)
-    return path
+    """Draw ``report.png`` of a flown job into ``out`` now (slow: about a second of CPU); None
+    for a backend that does not know its pen."""
+    order = picture_order(setup, prepared, trace)
+    return None if order is None else draw_picture(out, order)
 
 
 def archive_job(
@@ -203,9 +273,11 @@ def archive_job(
     trace: JobTrace,
     metrics: JobMetrics | None,
 ) -> Path:
-    """:func:`write_job_report`, then ``report.png`` drawn by ``pictures`` in the background;
-    the vehicle's older job directories beyond its budget or age are removed."""
+    """:func:`write_job_report`, then ``report.png`` ordered from ``pictures`` (drawn in the
+    background, later when the machine is busy); the vehicle's older job directories beyond
+    its budget or age are removed."""
     out = write_job_report(setup, prepared, trace, metrics)
     prune(out.parent, setup.vehicle_id, JobFilesPolicy.of(setup.show))
-    pictures.submit(lambda: write_job_picture(setup, prepared, trace, out))
+    if (order := picture_order(setup, prepared, trace)) is not None:
+        pictures.submit(out, order)
     return out

@@ -175,11 +175,11 @@ def learn(
         return
     model = load_model(path)
     model = TrackingModel.fitted(flight) if model is None else model.updated(flight)
-    predicted = choice.predicted_rmse_m
+    predicted, flown = choice.predicted_rmse_m, metrics.rmse_pen_down_m
     last_job = {
         "stretch": round(choice.stretch, 3),
         "predicted_rmse_mm": None if predicted is None else round(predicted * 1e3, 2),
-        "flown_rmse_mm": round(metrics.rmse_pen_down_m * 1e3, 2),
+        "flown_rmse_mm": None if flown is None else round(flown * 1e3, 2),
         "iou": metrics.iou,
     }
     save_model(path, model, last_job)

@@ -2,19 +2,23 @@
 agent process; a fleet host shares a few among all its vehicles, ``vehicle_agent/work_pool.py``).
 
 ``python -m vehicle_agent.plan_worker PARENT_PID`` is started by
-:class:`vehicle_agent.worker_client.ProcessJobWork` when its agent gets its first job. It serves the
-requests of :mod:`vehicle_agent.worker_protocol` on stdin/stdout, one at a time, in Linux's idle
-scheduling class (below every normal task: its agent's control loop, woken, takes the core from it
-at once), and imports the planner, the solvers and matplotlib so that the agent does not. It exits
-at the end of its stdin, on ``close``, and with its agent (``PR_SET_PDEATHSIG``); it ignores
-SIGINT/SIGTERM sent to the terminal's process group (its agent stops it, after a picture still being
-drawn).
+:class:`vehicle_agent.worker_client.ProcessJobWork`: an agent starts and warms it (``warm``: a
+one-stroke character planned, every module of a plan imported) before its vehicle joins the show,
+so its first job plans as fast as any other. It serves the requests of
+:mod:`vehicle_agent.worker_protocol` on stdin/stdout, one at a time, below the control loop
+(:func:`main`), and imports the planner, the solvers and matplotlib so that the agent does not.
+After each job's record (``archive``) it collects its garbage and gives the freed heap back to the
+system (a worker kept for the show holds what it reuses: modules and caches, not the figures of
+past pictures). It exits at the end of its stdin, on ``close``, and with its agent
+(``PR_SET_PDEATHSIG``); it ignores SIGINT/SIGTERM sent to the terminal's process group (its agent
+stops it, after a picture still being drawn).
 """
 
 from __future__ import annotations
 
 import contextlib
 import ctypes
+import gc
 import logging
 import os
 import pickle
@@ -39,6 +43,10 @@ A picture takes under a second on a quiet machine; beside four busy processes th
 job's record, so an idle worker waits for it; when an agent is stopped, the supervisor's grace
 for the agent bounds the wait (``cli/supervisor.py``)."""
 PR_SET_PDEATHSIG = 1
+WARM_TEXT = "一"
+"""What ``warm`` plans: one stroke is enough to import and run every module a plan uses (after it,
+the Airshow corpus's characters cost 0.02-0.05 s CPU each, cold 1.0-1.3 s: 0.6 s of it
+``scipy.signal``, ``vehicles/quadrotor_brush/control/tip.py``)."""
 
 log = logging.getLogger("vehicle_agent.plan_worker")
 
@@ -72,6 +80,8 @@ class Worker:
         setup, pictures = self._setups[self._vehicle_id], self._pictures[self._vehicle_id]
         if name == "prepare":
             return self._prepare(setup, request[1])
+        if name == "warm":
+            return self._warm(setup)
         from vehicle_agent import jobs
 
         prepared = _opened(request[1])
@@ -102,6 +112,16 @@ class Worker:
             self._setups[vehicle_id] = setup
             self._pictures[vehicle_id] = PictureWorker(vehicle_id)
         self._vehicle_id = vehicle_id
+
+    def _warm(self, setup: Any) -> None:
+        """Plan :data:`WARM_TEXT` as a job is planned (the kind's plan and its command
+        reference), touching no file: the pace model is left alone."""
+        from planner.glyphs import text_glyph
+        from vehicles.jobs import plan_job
+
+        plan = plan_job(setup.show, setup.vehicle_id, text_glyph(WARM_TEXT)).plan
+        setup.kind.command_reference(plan, setup.settings)
+        gc.freeze()  # modules and setups live as long as the worker: out of every collection
 
     def _prepare(self, setup: Any, assignment: Any) -> Any:
         from vehicle_agent.jobs import prepare_job
@@ -140,6 +160,28 @@ def serve(requests: BinaryIO, replies: BinaryIO, worker: Worker) -> None:
             write_frame(replies, ("error", error_info_from_exception(exc)))
         else:
             write_frame(replies, ("ok", value, time.process_time() - started_cpu_s))
+        if _innermost(request)[0] == "archive":  # a job's end: off the plan's path
+            give_back()
+
+
+def _innermost(request: tuple[Any, ...]) -> tuple[Any, ...]:
+    """The request itself, out of a fleet host's ``("vehicle", vehicle_id, request)``."""
+    while request[0] == "vehicle" and len(request) == 3 and isinstance(request[2], tuple):
+        if not request[2]:
+            break
+        request = request[2]
+    return request
+
+
+def give_back() -> None:
+    """Collect the garbage (a job's picture leaves cycles, 30-50 MiB that only a full
+    collection frees) and give the free heap back to the system (``malloc_trim``: freed pages
+    inside the heap stay mapped otherwise). Measured in one process after three Airshow jobs
+    and their pictures: 217 MiB, 204 MiB trimmed alone, 170 MiB collected and trimmed; the
+    collection costs 0.14 s CPU once the warm-up's objects are frozen (0.23 s before)."""
+    gc.collect()
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
 
 
 PLAN_NICE = 5

@@ -6,8 +6,11 @@ vehicle says how it ended (``orchestrator/holders.py``); this journal lets the v
 after a restart too. From the control tick in which the writing ended (before anything slow:
 measuring, recording) a file holds the job's result: first ``failed`` with code ``unmeasured``
 (written, not yet measured: ``done`` means measured within the writing bounds), then the
-measured result. The file goes when the orchestrator has answered the result. An agent starting
-anew sends what it finds, and its status names that job meanwhile, as the running agent's does.
+measured result. A job broken off by a safety abort after its writing began is kept the same
+way: from the tick of the abort its ``failed`` report, then that report with the metrics of
+what was flown (``vehicle_agent/job_end.py``). The file goes when the orchestrator has answered
+the result. An agent starting anew sends what it finds, and its status names that job
+meanwhile, as the running agent's does.
 
 A file replaced atomically, without fsync, survives the death of the process (SIGKILL, a crash),
 which is what a restart follows; not the host's power failing. A kill between the last ink and
@@ -57,7 +60,8 @@ class ResultJournal:
         self._keep(unmeasured)
 
     def measured(self, result: AgentReport) -> None:
-        """The job's result as it will be reported (``done`` or ``failed``)."""
+        """The job's result as it will be reported (``done`` or ``failed``; an aborted job's
+        ``failed``, with or without its metrics yet)."""
         self._keep(result)
 
     def settled(self, job_id: str) -> None:

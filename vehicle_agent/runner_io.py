@@ -108,6 +108,9 @@ class PreparedJob:
     force_n: NDArray[np.float64] | None = None
     """(N,) wanted normal contact force in [N] at the times of ``samples`` (kinds that control
     force), None otherwise."""
+    label: str = ""
+    """What the job writes, for people: its typed text, or ``drawing (N strokes)`` (as
+    ``bus.messages.JobState.label``); empty: not known (the job's id stands for it)."""
 
 
 @dataclass(frozen=True)
@@ -126,6 +129,19 @@ class RunnerEvent:
 
 
 @dataclass(frozen=True)
+class AbortedJob:
+    """A job broken off after its writing began: what was flown of it, to measure against the
+    whole plan and keep as a finished job's files are kept (``vehicle_agent/jobs.py``)."""
+
+    trace: JobTrace
+    """What was flown until it stopped (``flown.abort_reason``: why)."""
+    report: AgentReport | None
+    """Its ``failed`` result (a safety abort: final), to send with its metrics once measured;
+    None: no result is sent (an interruption: the orchestrator asked for it, or takes the job
+    back itself, ``vehicle_agent/job_runner.py``)."""
+
+
+@dataclass(frozen=True)
 class TickActions:
     """What the service must do in this control period, in this order."""
 
@@ -141,6 +157,9 @@ class TickActions:
     """A telemetry message to publish now."""
     finished: JobTrace | None = None
     """A job just flown to its end: compute its metrics and report it (:func:`result_report`)."""
+    aborted: AbortedJob | None = None
+    """A job just broken off after its writing began: measure it, keep its files, and send its
+    report (if any) with its metrics."""
     events: tuple[RunnerEvent, ...] = ()
     """Events for the show's log (aborts, faults, autopilot mode changes), oldest first."""
 
@@ -165,7 +184,9 @@ def result_report(
     if metrics is None:
         error = ErrorInfo(code="unmeasured", message="the written job could not be measured")
     else:
-        why = writing_verdict(metrics.rmse_pen_down_m, metrics.iou, bounds)
+        why = writing_verdict(
+            metrics.rmse_pen_down_m, metrics.iou, bounds, flown_fraction=metrics.flown_fraction
+        )
         if why is None:
             return done_report(vehicle_id, trace, metrics)
         error = ErrorInfo(code="writing_bounds", message=f"written out of bounds: {why}")

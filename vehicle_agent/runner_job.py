@@ -50,6 +50,11 @@ class RunningJob:
         """Writing has begun: the board may carry ink of this job."""
         return self.started_s is not None
 
+    @property
+    def written(self) -> bool:
+        """Written to its end: its result is the finished job's (``TickActions.finished``)."""
+        return self.progress >= 1.0
+
     def setpoint(self, now_s: float) -> Setpoint:
         """What to command at agent time ``now_s`` while writing (the body reference when the
         plan has one; the pen state is the plan's)."""
@@ -82,6 +87,14 @@ class RunningJob:
     def finish(self) -> JobTrace:
         """The flown trace of the whole job."""
         return self.recorder.finish(self.job_id, self.assignment.attempt)
+
+    def broken_off(self, reason: str) -> JobTrace | None:
+        """What was flown of the job, stopped before its end for ``reason`` (e.g.
+        ``deviation``, ``cancelled``: ``FlownWriting.abort_reason``); None when nothing was
+        (writing had not begun) or the job was written to its end."""
+        if self.written or not len(self.recorder):
+            return None
+        return self.recorder.finish(self.job_id, self.assignment.attempt, abort_reason=reason)
 
     def report(
         self,

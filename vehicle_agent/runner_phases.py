@@ -14,6 +14,7 @@ from bus.messages import AgentReport, Telemetry, VehicleStateName, VehicleStatus
 from vehicle_agent.backends.base import Setpoint, Vec3, VehicleSnapshot
 from vehicle_agent.motion import Move, plan_move
 from vehicle_agent.runner_io import (
+    AbortedJob,
     BackendCommand,
     RunnerConfig,
     RunnerEvent,
@@ -56,6 +57,8 @@ class RunnerPhases:
         self._hold_m_enu: Vec3 | None = None
         self._backend_command: BackendCommand | None = None
         self._reports: list[AgentReport] = []
+        self._aborted: AbortedJob | None = None
+        """A job broken off after its writing began, for this tick's actions."""
         self._events: list[RunnerEvent] = []
         self._orchestrator_alive = False
         self.may_begin_writing = True
@@ -303,6 +306,17 @@ class RunnerPhases:
         self._reports.append(
             job.report(self.config.vehicle_id, "started", planned_duration_s=duration_s)
         )
+
+    def _end_job(self, job: RunningJob, reason: str, report: AgentReport | None = None) -> None:
+        """``job`` stops before its end (``reason``): once its writing has begun, what was flown
+        goes out with ``report`` (:class:`AbortedJob`: measured first, its report then carries
+        the metrics); before, ``report`` goes at once. A job written to its end has its result
+        from the finished job's measure already."""
+        trace = job.broken_off(reason)
+        if trace is not None:
+            self._aborted = AbortedJob(trace, report)
+        elif report is not None and not job.written:
+            self._reports.append(report)
 
     def _write_tick(
         self, snap: VehicleSnapshot, now_s: float, setpoint: Setpoint

@@ -23,7 +23,10 @@ Tasks of a running agent (one process, one event loop):
   ``vehicles/<id>/events``, which the orchestrator relays into the show's event log.
 - clock: this machine's wall clock measured against the orchestrator's on
   ``orchestrator/clock`` (:class:`vehicle_agent.clock_sync.ClockSync`), at start and about every
-  ``clock_period_s``, into ``runner.clock_offset_s`` for the preflight and the status.
+  ``clock_period_s``, into ``runner.clock_offset_s`` for the preflight and the status;
+- stopping: :meth:`AgentService.land_then_stop` (the process's SIGTERM or SIGINT,
+  ``vehicle_agent/stop_signals.py``) lands a vehicle in the air before the agent leaves the
+  bus, as an operator's ``land`` does, and takes no job meanwhile.
 """
 
 from __future__ import annotations
@@ -44,6 +47,7 @@ import msgspec
 from bus.bridge import FifoChannel
 from bus.keys import ShowKeys
 from bus.messages import (
+    AIRBORNE_STATES,
     CommandReply,
     ErrorInfo,
     JobAssignment,
@@ -67,6 +71,7 @@ from vehicle_agent.clock_sync import ClockSample, ClockSync
 from vehicle_agent.events import EventOutbox
 from vehicle_agent.fault import clear_fault
 from vehicle_agent.flight_day import FlightDay, with_day
+from vehicle_agent.job_end import job_result, measured_and_kept
 from vehicle_agent.job_guard import JobGuard
 from vehicle_agent.job_runner import JobRunner, PreparedJob, TickActions
 from vehicle_agent.lease import JobLease
@@ -74,7 +79,7 @@ from vehicle_agent.pacer import OwnTimer, Pacer
 from vehicle_agent.reports import ReportOutbox
 from vehicle_agent.rest import at_rest
 from vehicle_agent.results import ResultJournal
-from vehicle_agent.runner_io import result_report
+from vehicle_agent.runner_io import AbortedJob
 from vehicle_agent.service_settings import ServiceSettings
 from vehicle_agent.trace import JobTrace
 from vehicle_agent.work import JobWork
@@ -85,6 +90,8 @@ TICK_HISTORY = 4096
 """How many tick start times the service keeps (``AgentService.tick_starts_s``)."""
 HEARTBEAT_SLACK_S = 0.005
 """A heartbeat status due within this is sent now rather than after a sleep that short, [s]."""
+STOP_POLL_S = 0.05
+"""How often in wall [s] a landing before the agent stops looks whether it is down."""
 SILENCE_SHARE = 1.1 / 3.0
 """The longest an agent stays silent, as a share of ``lost_after_s`` (:func:`status_due_s`)."""
 
@@ -160,6 +167,8 @@ class AgentService:
             self.keys, wall_clock=wall_clock, period_s=settings.clock_period_s
         )
         """Measures this machine's clock against the orchestrator's, for the preflight."""
+        self.stopping = False
+        """Whether the agent is about to stop (:meth:`land_then_stop`): it takes no job."""
 
     async def run(self, stop: asyncio.Event) -> None:
         """Join the bus, fly until ``stop`` is set, then leave it cleanly."""
@@ -226,8 +235,10 @@ class AgentService:
         vehicle has just finished (its result not yet delivered: the orchestrator was away) is
         refused rather than written twice."""
         job = command.job
+        if self.stopping:
+            return _refusal("busy", f"{self.vehicle_id}'s agent is stopping")
         if job is not None and self.results.unsettled(job.job_id):
-            return _refusal("busy", f"{job.job_id} is written; its report is on its way")
+            return _refusal("busy", f"{job.job_id} was flown here; its result is on its way")
         if command.command != "assign":
             where = self.keys.vehicle_assign(self.vehicle_id)
             return _refusal("invalid", f"only assign is sent on {where}", field="command")
@@ -252,6 +263,51 @@ class AgentService:
             self._wake_up()
             self.runner.set_orchestrator_alive(alive, self.clock.now_s)
             self._publish_status()
+
+    # --- stopping ------------------------------------------------------------------------------
+    def airborne(self) -> bool:
+        """Whether the vehicle is off the ground or on its way there (its runner flies a job or a
+        landing, or its backend says it is not on the ground); not after an emergency stop."""
+        if self.runner.phase == "stopped":
+            return False
+        snapshot = self._snapshot
+        return self.runner.state in AIRBORNE_STATES or (
+            snapshot is not None and not snapshot.on_ground
+        )
+
+    async def land_then_stop(self, stop: asyncio.Event, limit_s: float) -> None:
+        """Set ``stop`` once the vehicle is on the ground: at once when it is there, else after
+        an operator's ``land`` (brush lifted, back home, down; the job abandoned for the
+        orchestrator to take back, ``vehicle_agent/job_runner.py``), or after ``limit_s`` wall
+        [s] when it has not landed by then (said in the log and the event log). No job is taken
+        meanwhile."""
+        self.stopping = True
+        if not self.airborne():
+            stop.set()
+            return
+        vid, started_s = self.vehicle_id, time.monotonic()
+        said = f"{vid}: its agent is stopping; landing first (up to {limit_s:.0f} s)"
+        log.warning("%s", said)
+        self.events.push("warning", "stop_landing", said, job_id=self.runner.job_id)
+        await self._handle(VehicleCommand(command="land"))
+        while self.airborne():
+            if time.monotonic() - started_s > limit_s:
+                said = (
+                    f"{vid} has not landed in {limit_s:.0f} s ({self.runner.state}: "
+                    f"{self.runner.message}); its agent stops anyway: an autopilot falls back "
+                    "on its own failsafe, a simulated vehicle stops where it is"
+                )
+                log.error("%s", said)
+                self.events.push("alert", "stop_landing", said)
+                break
+            await asyncio.sleep(STOP_POLL_S)
+        else:
+            said = f"{vid} landed in {time.monotonic() - started_s:.1f} s; its agent stops"
+            log.warning("%s", said)
+            self.events.push("info", "stop_landing", said)
+        for event in self.events.drain():  # said before the session closes
+            publish(self._session, self.keys.vehicle_events(vid), event)
+        stop.set()
 
     def _clock_measured(self, best: ClockSample) -> None:
         """The clock filter's best sample: the preflight checks it from the next tick on."""
@@ -353,6 +409,10 @@ class AgentService:
         if actions.finished is not None:
             self.results.written(actions.finished.job_id, actions.finished.duration_s)
             self._spawn(self._finish(actions.finished))
+        if (aborted := actions.aborted) is not None:
+            if aborted.report is not None:  # kept from this tick: a restart still sends it
+                self.results.measured(aborted.report)
+            self._spawn(self._finish(aborted.trace, aborted))
         if actions.telemetry is not None:
             self._telemetry.put(actions.telemetry)
             self._spoke_at_s = time.monotonic()
@@ -378,24 +438,16 @@ class AgentService:
         self._prepared = {assignment.job_id: prepared}
         self.runner.plan_ready(prepared)
 
-    async def _finish(self, trace: JobTrace) -> None:
-        """Measure the flown job, record it, then report it: a job reported done has its
-        record on disk (its picture may still be drawn). From the tick its writing ended until
-        the orchestrator answers, its result is in ``results`` and the status names the job."""
+    async def _finish(self, trace: JobTrace, aborted: AbortedJob | None = None) -> None:
+        """Measure the flown job (``aborted``: broken off), record it, then report it: a job
+        reported has its record on disk (its picture may still be drawn). From the tick its
+        writing ended until the orchestrator answers, its result is in ``results`` and the
+        status names the job."""
         prepared = self._prepared[trace.job_id]
-        metrics = None
-        try:
-            metrics = await self.work.measure(prepared, trace)
-        except Exception:  # reported as unmeasured: done means within the writing bounds
-            log.exception("%s: metrics of %s failed", self.vehicle_id, trace.job_id)
-        try:
-            where = await self.work.archive(prepared, trace, metrics)
-        except Exception:
-            log.exception("%s: cannot record job %s", self.vehicle_id, trace.job_id)
-        else:
-            if where is not None:
-                log.info("%s: job %s recorded in %s", self.vehicle_id, trace.job_id, where)
-        result = result_report(self.vehicle_id, trace, metrics, self.runner.safety.writing)
+        metrics = await measured_and_kept(self.work, prepared, trace, self.vehicle_id)
+        result = job_result(self.vehicle_id, trace, metrics, self.runner.safety.writing, aborted)
+        if result is None:  # broken off, unreported: its files only
+            return
         self.results.measured(result)
         self.reports.queue(result)
 

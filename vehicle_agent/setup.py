@@ -8,11 +8,11 @@ from dataclasses import dataclass
 from typing import Any
 
 from showfile import Board, PlanningSettings, Show
-from showfile.checks import footprint
+from showfile.geofence import show_fence
 from vehicle_agent.backends.base import Vec3
 from vehicle_agent.job_runner import RunnerConfig
 from vehicle_agent.preflight import PreflightLimits
-from vehicle_agent.safety import DeviationLimit, SafetyLimits, WritingBounds, vehicle_fence
+from vehicle_agent.safety import DeviationLimit, SafetyLimits, WritingBounds
 from vehicles.jobs import board_surface
 from vehicles.kind import AutopilotWorld, JobPhases, VehicleKind
 from vehicles.registry import vehicle_kind
@@ -76,7 +76,7 @@ def vehicle_setup(show: Show, vehicle_id: str, *, time_scale: float | None = Non
         transit_wait_m=phases.transit_wait_m,
         telemetry_period_s=scale / TELEMETRY_RATE_HZ,
         progress_period_s=scale * PROGRESS_PERIOD_S,
-        safety=safety_limits(show, vehicle_id, cruise_z_m, route=phases.route),
+        safety=safety_limits(show, vehicle_id, cruise_z_m),
         preflight=preflight_limits(show),
     )
     return VehicleSetup(
@@ -117,25 +117,11 @@ def preflight_limits(show: Show) -> PreflightLimits:
     )
 
 
-def safety_limits(
-    show: Show, vehicle_id: str, cruise_z_m: float, *, route: str = "straight"
-) -> SafetyLimits:
-    """The show's ``safety`` section for one vehicle, with its geofence: its board, its home and
-    the transit between them (with ``route`` ``sideways_first``, the corners of its legs too), up
-    to ``cruise_z_m`` plus the ceiling margin."""
+def safety_limits(show: Show, vehicle_id: str, cruise_z_m: float) -> SafetyLimits:
+    """The show's ``safety`` section for one vehicle, with its geofence (its board, its home and
+    the transit between them, up to ``cruise_z_m`` plus the ceiling margin)."""
     s = show.safety
-    vehicle = show.vehicle(vehicle_id)
-    corners = footprint(show.board(vehicle.board))
-    if route == "sideways_first":
-        hx, hy = vehicle.home_m_enu[0], vehicle.home_m_enu[1]
-        corners += [(hx, y) for _, y in corners] + [(x, hy) for x, _ in corners]
-    fence = vehicle_fence(
-        corners,
-        vehicle.home_m_enu,
-        cruise_z_m,
-        margin_m=s.fence_margin_m,
-        ceiling_margin_m=s.fence_ceiling_margin_m,
-    )
+    fence = show_fence(show, vehicle_id, cruise_z_m)
     return SafetyLimits(
         deviation=DeviationLimit(s.deviation_bound_m, s.deviation_window_s),
         fence=fence,

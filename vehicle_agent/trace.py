@@ -79,8 +79,9 @@ class TraceRecorder:
         self._width.append(snapshot.pen_width_m)
         self._force.append(snapshot.force_n)
 
-    def finish(self, job_id: str, attempt: int) -> JobTrace:
-        """The recorded samples as the job's :class:`JobTrace`."""
+    def finish(self, job_id: str, attempt: int, abort_reason: str | None = None) -> JobTrace:
+        """The recorded samples as the job's :class:`JobTrace`; ``abort_reason``: why the job
+        stopped before its end (``FlownWriting.abort_reason``), None: flown to its end."""
         contact_known = _known(self._contact)
         pen_known = contact_known and _known(self._tip) and _known(self._width)
         position = _vectors(self._p)
@@ -103,6 +104,7 @@ class TraceRecorder:
             base_m_enu=base,
             force_n=np.asarray(self._force, dtype=np.float64) if _known(self._force) else None,
             extra=extra,
+            abort_reason=abort_reason,
         )
         return JobTrace(job_id, attempt, flown, pen_known)
 

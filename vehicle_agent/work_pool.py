@@ -5,14 +5,17 @@ host of 250 vehicles cannot (a worker holds the planner, solvers and matplotlib:
 each). :class:`PlanPool` keeps ``size`` workers, each able to serve any vehicle of the show
 (``vehicle_agent/plan_worker.py`` makes a vehicle's setup on its first request); each vehicle's
 :class:`PooledJobWork` hands its requests to the first free worker, in the order they came.
-Nothing waits on the event loop: requests wait for a worker as tasks, and a prepared job carries
-its planning context sealed, so any worker may measure and record a job another one planned.
+The host warms them before its vehicles join the show (:meth:`PlanPool.warm`), as an agent warms
+its own. Nothing waits on the event loop: requests wait for a worker as tasks, and a prepared job
+carries its planning context sealed, so any worker may measure and record a job another one
+planned.
 """
 
 from __future__ import annotations
 
 import asyncio
 import os
+from collections.abc import Sequence
 from typing import Any
 
 from showfile import Show
@@ -35,6 +38,7 @@ class PlanPool:
     ) -> None:
         if size < 1:
             raise ValueError("a planning pool needs at least one worker")
+        self.show = show
         self.workers = [
             ProcessJobWork(
                 show, None, time_scale, idle_exit_s=idle_exit_s, name=f"fleet worker {i + 1}"
@@ -48,6 +52,12 @@ class PlanPool:
     def for_vehicle(self, vehicle_id: str) -> PooledJobWork:
         """The :class:`vehicle_agent.work.JobWork` of one vehicle of the host."""
         return PooledJobWork(self, vehicle_id)
+
+    async def warm(self, vehicle_ids: Sequence[str]) -> None:
+        """Start every worker and warm it for one vehicle of each kind among ``vehicle_ids``
+        (:meth:`ProcessJobWork.warm`), all at once; the workers stay from now on."""
+        one_of_each = {self.show.vehicle(v).kind: v for v in reversed(vehicle_ids)}
+        await asyncio.gather(*(w.warm(one_of_each.values()) for w in self.workers))
 
     async def call(self, vehicle_id: str, request: tuple[Any, ...]) -> Any:
         """``request`` of ``vehicle_id`` answered by the first free worker."""

@@ -6,6 +6,8 @@ nothing from the network is unpickled: assignments arrive as validated bus messa
 Requests, one at a time, each answered by one reply:
 
 - ``("init", show, vehicle_id, time_scale)``: the vehicle whose jobs follow (first request);
+- ``("warm",)``: plan a small character as a job is planned, answer None (the modules and
+  caches of planning loaded before the first job);
 - ``("prepare", assignment)`` -> a :class:`PreparedJob` whose ``context`` is a
   :class:`SealedContext` (the kind's plan, pickled: the agent never needs its classes);
 - ``("measure", prepared, trace)`` -> :class:`JobMetrics`;

@@ -10,7 +10,7 @@ the kinds, and check a vehicle against its kind, without the console or trust se
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 if TYPE_CHECKING:
     from vehicles.surface import Orientation
@@ -41,6 +41,9 @@ class Room:
     """A light module of the room (pydantic and plain Python only: the show file loads it) whose
     ``board_problem(show, vehicle, board) -> str | None`` says in one line why a vehicle of the
     kind cannot write on its board (beyond its reach, behind a step); None: no check of its own."""
+    transit_route: Literal["straight", "sideways_first"] = "straight"
+    """How its pen-up moves run (the kind's ``JobPhases.route``), which shapes its geofence
+    (``showfile.geofence.show_fence``)."""
 
 
 ROOMS: dict[str, Room] = {
@@ -56,6 +59,7 @@ ROOMS: dict[str, Room] = {
         footprint_radius_m=0.5,  # home is the marker; the rear wheels reach 0.44 m behind it
         section="omni_wheel",
         show_checks="vehicles.omni_wheel.show_section",
+        transit_route="sideways_first",
     ),
     "hexarotor-sponge": Room(
         kind_module="vehicles.hexarotor_sponge.kind",

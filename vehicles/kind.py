@@ -118,16 +118,19 @@ class FlownWriting:
 class WritingScore:
     """How well a job was written."""
 
-    rmse_pen_down_m: float
-    """RMSE in [m] of the writing point against its reference while the pen is down."""
+    rmse_pen_down_m: float | None
+    """RMSE in [m] of the writing point against its reference while the pen is down; None when
+    the pen never came down (not measured)."""
     rmse_m: float
     """RMSE in [m] over the whole run."""
     max_error_m: float
     """Largest error in [m]."""
     iou: float | None
-    """Intersection over union of written and target ink rasters (None: not measurable)."""
+    """Intersection over union of written and target ink rasters, the target being the whole
+    plan however much of it was flown (None: not measurable)."""
     extra: Mapping[str, float] = field(default_factory=dict)
-    """Kind-specific figures, names with units (``force_rmse_n``, ``rmse_base_m``, ...)."""
+    """Kind-specific figures, names with units (``force_rmse_n``, ``rmse_base_m``, ...): only
+    those measured (none of the pen-down part of a flight whose pen never came down)."""
     error_m: FloatArray | None = None
     """(K,) the error in [m] at each tick of the flight whose pen-down RMS is
     ``rmse_pen_down_m``, where the kind measures it tick by tick (the brush quadrotor: what

@@ -1,14 +1,15 @@
 // A phrase written together: typed characters, one per board, each by its own drone, on boards
 // side by side in reading order. Its tab, its preview (the row of boards), and its one ticket:
 // the phrase summed up and each character (waiting, being written by drone k, written, failed
-// and written again alone). Drones are named by their board's place from the left. Whatever
-// the visitor typed is set as text, never markup.
+// and written again alone); a character written shows on its board the ink its drone left, in
+// place of the plan. Drones are named by their board's place from the left. Whatever the
+// visitor typed is set as text, never markup.
 "use strict";
 
 window.SkyquillPhrase = (() => {
   const $ = (id) => document.getElementById(id);
   const { set: word } = window.SkyquillI18n;
-  const { fitCanvas, drawGuides, drawPath } = window.SkyquillPictures;
+  const { fitCanvas, drawGuides, drawPath, drawInk } = window.SkyquillPictures;
   let row = 0;          // boards in the show's row (the longest phrase)
   let drawnRow = "";    // what the status row shows now (redrawn only when it changes)
 
@@ -24,8 +25,9 @@ window.SkyquillPhrase = (() => {
     return text ? { text, phrase: true } : null;
   }
 
-  // One picture per board of the row: a character's path on its board, the others empty.
-  function drawRow(box, characters, boards, labels) {
+  // One picture per board of the row: on a character's board the ink its drone left once
+  // written (``inks``, in the frame of ``areaM``), else its planned path; the others empty.
+  function drawRow(box, characters, boards, labels, inks = [], areaM = null) {
     box.textContent = "";
     const count = Math.max(row, ...boards.filter(Boolean));
     box.style.setProperty("--boards", String(count));
@@ -45,7 +47,10 @@ window.SkyquillPhrase = (() => {
       } else {
         word(caption, "phrase_board", { n: b });
       }
-      if (i >= 0 && characters[i]) drawPath(canvas, characters[i]);
+      if (i >= 0 && inks[i]) {
+        figure.classList.add("written");
+        drawInk(canvas, inks[i], areaM);
+      } else if (i >= 0 && characters[i]) drawPath(canvas, characters[i]);
       else { const { ctx, w, h } = fitCanvas(canvas); drawGuides(ctx, w, h); }
     }
   }
@@ -84,7 +89,14 @@ window.SkyquillPhrase = (() => {
         return ["ph_done", { n, first: p.boards[0], last: p.boards[p.boards.length - 1] }];
       case "rejected": return job.reason ? ["ph_rejected_reason", said] : ["ph_rejected", {}];
       case "cancelled": return job.reason ? ["ph_cancelled_reason", said] : ["ph_cancelled", {}];
-      default: return ["ph_failed", { n, done: p.written }];
+      default: {
+        // a character that could not be written before the phrase began ended it whole
+        const cause = p.characters.find((c) => c.state === "failed" && !c.with_phrase);
+        if (p.written === 0 && cause && p.characters.some((c) => c.with_phrase)) {
+          return ["ph_failed_whole", { char: cause.label }];
+        }
+        return ["ph_failed", { n, done: p.written }];
+      }
     }
   }
 
@@ -100,24 +112,29 @@ window.SkyquillPhrase = (() => {
         return c.board ? [c.again ? "ph_c_rewriting" : "ph_c_writing", { drone, pct }]
           : ["ph_c_waiting", {}];
       case "done": return c.board ? ["ph_c_done", { drone }] : ["ph_c_done_any", {}];
-      case "failed": return ["ph_c_failed", {}];
+      case "failed": return [c.with_phrase ? "ph_c_with_phrase" : "ph_c_failed", {}];
       case "cancelled": return ["ph_c_cancelled", {}];
       case "rejected": return ["ph_c_rejected", {}];
       default: return ["ph_c_checking", {}];
     }
   }
 
-  // The ticket of a phrase: its row of boards and the list of its characters.
+  // The ticket of a phrase: its row of boards (the plan, then each character's ink as it is
+  // written) and the list of its characters.
   function render(job, preview) {
     $("phrase-status").hidden = false;
     const chars = job.phrase.characters;
     const boards = chars.map((c) => c.board);
     const placed = boards.every(Boolean) ? boards : fromLeft(chars.length);
     const labels = chars.map((c) => c.label);
-    const key = JSON.stringify([placed, labels, document.documentElement.lang]);
+    const inks = chars.map((c) => c.written || null);
+    const inked = inks.map((ink) => (ink ? ink.bits : null));
+    const key = JSON.stringify([placed, labels, inked, document.documentElement.lang]);
     if (key !== drawnRow) {
       drawnRow = key;
-      drawRow($("phrase-status-row"), preview ? preview.characters : [], placed, labels);
+      const plans = preview ? preview.characters : [];
+      const area = preview ? preview.writing_area_m : null;
+      drawRow($("phrase-status-row"), plans, placed, labels, inks, area);
     }
     const list = $("phrase-chars");
     list.textContent = "";

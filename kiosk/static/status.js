@@ -65,9 +65,17 @@ window.SkyquillStatus = (() => {
     if (m) out.push(["done_time", { secs: Math.round(m.duration_s) }]);
     if (job.board) out.push(["look_at", { n: job.board }]);
     if (m) {
-      const cm = m.rmse_pen_down_m * 100;
-      const key = cm < 1 ? "acc_very_close" : cm < 3 ? "acc_close" : "acc_off";
-      out.push([key, { cm: cm.toFixed(1) }]);
+      // null: the pen never came down, nothing was measured (never shown as 0 cm)
+      if (m.rmse_pen_down_m == null) {
+        out.push(["acc_none", {}]);
+      } else {
+        const cm = m.rmse_pen_down_m * 100;
+        const key = cm < 1 ? "acc_very_close" : cm < 3 ? "acc_close" : "acc_off";
+        out.push([key, { cm: cm.toFixed(1) }]);
+      }
+      if (m.flown_fraction != null && m.flown_fraction < 1) {
+        out.push(["partial", { pct: Math.round(m.flown_fraction * 100) }]);
+      }
       if (m.iou != null) out.push(["overlap", { pct: Math.round(m.iou * 100) }]);
       if (m.written) out.push(["written_note", {}]);
     }

@@ -73,12 +73,12 @@ MOCAP_BOOT_PARAMS = {
 }
 """ArduCopter parameters that fusing forwarded mocap needs from boot on: VISO_TYPE is read only at
 boot; the EKF3 sources (ExternalNav; the agent sets them too, as in
-``vehicle_agent/backends/mavlink_params.py``) because a SITL whose GPS gets its fix before the
+``vehicle_agent/backends/mavlink/params.py``) because a SITL whose GPS gets its fix before the
 agent has set them takes its EKF origin from the GPS, then never uses the mocap ("PreArm: Fence
 enabled, need position estimate", "Check mag field"): 7 of 10 ArduCopter starts with mocap in
 one day, where connecting and setting the parameters took up to 18 s instead of 6."""
 PX4_MOCAP_BOOT_PARAMS = {"EKF2_ASP_DELAY": 0.0, "EKF2_DELAY_MAX": 20.0}
-"""The same for PX4, given as PX4_PARAM_* variables (vehicle_agent/backends/mavlink_params.py
+"""The same for PX4, given as PX4_PARAM_* variables (vehicle_agent/backends/mavlink/params.py
 sets and checks them at connect, and refuses a vehicle that would need a reboot)."""
 
 

@@ -31,14 +31,15 @@ HELP: tuple[tuple[str, str, str], ...] = (
     ("s", "fresh sheet: a board waiting for one is written on again", "selected vehicle's board"),
     ("b", "battery swapped: a vehicle in battery swap flies again (confirmed)", "selected vehicle"),
     ("Enter / d", "details of the vehicle", "selected vehicle (fleet focused)"),
+    ("m", "venue plan: boards, homes, geofences and vehicles to scale", "whole venue"),
     ("p", "pause / resume the queue (held vehicles stay held)", "queue"),
     ("P", "pause a vehicle: no new job / resume it (confirmed)", "selected vehicle"),
     ("L", "land every vehicle, pause the queue (confirmed)", "whole fleet"),
     ("e", "EMERGENCY STOP: motors off (confirmed)", "whole fleet; one vehicle in details"),
     ("x", "acknowledge the alerts shown", "alert line"),
     ("? / F1", "this help", ""),
-    ("Esc / q", "back (details, preview, help)", "this screen"),
-    ("q / Ctrl+Q", "quit the console (asks while vehicles fly); the show keeps running", ""),
+    ("Esc / q", "back (details, venue plan, preview, help)", "this screen"),
+    ("q / Ctrl+C", "quit the console (asks while vehicles fly); the show keeps running", ""),
 )
 """Keys, what they do and what they act on; the footer shows those that act now."""
 

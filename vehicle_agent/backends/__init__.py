@@ -1,2 +1,2 @@
 """What an agent flies: ``base`` (the protocol), ``sim`` (in-process simulator), ``kinematic``
-(an ideal point vehicle for tests and benchmarks) and ``mavlink`` (PX4 / ArduPilot)."""
+(an ideal point vehicle for tests and benchmarks) and the ``mavlink`` package (PX4 / ArduPilot)."""

@@ -30,7 +30,7 @@ everywhere; conversion to NED happens only inside the MAVLink backend.
 
 Creating a backend: ``vehicle_agent.agent.make_backend(setup)`` builds the simulator itself and,
 for ``backend: mavlink`` vehicles, calls
-``vehicle_agent.backends.mavlink_setup.create_backend(setup)`` with the agent's ``VehicleSetup``
+``vehicle_agent.backends.mavlink.create.create_backend(setup)`` with the agent's ``VehicleSetup``
 (show, vehicle id, board frame, runner config, time scale).
 """
 
@@ -207,7 +207,7 @@ class SynchronousVehicle(Protocol):
 @runtime_checkable
 class BatterySwap(Protocol):
     """A backend whose battery the crew can change: the simulator (a full pack), an autopilot
-    (told where it keeps a count: ``mavlink_battery.py``)."""
+    (told where it keeps a count: ``mavlink/battery.py``)."""
 
     async def swap_battery(self) -> None:
         """A fresh pack is in: only at rest on the ground (raises :class:`BackendError`)."""

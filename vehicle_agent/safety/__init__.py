@@ -1,6 +1,6 @@
 """Pure safety checks of one vehicle: tracking deviation, geofence, writing bounds (no I/O)."""
 
-from vehicle_agent.safety.geofence import Geofence, GeofenceError, vehicle_fence
+from showfile.geofence import Geofence, GeofenceError, vehicle_fence
 from vehicle_agent.safety.limits import SafetyLimits
 from vehicles.deviation import DeviationLimit, DeviationMonitor, DeviationTrip
 from vehicles.verdict import WritingBounds, writing_verdict

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal
 
-from vehicle_agent.safety.geofence import Geofence
+from showfile.geofence import Geofence
 from vehicles.deviation import DeviationLimit
 from vehicles.verdict import WritingBounds
 

@@ -28,6 +28,10 @@ FORCE_RATE_MAX_NPS = 2.0
 """Largest change of the normal force, [N/s] (paper: 2 N/s)."""
 REACH_M = 1.5
 """Farthest a stroke point may lie from the centre of the writing area, [m]."""
+REACH_SLACK_M = 1e-3
+"""Distance a stroke point or a writing area's corner may lie beyond the reach, [m]: a layout's
+rounding (a 2.4 m x 1.8 m area's corner is 1.5 m away to within a float's last bits). What is
+refused is then at least 1 mm beyond, and the refusal, in millimetres, says so."""
 
 PEN_WIDTH_COEFFICIENTS_M = (2.0e-3, 3.2e-3, -0.2e-3)
 """Line width [m] as a polynomial of normal force [N], lowest order first (the shape of the

@@ -23,7 +23,12 @@ def reference_at(plan: WritingPlan, k: int) -> Reference:
 def fly_plan(plan: WritingPlan, settings: FlySettings, *, seed: int = 0) -> FlownWriting:
     """Fly ``plan`` to its end; one row per control tick of the writing."""
     loop = WallLoop(plan.samples.position_m_enu[0], plan.surface, settings, seed=seed)
-    hold = reference_at(plan, 0)
+    start = reference_at(plan, 0)
+    # Hover at rest on the first point: the plan's first sample may already accelerate (towards
+    # the wall), and feeding that forward for the whole settle pushed the vehicle 9.7 mm off the
+    # point and wound the position integral up (the 9.6 mm ``max_error_m`` of every run, and
+    # 3 mm short of the wall at the first pen-down).
+    hold = Reference(start.position_m_enu, np.zeros(3), np.zeros(3), 0.0)
     for _ in range(round(settings.settle_s / loop.dt_s)):
         loop.track(hold)
     n = plan.samples.t_s.shape[0]

@@ -1,5 +1,7 @@
 """Metrics of one flown job as the paper's Table I: end-effector and base position RMSE, normal
-force RMSE, IoU of target and written images drawn with their line widths."""
+force RMSE, IoU of target and written images drawn with their line widths; beside this tracking,
+fidelity to the letter: how far the inked path and the plan's pen-down path lie from the target
+strokes, and the IoU of the plan flown perfectly."""
 
 from __future__ import annotations
 
@@ -8,6 +10,8 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from sim.ink import iou as ink_iou
+from vehicles.hexarotor_sponge.fidelity import to_strokes_figures
 from vehicles.hexarotor_sponge.params import HexarotorParams
 from vehicles.hexarotor_sponge.world import facing_rotation
 from vehicles.kind import FlownWriting, StrokeInput, WritingPlan, WritingScore
@@ -106,21 +110,51 @@ def raster_frame(strokes: Sequence[StrokeInput]) -> tuple[FloatArray, tuple[int,
 
 
 def iou(plan: WritingPlan, flown: FlownWriting, default_width_m: float) -> float:
-    """Intersection over union of target and written images."""
+    """Intersection over union of target and written images (:func:`sim.ink.iou`, the one
+    rule of every kind: nothing written scores 0)."""
     origin, shape = raster_frame(plan.strokes)
     target = target_image(plan.strokes, default_width_m, origin, shape)
-    written = written_image(flown, plan.surface, origin, shape)
-    union = int(np.count_nonzero(target | written))
-    return float(np.count_nonzero(target & written)) / union if union else 0.0
+    return ink_iou(written_image(flown, plan.surface, origin, shape), target)
+
+
+def as_flown(plan: WritingPlan) -> FlownWriting:
+    """The plan flown perfectly: the tip on its reference, the planned width where the pen is
+    down."""
+    down = plan.samples.pen_down
+    width = np.zeros(down.shape) if plan.width_m is None else np.where(down, plan.width_m, 0.0)
+    position = plan.samples.position_m_enu
+    return FlownWriting(plan.samples.t_s, position, position, down, width)
+
+
+def plan_fidelity(plan: WritingPlan, default_width_m: float) -> dict[str, float]:
+    """The plan's own fidelity to its letter: ``plan_iou`` (flown perfectly) and the distance of
+    its pen-down path from the strokes, ``plan_rmse_to_strokes_m``, ``plan_max_to_strokes_m``."""
+    xy = plan.surface.to_surface(plan.samples.position_m_enu[plan.samples.pen_down])
+    figures = to_strokes_figures(xy, plan.strokes)
+    return {
+        "plan_iou": iou(plan, as_flown(plan), default_width_m),
+        **{f"plan_{name}": value for name, value in figures.items()},
+    }
 
 
 def score_writing(
     plan: WritingPlan, flown: FlownWriting, params: HexarotorParams, default_width_m: float
 ) -> WritingScore:
-    """Table I's figures of one run (position RMSEs and force RMSE over the pen-down ticks)."""
+    """Table I's figures of one run (position RMSEs and force RMSE over the pen-down ticks),
+    and the inked path's distance from the target strokes (``rmse_to_strokes_m``,
+    ``max_to_strokes_m``) beside the plan's (:func:`plan_fidelity`). ``max_error_m`` is the
+    largest tracking error while writing (pen down): before and after, the vehicle hovers off
+    the wall and its offset from the first waypoint says nothing of the letter; a run whose pen
+    never came down measured no writing: ``rmse_pen_down_m`` None, ``max_error_m`` the largest
+    error of the whole run, and only the figures that were measured (finite) in ``extra``."""
     down = flown.pen_down
     err = np.linalg.norm(flown.writing_point_m_enu - flown.reference_m_enu, axis=1)
-    extra: dict[str, float] = {"rmse_ee_m": _rms(err[down])}
+    inked = flown.writing_point_m_enu[flown.ink_width_m > 0.0]
+    extra: dict[str, float] = {
+        "rmse_ee_m": _rms(err[down]),
+        **to_strokes_figures(plan.surface.to_surface(inked), plan.strokes),
+        **plan_fidelity(plan, default_width_m),
+    }
     if flown.base_m_enu is not None:
         base_err = flown.base_m_enu - reference_base_m_enu(plan, params)
         extra["rmse_base_m"] = _rms(np.linalg.norm(base_err, axis=1)[down])
@@ -129,9 +163,9 @@ def score_writing(
     if plan.width_m is not None:
         extra["width_rmse_m"] = _rms((flown.ink_width_m - plan.width_m)[down])
     return WritingScore(
-        rmse_pen_down_m=extra["rmse_ee_m"],
+        rmse_pen_down_m=extra["rmse_ee_m"] if down.any() else None,
         rmse_m=_rms(err),
-        max_error_m=float(err.max()),
+        max_error_m=float(err[down].max() if down.any() else err.max(initial=0.0)),
         iou=iou(plan, flown, default_width_m),
-        extra=extra,
+        extra={name: value for name, value in extra.items() if np.isfinite(value)},
     )

@@ -30,15 +30,12 @@ from numpy.typing import NDArray
 from planner.errors import PlannerError
 from vehicles.hexarotor_sponge import defaults
 from vehicles.hexarotor_sponge.contact_model import acceleration_mps2, contact_direction
+from vehicles.hexarotor_sponge.corridor import SHORTEST_CHORD_M, chords, corridor_rows
 from vehicles.hexarotor_sponge.diagnosis import Iterate, infeasible_error
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
-from vehicles.hexarotor_sponge.period_nlp import ACTION, NODE, STATE
-from vehicles.hexarotor_sponge.solver_cache import (
-    period_solver,
-    spread_steps,
-    step_count,
-    thrust_function,
-)
+from vehicles.hexarotor_sponge.period_nlp import ACTION, NODE, STATE, Rows
+from vehicles.hexarotor_sponge.solver_cache import period_solver, thrust_function
+from vehicles.hexarotor_sponge.steps import steps_per_segment, waypoint_nodes
 from vehicles.hexarotor_sponge.waypoints import Period
 
 FloatArray = NDArray[np.float64]
@@ -80,9 +77,18 @@ class Limits:
     takes the six bench glyphs from 1148 iterations to 618 (0.75 -> 0.38 s CPU per letter,
     median, solvers built), their durations within 0.3 % and steps within 0.03 s of their
     neighbours."""
+    corridor_m: float | None = 0.5e-3
+    """Half width in [m] of the corridor around the stroke's parabola between two waypoints of
+    a contact period that its nodes are held in (``corridor``: our extension of eq. 7, which
+    pins positions at the waypoints only); None: the paper's eq. 7. The parabolas lie within
+    1 mm of the stroke (``parabolas.FIT_TOLERANCE_M``), so the nodes lie within 1.5 mm; the
+    pen rides the corridor's inner edge on curves, and a line 10 mm wide laid 2 mm off its
+    target has an IoU of 0.67, so the corridor is narrow: 2 mm around chords gave the 1 m "8"
+    a plan IoU of 0.79, 0.5 mm around parabolas 0.95."""
 
     def __post_init__(self) -> None:
-        for name in ("v_max_mps", "a_max_mps2", "force_rate_max_nps", "h_init_s", "h_max_s"):
+        names = ["v_max_mps", "a_max_mps2", "force_rate_max_nps", "h_init_s", "h_max_s"]
+        for name in names + ([] if self.corridor_m is None else ["corridor_m"]):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0.0):
                 raise PlannerError(
@@ -133,17 +139,6 @@ class PeriodSolution:
         return dataclasses.replace(self, p_m=self.p_m + offset_m)
 
 
-def steps_per_segment(period: Period, limits: Limits) -> list[int]:
-    """Steps between consecutive waypoints, in proportion to distance and force change."""
-    d = np.linalg.norm(np.diff(period.points_m, axis=0), axis=1)
-    df = np.abs(np.diff(period.force_n))
-    travel_s = np.maximum(d / limits.v_max_mps, np.sqrt(d / limits.a_max_mps2))
-    travel_s[[0, -1]] = np.maximum(travel_s[[0, -1]], 2.0 * np.sqrt(d[[0, -1]] / limits.a_max_mps2))
-    by_dist = np.ceil(1.3 * travel_s / limits.h_init_s)
-    by_force = np.ceil(df / (limits.force_rate_max_nps * limits.h_init_s)) + 1
-    return [int(max(2, a, b)) for a, b in zip(by_dist, by_force, strict=True)]
-
-
 def own_frame_origin_m(period: Period) -> FloatArray:
     """The origin (3,) in [m], wall coordinates, of ``period``'s own frame: its first waypoint
     along the wall (x, y), the wall itself (s = 0)."""
@@ -160,7 +155,8 @@ def in_own_frame(period: Period) -> Period:
     """``period`` with its waypoints in its own frame (:func:`own_frame_origin_m`), rounded to
     :data:`OWN_FRAME_DECIMALS`."""
     local = np.round(period.points_m - own_frame_origin_m(period), OWN_FRAME_DECIMALS)
-    return dataclasses.replace(period, points_m=local)
+    sagitta = None if period.sagitta_m is None else np.round(period.sagitta_m, OWN_FRAME_DECIMALS)
+    return dataclasses.replace(period, points_m=local, sagitta_m=sagitta)
 
 
 def solve_period(period: Period, params: HexarotorParams, limits: Limits) -> PeriodSolution:
@@ -174,11 +170,57 @@ def solve_period(period: Period, params: HexarotorParams, limits: Limits) -> Per
     )
 
 
+RETRY_STEP_SCALES = (0.75, 0.5)
+"""In corridors (``Limits.corridor_m``), a period IPOPT found no trajectory for is solved again
+with its steps allotted at these shares of ``h_init`` (a third more steps, then twice as many):
+a near-stop in a corridor, where the pen turns sharply at the end of a piece, can leave IPOPT
+wandering for its 600 iterations on the first count (the 1 m cursive run: one piece of 57 steps
+ran out, at 0.75 h_init it plans in 19 iterations)."""
+
+
 def solve_own_frame(
     local: Period, period: Period, params: HexarotorParams, limits: Limits
 ) -> PeriodSolution:
     """Optimise ``local`` (``period`` in its own frame, see :func:`in_own_frame`); positions of
-    the result in that frame. ``period`` names the waypoints on the wall in an error.
+    the result in that frame. ``period`` names the waypoints on the wall in an error. In
+    corridors, a period without a trajectory is tried again with more steps
+    (:data:`RETRY_STEP_SCALES`); the error is that of the first count's."""
+    attempts = [limits]
+    if limits.corridor_m is not None:
+        attempts += [
+            dataclasses.replace(limits, h_init_s=scale * limits.h_init_s)
+            for scale in RETRY_STEP_SCALES
+        ]
+    first: PlannerError | None = None
+    for attempt in attempts:
+        try:
+            return _solve_steps(local, period, params, attempt)
+        except PlannerError as err:  # IPOPT found no trajectory (``diagnosis``)
+            first = first or err
+    assert first is not None
+    raise first
+
+
+def force_rows(period: Period, nodes: NDArray[np.int_], *, corridor: bool) -> FloatArray:
+    """(n, 2) wanted force per node ``0..n-1``: with corridors on a contact period, its chord
+    start's force and the change to the chord's end (``period_nlp.wanted_force`` reads how far
+    along the chord the node is); else, and on chords too short to say (the press and the lift
+    in place at a stroke's ends), the force interpolated by step index (the paper's) and 0."""
+    n = int(nodes[-1])
+    by_step = np.column_stack([np.interp(np.arange(n), nodes, period.force_n), np.zeros(n)])
+    if not (corridor and period.contact):
+        return by_step
+    length, _ = chords(period.points_m[:, 0:2])
+    segment = np.repeat(np.arange(nodes.size - 1), np.diff(nodes))
+    start = period.force_n[segment]
+    along = np.column_stack([start, period.force_n[segment + 1] - start])
+    return np.where((length[segment] >= SHORTEST_CHORD_M)[:, None], along, by_step)
+
+
+def _solve_steps(
+    local: Period, period: Period, params: HexarotorParams, limits: Limits
+) -> PeriodSolution:
+    """:func:`solve_own_frame` with the steps allotted at ``limits.h_init_s``.
 
     The NLP of ``n`` steps is built once per ``(n, params, cost weights)`` (see
     :func:`period_solver`); the period's waypoints, contact mode and limits enter as variable and
@@ -191,20 +233,21 @@ def solve_own_frame(
     against 168).
     """
     needed = steps_per_segment(local, limits)
-    steps = spread_steps(needed, step_count(sum(needed)))
-    nodes = np.concatenate([[0], np.cumsum(steps)]).astype(int)
+    nodes = waypoint_nodes(needed)
     n = int(nodes[-1])
-    force_path = np.interp(np.arange(n), nodes, local.force_n)
+    forces = force_rows(local, nodes, corridor=limits.corridor_m is not None)
+    corridor, lower, upper = corridor_rows(local, nodes, limits.corridor_m)
     lbx, ubx = _variable_bounds(local, nodes, limits)
-    guess = _initial_guess(local, nodes, limits.h_init_s * sum(needed) / n, params)
+    guess = initial_guess(local, nodes, limits.h_init_s * sum(needed) / n, params)
     started = time.perf_counter()
-    problem = (guess, force_path, lbx, ubx)
+    step_parameters = np.column_stack([forces, corridor]).ravel(order="F")
+    problem = _Problem(guess, step_parameters, lbx, ubx, lower, upper)
     w, stats, iterations, ipopt_s = _solve(n, False, problem, params, limits)
-    xs, us, hs = _unpack(w, n)
+    xs, us, hs = unpack(w, n)
     if _thrust_margin_n(xs, us, params) < -THRUST_SLACK_N:
         w, stats, more, more_s = _solve(n, True, problem, params, limits)
         iterations, ipopt_s = iterations + more, ipopt_s + more_s
-        xs, us, hs = _unpack(w, n)
+        xs, us, hs = unpack(w, n)
     solve_s = time.perf_counter() - started
     status = str(stats.get("return_status", "unknown"))
     if not bool(stats.get("success", False)):
@@ -218,20 +261,38 @@ THRUST_SLACK_N = 1e-6
 """Rotor thrust in [N] a solution without the thrust rows may be beyond the rotors' range by."""
 
 
+@dataclass(frozen=True)
+class _Problem:
+    """One period's data for a built solver."""
+
+    guess: FloatArray
+    """IPOPT's start."""
+    step_parameters: FloatArray
+    """Wanted forces (n,), then the corridors' parameters (n, 7), column by column."""
+    lbx: FloatArray
+    ubx: FloatArray
+    corridor_lower: FloatArray
+    """(n, 2) lower bounds in [m] of the nodes across and along their chords."""
+    corridor_upper: FloatArray
+
+
 def _solve(
-    n: int,
-    thrust_rows: bool,
-    problem: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
-    params: HexarotorParams,
-    limits: Limits,
+    n: int, thrust_rows: bool, problem: _Problem, params: HexarotorParams, limits: Limits
 ) -> tuple[FloatArray, dict[str, Any], int, float]:
-    """IPOPT on the NLP of ``n`` steps from ``problem`` (start, wanted forces, variable
-    bounds): its variables, statistics, iterations and own wall-clock seconds."""
-    guess, force_path, lbx, ubx = problem
-    lbg, ubg = _constraint_bounds(n, thrust_rows, params, limits)
-    solver, lock = period_solver(n, thrust_rows, params, cost_weights(limits), limits.weight_dh)
+    """IPOPT on the NLP of ``n`` steps from ``problem``: its variables, statistics, iterations
+    and own wall-clock seconds."""
+    rows = Rows(thrust=thrust_rows, corridor=limits.corridor_m is not None)
+    lbg, ubg = _constraint_bounds(n, rows, problem, params, limits)
+    solver, lock = period_solver(n, rows, params, cost_weights(limits), limits.weight_dh)
     with lock:
-        out = solver(x0=guess, p=force_path, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+        out = solver(
+            x0=problem.guess,
+            p=problem.step_parameters,
+            lbx=problem.lbx,
+            ubx=problem.ubx,
+            lbg=lbg,
+            ubg=ubg,
+        )
         stats = solver.stats()
     iterations = int(stats.get("iter_count", -1))
     return np.asarray(out["x"]).ravel(), stats, iterations, float(stats.get("t_wall_total", 0.0))
@@ -256,10 +317,11 @@ def cost_weights(limits: Limits) -> tuple[float, ...]:
 
 
 def _constraint_bounds(
-    n: int, thrust_rows: bool, params: HexarotorParams, limits: Limits
+    n: int, rows: Rows, problem: _Problem, params: HexarotorParams, limits: Limits
 ) -> tuple[FloatArray, FloatArray]:
-    """Bounds of the per-step constraints of :func:`period_solver` (the limits of eq. 7g)."""
-    rotors = 6 if thrust_rows else 0
+    """Bounds of the per-step constraints of :func:`period_solver` (the limits of eq. 7g, and
+    the corridor's with its rows)."""
+    rotors = 6 if rows.thrust else 0
     lower = np.concatenate([np.zeros(STATE), [-np.inf], np.zeros(rotors), [-np.inf]])
     upper = np.concatenate(
         [
@@ -269,7 +331,11 @@ def _constraint_bounds(
             [limits.v_max_mps**2],
         ]
     )
-    return np.tile(lower, n), np.tile(upper, n)
+    lbg, ubg = np.tile(lower, (n, 1)), np.tile(upper, (n, 1))
+    if rows.corridor:
+        lbg = np.column_stack([lbg, problem.corridor_lower])
+        ubg = np.column_stack([ubg, problem.corridor_upper])
+    return lbg.ravel(), ubg.ravel()
 
 
 def _variable_bounds(
@@ -310,7 +376,7 @@ def linear_states(
     return p0, v0, f0
 
 
-def _initial_guess(
+def initial_guess(
     period: Period, nodes: NDArray[np.int_], h_s: float, params: HexarotorParams
 ) -> FloatArray:
     """The paper's start (equal steps of ``h_s`` in [s], states linear between waypoints) with
@@ -331,7 +397,7 @@ def _initial_guess(
     return guess.ravel()[: NODE * n + STATE]
 
 
-def _unpack(w: FloatArray, n: int) -> tuple[FloatArray, FloatArray, FloatArray]:
+def unpack(w: FloatArray, n: int) -> tuple[FloatArray, FloatArray, FloatArray]:
     """States (7, n+1), actions (4, n) and time steps (n,) from the NLP's variable vector."""
     full = np.concatenate([w, np.zeros(NODE - STATE)]).reshape(n + 1, NODE)
     return full[:, :STATE].T.copy(), full[:n, STATE : STATE + ACTION].T.copy(), full[:n, -1].copy()

@@ -57,6 +57,7 @@ def _key(local: Period, params: HexarotorParams, limits: Limits) -> tuple[object
         local.points_m.shape,
         local.points_m.tobytes(),
         local.force_n.tobytes(),
+        local.sagittas_m().tobytes(),
         params,
         limits,
     )

@@ -9,9 +9,12 @@ reverse mode over the map, the gradient alone cost 8x the SX one). Same values a
 time as the horizon's SX derivatives; building a step count takes about 0.02 s instead of
 0.36 s (48 steps).
 
-Variables: ``[x_0, u_0, h_0, ..., x_{n-1}, u_{n-1}, h_{n-1}, x_n]``; parameter: the wanted
-force at nodes ``0..n-1``; constraints per step: the RK4 defect (7), ``|a|^2`` (1), rotor
-thrusts (6, only with thrust rows) and ``|v|^2`` (1).
+Variables: ``[x_0, u_0, h_0, ..., x_{n-1}, u_{n-1}, h_{n-1}, x_n]``; parameter: per node
+``0..n-1`` the wanted force (``nlp.force_rows``: at the start of its chord and its change along
+it), then its corridor (``corridor.corridor_rows``); constraints per
+step: the RK4 defect (7), ``|a|^2`` (1), rotor thrusts (6, only with thrust rows), ``|v|^2`` (1)
+and the corridor rows (2, only with corridor rows: the node's position across its chord's
+parabola and along the chord, our extension of eq. 7).
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from vehicles.hexarotor_sponge.contact_model import hover_control_n, rk4_step, rotor_thrusts
+from vehicles.hexarotor_sponge.corridor import CORRIDOR_PARAMETERS
 from vehicles.hexarotor_sponge.params import HexarotorParams
 
 STATE = 7
@@ -35,26 +39,41 @@ NODE = STATE + ACTION + 1
 """Decision variables of one step in the NLP's vector: x_k, u_k, h_k (the last node only x_N)."""
 WINDOW = NODE + 3 + 1 + STATE
 """What one step's functions read: x_k, u_k, h_k, f_a and h of the step before, x_{k+1}."""
+FORCE_PARAMETERS = 2
+"""The wanted force of a node: at its chord's start, and its change to the chord's end."""
+STEP_PARAMETERS = FORCE_PARAMETERS + CORRIDOR_PARAMETERS
+"""Parameters of a step's node: wanted force (2), its corridor (``corridor.corridor_rows``)."""
+
+
+@dataclass(frozen=True)
+class Rows:
+    """Which optional constraint rows a period NLP has."""
+
+    thrust: bool
+    """The six rotor thrusts of each step (screened: see ``nlp.solve_own_frame``)."""
+    corridor: bool
+    """The node's position across and along its chord (``corridor``), our extension."""
 
 
 def period_nlp(
     n: int,
-    thrust_rows: bool,
+    rows: Rows,
     params: HexarotorParams,
     weights: tuple[float, ...],
     weight_dh: float,
 ) -> tuple[dict[str, Any], dict[str, ca.Function]]:
     """The NLP of ``n`` RK4 steps for ``casadi.nlpsol`` and its ``grad_f``, ``jac_g`` and
     ``hess_lag`` options. ``weights``: the cost weights ``(v, u, du, force, time)``;
-    ``weight_dh``: the cost per [s^2] of a time step's change from the step before."""
-    fns = _step_functions(thrust_rows, params, weights, weight_dh)
+    ``weight_dh``: the cost per [s^2] of a time step's change from the step before; parameter:
+    ``STEP_PARAMETERS`` columns of ``n`` (wanted force, corridor)."""
+    fns = _step_functions(rows, params, weights, weight_dh)
     index, size = _windows(n)
     w = ca.MX.sym("w", size)
-    force_ref = ca.MX.sym("force_ref", n)
+    force_ref = ca.MX.sym("p", STEP_PARAMETERS * n)
     outside = ca.vertcat(hover_control_n(params), 0.0)
     windows = ca.reshape(ca.vertcat(w, outside)[index.ravel(order="F").tolist()], WINDOW, n)
     has_before = ca.DM([[0.0] + [1.0] * (n - 1)])
-    step_p = ca.vertcat(force_ref.T, has_before)
+    step_p = ca.vertcat(ca.reshape(force_ref, n, STEP_PARAMETERS).T, has_before)
     cost, g = fns.step.map(n)(windows, step_p)
     cost_values, grad_nz = fns.grad.map(n)(windows, step_p)
     g_values, jac_nz = fns.jac.map(n)(windows, step_p)
@@ -94,8 +113,8 @@ def period_nlp(
 
 @dataclass(frozen=True)
 class _StepFunctions:
-    """One step's functions of its window (:data:`WINDOW`) and ``[wanted force, 1 if a step
-    comes before]``, and the sparsity of the derivatives' nonzeros in the window."""
+    """One step's functions of its window (:data:`WINDOW`) and ``[wanted force (2), corridor (7),
+    1 if a step comes before]``, and the sparsity of the derivatives' nonzeros in the window."""
 
     step: ca.Function
     """-> (cost, constraints)."""
@@ -114,18 +133,21 @@ class _StepFunctions:
 
 @lru_cache(maxsize=8)
 def _step_functions(
-    thrust_rows: bool, params: HexarotorParams, weights: tuple[float, ...], weight_dh: float
+    rows: Rows, params: HexarotorParams, weights: tuple[float, ...], weight_dh: float
 ) -> _StepFunctions:
     """One step's cost, constraints and their exact derivatives (see :class:`_StepFunctions`)."""
     z = ca.SX.sym("z", WINDOW)
-    p = ca.SX.sym("p", 2)
+    p = ca.SX.sym("p", STEP_PARAMETERS + 1)
     x, u, h = z[0:STATE], z[STATE : STATE + ACTION], z[NODE - 1]
     x_end, rate = rk4_step(x, u, h, params)
     defect = z[WINDOW - STATE :] - x_end
-    thrusts = rotor_thrusts(x, u, params) if thrust_rows else ca.SX(0, 1)
-    g = ca.vertcat(defect, ca.sumsqr(rate[3:6]), thrusts, ca.sumsqr(x[3:6]))
-    cost = stage_cost(x, u, z[NODE : NODE + 3], p[0], params, weights) * h
-    cost += p[1] * weight_dh * (h - z[NODE + 3]) ** 2
+    thrusts = rotor_thrusts(x, u, params) if rows.thrust else ca.SX(0, 1)
+    rows_p = p[FORCE_PARAMETERS:STEP_PARAMETERS]
+    corridor = corridor_terms(x[0:2], rows_p) if rows.corridor else ca.SX(0, 1)
+    g = ca.vertcat(defect, ca.sumsqr(rate[3:6]), thrusts, ca.sumsqr(x[3:6]), corridor)
+    force_ref = wanted_force(x[0:2], p[0:FORCE_PARAMETERS], rows_p)
+    cost = stage_cost(x, u, z[NODE : NODE + 3], force_ref, params, weights) * h
+    cost += p[STEP_PARAMETERS] * weight_dh * (h - z[NODE + 3]) ** 2
     lam_f = ca.SX.sym("lam_f")
     lam_g = ca.SX.sym("lam_g", g.numel())
     grad = ca.gradient(cost, z)
@@ -141,6 +163,25 @@ def _step_functions(
         hess_sparsity=hess.sparsity(),
         rows=int(g.numel()),
     )
+
+
+def wanted_force(p_xy: Any, force: Any, corridor: Any) -> Any:
+    """The wanted force at a node on the wall at ``p_xy`` (2): its chord start's force plus the
+    chord's change times how far along the chord the node is (``u / length``; 0 without a
+    corridor, whose rows are zero). Our extension: eq. 7 pins the force at waypoints only, and
+    a force interpolated by step index runs ahead of the pen where it speeds up from rest (a
+    drawn width ramp was planned 1.5 mm wide of the drawing a quarter along the stroke)."""
+    u = ca.dot(corridor[2:4], p_xy) - corridor[4]
+    return force[0] + force[1] * u / ca.fmax(corridor[5], 1e-9)
+
+
+def corridor_terms(p_xy: Any, corridor: Any) -> Any:
+    """The node's two corridor rows (``corridor.corridor_rows``) of its position on the wall
+    ``p_xy`` (2) and its corridor's parameters (7): across, ``normal . p - k u (length - u)``
+    with ``u = direction . p - start``; along, ``direction . p``."""
+    along = ca.dot(corridor[2:4], p_xy)
+    u = along - corridor[4]
+    return ca.vertcat(ca.dot(corridor[0:2], p_xy) - corridor[6] * u * (corridor[5] - u), along)
 
 
 def stage_cost(

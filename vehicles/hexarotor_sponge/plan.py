@@ -1,9 +1,10 @@
 """The hexarotor's job plan: strokes on the wall -> optimised periods -> one stitched reference.
 
 ``plan_writing`` is the paper's planner (eq. 7 per period, stitched, resampled at the control
-rate by linear interpolation, section IV). ``plan_equal_distance`` is the paper's planning
-baseline (section VII-C): the waypoints sampled at equal distance at constant speed, positions
-and forces only (no velocity, acceleration or contact-wrench feed-forward).
+rate, section IV), with our extensions: the pen held on the strokes between waypoints
+(``corridor``), strokes planned in pieces (``long_periods``). ``plan_equal_distance`` is the
+paper's planning baseline (section VII-C): the waypoints sampled at equal distance at constant
+speed, positions and forces only (no velocity, acceleration or contact-wrench feed-forward).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from planner.errors import InfeasibleTrajectoryError, PlannerError
 from planner.samples import TrajectorySamples
 from vehicles.hexarotor_sponge import defaults
 from vehicles.hexarotor_sponge.allocation import Allocator
+from vehicles.hexarotor_sponge.long_periods import split_long
 from vehicles.hexarotor_sponge.nlp import Limits, PeriodSolution, PeriodStart
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
 from vehicles.hexarotor_sponge.period_cache import solve_period_reusing
@@ -46,7 +48,11 @@ class PlanSettings:
     control_dt_s: float = 0.01
     """Sample period of the reference in [s]."""
     reach_m: float = defaults.REACH_M
-    """Largest distance in [m] of a stroke point from the writing area's centre."""
+    """Largest distance in [m] of a stroke point from the writing area's centre (1 mm more is
+    let through: ``defaults.REACH_SLACK_M``)."""
+    longest_period_steps: int = 117
+    """Most steps of one contact period: a longer stroke is planned in pieces from rest to rest
+    (``long_periods``)."""
 
 
 def _checked_strokes(
@@ -58,11 +64,12 @@ def _checked_strokes(
     if not strokes:
         raise PlannerError("nothing to write", field="strokes")
     for k, stroke in enumerate(strokes):
-        far = np.flatnonzero(np.linalg.norm(stroke.xy_m, axis=1) > settings.reach_m)
+        distance = np.linalg.norm(stroke.xy_m, axis=1)
+        far = np.flatnonzero(distance > settings.reach_m + defaults.REACH_SLACK_M)
         if far.size:
             raise PlannerError(
-                f"point is {float(np.linalg.norm(stroke.xy_m[far[0]])):.2f} m from the wall's "
-                f"writing centre, beyond the reach {settings.reach_m} m",
+                f"point is {float(distance[far[0]]):.3f} m from the wall's writing centre, "
+                f"beyond the reach {settings.reach_m:g} m",
                 stroke_index=k,
                 point_index=int(far[0]),
             )
@@ -135,6 +142,7 @@ def plan_writing(
 ) -> WritingPlan:
     """The contact-aware motion-force plan of ``strokes`` on a vertical ``surface``."""
     checked, periods, clamped = _periods(strokes, settings)
+    periods = split_long(periods, settings.limits, settings.longest_period_steps)
     solutions = []
     for period in periods:
         solutions.append(solve(period, settings.params, settings.limits))
@@ -243,7 +251,10 @@ def _as_plan(
     settings: PlanSettings,
     report: dict[str, object],
 ) -> WritingPlan:
-    """Resample the nodes at the control rate and turn wall coordinates into world ENU."""
+    """Resample the nodes at the control rate by linear interpolation (the paper's; a cubic
+    Hermite curve of the nodes' positions and velocities was measured instead: on the 1 m "8"
+    plan IoU 0.945 against 0.953, flown in calm air 0.857 against 0.859) and turn wall
+    coordinates into world ENU."""
     grid = np.arange(0.0, t[-1] + 1e-9, settings.control_dt_s)
     if grid[-1] < t[-1] - 1e-9:
         grid = np.append(grid, t[-1])

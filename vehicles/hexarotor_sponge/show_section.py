@@ -113,9 +113,9 @@ def board_problem(show: _Show, vehicle: _Vehicle, board: _Board) -> str | None:
     margin_m = show.planning.margin_m
     half = [max(0.0, size / 2 - margin_m) for size in board.writing_area_m]
     corner_m = math.hypot(*half)
-    if corner_m <= reach_m:
+    if corner_m <= reach_m + defaults.REACH_SLACK_M:
         return None
     return (
         f"{vehicle.id} cannot write there: the corners of wall {board.id!r}'s writing area are "
-        f"{corner_m:.2f} m from its centre, beyond the reach {reach_m} m (hexarotor.reach_m)"
+        f"{corner_m:.3f} m from its centre, beyond the reach {reach_m:g} m (hexarotor.reach_m)"
     )

@@ -1,7 +1,7 @@
 """IPOPT solvers of the period NLP (paper eq. 7), built once per step count and kept, and the
 step-count ladder that lets periods of nearby lengths share one built solver.
 
-A solver is built per ``(steps, thrust rows, params, cost weights)`` only (about 20 ms of CPU
+A solver is built per ``(steps, optional rows, params, cost weights)`` only (about 20 ms of CPU
 whatever the step count, see ``period_nlp``); a period's waypoints, contact mode and limits reach
 it as variable and constraint bounds (``nlp``), its force profile as a parameter.
 """
@@ -18,7 +18,7 @@ import numpy as np
 
 from vehicles.hexarotor_sponge.contact_model import rotor_thrusts
 from vehicles.hexarotor_sponge.params import HexarotorParams
-from vehicles.hexarotor_sponge.period_nlp import ACTION, STATE, period_nlp
+from vehicles.hexarotor_sponge.period_nlp import ACTION, STATE, Rows, period_nlp
 
 STEP_COUNT_RATIO = 1.25
 """Ratio of consecutive step counts a period is planned with: a period's steps are rounded up to
@@ -71,18 +71,19 @@ iterations at mu 0.1; a monotone barrier from 1e-2 with a first Hessian perturba
 @lru_cache(maxsize=64)
 def period_solver(
     n: int,
-    thrust_rows: bool,
+    rows: Rows,
     params: HexarotorParams,
     weights: tuple[float, ...],
     weight_dh: float,
 ) -> tuple[ca.Function, threading.Lock]:
-    """IPOPT on the NLP of ``n`` RK4 steps (:func:`period_nlp`, options
-    :data:`IPOPT_OPTIONS`), and the lock that keeps one solve (and its stats) at a time on it.
+    """IPOPT on the NLP of ``n`` RK4 steps with the optional ``rows`` (:func:`period_nlp`,
+    options :data:`IPOPT_OPTIONS`), and the lock that keeps one solve (and its stats) at a time
+    on it.
 
     ``weights``: the cost weights ``(v, u, du, force, time)`` of the planner's limits;
     ``weight_dh``: the cost per [s^2] of a time step's change from the step before.
     """
-    nlp, derivatives = period_nlp(n, thrust_rows, params, weights, weight_dh)
+    nlp, derivatives = period_nlp(n, rows, params, weights, weight_dh)
     options: dict[str, Any] = {
         "print_time": False,
         "record_time": True,

@@ -4,6 +4,10 @@ Every stroke becomes one contact period: touch the wall at its first point with 
 to the first point's force, slide through the stroke's points with their forces, release at its
 last point. Between strokes (and before the first, after the last) a free-flight period leaves the
 wall along its normal to ``standoff_m``, flies across, and comes back to the wall.
+Our extension: each chord between a contact period's waypoints carries the sagitta of the
+parabola through its two waypoints that fits the stroke between them, the centre line of the
+corridor its nodes are held in (``corridor``); where no parabola fits, a waypoint is added
+(``parabolas.refined``).
 Waypoints are in wall coordinates ``(x, y, s)``: reader's x and y on the wall and ``s`` the
 distance out of the wall (the contact function ``phi``).
 """
@@ -17,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from planner.errors import PlannerError
+from vehicles.hexarotor_sponge.parabolas import refined
 from vehicles.hexarotor_sponge.pen import PenCurve
 from vehicles.kind import StrokeInput
 
@@ -43,6 +48,15 @@ class Period:
     part: str
     """What it does for that stroke, for error messages after ``stroke k:``: ``flight to it``,
     ``writing it`` or ``leaving it``."""
+    sagitta_m: FloatArray | None = None
+    """(M-1,) offset in [m] of the stroke's parabola from each chord's middle, along the chord's
+    left normal (its direction turned +90 deg); None: straight chords (free flight)."""
+
+    def sagittas_m(self) -> FloatArray:
+        """(M-1,) :attr:`sagitta_m`, zeros for straight chords."""
+        if self.sagitta_m is None:
+            return np.zeros(self.points_m.shape[0] - 1)
+        return self.sagitta_m
 
     @property
     def label(self) -> str:
@@ -99,7 +113,8 @@ def periods_of(
     for k, (stroke, force) in enumerate(zip(strokes, forces_n, strict=True)):
         if np.any(force <= 0.0):
             raise PlannerError("a contact stroke needs a positive force", stroke_index=k)
-        idx = simplify(np.column_stack([stroke.xy_m, force * FORCE_TO_M]), tolerance_m)
+        thinned = simplify(np.column_stack([stroke.xy_m, force * FORCE_TO_M]), tolerance_m)
+        idx, sagittas = refined(stroke.xy_m, thinned)
         on_wall = np.column_stack([stroke.xy_m[idx], np.zeros(idx.size)])
         first, last = on_wall[0], on_wall[-1]
         lift = np.array([0.0, 0.0, standoff_m])
@@ -108,7 +123,8 @@ def periods_of(
         periods.append(_period(False, np.array(flight), None, k, "flight to it"))
         pts = np.vstack([first, on_wall, last])
         f = np.concatenate([[0.0], force[idx], [0.0]])
-        periods.append(_period(True, pts, f, k, "writing it"))
+        sagitta = np.concatenate([[0.0], sagittas, [0.0]])
+        periods.append(Period(True, pts, f, k, "writing it", sagitta))
         here = last
     away = here + np.array([0.0, 0.0, standoff_m])
     periods.append(_period(False, np.array([here, away]), None, len(strokes) - 1, "leaving it"))

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 from vehicles.hexarotor_sponge.allocation import rotor_geometry
 from vehicles.hexarotor_sponge.fly_settings import WorldNoise
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
+from vehicles.hexarotor_sponge.rotations import rotation_of
 from vehicles.surface import Surface
 
 FloatArray = NDArray[np.float64]
@@ -203,7 +204,7 @@ class WallWorld:
         n, rng = self.noise, self._rng
         pos, vel, rot = self._delayed[0]
         tilt = n.mocap_attitude_rad * rng.standard_normal(3)
-        noisy_rot = rot @ _rotvec_matrix(tilt)
+        noisy_rot = rot @ rotation_of(tilt)
         sensor = self.data.sensordata
         return Measurement(
             base_m_enu=pos + n.mocap_position_m * rng.standard_normal(3),
@@ -232,13 +233,3 @@ class WallWorld:
                 mujoco.mj_contactForce(self.model, self.data, i, frame)
                 total += float(frame[0])
         return total
-
-
-def _rotvec_matrix(rotvec: FloatArray) -> FloatArray:
-    """Rotation matrix of a small rotation vector in [rad] (Rodrigues)."""
-    angle = float(np.linalg.norm(rotvec))
-    if angle < 1e-12:
-        return np.eye(3)
-    k = rotvec / angle
-    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.asarray(np.eye(3) + math.sin(angle) * kx + (1.0 - math.cos(angle)) * kx @ kx)

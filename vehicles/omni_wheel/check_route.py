@@ -15,9 +15,11 @@ from dataclasses import dataclass
 from vehicles.omni_wheel.terrain import Step, Terrain
 
 MAX_STEP_HEIGHT_M = 0.05
-"""Highest step in [m] the writer is allowed to cross (climbed with margin in MuJoCo with rubber
-rollers and the proposed method: 66-70 mm in benchmarks/bench_ground.py, about the wheel radius;
-above it a wheel must be lifted by friction on the riser alone)."""
+"""Highest step in [m] the writer is allowed to cross: climbed with margin in MuJoCo with rubber
+rollers and the proposed method (the model as read climbs about 70 mm, benchmarks/bench_ground.py:
+above the wheel radius the rear wheels stall at the riser, the friction of the wheels on top
+too small to press them on hard enough; the paper's 0.1 m step needs the rear mass centre read
+further forward, ``geometry``)."""
 MAX_ROUTE_M = 60.0
 """Longest route in [m] from the start to a floor area."""
 

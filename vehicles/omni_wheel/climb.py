@@ -97,20 +97,34 @@ class ClimbResult:
         return out
 
 
+def rolling_speed_mps(truth: TrueState) -> FloatArray:
+    """(7,) speed in [m/s] of each wheel centre in its wheel's plane (eq. 19's ``v_w``), signed as
+    the spin that would roll it so: along the wheel's drive direction (``axle x up``) where it
+    moves mostly horizontally, as the wheel spins where it moves mostly vertically (up or down a
+    riser, where only the spin tells which way it rolls). Unsigned, a wheel rolling backwards
+    (writing, a route going west) had a slip of 200 %."""
+    velocity, axle = truth.hub_velocity_mps_enu, truth.axle_enu
+    along_axle = np.sum(velocity * axle, axis=1)
+    in_plane = velocity - along_axle[:, None] * axle
+    speed = np.linalg.norm(in_plane, axis=1)
+    drive = np.cross(axle, np.array([0.0, 0.0, 1.0]))
+    forward = np.sum(in_plane * drive, axis=1)
+    horizontal = np.abs(forward) >= np.abs(in_plane[:, 2])
+    sign = np.where(horizontal, np.sign(forward), np.sign(truth.wheel_spin_radps))
+    return np.asarray(np.where(sign < 0.0, -speed, speed))
+
+
 def wheel_ratios(
     truth: TrueState, refs: FloatArray, geometry: OmniGeometry
 ) -> tuple[FloatArray, FloatArray]:
-    """Per-wheel |slip| (eq. 19, from the wheel's absolute spin and its centre's speed in the
-    wheel plane) and |rotation error| (eq. 20, motor rate against ``refs``) at one tick, capped at
-    :data:`RATIO_CAP`; NaN where the wheel is nearly still."""
+    """Per-wheel |slip| (eq. 19, from the wheel's absolute spin and its centre's signed speed in
+    the wheel plane, :func:`rolling_speed_mps`) and |rotation error| (eq. 20, motor rate against
+    ``refs``) at one tick, capped at :data:`RATIO_CAP`; NaN where the wheel is nearly still."""
     r, v0 = geometry.wheel_radius_m, geometry.running_speed_mps
-    along = np.sum(truth.hub_velocity_mps_enu * truth.axle_enu, axis=1)
-    in_plane = truth.hub_velocity_mps_enu - along[:, None] * truth.axle_enu
     spin = truth.wheel_spin_radps
     moving = np.abs(r * spin) > 0.1 * v0
-    slip = np.where(
-        moving, slip_ratio(r, np.where(moving, spin, 1.0), np.linalg.norm(in_plane, axis=1)), np.nan
-    )
+    speed = rolling_speed_mps(truth)
+    slip = np.where(moving, slip_ratio(r, np.where(moving, spin, 1.0), speed), np.nan)
     turning = np.abs(r * truth.motor_rate_radps) > 0.1 * v0
     rate = np.where(turning, truth.motor_rate_radps, 1.0)
     error = np.where(turning, rotation_error_ratio(refs, rate), np.nan)

@@ -28,8 +28,12 @@ from vehicles.omni_wheel.terrain import Terrain
 from vehicles.surface import Surface
 
 RUBBER_ROLLERS = OmniGeometry(friction_static=1.0, friction_dynamic=0.9)
-"""The prototype with rubber rollers: Table 1's 0.3 cannot lift a wheel onto a 50 mm step in
-MuJoCo (tests/test_ground_sim.py), so the writer climbs on rubber."""
+"""The prototype with rubber rollers: our analogue of the experiment's vehicle (section 3.3), not
+a value of the paper. Table 1's 0.3 cannot lift any axle up a riser (``statics``: the front
+axle needs 45 N, the riser's friction gives at most 15 N) nor a wheel onto a 50 mm step in
+MuJoCo (tests/test_ground_sim.py); the prototype climbed 152 mm, so its rollers gripped
+better than 0.3. 1.0 static, 0.9 sliding: rubber on a dry hard floor, a generic figure (the
+paper names no material); bench_ground's sensitivity table runs 0.8 and 1.2 too."""
 VIRTUAL_WRITE_HEIGHT_M = 0.05
 """Planner height of the pen-down reference above the floor in [m] (the pen axis only)."""
 VIRTUAL_CLEARANCE_M = 0.03

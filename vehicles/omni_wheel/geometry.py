@@ -66,6 +66,28 @@ class OmniGeometry:
     dynamic one is reported with it)."""
     rollers_per_wheel: int = 12
     """Free rollers on each wheel's rim."""
+    rear_frame_com_x_m: float = -0.140
+    """x in [m] of the rear frame's mass centre (its wheels excluded) in the rear part's frame.
+    The paper's figures are not in our copy; the reading is the middle of the rear part's
+    400 mm frame (Table 1), which ends at free joint 1, 0.060 m ahead of the middle axle:
+    0.060 - 0.200. The other reading, midway between middle and rear axles (-0.1075), is a row
+    of bench_ground's sensitivity table."""
+    front_frame_com_m: float = 0.0975
+    """Distance in [m] of the front frame's mass centre (its wheels excluded) ahead of free
+    joint 1: the middle of the front part's 195 mm linkage (Table 1), the same reading."""
+    frame_clearance_m: float = 0.050
+    """Height in [m] of the frames' underside above the axle line (the body's collision
+    geometry, ``model``). Not in the text; its lower bound follows from the prototype's 152 mm
+    climb (section 3.3): the frames cleared that step's edge, both the rear frame with its rear
+    wheels at the riser and the front linkage pitched up over it with joint 1 at the riser
+    (``statics.min_frame_clearance_m``: 49 mm), rounded up to the next 5 mm."""
+    motor_torque_max_nm: float = 3.6
+    """Largest torque in [N m] a wheel's motor and gear give. Not in the paper; the basis is the
+    quasi-static torque its 152 mm climb needs (``statics.required_torque_nm``): the middle
+    wheels lift their axle's load up the riser, 3.0 N m with the mass centres read above and
+    3.6 N m with the other reading of the rear one. The prototype climbed it whichever reading
+    is right, so its motors gave at least the larger; bench_ground's sensitivity table shows
+    what the value decides."""
 
     @property
     def joint1_x_m(self) -> float:

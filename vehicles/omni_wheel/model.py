@@ -2,11 +2,17 @@
 
 Each wheel is a hub on an actuated hinge carrying twelve free rollers (capsules on their own
 hinges, axes tangent to the rim): the rim can only push along the wheel's drive direction, while
-the rollers let the wheel slide freely along its axle. Only the rollers touch the terrain; the
-frames are modelled as arched over the step edges (no collision geometry), as the paper's free
-joint 1 at axle height implies. Rollers do not collide with each other. A roller's friction rules
-its contacts (higher priority than the terrain's), so the simulation can lower it to the dynamic
-coefficient while the roller slides (``sim``).
+the rollers let the wheel slide freely along its axle. The rollers and the two frames touch the
+terrain (collision classes: rollers 1, frames 2, terrain both), nothing of a vehicle touches
+another part of it or another vehicle. Each frame is a plate between the wheels (y within
+``FRAME_HALF_WIDTH_M``) from free joint 1 along its part's length (Table 1: front linkage to
+the front axle, rear frame 400 mm back from the joint), its underside
+``geometry.frame_clearance_m`` above the axle line (its basis: ``geometry``). Each frame's mass
+sits at its mass centre as ``geometry`` reads it (an explicit inertial, independent of the
+collision plate). A roller's friction rules its contacts (higher priority than the terrain's),
+so the simulation can lower it to the dynamic coefficient while the roller slides (``sim``); a
+frame scraping an edge slides with Table 1's dynamic coefficient (the vehicle's material on the
+ground, the only one the paper gives).
 
 Angles are in radians (MJCF's default is degrees: joint ranges would be read as such).
 
@@ -29,8 +35,15 @@ HUB_MASS_KG = 0.25
 """Mass in [kg] of a wheel hub with its motor's rotating parts."""
 ROLLER_MASS_KG = 0.015
 """Mass in [kg] of one free roller."""
-MOTOR_TORQUE_MAX_NM = 3.0
-"""Largest torque in [N m] a wheel motor gives (its gearbox output)."""
+FRAME_HALF_WIDTH_M = 0.1
+"""Half width in [m] of the frame plates (inside the side wheels' hubs at 0.15 m)."""
+FRAME_THICKNESS_M = 0.04
+"""Thickness in [m] of the frame plates."""
+FRAME_COM_ABOVE_AXLE_M = 0.05
+"""Height in [m] of the frames' mass centres above the axle line (batteries and electronics on
+the frames; an estimate: the paper gives no heights but joint 1's)."""
+FRAME_FRICTION = 0.25
+"""Friction of a frame on an edge it scrapes (Table 1's dynamic coefficient)."""
 PHYSICS_TIMESTEP_S = 0.001
 """MuJoCo time step in [s]."""
 
@@ -42,7 +55,7 @@ def _f(values: tuple[float, ...] | np.ndarray) -> str:
 def _terrain_xml(terrain: Terrain, friction: float) -> str:
     fr = f'friction="{friction} 0.005 0.0001"'
     parts = [
-        f'<geom name="floor" type="plane" size="0 0 1" contype="0" conaffinity="1" {fr}'
+        f'<geom name="floor" type="plane" size="0 0 1" contype="0" conaffinity="3" {fr}'
         ' rgba=".8 .8 .75 1"/>'
     ]
     for k, step in enumerate(terrain.steps):
@@ -55,7 +68,7 @@ def _terrain_xml(terrain: Terrain, friction: float) -> str:
         centre = (0.5 * (end + step.x_m), 0.0, 0.5 * step.height_m)
         parts.append(
             f'<geom name="step{k}" type="box" size="{_f(half)}" pos="{_f(centre)}" contype="0"'
-            f' conaffinity="1" {fr} rgba=".6 .6 .6 1"/>'
+            f' conaffinity="3" {fr} rgba=".6 .6 .6 1"/>'
         )
     return "\n".join(parts)
 
@@ -91,6 +104,25 @@ def _wheel_xml(prefix: str, name: str, pos: np.ndarray, axle: np.ndarray, g: Omn
     )
 
 
+def _frame_xml(
+    name: str, x_from_m: float, x_to_m: float, mass_kg: float, com_x_m: float, g: OmniGeometry
+) -> str:
+    """A frame's mass (explicit inertial at its mass centre) and its colliding plate from
+    ``x_from_m`` to ``x_to_m`` in its body's frame, ``g.frame_clearance_m`` above the axle line."""
+    length = x_to_m - x_from_m
+    w, t = 2.0 * FRAME_HALF_WIDTH_M, FRAME_THICKNESS_M
+    inertia = (mass_kg / 12.0) * np.array([w * w + t * t, length**2 + t * t, length**2 + w * w])
+    half = (0.5 * length, FRAME_HALF_WIDTH_M, 0.5 * t)
+    centre = (0.5 * (x_from_m + x_to_m), 0.0, g.frame_clearance_m + 0.5 * t)
+    return (
+        f'<inertial pos="{_f((com_x_m, 0.0, FRAME_COM_ABOVE_AXLE_M))}" mass="{mass_kg:.6g}"'
+        f' diaginertia="{_f(inertia)}"/>'
+        f'<geom name="{name}" type="box" size="{_f(half)}" pos="{_f(centre)}" contype="2"'
+        f' conaffinity="0" priority="1" friction="{FRAME_FRICTION} 0.005 0.0001"'
+        ' rgba=".2 .4 .8 1"/>'
+    )
+
+
 def _vehicle_xml(
     prefix: str, start_m: tuple[float, float, float], yaw_rad: float, g: OmniGeometry
 ) -> str:
@@ -109,27 +141,28 @@ def _vehicle_xml(
         for i in range(7)
         if FRONT_PART[i]
     )
-    tail = g.joint1_x_m - g.rear_link_m
-    rear_box = (0.5 * (g.joint1_x_m - tail), 0.1, 0.03)
-    rear_centre = (0.5 * (g.joint1_x_m + tail), 0.0, 0.05)
-    front_box = (0.5 * g.front_link_m, 0.1, 0.02)
     x, y, z = start_m
     quat = (math.cos(0.5 * yaw_rad), 0.0, 0.0, math.sin(0.5 * yaw_rad))
+    tail = g.joint1_x_m - g.rear_link_m
+    rear = _frame_xml(
+        f"{prefix}rear_frame", tail, g.joint1_x_m, rear_frame, g.rear_frame_com_x_m, g
+    )
+    front = _frame_xml(
+        f"{prefix}front_frame", 0.0, g.front_link_m, front_frame, g.front_frame_com_m, g
+    )
     return (
         f'<body name="{prefix}rear" pos="{_f((x, y, z))}" quat="{_f(quat)}">'
         f'<freejoint name="{prefix}base"/>'
-        f'<geom type="box" size="{_f(rear_box)}" pos="{_f(rear_centre)}" mass="{rear_frame}"'
-        ' contype="0" conaffinity="0" rgba=".2 .4 .8 1"/>'
-        f'<site name="{prefix}imu" pos="0 0 0"/>'
+        + rear
+        + f'<site name="{prefix}imu" pos="0 0 0"/>'
         + rear_wheels
         + f'<body name="{prefix}front" pos="{_f(joint)}">'
         f'<joint name="{prefix}joint1_pitch" type="hinge" axis="0 1 0" range="-0.9 0.9"'
         ' limited="true" damping="0.2"/>'
         f'<joint name="{prefix}joint1_roll" type="hinge" axis="1 0 0" range="-0.4 0.4"'
         ' limited="true" damping="0.2"/>'
-        f'<geom type="box" size="{_f(front_box)}" pos="{_f((0.5 * g.front_link_m, 0.0, 0.04))}"'
-        f' mass="{front_frame}" contype="0" conaffinity="0" rgba=".2 .6 .9 1"/>'
-        f'<site name="{prefix}pen" pos="{_f((g.front_link_m * 0.5, 0.0, 0.0))}"/>'
+        + front
+        + f'<site name="{prefix}pen" pos="{_f((g.front_link_m * 0.5, 0.0, 0.0))}"/>'
         + front_wheels
         + "</body></body>"
     )
@@ -151,9 +184,10 @@ def build_mjcf(
         _vehicle_xml(vehicle_prefix(k), (x, y, h + geometry.wheel_radius_m + 0.002), yaw, geometry)
         for k, (x, y, h, yaw) in enumerate(starts)
     )
+    torque = geometry.motor_torque_max_nm
     motors = "".join(
         f'<motor name="{vehicle_prefix(k)}{w}" joint="{vehicle_prefix(k)}{w}"'
-        f' ctrlrange="{-MOTOR_TORQUE_MAX_NM} {MOTOR_TORQUE_MAX_NM}" ctrllimited="true"/>'
+        f' ctrlrange="{-torque} {torque}" ctrllimited="true"/>'
         for k in range(len(starts))
         for w in WHEEL_NAMES
     )

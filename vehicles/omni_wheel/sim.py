@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from vehicles.omni_wheel.geometry import WHEEL_NAMES, OmniGeometry
-from vehicles.omni_wheel.model import MOTOR_TORQUE_MAX_NM, build_mjcf, vehicle_prefix
+from vehicles.omni_wheel.model import build_mjcf, vehicle_prefix
 from vehicles.omni_wheel.terrain import Terrain
 
 FloatArray = NDArray[np.float64]
@@ -171,7 +171,7 @@ class OmniWorld:
     def step(self, wheel_refs_radps: FloatArray) -> None:
         """Advance one control period with (n_vehicles, 7) wheel rate references in [rad/s]."""
         refs = np.asarray(wheel_refs_radps, dtype=np.float64).reshape(len(self.vehicles), 7)
-        dt = PHYSICS_DT_S
+        dt, torque_max = PHYSICS_DT_S, self.geometry.motor_torque_max_nm
         self._slide_friction()
         for _ in range(self.substeps):
             for k, v in enumerate(self.vehicles):
@@ -185,9 +185,7 @@ class OmniWorld:
                 lim = self.pid.integral_limit_rad
                 self._integral[k] = np.clip(self._integral[k] + err * dt, -lim, lim)
                 torque = self.pid.kp_nm_per_radps * err + self.pid.ki_nm_per_rad * self._integral[k]
-                self.data.ctrl[v.actuators] = np.clip(
-                    torque, -MOTOR_TORQUE_MAX_NM, MOTOR_TORQUE_MAX_NM
-                )
+                self.data.ctrl[v.actuators] = np.clip(torque, -torque_max, torque_max)
             mujoco.mj_step(self.model, self.data)
         for k in range(len(self.vehicles)):
             pots = self._pots(k)

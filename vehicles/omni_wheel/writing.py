@@ -123,19 +123,23 @@ def drive_plan(plan: WritingPlan, settings: OmniSettings, *, seed: int = 0) -> F
 
 def score_floor(plan: WritingPlan, flown: FlownWriting, marker_width_m: float) -> WritingScore:
     """RMSE of the marker against its reference (pen down, all) and IoU of written against planned
-    ink (the pen-down reference at the marker's width), on the floor raster."""
+    ink (the whole plan's pen-down reference at the marker's width, however much of it was
+    flown), on the floor raster. The pen-down figures of a run whose pen never came down are
+    not measured: None, and no ``max_error_pen_down_m``."""
     err = np.linalg.norm(flown.writing_point_m_enu[:, :2] - flown.reference_m_enu[:, :2], axis=1)
     pen = flown.pen_down
-    ref_xy = plan.surface.to_surface(flown.reference_m_enu)
+    planned = plan.samples
+    ref_xy = plan.surface.to_surface(planned.position_m_enu)
     point_xy = plan.surface.to_surface(flown.writing_point_m_enu)
-    spec = RasterSpec.covering(np.vstack([ref_xy[pen], ref_xy[:1]]), pixel_m=0.004, margin_m=0.1)
+    down = planned.pen_down
+    spec = RasterSpec.covering(np.vstack([ref_xy[down], ref_xy[:1]]), pixel_m=0.004, margin_m=0.1)
     target, written = InkCanvas(spec), InkCanvas(spec)
-    target.paint_path(ref_xy, np.full(pen.shape, marker_width_m), pen)
+    target.paint_path(ref_xy, np.full(down.shape, marker_width_m), down)
     written.paint_path(point_xy, flown.ink_width_m, flown.ink_width_m > 0.0)
     return WritingScore(
-        rmse_pen_down_m=float(np.sqrt(np.mean(err[pen] ** 2))) if pen.any() else 0.0,
+        rmse_pen_down_m=float(np.sqrt(np.mean(err[pen] ** 2))) if pen.any() else None,
         rmse_m=float(np.sqrt(np.mean(err**2))),
         max_error_m=float(err.max()),
-        iou=iou(written.pixels, target.pixels) if pen.any() else None,
-        extra={"max_error_pen_down_m": float(err[pen].max()) if pen.any() else 0.0},
+        iou=iou(written.pixels, target.pixels) if down.any() else None,
+        extra={"max_error_pen_down_m": float(err[pen].max())} if pen.any() else {},
     )

@@ -121,13 +121,14 @@ class QuadrotorBrush:
         from vehicles.quadrotor_brush.metrics import flight_metrics, writing_point_error
 
         brush = settings.flight.world.brush
-        m = flight_metrics(flown, brush, pixel_m=settings.ink_pixel_m)
+        m = flight_metrics(flown, brush, plan.samples, pixel_m=settings.ink_pixel_m)
+        measured = {k: v for k, v in m.to_json_dict().items() if v is not None}
         return WritingScore(
             rmse_pen_down_m=m.rmse_pen_down_m,
             rmse_m=m.rmse_m,
             max_error_m=m.max_error_m,
             iou=m.iou if math.isfinite(m.iou) else None,
-            extra={k: v for k, v in m.to_json_dict().items() if k not in _SCORE_FIELDS},
+            extra={k: v for k, v in measured.items() if k not in _SCORE_FIELDS},
             error_m=np.linalg.norm(writing_point_error(flown, brush), axis=1),
         )
 
@@ -143,8 +144,8 @@ class QuadrotorBrush:
         from vehicles.quadrotor_brush.report import build_report
 
         brush = settings.flight.world.brush
-        ink = ink_result(flown, brush, pixel_m=settings.ink_pixel_m)
-        scores = flight_metrics(flown, brush, ink=ink)
+        ink = ink_result(flown, brush, plan.samples, pixel_m=settings.ink_pixel_m)
+        scores = flight_metrics(flown, brush, plan.samples, ink=ink)
         board = board_of(plan.surface)
         strokes_xy = [board.to_world(np.asarray(s.xy_m))[:, :2] for s in plan.strokes]
         return build_report(

@@ -12,8 +12,11 @@ the body z axis. Level, it is the vehicle reference point itself (what Phang 201
 tilted, it moves with the brush. Its reference is the planned position.
 
 Ink (Guo 2024 section VII): the written raster is what the brush footprint painted while touching
-(``ink_width_m`` above 0); the target raster is the planned pen-down path painted at the nominal
-width. Both at ``pixel_m``.
+(``ink_width_m`` above 0); the target raster is the whole plan's pen-down path painted at the
+nominal width, however much of it was flown (a job aborted at 30 % scores what it wrote against
+the whole character). Both at ``pixel_m``.
+
+A figure of the pen-down part of a flight whose pen never came down is None: not measured.
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from planner.samples import TrajectorySamples
 from sim.ink import InkCanvas, RasterSpec, iou
 from vehicles.kind import FlownWriting
 from vehicles.quadrotor_brush.brush import writing_point
@@ -37,22 +41,22 @@ _UP = np.array([0.0, 0.0, 1.0])
 class FlightMetrics:
     """Scores of one vehicle's flight."""
 
-    rmse_pen_down_m: float
-    """RMS 3-D writing-point error while the reference writes, [m]."""
+    rmse_pen_down_m: float | None
+    """RMS 3-D writing-point error while the reference writes, [m] (None: it never wrote)."""
     rmse_m: float
     """RMS 3-D writing-point error over the whole flight, [m]."""
     max_error_m: float
     """Largest 3-D writing-point error over the flight, [m]."""
-    max_error_pen_down_m: float
-    """Largest 3-D writing-point error while writing, [m]."""
-    rmse_pen_down_xy_m: float
+    max_error_pen_down_m: float | None
+    """Largest 3-D writing-point error while writing, [m] (None: it never wrote)."""
+    rmse_pen_down_xy_m: float | None
     """RMS horizontal writing-point error while writing (what moves the ink), [m]."""
-    rmse_pen_down_z_m: float
+    rmse_pen_down_z_m: float | None
     """RMS height error while writing (what changes the press, hence the width), [m]."""
-    vehicle_rmse_pen_down_m: float
+    vehicle_rmse_pen_down_m: float | None
     """RMS 3-D error of the vehicle reference point itself while writing, [m]."""
     iou: float
-    """Intersection over union of written and target ink."""
+    """Intersection over union of written and target ink (the whole plan's)."""
     ink_intersection_ratio: float
     """|written and target| / |target| (Guo 2024 reports 0.79)."""
     ink_union_ratio: float
@@ -60,9 +64,9 @@ class FlightMetrics:
     sim_time_s: float
     """Simulated flight time, [s]."""
 
-    def to_json_dict(self) -> dict[str, float]:
-        """Plain dict of floats."""
-        return {k: float(v) for k, v in asdict(self).items()}
+    def to_json_dict(self) -> dict[str, float | None]:
+        """Plain dict of floats (None: not measured)."""
+        return {k: None if v is None else float(v) for k, v in asdict(self).items()}
 
 
 @dataclass(frozen=True)
@@ -72,7 +76,7 @@ class InkResult:
     written: InkCanvas
     """What the brush painted."""
     target: InkCanvas
-    """The planned pen-down path at nominal width."""
+    """The whole plan's pen-down path at nominal width."""
 
     @property
     def iou(self) -> float:
@@ -110,11 +114,18 @@ def writing_point_error(flown: FlownWriting, brush: BrushParams) -> FloatArray:
     return error
 
 
-def ink_result(flown: FlownWriting, brush: BrushParams, *, pixel_m: float = 0.001) -> InkResult:
-    """Paint the written and the target ink."""
-    pen = flown.pen_down
+def ink_result(
+    flown: FlownWriting,
+    brush: BrushParams,
+    planned: TrajectorySamples,
+    *,
+    pixel_m: float = 0.001,
+) -> InkResult:
+    """Paint the written ink of ``flown`` and the target ink of the whole plan ``planned`` (the
+    writing point's reference, world ENU)."""
+    pen = planned.pen_down
     contact = flown.ink_width_m > 0.0
-    ref_xy = flown.reference_m_enu[:, :2]
+    ref_xy = planned.position_m_enu[:, :2]
     tip_xy = tip_of(flown)[:, :2]
     covered = np.concatenate((ref_xy[pen], tip_xy[contact], ref_xy[:1]))
     spec = RasterSpec.covering(covered, pixel_m=pixel_m, margin_m=brush.nominal_width_m + 0.01)
@@ -125,32 +136,35 @@ def ink_result(flown: FlownWriting, brush: BrushParams, *, pixel_m: float = 0.00
     return InkResult(written, target)
 
 
-def _rms(values: FloatArray) -> float:
-    return float(np.sqrt(np.mean(values))) if values.size else 0.0
+def _rms(squares: FloatArray) -> float | None:
+    """Root of the mean of ``squares``; None for none (not measured)."""
+    return float(np.sqrt(np.mean(squares))) if squares.size else None
 
 
 def flight_metrics(
     flown: FlownWriting,
     brush: BrushParams,
+    planned: TrajectorySamples,
     *,
     pixel_m: float = 0.001,
     ink: InkResult | None = None,
 ) -> FlightMetrics:
-    """Scores of the flight of ``brush`` (paints the ink unless ``ink`` is given)."""
+    """Scores of the flight of ``brush`` against the whole plan ``planned`` (paints the ink
+    unless ``ink`` is given)."""
     err = writing_point_error(flown, brush)
     pen = flown.pen_down
     sq = np.sum(err * err, axis=1)
     veh = body_of(flown) - flown.reference_m_enu
-    ink = ink if ink is not None else ink_result(flown, brush, pixel_m=pixel_m)
+    ink = ink if ink is not None else ink_result(flown, brush, planned, pixel_m=pixel_m)
     target = max(int(np.count_nonzero(ink.target.pixels)), 1)
     both = int(np.count_nonzero(ink.written.pixels & ink.target.pixels))
     either = int(np.count_nonzero(ink.written.pixels | ink.target.pixels))
     t_s = flown.t_s
     return FlightMetrics(
         rmse_pen_down_m=_rms(sq[pen]),
-        rmse_m=_rms(sq),
+        rmse_m=float(np.sqrt(np.mean(sq))) if sq.size else 0.0,
         max_error_m=float(np.sqrt(sq.max())) if sq.size else 0.0,
-        max_error_pen_down_m=float(np.sqrt(sq[pen].max())) if pen.any() else 0.0,
+        max_error_pen_down_m=float(np.sqrt(sq[pen].max())) if pen.any() else None,
         rmse_pen_down_xy_m=_rms(np.sum(err[pen, :2] ** 2, axis=1)),
         rmse_pen_down_z_m=_rms(err[pen, 2] ** 2),
         vehicle_rmse_pen_down_m=_rms(np.sum(veh[pen] ** 2, axis=1)),

@@ -1,0 +1,193 @@
+"""Memory of a whole show: every process's resident set, alone and together, from start to soak.
+
+    python benchmarks/bench_memory.py                  # 10 minutes at time scale 4
+    python benchmarks/bench_memory.py --minutes 3
+    python benchmarks/bench_memory.py --fleet-hosts 1     # the vehicles in one fleet host
+
+Runs ``shows/airshow-2014.yaml`` (router, orchestrator, four simulated agents and their planning
+workers, real Zenoh on loopback) and keeps ``--waiting`` characters waiting. It samples every
+process of the show (the supervisor's children and theirs, e.g. an agent's planning worker):
+
+- RSS (``VmRSS``): what ``top`` shows per process; summed over processes it counts every shared
+  page (libraries, the Zenoh shared-memory segments) once per process that maps it;
+- PSS (``/proc/<pid>/smaps_rollup``): each shared page divided among the processes that map it,
+  so the sum over the show is the memory the show holds in all its processes together;
+- anonymous (``RssAnon``): the process's own heap, what a leak grows.
+
+Printed: the table when every vehicle first reports ready (``ready``: are the workers there
+already, warm?), at the end, the peak, and the least-squares slope of each after ``--warmup-s``
+in MiB/hour; the totals the same way. ``bench_soak.py`` is the long run (disk, pictures).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import tempfile
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+
+from bench_show import SHOW, wait_ready  # noqa: E402
+from bench_soak import Jobs, children_of, keep_waiting  # noqa: E402
+
+from bus.messages import JobState  # noqa: E402
+from bus.pubsub import subscribe  # noqa: E402
+from cli.showrun import ShowRun, Stagehand, derived_show  # noqa: E402
+
+MIB = 1024.0 * 1024.0
+MEASURES = ("rss", "pss", "anon")
+
+
+def memory_kib(pid: int) -> dict[str, int] | None:
+    """RSS, PSS and anonymous resident memory of ``pid`` in KiB (None: it is gone)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+        rollup = Path(f"/proc/{pid}/smaps_rollup").read_text()
+    except (FileNotFoundError, ProcessLookupError, PermissionError):
+        return None
+    found: dict[str, int] = {}
+    for text, names in ((status, {"VmRSS": "rss", "RssAnon": "anon"}), (rollup, {"Pss": "pss"})):
+        for line in text.splitlines():
+            name, _, value = line.partition(":")
+            if name in names:
+                found[names[name]] = int(value.split()[0])
+    return found if len(found) == len(MEASURES) else None
+
+
+def show_processes(run: ShowRun) -> dict[str, int]:
+    """Name -> pid of every running process of the show (an agent's worker under its name)."""
+    found: dict[str, int] = {}
+    for name in run.supervisor.names:
+        pid = run.supervisor.pid(name)
+        if pid is None:
+            continue
+        label = name.removeprefix("agent ")
+        found[label] = pid
+        for k, child in enumerate(children_of(pid)):
+            found[f"{label} worker" + (f" {k + 1}" if k else "")] = child
+    return found
+
+
+@dataclass
+class Series:
+    """Samples per process and measure: (seconds since ready, KiB)."""
+
+    points: dict[tuple[str, str], list[tuple[float, int]]] = field(default_factory=dict)
+    at_ready: dict[tuple[str, str], int] = field(default_factory=dict)
+
+    def take(self, t_s: float, run: ShowRun) -> None:
+        totals = dict.fromkeys(MEASURES, 0)
+        for name, pid in show_processes(run).items():
+            sizes = memory_kib(pid)
+            if sizes is None:
+                continue
+            for measure, kib in sizes.items():
+                self.points.setdefault((name, measure), []).append((t_s, kib))
+                totals[measure] += kib
+                if t_s == 0.0:
+                    self.at_ready[(name, measure)] = kib
+        for measure, kib in totals.items():
+            self.points.setdefault(("all together", measure), []).append((t_s, kib))
+            if t_s == 0.0:
+                self.at_ready[("all together", measure)] = kib
+
+
+def slope_mib_per_h(points: list[tuple[float, int]], after_s: float) -> float | None:
+    """Least-squares slope in MiB/hour of the points at or after ``after_s``."""
+    kept = [(t, v) for t, v in points if t >= after_s]
+    if len(kept) < 3:
+        return None
+    fit = statistics.linear_regression([t for t, _ in kept], [v for _, v in kept])
+    return fit.slope * 3600.0 / 1024.0
+
+
+def report(series: Series, warmup_s: float) -> None:
+    """One line per process: ready / end / peak / slope of RSS, PSS and anonymous memory."""
+    names = list(dict.fromkeys(name for name, _ in series.points))
+    names.sort(key=lambda n: n == "all together")
+    heads = "".join(f" {m.upper():>5}: ready   end  peak   slope/h" for m in MEASURES)
+    print(f"  {'process':16}{heads}")
+    for name in names:
+        cells = []
+        for measure in MEASURES:
+            points = series.points.get((name, measure), [])
+            if not points:
+                cells.append(f" {'':5}  {'-':>5} {'':5} {'':5} {'':9}")
+                continue
+            ready = series.at_ready.get((name, measure))
+            slope = slope_mib_per_h(points, warmup_s)
+            cells.append(
+                f" {'':5}  {'-' if ready is None else f'{ready / 1024:.0f}':>5}"
+                f" {points[-1][1] / 1024:5.0f} {max(v for _, v in points) / 1024:5.0f}"
+                f" {'-' if slope is None else f'{slope:+7.1f}':>9}"
+            )
+        print(f"  {name:16}" + "".join(cells))
+
+
+def run(args: argparse.Namespace, out_dir: Path) -> tuple[Series, Jobs]:
+    """The show for ``args.minutes`` after its vehicles are ready, sampled every ``sample_s``."""
+    path, show = derived_show(
+        SHOW, out_dir, time_scale=args.time_scale, fleet_hosts=args.fleet_hosts
+    )
+    series, jobs = Series(), Jobs()
+    with (
+        ShowRun(path, show, log_dir=out_dir / "logs") as show_run,
+        show_run.client() as session,
+        Stagehand(session, show_run.keys, period_s=5.0),
+    ):
+        _sub = subscribe(session, show_run.keys.jobs_all, JobState, jobs.on_job)
+        wait_ready(show_run, session, len(show.vehicles), timeout_s=180.0)
+        start = time.monotonic()
+        series.take(0.0, show_run)
+        stop = threading.Event()
+        feeder = threading.Thread(
+            target=keep_waiting, args=(stop, show_run, session, jobs, args.waiting), daemon=True
+        )
+        feeder.start()
+        end = start + args.minutes * 60.0
+        while (now := time.monotonic()) < end:
+            time.sleep(min(args.sample_s, end - now))
+            series.take(time.monotonic() - start, show_run)
+        stop.set()
+        feeder.join(timeout=30.0)
+    return series, jobs
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--minutes", type=float, default=10.0, help="after ready (10)")
+    parser.add_argument("--time-scale", type=float, default=4.0, help="show time_scale (4)")
+    parser.add_argument("--waiting", type=int, default=8, help="characters kept waiting (8)")
+    parser.add_argument("--sample-s", type=float, default=10.0, help="sampling period (10 s)")
+    parser.add_argument(
+        "--fleet-hosts",
+        type=int,
+        default=0,
+        help="the show's fleet_hosts: its vehicles in so many processes sharing their planning"
+        " workers (0, the Airshow's: an agent and a worker per vehicle)",
+    )
+    parser.add_argument("--warmup-s", type=float, default=120.0, help="slopes after this (120 s)")
+    args = parser.parse_args()
+    load_before = os.getloadavg()[0]
+    with tempfile.TemporaryDirectory() as tmp:
+        series, jobs = run(args, Path(tmp))
+    counts = jobs.counts()
+    print(
+        f"memory: {SHOW.name} at time_scale {args.time_scale:g}, fleet_hosts"
+        f" {args.fleet_hosts}, {args.minutes:g} min after"
+        f" ready, {counts['done']} done, {counts['failed']} failed; load (1 min)"
+        f" {load_before:.1f} at start, {os.getloadavg()[0]:.1f} at the end; MiB"
+    )
+    report(series, args.warmup_s)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

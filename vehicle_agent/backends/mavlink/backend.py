@@ -1,0 +1,490 @@
+"""The MAVLink backend: the agent flies a PX4 or ArduPilot vehicle (or ``skyquill sim-mavlink``).
+
+Built from a show's vehicle by :func:`~vehicle_agent.backends.mavlink.create.create_backend`.
+``start`` opens the link and connects (:mod:`~vehicle_agent.backends.mavlink.connect`: our
+ground-station heartbeat, the autopilot's, the telemetry asked for, the show's parameters set and
+read back; if they do not hold, the vehicle is in fault).
+``takeoff``: ArduPilot -> GUIDED (custom mode 4, MAV_CMD_DO_SET_MODE), arm, MAV_CMD_NAV_TAKEOFF
+(param 7: metres above home); PX4 -> stream setpoints for a second, OFFBOARD, arm, then our own
+climb ramp; not while SYS_STATUS says the pre-arm checks fail: then nothing is sent and the
+refusal carries the autopilot's words (asked for with MAV_CMD_RUN_PREARM_CHECKS if unsaid).
+``tick`` streams SET_POSITION_TARGET_LOCAL_NED (p, v, a and the take-off heading) or
+SET_ATTITUDE_TARGET at ``setpoint_rate_hz``; ``land`` switches to the autopilot's landing mode;
+``estop`` force-disarms; ``recover`` makes a vehicle at rest ``idle`` again. ENU inside,
+LOCAL_NED on the wire (origin ``origin_m_enu``).
+
+Failsafe, never fighting the pilot (:mod:`~vehicle_agent.backends.mavlink.watchdog`): a lost
+heartbeat, a mode or arming change we did not command, a STATUSTEXT naming a failsafe, or a gap in
+our setpoint stream longer than the autopilot's timeout stop the stream and set
+``VehicleSnapshot.fault``; commands then raise :class:`VehicleFaultError` (except ``estop``).
+Refused commands raise :class:`CommandRejectedError` with the autopilot's STATUSTEXT reason.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import math
+import time
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+from vehicle_agent.backends.base import BackendError, BackendMode, Setpoint, Vec3, VehicleSnapshot
+from vehicle_agent.backends.mavlink.battery import reset_after_swap
+from vehicle_agent.backends.mavlink.commands import REASON_GRACE_S, CommandChannel
+from vehicle_agent.backends.mavlink.connect import (
+    GCS_HEARTBEAT_PERIOD_S,
+    await_autopilot,
+    request_telemetry,
+    send_gcs_heartbeat,
+    set_show_params,
+)
+from vehicle_agent.backends.mavlink.errors import (
+    CommandRejectedError,
+    LinkLostError,
+    PrearmFailingError,
+    UnsupportedAutopilotError,
+    VehicleFaultError,
+)
+from vehicle_agent.backends.mavlink.frames import LocalFrame
+from vehicle_agent.backends.mavlink.health import fence_problem, link_health
+from vehicle_agent.backends.mavlink.link import MavlinkLink
+from vehicle_agent.backends.mavlink.mocap import MocapForwarder, MocapSource, TickTime
+from vehicle_agent.backends.mavlink.params import ParamChannel
+from vehicle_agent.backends.mavlink.pen import PenOverBoard
+from vehicle_agent.backends.mavlink.response import ResponseAid
+from vehicle_agent.backends.mavlink.settings import MavlinkSettings
+from vehicle_agent.backends.mavlink.snapshot import vehicle_snapshot
+from vehicle_agent.backends.mavlink.state import SEVERITY_WARNING, LinkState
+from vehicle_agent.backends.mavlink.stream import SetpointStream
+from vehicle_agent.backends.mavlink.url import parse_mavlink_url
+from vehicle_agent.backends.mavlink.watchdog import Commanded, Watchdog, WatchLimits
+from vehicle_agent.motion import Move, plan_move
+
+log = logging.getLogger(__name__)
+
+CMD_NAV_LAND, CMD_NAV_TAKEOFF, CMD_DO_SET_MODE = 21, 22, 176
+CMD_ARM_DISARM, CMD_RUN_PREARM_CHECKS = 400, 401
+PREARM_ASK_PERIOD_S = 5.0
+"""How often in [s] an autopilot whose pre-arm checks fail unexplained is asked why."""
+GROUND_MODE_ASK_PERIOD_S = 0.5
+"""How often in [s] a PX4 disarmed in OFFBOARD is asked to go to Hold (a heartbeat is 1 s)."""
+GROUND_MODE_WAIT_S = 3.0
+"""How long in [s] a landing waits for the ground mode before the vehicle is idle anyway (its
+pre-arm state then says it is not in Hold yet)."""
+FORCE_DISARM = 21196.0
+TextHandler = Callable[[int, str], None]
+
+
+class MavlinkBackend:
+    """One autopilot behind the :class:`~vehicle_agent.backends.base.VehicleBackend` protocol."""
+
+    def __init__(
+        self,
+        settings: MavlinkSettings,
+        *,
+        on_text: TextHandler | None = None,
+        mocap_source: MocapSource | None = None,
+        pen: PenOverBoard | None = None,
+    ) -> None:
+        self.settings = settings
+        self.pen = pen
+        """The vehicle's pen, modelled from its pose for the snapshot (None: none)."""
+        self.frame = LocalFrame(settings.origin_m_enu)
+        self.state = LinkState(settings.system_id)
+        self.mode: BackendMode = "idle"
+        self.fault: str | None = None
+        self.events: deque[tuple[int, str]] = deque(maxlen=200)
+        """STATUSTEXTs of the autopilot (severity, text), newest last, for the event log."""
+        self._on_text = on_text
+        self.aid = ResponseAid(settings, seed=settings.system_id or 0)
+        """The vehicle's true state (SITL) and its identified lag."""
+        source = mocap_source if mocap_source is not None else self.aid.mocap_source()
+        self._mocap = MocapForwarder(settings, self.frame, source, lambda: self._flavor().name)
+        self.tick_time = TickTime()
+        """The agent's clock between ticks (truth stamps, mocap)."""
+        self._link: MavlinkLink | None = None
+        self._heartbeat_seen = asyncio.Event()
+        self.commands = CommandChannel(lambda: self.link, self.state,
+            timeout_s=settings.command_timeout_s, attempts=settings.command_attempts)  # fmt: skip
+        self.params = ParamChannel(lambda: self.link, self.state, lambda: self._flavor().name,
+            timeout_s=settings.command_timeout_s, attempts=settings.command_attempts)  # fmt: skip
+        self.params_set: dict[str, float] = {}
+        """Parameters set and read back at connect, by name."""
+        limits = WatchLimits(settings.heartbeat_timeout_s, settings.setpoint_timeout_s,
+                             settings.takeoff_timeout_s, settings.land_timeout_s)  # fmt: skip
+        self.watchdog = Watchdog(limits)
+        self._now_s = 0.0
+        self._commanded_mode: int | None = None
+        self._commanded_at = 0  # heartbeat count when our last mode/arming change was accepted
+        self._last_gcs_heartbeat_s = -math.inf
+        self._prearm_asked_s = -math.inf
+        self._ground_mode_asked_s = -math.inf
+        self._ground_mode_since_s = math.inf  # when we began to ask for it (inf: not asking)
+        self._hold: Setpoint | None = None
+        self._climb: Move | None = None
+        self._climb_to: tuple[Vec3, Vec3] | None = None  # (from, to): planned at the next tick
+        self.stream = SetpointStream(settings, self.frame, self.state, lambda: self.link)
+
+    @property
+    def control_period_s(self) -> float:
+        return self.settings.control_period_s
+
+    @property
+    def setpoints_sent(self) -> int:
+        """Setpoints sent so far."""
+        return self.stream.sent
+
+    @property
+    def link(self) -> MavlinkLink:
+        if self._link is None:
+            raise LinkLostError("MAVLink backend not started")
+        return self._link
+
+    # --- connection --------------------------------------------------------------------------
+    async def start(self) -> VehicleSnapshot:
+        """Open the link and wait for the autopilot's heartbeat."""
+        s = self.settings
+        self._link = MavlinkLink(parse_mavlink_url(s.url), self._on_message)
+        await self._link.open()
+        try:
+            await await_autopilot(self.state, self._heartbeat_seen, self._send_gcs_heartbeat,
+                                  url=s.url, timeout_s=s.connect_timeout_s)  # fmt: skip
+        except (LinkLostError, UnsupportedAutopilotError):
+            self.close_link()
+            raise
+        flavor = self._flavor().name
+        request_telemetry(
+            self.commands, s.telemetry_rate_hz, self.aid.truth_message(flavor), flavor
+        )
+        # also after a fault: the autopilot (or the pilot) still flies on the mocap
+        self._mocap.start(lambda: self._link, self.tick_time)
+        if self.state.armed:
+            self.fault = "vehicle already armed when the agent connected: the pilot has it"
+        else:
+            if s.set_params:
+                fault = await set_show_params(self.params, s, self._flavor().name, self.params_set)
+                if fault is not None:
+                    self.fault = fault
+                    log.error("vehicle %s: %s", self.state.system_id, fault)
+            if self._flavor().name == "px4":  # ArduPilot: once it says it uses external nav
+                self._mocap.set_ekf_origin(self.link, self.state.system_id or 0)
+        log.info("MAVLink vehicle %s (%s) on %s", self.state.system_id,
+                 self._flavor().name, s.url)  # fmt: skip
+        return self._snapshot(0.0)
+
+    def _on_message(self, message: Any) -> None:
+        kind = self.state.absorb(message)
+        if kind == "HEARTBEAT":
+            self._heartbeat_seen.set()
+        elif kind == "COMMAND_ACK":
+            self.commands.on_ack(message)
+        elif kind == "PARAM_VALUE":
+            self.params.on_param_value(message)
+        elif kind in ("SIM_STATE", "HIL_STATE_QUATERNION"):
+            now_s = self.tick_time.now_s(time.monotonic())
+            self.aid.on_message(message, now_s, resting_at_home=not self.state.armed)
+        elif kind == "STATUSTEXT":
+            self._tell_texts()
+
+    def _tell_texts(self) -> None:
+        """Hand on the autopilot's texts completed since the last time (chunks joined: two at
+        once when a cut-off one is followed by another, a late part from ``tick``)."""
+        for severity, text in self.state.take_to_tell():
+            self.commands.on_text(text)
+            self.events.append((severity, text))
+            if "using external nav" in text and self._link is not None:
+                self._mocap.set_ekf_origin(self._link, self.state.system_id or 0)
+            log.log(logging.WARNING if severity <= SEVERITY_WARNING else logging.INFO,
+                    "vehicle %s: %s", self.state.system_id, text)  # fmt: skip
+            if self._on_text is not None:
+                self._on_text(severity, text)
+
+    # --- commands ----------------------------------------------------------------------------
+    async def _set_mode(self, custom_mode: int) -> None:
+        flavor = self._flavor()
+        await self.commands.run(CMD_DO_SET_MODE, *flavor.set_mode_params(custom_mode))
+        self._commanded_mode = custom_mode
+        self._commanded_at = self.state.heartbeats
+
+    def _flavor(self) -> Any:
+        flavor = self.state.flavor
+        if flavor is None:
+            raise LinkLostError("no autopilot heartbeat yet")
+        return flavor
+
+    def _check_usable(self) -> None:
+        if self.fault is not None:
+            raise VehicleFaultError(f"vehicle in fault, not commanding it: {self.fault}")
+
+    async def takeoff(self, hover_m_enu: Vec3) -> None:
+        """GUIDED/OFFBOARD, arm, climb to ``hover_m_enu``; returns once the climb has begun."""
+        self._check_usable()
+        if self.mode != "idle":
+            raise BackendError(f"cannot take off in mode {self.mode}")
+        await self._refuse_while_prearm_fails()
+        flavor = self._flavor()
+        here = self._position_m_enu()
+        self.stream.new_flight(await self._heading_now())
+        self.aid.lag.reset()
+        if flavor.name == "px4":
+            await self._prove_life(Setpoint(position_m_enu=here))
+        await self._set_mode(flavor.offboard_mode)
+        await self.commands.run(CMD_ARM_DISARM, 1.0, arming=True)
+        self._commanded_at = self.state.heartbeats
+        top = (here[0], here[1], hover_m_enu[2])
+        if flavor.name == "ardupilot":
+            try:
+                await self.commands.run(
+                    CMD_NAV_TAKEOFF, *([0.0] * 6), top[2] - self.frame.origin_m_enu[2]
+                )
+            except CommandRejectedError:
+                await self._disarm_on_ground()
+                raise
+            self._climb = None
+        else:
+            self._climb_to = (here, top)
+        self._hold = Setpoint(position_m_enu=hover_m_enu)
+        self._set_backend_mode("takeoff")
+
+    async def _refuse_while_prearm_fails(self) -> None:
+        """Raise :class:`PrearmFailingError` while SYS_STATUS says the pre-arm checks fail,
+        having sent no mode change and no ARM (a ground station offers no arming then): the
+        refusal the autopilot would give, in its words, asked for if it has not said them."""
+        if self.state.preflight is None:
+            return
+        if self.state.prearm_text is None:
+            with contextlib.suppress(BackendError):  # an autopilot without the command
+                await self.commands.run(CMD_RUN_PREARM_CHECKS)
+                await asyncio.sleep(REASON_GRACE_S)  # ArduPilot queues its texts after the ACK
+        why = self.state.preflight  # None: they passed meanwhile
+        if why is not None:
+            raise PrearmFailingError(why)
+
+    def _ask_why_not_ready(self, now_s: float) -> None:
+        """SYS_STATUS says the pre-arm checks fail and the autopilot has not said why (it said
+        it before we listened; ArduPilot repeats it only every 30 s): ask, as a ground
+        station's "check" does, without waiting for the answer."""
+        st = self.state
+        unsaid = st.preflight is not None and st.prearm_text is None and not st.armed
+        if unsaid and now_s - self._prearm_asked_s >= PREARM_ASK_PERIOD_S:
+            self._prearm_asked_s = now_s
+            self.commands.send(CMD_RUN_PREARM_CHECKS)
+
+    async def _heading_now(self) -> float:
+        """The vehicle's heading in [rad] from north (ATTITUDE), held for the whole flight; a
+        vehicle that has not said it within a second is refused the take-off (try again)."""
+        for _ in range(20):
+            if self.state.attitude_ned is not None:
+                return self.state.attitude_ned[2]
+            await asyncio.sleep(0.05)
+        raise CommandRejectedError(
+            CMD_NAV_TAKEOFF, 1, "no ATTITUDE from the vehicle yet: its heading is unknown"
+        )
+
+    async def _prove_life(self, hold: Setpoint) -> None:
+        """PX4: OFFBOARD and arming need a live setpoint stream; stream a second and a bit of
+        the current position on a running clock."""
+        self._hold = hold
+        rate = self.settings.setpoint_rate_hz
+        for k in range(int(rate) + 5):
+            self.stream.send_proof_of_life(hold, self._now_s + k / rate)
+            if k % max(1, round(rate * GCS_HEARTBEAT_PERIOD_S)) == 0:
+                self._send_gcs_heartbeat()  # no tick meanwhile: stay a ground station for PX4
+            await asyncio.sleep(1.0 / rate)
+        self.stream.last_sent_s = self._now_s  # the agent's clock did not run meanwhile
+
+    async def _disarm_on_ground(self) -> None:
+        """Armed but refused the take-off: disarm (best effort) so that it may be retried."""
+        try:
+            await self.commands.run(CMD_ARM_DISARM, 0.0)
+            self._commanded_at = self.state.heartbeats
+        except BackendError as exc:
+            log.warning("vehicle %s: disarm after a refused take-off: %s",
+                        self.state.system_id, exc)  # fmt: skip
+
+    async def land(self) -> None:
+        """The autopilot's landing mode (ArduPilot LAND, PX4 AUTO.LAND) where the vehicle is."""
+        self._check_usable()
+        if self.mode in ("idle", "estop", "landing"):
+            return
+        await self._set_mode(self._flavor().land_mode)
+        self._set_backend_mode("landing")
+
+    async def estop(self) -> None:
+        """Force-disarm now (motors off); best effort, never raises for a silent vehicle."""
+        self._set_backend_mode("estop")
+        if self._link is None or not self.state.connected:
+            return
+        try:
+            await self.commands.run(CMD_ARM_DISARM, 0.0, FORCE_DISARM)
+        except BackendError as exc:
+            log.error("estop of vehicle %s not confirmed: %s", self.state.system_id, exc)
+
+    async def recover(self) -> None:
+        """After an e-stop (a force-disarm) or a fault: ``idle`` again once the autopilot, heard
+        within its heartbeat timeout, says it is disarmed on the ground. Nothing is sent: the
+        next take-off sets the mode and arms through the autopilot's own pre-arm checks."""
+        st = self.state
+        if self._link is None or not st.connected:
+            raise LinkLostError("no link to the autopilot: it cannot be recovered")
+        silent_s = self.watchdog.link_silent_s(self._now_s)
+        if not silent_s <= self.settings.heartbeat_timeout_s:
+            raise LinkLostError(f"no heartbeat from the autopilot for {silent_s:.1f} s")
+        if st.armed:
+            raise BackendError("its motors are still armed")
+        if st.landed_state is not None and st.landed_state != 1:
+            raise BackendError("the autopilot does not say it is on the ground")
+        if self.fault is not None:
+            log.warning("vehicle %s: fault cleared by the operator: %s", st.system_id, self.fault)
+        self.fault, self._hold, self._climb, self._climb_to = None, None, None, None
+        self._commanded_at = st.heartbeats
+        self._set_backend_mode("idle")
+
+    async def swap_battery(self) -> None:
+        """The crew's fresh pack, told to the autopilot where it keeps a count
+        (:mod:`~vehicle_agent.backends.mavlink.battery`)."""
+        await reset_after_swap(self.commands, self.state)
+
+    def close_link(self) -> None:
+        self._mocap.stop()
+        self.commands.cancel_all()
+        self.params.cancel_all()
+        if self._link is not None:
+            self._link.close()
+            self._link = None
+
+    async def close(self) -> None:
+        """Stop streaming and close the link; safe to call twice."""
+        self.close_link()
+
+    # --- the tick ----------------------------------------------------------------------------
+    async def tick(self, setpoint: Setpoint | None, now_s: float) -> VehicleSnapshot:
+        """Supervise, advance our mode, stream one setpoint when due; the state read back."""
+        self._now_s = now_s
+        self.tick_time.ticked(now_s, time.monotonic())
+        self._supervise(now_s)
+        self._tell_texts()  # the part of a chunked text that waited its time for the rest
+        if self._link is not None:
+            self._ask_why_not_ready(now_s)
+        if self.fault is None and self._link is not None:
+            self._advance(now_s)
+            self._stream(setpoint, now_s)
+        elif self.state.heartbeats > self._commanded_at:
+            self._observe_after_fault()
+        if now_s - self._last_gcs_heartbeat_s >= GCS_HEARTBEAT_PERIOD_S:
+            self._last_gcs_heartbeat_s = now_s
+            self._send_gcs_heartbeat()
+        return self._snapshot(now_s)
+
+    def _send_gcs_heartbeat(self) -> None:
+        if self._link is not None:
+            send_gcs_heartbeat(self._link)
+
+    def _set_backend_mode(self, mode: BackendMode) -> None:
+        self.mode = mode
+        self.watchdog.mode_changed()
+        self._ground_mode_since_s = math.inf
+
+    def _fail(self, reason: str) -> None:
+        """Stop streaming for good; the autopilot (or the pilot) flies from here."""
+        if self.fault is None:
+            self.fault = reason
+            log.error("vehicle %s fault: %s", self.state.system_id, reason)
+            if self.mode in ("takeoff", "offboard"):
+                self._set_backend_mode("hold")
+
+    def _observe_after_fault(self) -> None:
+        """In a fault we only watch: a vehicle landed and disarmed (by its pilot) is idle."""
+        st = self.state
+        on_ground = st.landed_state == 1 if st.landed_state is not None else True
+        if self.mode != "estop" and not st.armed and on_ground:
+            self._set_backend_mode("idle")
+
+    def _supervise(self, now_s: float) -> None:
+        commanded = Commanded(self._commanded_mode, self._commanded_at, self.stream.last_sent_s)
+        reason = self.watchdog.check(now_s, self.control_period_s, self.state, self._flavor(),
+                                     self.mode, commanded)  # fmt: skip
+        if reason is not None:
+            self._fail(reason)
+
+    def _advance(self, now_s: float) -> None:
+        st = self.state
+        if self._climb_to is not None:
+            start, top = self._climb_to
+            self._climb = plan_move(start, top, now_s, v_max_mps=self.settings.climb_speed_mps,
+                                    a_max_mps2=0.8)  # fmt: skip
+            self._climb_to = None
+        if self.mode == "takeoff" and self._hold is not None:
+            climb_done = self._climb is None or self._climb.done(now_s)
+            height_error = abs(self._position_m_enu()[2] - self._hold.position_m_enu[2])
+            near = height_error < self.settings.takeoff_tolerance_m
+            if climb_done and st.position_ned is not None and near:
+                if self._climb is not None:  # our own climb (PX4): its outer loop learnt the
+                    self.stream.new_flight(self.stream.heading_ned_rad)  # ground; start afresh
+                self._climb = None
+                self._set_backend_mode("hold")
+        elif self.mode == "landing" and not st.armed and st.heartbeats > self._commanded_at:
+            in_hold_unsaid = st.prearm_mode != st.custom_mode  # no SYS_STATUS in Hold yet
+            if (st.in_offboard_on_ground or in_hold_unsaid) and self._to_ground_mode(
+                now_s, GROUND_MODE_WAIT_S
+            ):
+                return  # landed; idle once in Hold and its pre-arm checks said there
+            self._set_backend_mode("idle")
+            self._hold = None
+        elif self.mode == "idle" and st.in_offboard_on_ground:
+            self._to_ground_mode(now_s, math.inf)  # a refused arming, or found so at connect
+
+    def _to_ground_mode(self, now_s: float, wait_s: float) -> bool:
+        """Ask for the autopilot's ground mode (PX4: Hold) now and then, not awaited (a refusal
+        leaves it where it is); False once asked for longer than ``wait_s``, or when it has
+        none."""
+        flavor = self._flavor()
+        if flavor.ground_mode is None:
+            return False
+        if math.isinf(self._ground_mode_since_s):
+            self._ground_mode_since_s = now_s
+        if now_s - self._ground_mode_asked_s >= GROUND_MODE_ASK_PERIOD_S:
+            self._ground_mode_asked_s = now_s
+            self.commands.send(CMD_DO_SET_MODE, *flavor.set_mode_params(flavor.ground_mode))
+        return now_s - self._ground_mode_since_s < wait_s
+
+    def _stream(self, setpoint: Setpoint | None, now_s: float) -> None:
+        if setpoint is not None and self.mode in ("takeoff", "hold", "offboard"):
+            self._climb, self._climb_to = None, None
+            if self.mode != "offboard":
+                self._set_backend_mode("offboard")
+            self._hold = Setpoint(position_m_enu=setpoint.position_m_enu)
+            target = self.aid.lead(setpoint, now_s)
+        elif self.mode in ("hold", "offboard") and self._hold is not None:
+            if self.mode == "offboard":
+                self._set_backend_mode("hold")
+            target = self._hold
+        elif self.mode == "takeoff" and self._climb is not None:
+            target = self._climb.setpoint(now_s)
+        else:
+            return
+        sent = self.stream.sent
+        self.stream.send(target, now_s)
+        if self.mode in ("hold", "offboard") and self.state.position_ned is not None:
+            if self.stream.sent > sent:
+                self.aid.sent(now_s, target.position_m_enu)
+            self.aid.measured(now_s, self._position_m_enu())
+
+    # --- state out ---------------------------------------------------------------------------
+    def _position_m_enu(self) -> Vec3:
+        ned = self.state.position_ned
+        return self.frame.origin_m_enu if ned is None else self.frame.position_from_ned(ned)
+
+    def _snapshot(self, now_s: float) -> VehicleSnapshot:
+        position = self._position_m_enu()
+        asked = self.settings.fence is not None
+        fence = fence_problem(asked, self.settings.set_params, self.params_set, self._flavor().name)
+        losses = None if self._link is None else self._link.losses
+        health = link_health(self.state, losses, self.watchdog.link_silent_s(now_s),
+                             self._mocap.age_s(now_s), fence)  # fmt: skip
+        return vehicle_snapshot(self.state, now_s, position, self.aid.true_state(now_s),
+                                mode=self.mode, fault=self.fault, pen=self.pen,
+                                health=health)  # fmt: skip

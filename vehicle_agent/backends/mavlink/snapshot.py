@@ -1,0 +1,59 @@
+"""What the MAVLink backend reports of its vehicle each tick, in the show frame (pure).
+
+Position and velocity are the autopilot's own estimate (LOCAL_NED turned ENU); on the ground when
+EXTENDED_SYS_STATE says landed (before it does: when disarmed). The pen is modelled from the
+simulator's true pose when the backend reads it (SITL), otherwise from the estimate and ATTITUDE.
+Idle on the ground and disarmed, ``preflight`` is why the autopilot would not arm (SYS_STATUS,
+and its words in STATUSTEXT); while a landing ends (PX4 put in Hold) it is not asked yet.
+"""
+
+from __future__ import annotations
+
+from vehicle_agent.backends.base import BackendMode, LinkHealth, Vec3, VehicleSnapshot
+from vehicle_agent.backends.mavlink.frames import ned_to_enu
+from vehicle_agent.backends.mavlink.pen import PenOverBoard
+from vehicle_agent.backends.mavlink.state import LinkState
+from vehicle_agent.backends.mavlink.truth import TruthSample
+
+
+def vehicle_snapshot(
+    state: LinkState,
+    now_s: float,
+    position_m_enu: Vec3,
+    truth: TruthSample | None,
+    *,
+    mode: BackendMode,
+    fault: str | None,
+    pen: PenOverBoard | None,
+    health: LinkHealth | None = None,
+) -> VehicleSnapshot:
+    """The vehicle at ``now_s`` in [s] as ``state`` has it, at ``position_m_enu`` in [m] (the
+    estimate in the show frame), with the simulator's ``truth`` if read and the backend's
+    ``mode`` and ``fault``; ``pen``: the pen it carries (None: none); ``health``: the figures
+    of the agent's preflight."""
+    st = state
+    on_ground = st.landed_state == 1 if st.landed_state is not None else not st.armed
+    body, attitude = (position_m_enu, st.attitude_ned) if truth is None else (
+        truth.position_m_enu, truth.attitude_ned_rad)  # fmt: skip
+    reading = None
+    if pen is not None and attitude is not None:
+        reading = pen.read(body, attitude)
+    return VehicleSnapshot(
+        t_s=now_s,
+        position_m_enu=position_m_enu,
+        velocity_mps_enu=ned_to_enu(st.velocity_ned),
+        armed=st.armed,
+        mode=mode,
+        on_ground=on_ground,
+        battery_fraction=st.battery_fraction,
+        battery_voltage_v=st.battery_voltage_v,
+        battery_minutes_left=st.battery_minutes_left,
+        fault=fault,
+        pen_tip_m_enu=None if reading is None else reading.tip_m_enu,
+        pen_width_m=None if reading is None else reading.width_m,
+        pen_contact=None if reading is None else reading.contact,
+        autopilot_mode=None if st.flavor is None else st.flavor.mode_name(st.custom_mode or 0),
+        true_position_m_enu=None if truth is None else truth.position_m_enu,
+        preflight=st.preflight if mode == "idle" and on_ground and not st.armed else None,
+        health=health,
+    )
