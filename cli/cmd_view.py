@@ -22,6 +22,9 @@ if TYPE_CHECKING:
 
 NAME = "view"
 HELP = "Serve the running show live to Foxglove (3D scene, plots, log); read only."
+ROUTER_RELOAD_S = 2.0
+"""Wait after issuing the watcher, in [s]: a running router re-reads its clients within a second
+(``trust/clients.py``)."""
 VIEW_CLIENT = "view"
 """The watcher issued for ``skyquill view`` on the show's machine."""
 
@@ -68,6 +71,7 @@ def _settings(show: Show, client: Path | None) -> BusSettings:
         client = files.cert.parent
         if not files.cert.exists():
             client = issue_client_folder(show, VIEW_CLIENT, "watcher")
+            time.sleep(ROUTER_RELOAD_S)  # a running router admits the new watcher meanwhile
     return client_session_settings(show, client)
 
 
@@ -77,7 +81,7 @@ def _serve(show: Show, args: argparse.Namespace) -> int:
     from bus.keys import ShowKeys
     from bus.pubsub import subscribe_raw
     from bus.session import SessionOpenError, open_session
-    from scene.live import LiveView
+    from scene.live import LIVE_VENUE_PERIOD_S, LiveView
     from trust.pki import KeysError
 
     try:
@@ -106,6 +110,7 @@ def _serve(show: Show, args: argparse.Namespace) -> int:
         )
         try:
             while True:
-                time.sleep(1.0)
+                view.send_fixed()
+                time.sleep(LIVE_VENUE_PERIOD_S)
         finally:
             server.stop()  # the session's close undeclares the subscriber

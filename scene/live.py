@@ -43,6 +43,14 @@ class LiveView:
             for message in self.scene.derive(key, payload, stamp_ns):
                 self._channel(message).log(message.payload, log_time=stamp_ns)
 
+    def send_fixed(self) -> None:
+        """The venue and vehicle models now, whatever the bus says (a viewer of a quiet show,
+        or of one whose bus this view cannot hear, still sees the venue)."""
+        stamp_ns = time.time_ns()
+        with self._lock:
+            for message in self.scene.fixed(stamp_ns, force=True):
+                self._channel(message).log(message.payload, log_time=stamp_ns)
+
     def _channel(self, message: DerivedMessage) -> foxglove.Channel:
         channel = self._channels.get(message.topic)
         if channel is None:

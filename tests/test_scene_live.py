@@ -22,6 +22,7 @@ import websockets
 from scene_decode import protobuf_class
 
 from bus.session import free_tcp_endpoint
+from cli.main import main as skyquill
 from cli.showrun import ShowRun, derived_show, snapshot
 from showfile import load_show
 
@@ -39,6 +40,7 @@ def show_run(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ShowRun]:
     vehicles = load_show(AIRSHOW).vehicles[:2]
     path, show = derived_show(AIRSHOW, out, time_scale=4.0, vehicles=vehicles)
     assert show.security.mode == "mtls"
+    assert skyquill(["keys", str(path), "--client", "view", "--role", "watcher"]) == 0
     with ShowRun(path, show, log_dir=out / "logs") as run:
         yield run
 
