@@ -40,7 +40,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import os
 import random
 import sqlite3
@@ -78,6 +77,7 @@ from bus.pubsub import subscribe  # noqa: E402
 from bus.session import free_tcp_endpoint  # noqa: E402
 from cli.showrun import ShowRun, Stagehand, derived_show  # noqa: E402
 from showfile import Show, dump_show, load_show  # noqa: E402
+from vehicle_agent.job_files import written_whole  # noqa: E402
 
 
 @dataclass
@@ -119,15 +119,6 @@ def run_show(args: argparse.Namespace, out: Path, chaos: bool) -> Result:
         return _run_show(args, out, chaos, None)
     with OwnDisk(out) as disk:
         return _run_show(args, out, chaos, disk)
-
-
-def _whole(job_dir: Path) -> bool:
-    """Whether a job folder holds an attempt written to its end (its metrics name no abort)."""
-    try:
-        summary = json.loads((job_dir / "metrics.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return False
-    return summary.get("abort_reason") is None
 
 
 def _run_show(args: argparse.Namespace, out: Path, chaos: bool, disk: OwnDisk | None) -> Result:
@@ -200,7 +191,7 @@ def _run_show(args: argparse.Namespace, out: Path, chaos: bool, disk: OwnDisk | 
         stored.close()
     job_dirs = show.database_path.parent / "jobs"
     folders = (  # attempts written to their end: a broken-off one keeps its folder too
-        Counter(p.name.split("-")[0] for p in job_dirs.iterdir() if _whole(p))
+        Counter(p.name.split("-")[0] for p in job_dirs.iterdir() if written_whole(p))
         if job_dirs.is_dir()
         else Counter()
     )

@@ -16,7 +16,11 @@ process of the show (the supervisor's children and theirs, e.g. an agent's plann
 
 Printed: the table when every vehicle first reports ready (``ready``: are the workers there
 already, warm?), at the end, the peak, and the least-squares slope of each after ``--warmup-s``
-in MiB/hour; the totals the same way. ``bench_soak.py`` is the long run (disk, pictures).
+in MiB/hour; the totals the same way, then the totals of RSS and PSS against the target of
+1 GiB (ratios) and the machine's load over the run. A drawing process (a child of a planning
+worker, ``vehicle_agent/picture_process.py``) is counted in ``all together`` while it runs, and
+left out of ``long-lived``, whose slope is the one a leak shows in. ``bench_soak.py`` is the
+long run (disk, pictures).
 """
 
 from __future__ import annotations
@@ -43,6 +47,14 @@ from cli.showrun import ShowRun, Stagehand, derived_show  # noqa: E402
 
 MIB = 1024.0 * 1024.0
 MEASURES = ("rss", "pss", "anon")
+TARGET_MIB = 1024.0
+ALL = "all together"
+LONG_LIVED = "long-lived"
+"""The total without the drawing processes, which come and go with each batch of pictures."""
+TOTALS = (LONG_LIVED, ALL)
+TRANSIENT = ("picture", *(f"picture {k}" for k in range(2, 10)))
+"""How the names of drawing processes end (``uav1 worker picture``)."""
+"""Issue 35: a four-vehicle show holds at most 1 GiB in all its processes together."""
 
 
 def memory_kib(pid: int) -> dict[str, int] | None:
@@ -71,7 +83,10 @@ def show_processes(run: ShowRun) -> dict[str, int]:
         label = name.removeprefix("agent ")
         found[label] = pid
         for k, child in enumerate(children_of(pid)):
-            found[f"{label} worker" + (f" {k + 1}" if k else "")] = child
+            worker = f"{label} worker" + (f" {k + 1}" if k else "")
+            found[worker] = child
+            for j, grandchild in enumerate(children_of(child)):  # a picture being drawn
+                found[f"{worker} picture" + (f" {j + 1}" if j else "")] = grandchild
     return found
 
 
@@ -81,22 +96,28 @@ class Series:
 
     points: dict[tuple[str, str], list[tuple[float, int]]] = field(default_factory=dict)
     at_ready: dict[tuple[str, str], int] = field(default_factory=dict)
+    load_1min: list[float] = field(default_factory=list)
+    """The machine's 1-minute load average at each sample."""
 
     def take(self, t_s: float, run: ShowRun) -> None:
-        totals = dict.fromkeys(MEASURES, 0)
+        self.load_1min.append(os.getloadavg()[0])
+        totals = {total: dict.fromkeys(MEASURES, 0) for total in TOTALS}
         for name, pid in show_processes(run).items():
             sizes = memory_kib(pid)
             if sizes is None:
                 continue
             for measure, kib in sizes.items():
                 self.points.setdefault((name, measure), []).append((t_s, kib))
-                totals[measure] += kib
+                totals[ALL][measure] += kib
+                if not name.endswith(TRANSIENT):
+                    totals[LONG_LIVED][measure] += kib
                 if t_s == 0.0:
                     self.at_ready[(name, measure)] = kib
-        for measure, kib in totals.items():
-            self.points.setdefault(("all together", measure), []).append((t_s, kib))
-            if t_s == 0.0:
-                self.at_ready[("all together", measure)] = kib
+        for total, sums in totals.items():
+            for measure, kib in sums.items():
+                self.points.setdefault((total, measure), []).append((t_s, kib))
+                if t_s == 0.0:
+                    self.at_ready[(total, measure)] = kib
 
 
 def slope_mib_per_h(points: list[tuple[float, int]], after_s: float) -> float | None:
@@ -111,9 +132,9 @@ def slope_mib_per_h(points: list[tuple[float, int]], after_s: float) -> float | 
 def report(series: Series, warmup_s: float) -> None:
     """One line per process: ready / end / peak / slope of RSS, PSS and anonymous memory."""
     names = list(dict.fromkeys(name for name, _ in series.points))
-    names.sort(key=lambda n: n == "all together")
+    names.sort(key=lambda n: n in TOTALS)
     heads = "".join(f" {m.upper():>5}: ready   end  peak   slope/h" for m in MEASURES)
-    print(f"  {'process':16}{heads}")
+    print(f"  {'process':20}{heads}")
     for name in names:
         cells = []
         for measure in MEASURES:
@@ -122,13 +143,40 @@ def report(series: Series, warmup_s: float) -> None:
                 cells.append(f" {'':5}  {'-':>5} {'':5} {'':5} {'':9}")
                 continue
             ready = series.at_ready.get((name, measure))
-            slope = slope_mib_per_h(points, warmup_s)
+            # a process that comes and goes has no trend: its samples are other processes
+            gone = len(points) < len(series.load_1min)
+            slope = None if gone else slope_mib_per_h(points, warmup_s)
             cells.append(
                 f" {'':5}  {'-' if ready is None else f'{ready / 1024:.0f}':>5}"
                 f" {points[-1][1] / 1024:5.0f} {max(v for _, v in points) / 1024:5.0f}"
                 f" {'-' if slope is None else f'{slope:+7.1f}':>9}"
             )
-        print(f"  {name:16}" + "".join(cells))
+        print(f"  {name:20}" + "".join(cells))
+
+
+def verdict(series: Series, warmup_s: float) -> None:
+    """The show's RSS and PSS summed over its processes against :data:`TARGET_MIB`: at the end,
+    at the peak, their mean after ``warmup_s`` and its slope, as ratios (no pass or fail)."""
+    for total, measure in ((t, m) for m in ("rss", "pss") for t in TOTALS):
+        points = series.points.get((total, measure), [])
+        if not points:
+            continue
+        end_mib, peak_mib = points[-1][1] / 1024, max(v for _, v in points) / 1024
+        kept = [v / 1024 for t, v in points if t >= warmup_s] or [end_mib]
+        slope = slope_mib_per_h(points, warmup_s)
+        print(
+            f"  {measure.upper()} {total:12} against {TARGET_MIB:.0f} MiB: end {end_mib:.0f}"
+            f" ({end_mib / TARGET_MIB:.2f}), peak {peak_mib:.0f} ({peak_mib / TARGET_MIB:.2f}),"
+            f" mean after {warmup_s:.0f} s {statistics.fmean(kept):.0f}"
+            f" ({statistics.fmean(kept) / TARGET_MIB:.2f}), slope"
+            f" {'-' if slope is None else f'{slope:+.0f} MiB/h'}"
+        )
+    if series.load_1min:
+        loads = series.load_1min
+        print(
+            f"  load (1 min) over the samples: min {min(loads):.1f},"
+            f" mean {statistics.fmean(loads):.1f}, max {max(loads):.1f}"
+        )
 
 
 def run(args: argparse.Namespace, out_dir: Path) -> tuple[Series, Jobs]:
@@ -186,6 +234,7 @@ def main() -> int:
         f" {load_before:.1f} at start, {os.getloadavg()[0]:.1f} at the end; MiB"
     )
     report(series, args.warmup_s)
+    verdict(series, args.warmup_s)
     return 0
 
 

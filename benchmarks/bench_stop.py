@@ -36,9 +36,10 @@ AIRSHOW = ROOT / "shows" / "airshow-2014.yaml"
 SPACING_M = 2.0
 
 
-def wide_show(out: Path, count: int) -> tuple[Path, Show]:
-    """The Airshow show with ``count`` vehicles, each over its own board."""
-    base = load_show(AIRSHOW)
+def wide_show(out: Path, count: int, source: Path = AIRSHOW) -> tuple[Path, Show]:
+    """The show of ``source`` (the Airshow's) with ``count`` vehicles, each over its own board
+    (a copy of its first), ``SPACING_M`` apart along x."""
+    base = load_show(source)
     board0, vehicle0 = base.boards[0], base.vehicles[0]
     boards, vehicles = [], []
     for i in range(count):
@@ -51,7 +52,7 @@ def wide_show(out: Path, count: int) -> tuple[Path, Show]:
                 update={"id": f"uav{i + 1}", "board": f"b{i + 1}", "home_m_enu": (x_m, hy, hz)}
             )
         )
-    return derived_show(AIRSHOW, out, boards=tuple(boards), vehicles=tuple(vehicles))
+    return derived_show(source, out, boards=tuple(boards), vehicles=tuple(vehicles))
 
 
 def wait_present(show: Show, timeout_s: float) -> float:

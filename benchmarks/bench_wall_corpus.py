@@ -36,8 +36,9 @@ from planner.glyphs.glyph import Glyph
 from planner.glyphs.layout import fit_to_area
 from planner.glyphs.text import has_glyph, text_glyph
 from vehicles.hexarotor_sponge.kind import WallSettings, with_default_widths
+from vehicles.hexarotor_sponge.limits import Limits
 from vehicles.hexarotor_sponge.metrics import plan_fidelity
-from vehicles.hexarotor_sponge.nlp import Limits, solve_period
+from vehicles.hexarotor_sponge.nlp import solve_period
 from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing
 from vehicles.kind import StrokeInput
 from vehicles.surface import Surface

@@ -25,8 +25,8 @@ from numpy.typing import NDArray
 from vehicles.hexarotor_sponge.contact_model import hover_control_n, rk4_step, rotor_thrusts
 from vehicles.hexarotor_sponge.corridor import corridor_rows
 from vehicles.hexarotor_sponge.diagnosis import Iterate, infeasible_error
+from vehicles.hexarotor_sponge.limits import Limits
 from vehicles.hexarotor_sponge.nlp import (
-    Limits,
     PeriodSolution,
     cost_weights,
     force_rows,
@@ -42,7 +42,7 @@ from vehicles.hexarotor_sponge.period_nlp import (
     stage_cost,
     wanted_force,
 )
-from vehicles.hexarotor_sponge.solver_cache import IPOPT_OPTIONS
+from vehicles.hexarotor_sponge.solver_cache import IPOPT_OPTIONS, MAX_ITERATIONS
 from vehicles.hexarotor_sponge.steps import steps_per_segment, waypoint_nodes
 from vehicles.hexarotor_sponge.waypoints import Period
 
@@ -80,7 +80,11 @@ def solve_period_opti(period: Period, params: HexarotorParams, limits: Limits) -
     opti.set_initial(var.x, xs)
     opti.set_initial(var.u, us)
     opti.set_initial(var.h, hs)
-    opti.solver("ipopt", {"print_time": False, "expand": True, "record_time": True}, IPOPT_OPTIONS)
+    opti.solver(
+        "ipopt",
+        {"print_time": False, "expand": True, "record_time": True},
+        {**IPOPT_OPTIONS, "max_iter": MAX_ITERATIONS},
+    )
     started = time.perf_counter()
     try:
         values = opti.solve().value

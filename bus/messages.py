@@ -307,6 +307,13 @@ class Telemetry(State, frozen=True):
     force_reference_n: float | None = None
     """Wanted normal contact force in [N] now (the plan's, 0 in free flight), for kinds that
     control force; None otherwise (v1 addition)."""
+    attitude_xyzw_enu: tuple[float, float, float, float] | None = None
+    """The body's attitude: unit quaternion (x, y, z, w) turning body axes forward-left-up into
+    world ENU; None: not known (at rest, an older agent) (v1 addition)."""
+    writing_point_m_enu: tuple[float, float, float] | None = None
+    """Where the writing point (brush tip, sponge, marker) is in [m], ENU; ``position_m_enu`` is
+    the vehicle's reference point, which is the writing point itself for some kinds and the
+    body's centre for others; None: not known (v1 addition)."""
 
 
 class VehicleStatus(State, frozen=True):
@@ -369,9 +376,12 @@ class AgentReport(Request, frozen=True):
 
     vehicle_id: Id
     job_id: Id
-    event: Literal["holding", "started", "progress", "done", "failed"]
+    event: Literal["holding", "started", "progress", "done", "failed", "ended"]
     """``holding``: the vehicle flies the job and has not begun writing it (a lease renewal);
-    ``started``: writing begins; ``progress`` while writing; then ``done`` or ``failed``."""
+    ``started``: writing begins; ``progress`` while writing; then ``done`` or ``failed``;
+    ``ended`` (v1 addition): the job was stopped by something else (a cancel, a land, an
+    emergency stop, a vehicle fault, its lease): what was written of it (``progress``, ``metrics``;
+    ``error.code`` the reason), which changes nothing of the job."""
     planned_duration_s: Duration | None = None
     progress: Fraction = 0.0
     metrics: JobMetrics | None = None

@@ -26,7 +26,6 @@ import queue
 import threading
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
 from typing import IO, Any
@@ -35,6 +34,7 @@ import msgspec
 from mcap.writer import CompressionType, Writer
 
 from bus.keys import ShowKeys
+from bus.mcap_channels import DerivedMessage, McapChannels
 from bus.messages import (
     AgentReport,
     CommandReply,
@@ -67,6 +67,12 @@ class LivelinessChange(msgspec.Struct, frozen=True):
 
     key: str
     alive: bool
+
+
+def _json_schema(message_type: type[msgspec.Struct] | None) -> bytes:
+    """The JSON schema of a recorded channel (``{}``: a topic of no known type)."""
+    schema: dict[str, Any] = msgspec.json.schema(message_type) if message_type else {}
+    return json.dumps(schema, sort_keys=True).encode()
 
 
 def message_type_for_topic(keys: ShowKeys, topic: str) -> type[msgspec.Struct] | None:
@@ -105,34 +111,19 @@ def message_type_for_topic(keys: ShowKeys, topic: str) -> type[msgspec.Struct] |
     return None
 
 
-@dataclass(frozen=True)
-class DerivedMessage:
-    """A message the recording adds beside the bus's own, already encoded: a view of the show
-    in another schema (Foxglove's scene, ``scene.show_scene``), on its own topic."""
-
-    topic: str
-    schema_name: str
-    """e.g. ``foxglove.SceneUpdate``."""
-    schema_encoding: str
-    """``protobuf`` (a FileDescriptorSet) or ``jsonschema``."""
-    schema_data: bytes
-    message_encoding: str
-    """``protobuf`` or ``json``."""
-    payload: bytes
-
-
-Derive = Callable[[str, bytes, int], Iterable[DerivedMessage]]
-"""Called on the writer thread with each recorded bus message (topic, JSON payload, receive time
-in [ns]): the messages to record beside it."""
+Derive = Callable[[str, msgspec.Struct | None, int], Iterable[DerivedMessage]]
+"""Called on the writer thread with each recorded bus message (topic, the message as its topic's
+type decoded it, receive time in [ns]): the messages to record beside it. The message is None on a
+topic of no known type, or for JSON that is not of its topic's type."""
 
 log = logging.getLogger(__name__)
 
 RETRY_AFTER_FULL_S = 10.0
 """After a write failed (a full disk), a new part is tried this often, [s]."""
 _FLUSH = "flush"
-_JSON = msgspec.json.Decoder()
-"""Checks that a payload is JSON before it is recorded (the value is not kept)."""
 """Queue marker: push completed chunks to the disk."""
+_JSON = msgspec.json.Decoder()
+"""Checks that a payload of no known type is JSON before it is recorded (the value is not kept)."""
 
 
 class McapRecorder:
@@ -167,6 +158,8 @@ class McapRecorder:
         """Bus messages whose derived messages could not be made."""
         self.parts = 1
         """Files begun so far."""
+        self._types: dict[str, type[msgspec.Struct] | None] = {}
+        self._decoders: dict[type[msgspec.Struct], msgspec.json.Decoder[Any]] = {}
         self._queue: queue.SimpleQueue[tuple[str, bytes, int] | str | None] = queue.SimpleQueue()
         self._open(self.first_path)
         self._sequence = 0
@@ -197,8 +190,7 @@ class McapRecorder:
         self._size = self._file.tell()
         self._chunks = 0
         """Chunks written to this part (each write of the writer to the file is one)."""
-        self._schemas: dict[str, int] = {}
-        self._channels: dict[str, int] = {}
+        self._book = McapChannels(self._writer)
 
     def _finish(self) -> None:
         if self._failed_at_s is None:
@@ -242,25 +234,38 @@ class McapRecorder:
         stem = self.first_path.with_suffix("")
         self._open(stem.with_name(f"{stem.name}-{self.parts:03d}{self.first_path.suffix}"))
 
-    def _schema_id(self, message_type: type[msgspec.Struct] | None) -> int:
-        name = message_type.__name__ if message_type is not None else "unknown"
-        if name not in self._schemas:
-            schema: dict[str, Any] = (
-                msgspec.json.schema(message_type) if message_type is not None else {}
-            )
-            data = json.dumps(schema, sort_keys=True).encode()
-            self._schemas[name] = self._writer.register_schema(
-                name=f"skyquill.{name}", encoding="jsonschema", data=data
-            )
-        return self._schemas[name]
+    def _type_of(self, topic: str) -> type[msgspec.Struct] | None:
+        if topic not in self._types:
+            self._types[topic] = message_type_for_topic(self.keys, topic)
+        return self._types[topic]
+
+    def _decoded(self, topic: str, payload: bytes) -> msgspec.Struct | None:
+        """``payload`` as its topic's type, for ``derive`` (None: no known type, JSON of another
+        shape, or nothing derived: then it is only checked); raises ``msgspec.DecodeError`` when
+        it is not strict RFC 8259 UTF-8 JSON."""
+        message_type = self._type_of(topic) if self._derive is not None else None
+        if message_type is None:
+            _JSON.decode(payload)  # 6x faster than json.loads
+            return None
+        decoder = self._decoders.get(message_type)
+        if decoder is None:
+            decoder = self._decoders[message_type] = msgspec.json.Decoder(message_type)
+        try:
+            message: msgspec.Struct = decoder.decode(payload)
+        except msgspec.ValidationError:  # JSON, not of this type: recorded all the same
+            _JSON.decode(payload)
+            return None
+        return message
 
     def _channel_id(self, topic: str) -> int:
-        if topic not in self._channels:
-            schema_id = self._schema_id(message_type_for_topic(self.keys, topic))
-            self._channels[topic] = self._writer.register_channel(
-                topic=topic, message_encoding="json", schema_id=schema_id
-            )
-        return self._channels[topic]
+        message_type = self._type_of(topic)
+        return self._book.channel_id(
+            topic,
+            schema_name=f"skyquill.{message_type.__name__ if message_type else 'unknown'}",
+            schema_encoding="jsonschema",
+            schema_data=lambda: _json_schema(message_type),
+            message_encoding="json",
+        )
 
     def record(self, topic: str, payload: bytes, *, time_ns: int | None = None) -> None:
         """Queue one JSON payload for ``topic``; non-JSON payloads are counted in ``skipped``."""
@@ -297,7 +302,7 @@ class McapRecorder:
 
     def _write(self, topic: str, payload: bytes, stamp_ns: int) -> None:
         try:
-            _JSON.decode(payload)  # strict RFC 8259 UTF-8 JSON, 6x faster than json.loads
+            message = self._decoded(topic, payload)
         except msgspec.DecodeError:
             self.skipped += 1
             return
@@ -307,39 +312,21 @@ class McapRecorder:
         )
         self.messages += 1
         if self._derive is not None:
-            self._write_derived(topic, payload, stamp_ns)
+            self._write_derived(topic, message, stamp_ns)
 
-    def _write_derived(self, topic: str, payload: bytes, stamp_ns: int) -> None:
+    def _write_derived(self, topic: str, message: msgspec.Struct | None, stamp_ns: int) -> None:
         assert self._derive is not None
         try:
-            derived = list(self._derive(topic, payload, stamp_ns))
+            derived = list(self._derive(topic, message, stamp_ns))
         except Exception:  # a view of the show must never stop its recording
             if not self.derive_failures:
                 log.exception("derived messages of %s failed (logged once)", topic)
             self.derive_failures += 1
             return
-        for message in derived:
+        for item in derived:
             self._sequence += 1
-            channel_id = self._derived_channel_id(message)
-            self._writer.add_message(
-                channel_id, stamp_ns, message.payload, stamp_ns, self._sequence
-            )
+            self._book.add(item, stamp_ns, self._sequence)
             self.messages += 1
-
-    def _derived_channel_id(self, message: DerivedMessage) -> int:
-        if message.topic not in self._channels:
-            if message.schema_name not in self._schemas:
-                self._schemas[message.schema_name] = self._writer.register_schema(
-                    name=message.schema_name,
-                    encoding=message.schema_encoding,
-                    data=message.schema_data,
-                )
-            self._channels[message.topic] = self._writer.register_channel(
-                topic=message.topic,
-                message_encoding=message.message_encoding,
-                schema_id=self._schemas[message.schema_name],
-            )
-        return self._channels[message.topic]
 
     def record_message(self, topic: str, message: msgspec.Struct) -> None:
         """Record a message struct."""

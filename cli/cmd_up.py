@@ -11,7 +11,9 @@ Without ``--headless`` the operator console runs in the foreground (when this is
 is a viewer: quitting it leaves the show running (``up`` stays in the foreground; Enter reopens the
 console), a crash reopens it. The show stops only on purpose: SIGTERM to ``up``, ``skyquill down
 SHOW`` from any shell, or Ctrl-C (with vehicles in the air, a second Ctrl-C after ``up`` has
-named them: ``cli/interrupt.py``). Each process then gets SIGTERM and its own grace period.
+named them: ``cli/interrupt.py``). Each process then gets SIGTERM and its own grace period,
+group by group, or all at once after a Ctrl-C that found nothing in the air (then said in
+``up.log`` only); a Ctrl-C ends ``up`` with one line and exit status 130, as every command.
 
 A show across several machines (``zenoh.hosts`` in the show file) is started with ``--host NAME``
 on each: that host's router, and the orchestrator and kiosk on the ground station, the agents of
@@ -43,6 +45,7 @@ from cli.supervisor import ChildSpec, Supervisor
 from cli.viewer import ConsoleViewer, UpOutput, enter_pressed
 
 if TYPE_CHECKING:
+    from bus.messages import ShowSnapshot
     from showfile import Show
 
 NAME = "up"
@@ -192,9 +195,11 @@ def _supervise(
     tui: bool,
     kiosk: bool,
 ) -> None:
-    """Start (or adopt) the host's children and keep them up until asked to stop."""
+    """Start (or adopt) the host's children and keep them up until asked to stop; after a
+    Ctrl-C, raise ``KeyboardInterrupt`` once they are stopped (``cli/main.py`` ends it)."""
     from cli.fleets import split_fleets
     from cli.supervisor import child_env, show_children, skyquill_argv
+    from orchestrator.client import snapshot  # here, not at a Ctrl-C (0.18 s at load 10)
 
     agents, fleets = split_fleets(show, plan.vehicle_ids)
     specs = show_children(
@@ -218,7 +223,7 @@ def _supervise(
         die_with_supervisor=False,
         on_spawn=lambda name, pid: _record(runfile, name, pid),
     )
-    stop = StopRequests(lambda: _flying(show), output.say, str(args.show))
+    stop = StopRequests(lambda: _flying(show, snapshot), output.say, str(args.show))
     _install_signals(stop, output)
     try:
         _adopt_survivors(supervisor, specs, previous, runfile, output.say)
@@ -239,11 +244,13 @@ def _supervise(
         else:
             supervisor.run_until(stop.due)
     finally:
-        output.quiet = False
+        output.quiet = stop.grounded  # nothing in the air: a quick stop, in up.log only
         output.say("stopping")
-        output.say(supervisor.stop().summary())
+        output.say(supervisor.stop(grounded=stop.grounded).summary())
         runfile.remove()
         output.close()
+    if stop.by_ctrl_c:  # one line, exit status 130, no interpreter teardown (cli/main.py)
+        raise KeyboardInterrupt
 
 
 def _announce(
@@ -282,11 +289,11 @@ def _record(runfile: RunFile, name: str, pid: int) -> None:
         runfile.save()
 
 
-def _flying(show: Show) -> list[str] | None:
-    """The show's vehicles in the air, as the orchestrator sees them (None: it does not answer,
-    or this host holds no operator certificate)."""
+def _flying(show: Show, snapshot: Callable[..., ShowSnapshot]) -> list[str] | None:
+    """The show's vehicles in the air, as the orchestrator sees them through ``snapshot``
+    (``orchestrator.client.snapshot``); None: it does not answer, or this host holds no operator
+    certificate."""
     from bus.messages import AIRBORNE_STATES
-    from orchestrator.client import snapshot
 
     try:
         vehicles = snapshot(show, timeout_s=FLYING_QUERY_S).vehicles

@@ -113,4 +113,5 @@ def _serve(show: Show, args: argparse.Namespace) -> int:
                 view.send_fixed()
                 time.sleep(LIVE_VENUE_PERIOD_S)
         finally:
+            view.close()
             server.stop()  # the session's close undeclares the subscriber

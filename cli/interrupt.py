@@ -49,6 +49,12 @@ class StopRequests:
         self._terminated = False
         self._interrupted = False
         self._asked_at_s: float | None = None
+        self.by_ctrl_c = False
+        """The stop that :meth:`due` called for is a Ctrl-C's (``up`` ends it with one line and
+        exit status 130), not a SIGTERM's."""
+        self.grounded = False
+        """:meth:`due` called for the stop after seeing no vehicle in the air: the supervisor
+        may stop every process at once (:meth:`cli.supervisor.Supervisor.stop`)."""
 
     def terminate(self) -> None:
         """SIGTERM: stop at once."""
@@ -67,9 +73,11 @@ class StopRequests:
         self._interrupted = False
         now_s = self._clock()
         if self._asked_at_s is not None and now_s - self._asked_at_s <= CONFIRM_WINDOW_S:
+            self.by_ctrl_c = True
             return True
         flying = self._flying()
         if flying == []:
+            self.by_ctrl_c = self.grounded = True
             return True
         what = (
             f"{', '.join(flying)} {'is' if len(flying) == 1 else 'are'} in the air"

@@ -3,7 +3,8 @@
 :class:`RestartPolicy` decides (pure); :class:`Supervisor` carries it out with ``subprocess``.
 Children run in their own session, so a Ctrl-C in the terminal reaches only the supervisor, which
 then stops them group by group (``ChildSpec.stop_group``: agents and kiosk, then the
-orchestrator, then simulated autopilots, then the router): each child of a group gets SIGTERM and
+orchestrator, then simulated autopilots, then the router; all groups together once no vehicle
+is in the air, :meth:`Supervisor.stop`): each child of a group gets SIGTERM and
 its own grace period, and only a child that outlives its own grace gets SIGKILL. The grace is
 measured against the child's progress: past it, a child still using CPU or waiting for one
 is given up to ``stop_limit_s``; one that sits idle (stuck) is killed (``cli/stopping.py``).
@@ -220,18 +221,25 @@ class Supervisor:
             if child.spec.lands_on_stop and process is not None and process.poll() is None:
                 process.send_signal(NOW_SIGNAL)
 
-    def stop(self, grace_s: float | None = None) -> StopReport:
-        """Stop every child, group by group (``ChildSpec.stop_group``; all at once when
-        hurried): SIGTERM, then wait for each child its own grace (``grace_s`` if given, else its
-        ``stop_grace_s``), then SIGKILL only the children that outlived theirs. Returns how long
-        each took."""
+    def stop(self, grace_s: float | None = None, *, grounded: bool = False) -> StopReport:
+        """Stop every child, group by group (``ChildSpec.stop_group``), or all at once when
+        hurried or ``grounded``: SIGTERM, then wait for each child its own grace (``grace_s`` if
+        given, else its ``stop_grace_s``), then SIGKILL only the children that outlived theirs.
+        Returns how long each took.
+
+        ``grounded``: the caller has just seen no vehicle in the air (``cli/interrupt.py``), so
+        no agent has a landing to fly that would need the processes of later groups (its
+        simulated autopilot, the orchestrator that hears it land, the router between them): the
+        groups are stopped together, the stop taking its slowest child's time rather than the
+        sum of every group's (1.9 s of a 2.85 s Ctrl-C at load 13.8, issue 34). Unlike a hurry,
+        no agent is told to skip its landing: one that finds itself in the air still lands."""
         self.stopping = True
         if self.hurried:
             self.hurry()  # children started since the hurry was asked
         started = time.monotonic()
         report = StopReport()
         groups = sorted({c.spec.stop_group for c in self._children.values()})
-        for group in [None] if self.hurried else groups:
+        for group in [None] if self.hurried or grounded else groups:
             members = [c for c in self._children.values() if group in (None, c.spec.stop_group)]
             stopping = [
                 Stopping.of(

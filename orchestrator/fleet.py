@@ -12,6 +12,11 @@ from orchestrator.jobs import Job
 
 READY_STATES: frozenset[str] = frozenset({"idle", "landed"})
 """Vehicle states in which a vehicle may take a new job."""
+RELAY_BURST = 10.0
+"""Log lines a vehicle's own words (its events, its ``ended`` reports) make at once, before the
+rate limit applies."""
+RELAY_RATE_PER_S = 1.0
+"""Log lines of a vehicle's own words per second, sustained."""
 
 
 @dataclass(frozen=True)
@@ -103,6 +108,17 @@ class VehicleView:
     """Events of this vehicle that may still be relayed into the log at once (token bucket)."""
     event_tokens_at_s: float | None = None
     """Orchestrator time ``event_tokens`` was last refilled, [s]."""
+
+    def may_log(self, now_s: float) -> bool:
+        """Whether a line of this vehicle's own words may go into the show's log now (a token
+        bucket: :data:`RELAY_BURST` at once, then :data:`RELAY_RATE_PER_S`); takes its token."""
+        since = self.event_tokens_at_s if self.event_tokens_at_s is not None else now_s
+        self.event_tokens = min(RELAY_BURST, self.event_tokens + (now_s - since) * RELAY_RATE_PER_S)
+        self.event_tokens_at_s = now_s
+        if self.event_tokens < 1.0:
+            return False
+        self.event_tokens -= 1.0
+        return True
 
     def summary(self, job_id: str | None) -> VehicleSummary:
         """The wire view of this vehicle."""

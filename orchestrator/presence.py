@@ -33,10 +33,6 @@ from orchestrator.core_types import Effects
 from orchestrator.fleet import VehicleView
 from orchestrator.requeue import hand_back, requeue
 
-RELAY_BURST = 10.0
-"""Events of one vehicle relayed at once before the rate limit applies."""
-RELAY_RATE_PER_S = 1.0
-"""Events of one vehicle relayed per second, sustained."""
 MAX_KIND_CHARS = 40
 MAX_MESSAGE_CHARS = 300
 
@@ -184,17 +180,13 @@ def telemetry(
 
 def vehicle_event(book: BookProtocol, vehicle_id: str, event: Event, now_s: float) -> Effects:
     """An event an agent published about its vehicle (``vehicles/<id>/events``), relayed into the
-    show's log with the orchestrator's time; ``RELAY_BURST`` at once, then ``RELAY_RATE_PER_S``."""
+    show's log with the orchestrator's time, at the rate :meth:`VehicleView.may_log` allows."""
     eff = Effects()
     view = book.vehicles.get(vehicle_id)
     if view is None:
         return eff
-    since = view.event_tokens_at_s if view.event_tokens_at_s is not None else now_s
-    view.event_tokens = min(RELAY_BURST, view.event_tokens + (now_s - since) * RELAY_RATE_PER_S)
-    view.event_tokens_at_s = now_s
-    if view.event_tokens < 1.0:
+    if not view.may_log(now_s):
         return eff
-    view.event_tokens -= 1.0
     book.event(
         eff,
         now_s,

@@ -1,4 +1,6 @@
-"""Agent reports (pure): started / progress / done / failed, idempotent because agents retry.
+"""Agent reports (pure): started / progress / done / failed, idempotent because agents retry;
+``ended`` (what was written of a job stopped by something else) changes no job's state
+(``orchestrator/job_ends.py``).
 
 A report counts only from the vehicle the job was last given to (the service has already checked
 that the report came on that vehicle's own key): ``done`` from any other vehicle is refused
@@ -32,6 +34,7 @@ import msgspec
 from bus.messages import AgentReport, CommandReply, ErrorInfo, VehicleCommand
 from orchestrator import holders, phrases
 from orchestrator.core_types import Effects
+from orchestrator.job_ends import apply_ended
 from orchestrator.jobs import Job, transition, update
 from orchestrator.requeue import hand_back, requeue
 from orchestrator.unwritten import unwritten
@@ -57,6 +60,8 @@ def apply_report(book: BookProtocol, rep: AgentReport, eff: Effects, now_s: floa
         return CommandReply(
             ok=False, error=ErrorInfo(code="unknown_job", message=f"no job {rep.job_id}")
         )
+    if rep.event == "ended":  # what was written, after the fact: decides nothing
+        return apply_ended(book, job, rep, eff, now_s)
     if job.final:
         return CommandReply(ok=True, message=f"job already {job.state}")
     if rep.vehicle_id != job.vehicle_id:
@@ -190,13 +195,13 @@ def _handed_back(
     reason = rep.error.message if rep.error else "no reason given"
     why = f"{rep.vehicle_id} could not start it: {reason}"
     if rep.error is not None and rep.error.code in UNCOUNTED:
-        hand_back(book, eff, job, now_s, why)
+        hand_back(book, eff, job, now_s, why, untouched=True)
     elif job.counted_attempts >= book.config.max_attempts:
         message = f"{job.label} failed on {rep.vehicle_id}: {reason}"
         tries = f"{message}; gave up after {job.counted_attempts} tries"
         return _fail(book, job, rep, eff, now_s, tries)
     else:
-        requeue(book, eff, job, now_s, why, lost=False)
+        requeue(book, eff, job, now_s, why, lost=False, untouched=True)
     book.assign(eff, now_s)
     return CommandReply(ok=True, message="job back in the queue")
 

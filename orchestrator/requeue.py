@@ -38,15 +38,20 @@ def requeue(
     *,
     lost: bool,
     wait_for_holder: bool = False,
+    untouched: bool = False,
 ) -> None:
     """Take an active job back: queued again, or failed after too many lost attempts (or
     hand-backs, :func:`hand_back`);
     ``wait_for_holder``: its vehicle was lost, and the job waits for it a while
-    (``orchestrator/holders.py``)."""
+    (``orchestrator/holders.py``); ``untouched``: its vehicle handed it back saying its brush
+    never touched the board (e.g. ``not_settled`` after its *ready* report), so the board is as
+    it was and needs no fresh sheet."""
     together = phrases.not_begun(book, job)  # its phrase goes back with it, whoever held it
     wait_for_holder = wait_for_holder and not together
     info = ErrorInfo(code="vehicle_lost" if lost else "requeued", message=reason)
-    begun = job.state == "writing" or job.progress > 0 or job.writing_since_s is not None
+    begun = not untouched and (
+        job.state == "writing" or job.progress > 0 or job.writing_since_s is not None
+    )
     if begun and not wait_for_holder:  # a lost holder may be writing on: see holders.py
         left_half_written(book, eff, job, now_s)
     gave_up = _gave_up(book, job, lost and not (wait_for_holder and begun))
@@ -104,10 +109,20 @@ def _with_its_phrase(book: BookProtocol, eff: Effects, job: Job, now_s: float) -
             hand_back(book, eff, other, now_s, why)
 
 
-def hand_back(book: BookProtocol, eff: Effects, job: Job, now_s: float, reason: str) -> None:
+def hand_back(
+    book: BookProtocol,
+    eff: Effects,
+    job: Job,
+    now_s: float,
+    reason: str,
+    *,
+    untouched: bool = False,
+) -> None:
     """Take an active job back without counting its attempt (see the module docstring): queued
-    again, or failed once it has been handed back ``max_handbacks`` times."""
-    requeue(book, eff, update(job, now_s, handbacks=job.handbacks + 1), now_s, reason, lost=False)
+    again, or failed once it has been handed back ``max_handbacks`` times (``untouched``: as
+    :func:`requeue`)."""
+    again = update(job, now_s, handbacks=job.handbacks + 1)
+    requeue(book, eff, again, now_s, reason, lost=False, untouched=untouched)
 
 
 def _gave_up(book: BookProtocol, job: Job, lost: bool) -> str | None:

@@ -1,4 +1,7 @@
-"""Symmetric band systems ``A x = rhs`` in plain numpy: the closed-form fit's normal equations.
+"""Symmetric band systems ``A x = rhs``: the closed-form fit's normal equations.
+
+LAPACK's ``dgbsv`` from numpy's own OpenBLAS solves them where numpy's wheels bundle it
+(planner.lapack_band); elsewhere :func:`solve_symmetric_band_blocks` solves them in plain numpy.
 
 ``A`` is given in LAPACK's upper band storage (``ab[u + i - j, j] == A[i, j]`` for ``i <= j``),
 as :func:`scipy.linalg.solveh_banded` takes it; importing ``scipy.linalg`` would cost a one-off
@@ -11,7 +14,7 @@ round-off made slightly indefinite, where a Cholesky factorisation would stop.
 Measured against ``solveh_banded`` (3 super-diagonals, 3 right-hand sides, one core at load
 1.5): 0.16 against 0.03 ms at n = 88 (a character of 18 s), 0.3-0.5 against 0.08 ms at n = 336
 (the longest characters), 7-11 against 0.8-1.1 ms at n = 5750 (64 characters); the solutions
-agree to 1e-12 relative. A plan makes 12-15 of these solves.
+agree to 1e-12 relative. A plan makes 10-14 of these solves.
 """
 
 from __future__ import annotations
@@ -20,6 +23,8 @@ from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
+
+from planner.lapack_band import band_solver
 
 BLOCK_SIZE = 48
 """Rows per dense block (fewer when the band has fewer rows); 48 was the fastest of 8 to 96 for
@@ -72,7 +77,18 @@ def solve_symmetric_band(
     ab_upper: NDArray[np.float64], rhs: NDArray[np.float64]
 ) -> NDArray[np.float64]:
     """``x`` with ``A x = rhs`` for symmetric ``A`` in upper band storage ``ab_upper`` (u + 1, n);
-    ``rhs`` (n,) or (n, d). Raises ``numpy.linalg.LinAlgError`` where a block is singular."""
+    ``rhs`` (n,) or (n, d). Raises ``numpy.linalg.LinAlgError`` where ``A`` is singular."""
+    lapack = band_solver()
+    if lapack is not None:
+        return lapack(ab_upper, rhs)
+    return solve_symmetric_band_blocks(ab_upper, rhs)
+
+
+def solve_symmetric_band_blocks(
+    ab_upper: NDArray[np.float64], rhs: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """:func:`solve_symmetric_band` in plain numpy, by block LU (see the module docstring).
+    Raises ``numpy.linalg.LinAlgError`` where a block is singular."""
     bandwidth, n = ab_upper.shape[0] - 1, ab_upper.shape[1]
     b = min(BLOCK_SIZE, n)
     diagonal, upper = _blocks(ab_upper, b)

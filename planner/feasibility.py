@@ -5,8 +5,8 @@ at knots), jerk piecewise constant, thrust ``m ||a - g||`` convex in ``a`` (maxi
 Speed is a quartic per span and is sampled 33 times per span (relative error < 1e-4). Besides,
 acceleration and speed are sampled at ``SAMPLED_RATE_HZ`` (every span, both ends included) and
 their largest share of the bounds is reported and checked: the limits hold densely, not only
-where the QP imposes them (the QP's speed polytope is inscribed in the ``v_max`` ball, so it
-holds with up to 11 % to spare; acceleration bounds are exact).
+where the QP imposes them (the hodograph control points are kept in the ``v_max`` ball, which
+bounds the speed everywhere; acceleration bounds are exact).
 """
 
 from __future__ import annotations

@@ -237,6 +237,16 @@ def fit_closed_form(problem: FitProblem) -> SplineFit:
     return evaluate_fit(problem, tau, rows=rows)
 
 
+def closed_form_points(problem: FitProblem) -> tuple[FloatArray, FloatArray]:
+    """Control points (n_ctrl, 3) of eq. (43) and the residuals ``p(t_i) - d_i`` (N, 3): the
+    closed form without the rest of :class:`SplineFit` (costs, data-point velocities), for
+    callers that evaluate many time allocations (planner.timescale)."""
+    rows = basis_rows(problem.alpha * problem.times_s, problem.n_spans)
+    ab, rhs = normal_equations(problem, rows)
+    tau = closed_form_from_normal_equations(problem, ab, rhs)
+    return tau, rows.apply(tau) - problem.points_m
+
+
 def closed_form_from_normal_equations(
     problem: FitProblem, ab: FloatArray, rhs: FloatArray
 ) -> FloatArray:

@@ -3,10 +3,10 @@
 The data points of a character (planner.waypoints) form a polyline. Along it, the fastest rest-to-
 rest motion under the vehicle limits is found by the classic forward-backward pass: each piece
 ``j`` (direction ``u_j``, length ``L_j``) gets the largest acceleration the per-axis bounds allow
-along ``u_j`` and the largest speed the QP's speed polytope allows along it; each vertex gets a
-speed limit from its turn (the velocity turns by ``2 v sin(theta/2)`` within about one smoothing
-time ``corner_time_s`` at that acceleration), zero at a repeated point (a dwell) and at the ends.
-Each piece is then flown accelerate-cruise-decelerate between its vertex speeds.
+along ``u_j`` and the speed limit ``v_max`` (a ball, as planner.timescale reads it); each vertex
+gets a speed limit from its turn (the velocity turns by ``2 v sin(theta/2)`` within about one
+smoothing time ``corner_time_s`` at that acceleration), zero at a repeated point (a dwell) and at
+the ends. Each piece is then flown accelerate-cruise-decelerate between its vertex speeds.
 
 This is bang-bang timing of a path with corners; the minimum-jerk fit smooths both, and
 planner.timescale re-times the result until the fit is within the limits everywhere.
@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from planner.bspline import FloatArray
-from planner.qp_structure import SPEED_DIRECTIONS, SPEED_POLYTOPE_APOTHEM, QpLimits
+from planner.qp_structure import QpLimits
 
 
 def _along(limits: QpLimits, u: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -29,8 +29,7 @@ def _along(limits: QpLimits, u: FloatArray) -> tuple[FloatArray, FloatArray]:
         accel = np.min(np.where(np.abs(u) > 1e-12, bound / np.abs(u), np.inf), axis=1)
     if limits.speed_max_mps is None:
         return accel, np.full(u.shape[0], np.inf)
-    support = np.max(np.abs(u @ SPEED_DIRECTIONS.T), axis=1)
-    return accel, limits.speed_max_mps * SPEED_POLYTOPE_APOTHEM / np.maximum(support, 1e-12)
+    return accel, np.full(u.shape[0], limits.speed_max_mps)
 
 
 def _vertex_speeds(
@@ -49,15 +48,19 @@ def _vertex_speeds(
     return limit
 
 
-def _piece_time_s(v_a: float, v_b: float, length: float, a: float, v_max: float) -> float:
-    """Accelerate from ``v_a``, cruise at most ``v_max``, decelerate to ``v_b`` over ``length``."""
-    if length <= 0.0:
-        return 0.0
-    peak = min(v_max, math.sqrt(max(a * length + 0.5 * (v_a * v_a + v_b * v_b), 0.0)))
-    peak = max(peak, v_a, v_b)
-    ramps = (2.0 * peak * peak - v_a * v_a - v_b * v_b) / (2.0 * a)
-    cruise = max(length - ramps, 0.0) / peak if peak > 0.0 else 0.0
-    return (peak - v_a) / a + (peak - v_b) / a + cruise
+def _piece_times_s(
+    v_a: FloatArray, v_b: FloatArray, length: FloatArray, a: FloatArray, v_max: FloatArray
+) -> FloatArray:
+    """Per piece: accelerate from ``v_a``, cruise at most ``v_max``, decelerate to ``v_b`` over
+    ``length`` (0 for a piece of no length)."""
+    ends2 = v_a * v_a + v_b * v_b
+    peak = np.minimum(v_max, np.sqrt(np.maximum(a * length + 0.5 * ends2, 0.0)))
+    peak = np.maximum(peak, np.maximum(v_a, v_b))
+    ramps = (2.0 * peak * peak - ends2) / (2.0 * a)
+    moving = peak > 0.0
+    cruise = np.where(moving, np.maximum(length - ramps, 0.0) / np.where(moving, peak, 1.0), 0.0)
+    times = (2.0 * peak - v_a - v_b) / a + cruise
+    return np.asarray(np.where(length > 0.0, times, 0.0))
 
 
 def polyline_durations_s(
@@ -76,11 +79,12 @@ def polyline_durations_s(
     v = np.minimum(_vertex_speeds(u, accel, length, corner_time_s), np.append(speed, 0.0))
     v = np.minimum(v, np.concatenate([[0.0], speed]))
     # the passes run on Python floats (the same IEEE arithmetic, without numpy's scalar costs)
-    vs, a_l, l_l, s_l = v.tolist(), accel.tolist(), length.tolist(), speed.tolist()
+    vs, a_l, l_l = v.tolist(), accel.tolist(), length.tolist()
     n = len(l_l)
     for j in range(n):  # forward: reachable from the previous vertex
         vs[j + 1] = min(vs[j + 1], math.sqrt(vs[j] ** 2 + 2.0 * a_l[j] * l_l[j]))
     for j in range(n - 1, -1, -1):  # backward: can still stop in time
         vs[j] = min(vs[j], math.sqrt(vs[j + 1] ** 2 + 2.0 * a_l[j] * l_l[j]))
-    times = np.array([_piece_time_s(vs[j], vs[j + 1], l_l[j], a_l[j], s_l[j]) for j in range(n)])
+    ends = np.array(vs)
+    times = _piece_times_s(ends[:-1], ends[1:], length, accel, speed)
     return np.asarray(np.maximum(times, min_duration_s), dtype=np.float64)

@@ -8,7 +8,8 @@ Variables are the control points of the three axes stacked, ``x = [tau_x; tau_y;
   piecewise linear with these values at the knots, so this bound is exact;
 - speed (optional): the hodograph control points ``alpha K_u tau`` (eq. 47-48) are kept inside a
   polytope of 13 direction pairs (axes, face and body diagonals) inscribed in the ball of radius
-  ``v_max``; by the convex hull property ``||p'(t)|| <= v_max`` (sufficient, ~11 % margin);
+  ``v_max``; by the convex hull property ``||p'(t)|| <= v_max`` (sufficient, ~11 % margin). The
+  lazy strategy of planner.fit_qp imposes them only at hodograph points outside the ball;
 - floor (optional): z control points ``>= z_floor`` so that ``z(t) >= z_floor`` (convex hull).
 
 The constraint matrix never depends on ``alpha``: the bounds are divided by ``alpha^e`` instead, so

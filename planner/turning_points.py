@@ -26,12 +26,13 @@ def _distance_to_segment(points: FloatArray, a: FloatArray, b: FloatArray) -> Fl
     """Distance of each point to segment a-b (to the point a when a == b), in point units."""
     ab = b - a
     length_sq = float(ab @ ab)
-    if length_sq == 0.0:
-        return np.asarray(np.linalg.norm(points - a, axis=1))
-    # Perpendicular distance to the infinite line, as in the paper; for points beyond the ends
-    # the distance to the nearer end, so that a stroke that doubles back keeps its far point.
-    s = np.clip((points - a) @ ab / length_sq, 0.0, 1.0)
-    return np.asarray(np.linalg.norm(points - (a + s[:, None] * ab), axis=1))
+    rel = points - a
+    if length_sq != 0.0:
+        # Perpendicular distance to the infinite line, as in the paper; for points beyond the
+        # ends the distance to the nearer end, so that a stroke that doubles back keeps its far
+        # point.
+        rel = rel - np.clip(rel @ ab / length_sq, 0.0, 1.0)[:, None] * ab
+    return np.asarray(np.sqrt(np.einsum("ij,ij->i", rel, rel)))
 
 
 def split_and_merge(points: FloatArray, threshold: float) -> IntArray:

@@ -9,7 +9,7 @@ from typing import Any, Protocol
 
 import foxglove.messages as fg
 
-from bus.recorder import DerivedMessage
+from bus.mcap_channels import DerivedMessage
 
 WORLD_FRAME = "world"
 """The show's world frame: x east, y north, z up, in [m] (the show file's ENU)."""
@@ -57,6 +57,40 @@ def vector(v: tuple[float, float, float] | Any) -> fg.Vector3:
 
 def point(v: tuple[float, float, float] | Any) -> fg.Point3:
     return fg.Point3(x=float(v[0]), y=float(v[1]), z=float(v[2]))
+
+
+Quaternion = tuple[float, float, float, float]
+"""A quaternion (x, y, z, w), as ``Telemetry.attitude_xyzw_enu``."""
+IDENTITY: Quaternion = (0.0, 0.0, 0.0, 1.0)
+
+
+UNIT_TOLERANCE = 1e-9
+"""A quaternion whose length is this close to 1 is sent as it came, bit for bit."""
+
+
+def unit(q: Quaternion) -> Quaternion:
+    """``q`` scaled to length 1 (the identity for a zero one)."""
+    n = math.sqrt(sum(c * c for c in q))
+    if abs(n - 1.0) <= UNIT_TOLERANCE:
+        return q
+    return IDENTITY if n == 0.0 else (q[0] / n, q[1] / n, q[2] / n, q[3] / n)
+
+
+def quaternion(q: Quaternion) -> fg.Quaternion:
+    return fg.Quaternion(x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
+
+
+def rotated_back(q: Quaternion, v: tuple[float, float, float]) -> tuple[float, float, float]:
+    """``v`` (world axes) in the axes of a body turned by the unit quaternion ``q``: ``R(q)^T v``
+    (``v + 2w (u x v) + 2 u x (u x v)`` with ``u = -(x, y, z)``, the conjugate's vector part)."""
+    ux, uy, uz, w = -q[0], -q[1], -q[2], q[3]
+    cx, cy, cz = uy * v[2] - uz * v[1], uz * v[0] - ux * v[2], ux * v[1] - uy * v[0]
+    dx, dy, dz = uy * cz - uz * cy, uz * cx - ux * cz, ux * cy - uy * cx
+    return (
+        v[0] + 2 * (w * cx + dx),
+        v[1] + 2 * (w * cy + dy),
+        v[2] + 2 * (w * cz + dz),
+    )
 
 
 def yaw_quaternion(yaw_rad: float) -> fg.Quaternion:

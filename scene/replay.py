@@ -5,6 +5,9 @@ vehicle agent) holds ``metrics.json`` and ``flight.npz``: what was flown at 20 H
 every tick (full), with the reference it followed and the plan. :func:`replay_job` feeds that
 flight, sample by sample, through the same scene as a live show (:class:`ShowScene`), adds the
 whole plan as a line from the first instant and the metrics as a log line, and writes one MCAP.
+The vehicle's frame is at its reference point (``base_m_enu`` where the files keep one, else the
+writing point), its writing point below it; the files keep no attitude, so the frame keeps the
+world's axes.
 """
 
 from __future__ import annotations
@@ -20,8 +23,8 @@ import foxglove.messages as fg
 import numpy as np
 from mcap.writer import CompressionType, Writer
 
+from bus.mcap_channels import DerivedMessage, McapChannels
 from bus.messages import Telemetry
-from bus.recorder import DerivedMessage
 from scene.encode import encoded, timestamp
 from scene.show_scene import LOG_TOPIC, PATHS_TOPIC, ShowScene
 from scene.vehicles import JobPaths
@@ -70,22 +73,9 @@ def replay_job(show: Show, folder: JobFolder, out: Path, *, start_ns: int) -> in
     with out.open("wb") as f:
         writer = Writer(f, compression=CompressionType.ZSTD)
         writer.start(profile="", library="skyquill replay")
-        schemas: dict[str, int] = {}
-        channels: dict[str, int] = {}
+        channels = McapChannels(writer)
         for stamp_ns, message in _messages(show, folder, flight, summary, start_ns):
-            if message.topic not in channels:
-                if message.schema_name not in schemas:
-                    schemas[message.schema_name] = writer.register_schema(
-                        name=message.schema_name,
-                        encoding=message.schema_encoding,
-                        data=message.schema_data,
-                    )
-                channels[message.topic] = writer.register_channel(
-                    topic=message.topic,
-                    message_encoding=message.message_encoding,
-                    schema_id=schemas[message.schema_name],
-                )
-            writer.add_message(channels[message.topic], stamp_ns, message.payload, stamp_ns, count)
+            channels.add(message, stamp_ns, count)
             count += 1
         writer.finish()  # type: ignore[no-untyped-call]
     return count
@@ -99,7 +89,8 @@ def _messages(
     if t_s.size == 0:
         raise ReplayError(f"{folder.path}: flight.npz holds no sample")
     point = np.asarray(flight["writing_point_m_enu"], dtype=float)
-    reference = np.asarray(flight.get("reference_m_enu", point), dtype=float)
+    base = np.asarray(flight.get("base_m_enu", point), dtype=float)
+    reference = np.asarray(flight.get("reference_m_enu", base), dtype=float)
     pen_down = np.asarray(flight.get("pen_down", np.zeros(t_s.size, bool)), dtype=bool)
     force = flight.get("force_n")
     yield start_ns, encoded(PATHS_TOPIC, _plan(folder, flight, reference, start_ns))
@@ -109,14 +100,15 @@ def _messages(
             vehicle_id=folder.vehicle_id,
             t_s=float(t_s[i]),
             state="writing",
-            position_m_enu=_xyz(point[i]),
+            position_m_enu=_xyz(base[i]),
             velocity_mps_enu=(0.0, 0.0, 0.0),
             reference_m_enu=_xyz(reference[i]),
             pen_down=bool(pen_down[i]),
-            tracking_error_m=float(np.linalg.norm(point[i] - reference[i])),
+            tracking_error_m=float(np.linalg.norm(base[i] - reference[i])),
             job_id=folder.job_id,
             progress=(i + 1) / t_s.size,
             force_n=None if force is None or not math.isfinite(force[i]) else float(force[i]),
+            writing_point_m_enu=_xyz(point[i]),
         )
         for message in scene.fixed(stamp_ns):
             yield stamp_ns, message

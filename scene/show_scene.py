@@ -14,11 +14,11 @@ from collections.abc import Iterator
 import foxglove.messages as fg
 import msgspec
 
-from bus.keys import ShowKeys
+from bus.mcap_channels import DerivedMessage
 from bus.messages import Event, Telemetry
-from bus.recorder import DerivedMessage, message_type_for_topic
 from scene.encode import encoded, json_encoded, timestamp
-from scene.vehicles import JobPaths, transforms, vehicle_models
+from scene.models import vehicle_models
+from scene.vehicles import JobPaths, transforms
 from scene.venue import venue_update
 from showfile import Show
 
@@ -51,19 +51,20 @@ class ShowScene:
         self.show = show
         self.venue_period_s = venue_period_s
         """The venue and the vehicle models are sent again this often, in [s] of log time."""
-        self.keys = ShowKeys(show.show_id)
         self._paths: dict[str, JobPaths] = {}
         self._paths_sent_ns: dict[str, int] = {}
         self._venue_sent_ns: int | None = None
 
-    def derive(self, topic: str, payload: bytes, stamp_ns: int) -> list[DerivedMessage]:
-        """The scene's messages caused by one bus message (a recorder's ``derive``)."""
+    def derive(
+        self, topic: str, message: msgspec.Struct | None, stamp_ns: int
+    ) -> list[DerivedMessage]:
+        """The scene's messages caused by one bus message, decoded as its topic's type (a
+        recorder's ``derive``: ``bus.recorder.Derive``)."""
         out = list(self.fixed(stamp_ns))
-        message_type = message_type_for_topic(self.keys, topic)
-        if message_type is Telemetry:
-            out += self.telemetry(msgspec.json.decode(payload, type=Telemetry), stamp_ns)
-        elif message_type is Event:
-            out.append(self.event(msgspec.json.decode(payload, type=Event), stamp_ns))
+        if isinstance(message, Telemetry):
+            out += self.telemetry(message, stamp_ns)
+        elif isinstance(message, Event):
+            out.append(self.event(message, stamp_ns))
         return out
 
     def fixed(self, stamp_ns: int, *, force: bool = False) -> Iterator[DerivedMessage]:

@@ -1,21 +1,30 @@
-"""The moving part of the scene: each vehicle's frame (``foxglove.FrameTransforms``), a model of
-it drawn in that frame, its planned and flown paths and its ink as laid down."""
+"""The moving part of the scene: each vehicle's frames (``foxglove.FrameTransforms``), its
+planned and flown paths and its ink as laid down (its model: ``scene.models``)."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import foxglove.messages as fg
 
 from bus.messages import Telemetry
-from scene.encode import WORLD_FRAME, colour, point, pose, timestamp, vector
-from showfile import Show
+from scene.encode import (
+    IDENTITY,
+    WORLD_FRAME,
+    colour,
+    point,
+    pose,
+    quaternion,
+    rotated_back,
+    timestamp,
+    unit,
+    vector,
+)
 
 Point = tuple[float, float, float]
 MAX_PATH_POINTS = 6_000
 """Points kept per line of one job (5 min of telemetry at 20 Hz); past it every other one goes."""
-PLANNED_COLOUR, FLOWN_COLOUR, INK_COLOUR, MODEL_COLOUR = "#0087ff", "#8a8a8a", "#101010", "#ff5f00"
+PLANNED_COLOUR, FLOWN_COLOUR, INK_COLOUR = "#0087ff", "#8a8a8a", "#101010"
 
 
 def setpoint_frame(vehicle_id: str) -> str:
@@ -23,87 +32,54 @@ def setpoint_frame(vehicle_id: str) -> str:
     return f"{vehicle_id}/setpoint"
 
 
+def writing_point_frame(vehicle_id: str) -> str:
+    """The frame of the vehicle's writing point (brush tip, sponge, marker), child of the
+    vehicle's frame."""
+    return f"{vehicle_id}/writing_point"
+
+
 def transforms(t: Telemetry, stamp_ns: int) -> fg.FrameTransforms:
-    """World -> the vehicle's tracked point (its frame, named by its id) and -> its setpoint.
-    Telemetry carries no attitude: the frames keep the world's axes."""
-    identity = fg.Quaternion(x=0.0, y=0.0, z=0.0, w=1.0)
+    """World -> the vehicle's frame (named by its id: its reference point, turned as its body),
+    the vehicle's frame -> its writing point, and world -> its setpoint (world axes).
+
+    The writing point is a child of the vehicle, as a tool frame hangs below ``base_link`` in
+    ROS: its offset is the brush's or the arm's in body axes (nearly constant), so a frame
+    interpolated between two samples stays on the drawn vehicle, and its axes are the body's.
+    Telemetry without attitude (an older agent, a vehicle at rest) keeps the world's axes;
+    without a writing point there is no writing-point frame."""
+    attitude = IDENTITY if t.attitude_xyzw_enu is None else unit(t.attitude_xyzw_enu)
+    stamp = timestamp(stamp_ns)
     frames = [
         fg.FrameTransform(
-            timestamp=timestamp(stamp_ns),
+            timestamp=stamp,
             parent_frame_id=WORLD_FRAME,
             child_frame_id=t.vehicle_id,
             translation=vector(t.position_m_enu),
-            rotation=identity,
+            rotation=quaternion(attitude),
         )
     ]
+    if t.writing_point_m_enu is not None:
+        (wx, wy, wz), (px, py, pz) = t.writing_point_m_enu, t.position_m_enu
+        frames.append(
+            fg.FrameTransform(
+                timestamp=stamp,
+                parent_frame_id=t.vehicle_id,
+                child_frame_id=writing_point_frame(t.vehicle_id),
+                translation=vector(rotated_back(attitude, (wx - px, wy - py, wz - pz))),
+                rotation=quaternion(IDENTITY),
+            )
+        )
     if t.reference_m_enu is not None:
         frames.append(
             fg.FrameTransform(
-                timestamp=timestamp(stamp_ns),
+                timestamp=stamp,
                 parent_frame_id=WORLD_FRAME,
                 child_frame_id=setpoint_frame(t.vehicle_id),
                 translation=vector(t.reference_m_enu),
-                rotation=identity,
+                rotation=quaternion(IDENTITY),
             )
         )
     return fg.FrameTransforms(transforms=frames)
-
-
-def vehicle_models(show: Show, stamp_ns: int) -> fg.SceneUpdate:
-    """A model of each vehicle in its own frame (``frame_locked``: it moves with the frame)."""
-    entities = []
-    for vehicle in show.vehicles:
-        entities.append(
-            fg.SceneEntity(
-                timestamp=timestamp(stamp_ns),
-                frame_id=vehicle.id,
-                id=f"vehicle/{vehicle.id}",
-                frame_locked=True,
-                metadata=[fg.KeyValuePair(key="kind", value=vehicle.kind)],
-                cubes=[_body(vehicle.kind)],
-                cylinders=_rotors(vehicle.kind),
-                texts=[
-                    fg.TextPrimitive(
-                        pose=pose((0.0, 0.0, 0.35)),
-                        billboard=True,
-                        font_size=14.0,
-                        scale_invariant=True,
-                        color=colour("#ffffff"),
-                        text=vehicle.id,
-                    )
-                ],
-            )
-        )
-    return fg.SceneUpdate(entities=entities)
-
-
-ROTORS = {"quadrotor-brush": (4, 0.20, 0.25), "hexarotor-sponge": (6, 0.28, 0.20)}
-"""Per multirotor kind: rotors, their distance from the centre and their disc diameter, in [m]
-(the Airshow quadrotor: 40 cm motor to motor, 10-inch propellers; the Flying Calligrapher's
-rotors 0.28 m out, as in ``vehicles.ROOMS``' footprints)."""
-
-
-def _body(kind: str) -> fg.CubePrimitive:
-    size = (0.6, 0.5, 0.25) if kind not in ROTORS else (0.18, 0.18, 0.06)
-    return fg.CubePrimitive(
-        pose=pose((0.0, 0.0, 0.0)), size=vector(size), color=colour(MODEL_COLOUR)
-    )
-
-
-def _rotors(kind: str) -> list[fg.CylinderPrimitive]:
-    if kind not in ROTORS:
-        return []
-    count, arm_m, diameter_m = ROTORS[kind]
-    return [
-        fg.CylinderPrimitive(
-            pose=pose((arm_m * math.cos(a), arm_m * math.sin(a), 0.04)),
-            size=fg.Vector3(x=diameter_m, y=diameter_m, z=0.01),
-            bottom_scale=1.0,
-            top_scale=1.0,
-            color=colour("#5f5f5f", 0.6),
-        )
-        for a in (2 * math.pi * (i + 0.5) / count for i in range(count))
-    ]
 
 
 @dataclass
@@ -112,9 +88,12 @@ class JobPaths:
 
     job_id: str | None = None
     planned: list[Point] = field(default_factory=list)
+    """The reference of the vehicle's reference point, sample by sample."""
     flown: list[Point] = field(default_factory=list)
+    """Where the reference point went: the line to hold against ``planned``."""
     ink: list[Point] = field(default_factory=list)
-    """Pairs of points: each segment flown with the pen down."""
+    """Pairs of points: each segment the writing point moved with the pen down (the reference
+    point where telemetry has no writing point: an older agent, an old recording)."""
     _last_down: Point | None = None
 
     def add(self, t: Telemetry) -> None:
@@ -127,9 +106,10 @@ class JobPaths:
         if t.reference_m_enu is not None:
             self.planned.append(t.reference_m_enu)
         self.flown.append(t.position_m_enu)
+        pen = t.writing_point_m_enu if t.writing_point_m_enu is not None else t.position_m_enu
         if t.pen_down and self._last_down is not None:
-            self.ink += [self._last_down, t.position_m_enu]
-        self._last_down = t.position_m_enu if t.pen_down else None
+            self.ink += [self._last_down, pen]
+        self._last_down = pen if t.pen_down else None
         for name in ("planned", "flown", "ink"):
             points = getattr(self, name)
             if len(points) > MAX_PATH_POINTS:

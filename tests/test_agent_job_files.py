@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from showfile import load_show
-from vehicle_agent.job_files import JobFilesPolicy, decimated, prune
+from vehicle_agent.job_files import JobFilesPolicy, decimated, prune, written_whole
 
 SHOWS = Path(__file__).resolve().parents[1] / "shows"
 
@@ -61,3 +61,18 @@ def test_decimation_keeps_the_ends_and_no_two_samples_closer_than_the_rate(
     assert keep[0] == 0 and keep[-1] == len(t_s) - 1 and np.all(np.diff(keep) > 0)
     slots = np.floor((t_s[keep] - t_s[0]) * rate_hz + 1e-9)
     assert np.all(np.diff(slots[:-1]) >= 1)  # one sample per 1/rate slot (the last is extra)
+
+
+def test_only_an_attempt_flown_to_its_end_counts_as_written_whole(tmp_path: Path) -> None:
+    def folder(name: str, text: str | None) -> Path:
+        path = tmp_path / name
+        path.mkdir()
+        if text is not None:
+            (path / "metrics.json").write_text(text, encoding="utf-8")
+        return path
+
+    assert written_whole(folder("whole", '{"abort_reason": null, "metrics": {}}'))
+    assert not written_whole(folder("cancelled", '{"abort_reason": "cancelled"}'))
+    assert not written_whole(folder("deviation", '{"abort_reason": "deviation"}'))
+    assert not written_whole(folder("being-written", None))
+    assert not written_whole(folder("torn", '{"abort_reason": nul'))

@@ -84,7 +84,7 @@ def test_a_job_picture_is_titled_by_its_character_and_says_when_it_was_broken_of
     )  # fmt: skip
     broken = replace(cut, flown=replace(cut.flown, abort_reason="deviation"))
     assert picture_title(setup, prepared, broken).endswith(
-        "attempt 1, broken off (deviation) at 50% of its plan"
+        "attempt 1, aborted for deviation at 50% of its plan"
     )
     long = replace(prepared, label="永\n" + "x" * 80)  # one line, cut: the job's id stays in
     assert picture_title(setup, long, half).startswith(f"永 {'x' * 35}... · job j1 on uav1")

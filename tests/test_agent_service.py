@@ -349,7 +349,11 @@ def test_any_other_takeoff_error_is_a_fault(free_tcp_port: Callable[[], int]) ->
         ):
             assert (await orch.command(assign("j1"))).ok
             await wait_for(lambda: service.runner.state == "fault")
-            assert "lost link" in service.runner.message and orch.events() == []
+            assert "lost link" in service.runner.message
+            await wait_for(lambda: orch.events() == ["ended"])  # no result: nothing written
+            (ended,) = [r for r in orch.reports if r.event == "ended"]
+            assert ended.progress == 0.0 and ended.metrics is None and ended.error is not None
+            assert ended.error.code == "vehicle_fault"
 
     asyncio.run(scenario())
 

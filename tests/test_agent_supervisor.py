@@ -279,8 +279,10 @@ def test_skyquill_up_runs_a_show_and_stops_every_process_on_ctrl_c(tmp_path: Pat
             up.wait()
             # its children outlive a killed `up` by design: never leave them to the next test
             subprocess.run(skyquill_argv("down", str(show_path)), env=child_env(), timeout=60)
-    assert up.returncode == 0, stderr
-    assert "skyquill up: stopping" in stderr and "killing" not in stderr
+    assert up.returncode == 130, stderr
+    assert stderr.splitlines()[-1] == "skyquill up: interrupted"
+    assert "skyquill up: stopping" in stderr and "killing" not in stderr  # landing first
+    assert "skyquill up: stopped 3 processes" in stderr
     assert "uav1 is in the air. Ctrl-C again" in stderr
     assert not [pid for pid in children if _alive(pid)]
     assert not run_file_path(show.database_path).exists()

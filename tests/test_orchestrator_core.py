@@ -550,6 +550,24 @@ class FleetMachine(RuleBasedStateMachine):
             self.agent_job[vid] = None
         self._apply(eff)
 
+    @rule(data=st.data(), vid=st.sampled_from([v.vehicle_id for v in VEHICLES]))
+    def ended(self, data: st.DataObject, vid: str) -> None:
+        """An ``ended`` report (what was written of a job stopped otherwise: issue 34), about any
+        job, from any vehicle, at any time: no job's state changes, no command goes out."""
+        if not self.submitted:
+            return
+        job_id = data.draw(st.sampled_from(self.submitted))
+        before = {j.job_id: msgspec.structs.replace(j, metrics=None, updated_at_s=0.0)
+                  for j in self.book.jobs.values()}  # fmt: skip
+        info = ErrorInfo(code="cancelled", message="cancelled at 50% of its plan")
+        rep = AgentReport(vehicle_id=vid, job_id=job_id, event="ended", progress=0.5, error=info)
+        reply, eff = self.book.report(rep, self.now)
+        assert reply.ok and eff.commands == []
+        after = {j.job_id: msgspec.structs.replace(j, metrics=None, updated_at_s=0.0)
+                 for j in self.book.jobs.values()}  # fmt: skip
+        assert after == before
+        self._apply(eff)
+
     @rule(vid=st.sampled_from([v.vehicle_id for v in VEHICLES]), answered=st.booleans())
     def refuse(self, vid: str, answered: bool) -> None:
         job = self.book.active_job_of(vid)

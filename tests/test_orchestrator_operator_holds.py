@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from bus.messages import AgentReport, OperatorCommand, SubmitRequest, VehicleStatus
+from bus.messages import AgentReport, ErrorInfo, OperatorCommand, SubmitRequest, VehicleStatus
 from orchestrator.core import Book, CoreConfig, Effects
 from orchestrator.fleet import VehicleInfo, ready_for_job
 
@@ -166,3 +166,21 @@ def test_release_all_frees_every_held_vehicle_and_leaves_the_queue_paused() -> N
     assert ok and message.startswith("released uav1, uav2") and "resume" in message
     assert not any(v.held or v.paused for v in book.vehicles.values()) and book.queue_paused
     assert eff.settings_changed  # stored: a restarted orchestrator holds nobody
+
+
+def test_a_job_handed_back_unsettled_after_its_ready_report_leaves_the_board_clean() -> None:
+    """The vehicle asked to write (its *ready* report stored) but never settled at the start:
+    its hand-back says the brush never touched, so no fresh sheet is wanted."""
+    book = Book(CoreConfig(show_id="t", vehicles=VEHICLES[:1]), now_s=0.0)
+    book.liveliness("uav1", True, 0.0)
+    _idle(book, "uav1", 0.0)
+    assert _assigned(_submit(book, "j1", 1.0)) == [("uav1", "j1")]
+    ready = AgentReport(vehicle_id="uav1", job_id="j1", event="holding", planned_duration_s=20.0)
+    assert book.report(ready, 2.0)[0].ok
+    assert book.jobs["j1"].writing_since_s is not None
+    error = ErrorInfo(code="not_settled", message="not settled after 2 approaches")
+    unsettled = AgentReport(
+        vehicle_id="uav1", job_id="j1", event="failed", error=error, retry_after_s=5.0
+    )
+    assert book.report(unsettled, 3.0)[0].ok
+    assert book.jobs["j1"].state == "queued" and not book.dirty_boards

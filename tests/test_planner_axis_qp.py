@@ -138,7 +138,8 @@ def test_the_fitter_splits_dense_solves_without_speed_rows_and_agrees(
 
 
 def test_an_axis_without_rows_is_its_closed_form_and_costs_no_solve() -> None:
-    """A floor that the free fit breaks, no acceleration row: z alone goes to the solver."""
+    """A floor that the free fit breaks, no acceleration row: x and y keep their closed form,
+    z alone is held above the floor, by the active set of planner.floor_qp (no QP solve)."""
     p = _problem(seed=3)
     z_free = QpFitter(QpLimits((-50.0,) * 3, (50.0,) * 3)).fit(p).spline.control_points[:, 2]
     floor = float(np.quantile(z_free, 0.2))
@@ -146,7 +147,7 @@ def test_an_axis_without_rows_is_its_closed_form_and_costs_no_solve() -> None:
     fitter = QpFitter(limits, dense_budget_s=10.0)
     sizes = _counting_dense_solves(fitter)
     fit = fitter.fit(p)
-    assert sizes == [p.n_ctrl] * fitter.solves  # z's QP once a fit, x and y in closed form
+    assert (fitter.floor_solves, fitter.solves, sizes) == (1, 0, [])  # no QP, dense or sparse
     assert np.min(fit.spline.control_points[:, 2]) >= floor - 1e-7
     coupled = _tight_solve(build_qp(p, limits))
     np.testing.assert_allclose(fit.spline.control_points.T.ravel(), coupled.x, atol=1e-6)

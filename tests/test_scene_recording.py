@@ -107,3 +107,23 @@ def test_a_scene_that_cannot_be_drawn_never_stops_the_recording(tmp_path: Path) 
         for i in range(5):
             recorder.record(KEYS.telemetry("uav1"), msgspec.json.encode(_circle("uav1", i)))
     assert recorder.derive_failures == 5 and recorder.messages == 5
+
+
+def test_the_scene_is_handed_each_message_decoded_once_as_its_topics_type(tmp_path: Path) -> None:
+    handed: list[tuple[str, object]] = []
+
+    def derive(topic: str, message: msgspec.Struct | None, stamp_ns: int) -> list[object]:
+        handed.append((topic, message))
+        return []
+
+    with McapRecorder(tmp_path / "r.mcap", KEYS, derive=derive) as recorder:  # type: ignore[arg-type]
+        recorder.record(KEYS.telemetry("uav1"), msgspec.json.encode(_circle("uav1", 3)))
+        recorder.record(KEYS.telemetry("uav1"), b'{"vehicle_id": 7}')  # JSON, not Telemetry
+        recorder.record("skyquill/elsewhere/x", b"[1, 2]")  # no known type
+        recorder.record(KEYS.telemetry("uav1"), b"{not json")
+    assert recorder.messages == 3 and recorder.skipped == 1
+    assert handed == [
+        (KEYS.telemetry("uav1"), _circle("uav1", 3)),
+        (KEYS.telemetry("uav1"), None),
+        ("skyquill/elsewhere/x", None),
+    ]

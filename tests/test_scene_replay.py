@@ -20,13 +20,18 @@ OFFSET_M = np.array([0.01, 0.0, 0.0])
 """The made-up flight is the plan moved 1 cm east."""
 
 
-def _flown_job(tmp_path: Path) -> Path:
-    """A compact job j1 (一) on uav1 flown 1 cm east of its plan, and its show file."""
+def _flown_job(tmp_path: Path, *, brush_m: float | None = None) -> Path:
+    """A compact job j1 (一) on uav1 flown 1 cm east of its plan, and its show file; with
+    ``brush_m``, a backend that knows its brush, whose tip hangs that far below the body."""
     setup, prepared = solo_job(tmp_path, "compact")
     s = prepared.samples
     flown = s.position_m_enu + OFFSET_M
+    n = s.t_s.size
+    pen = {} if brush_m is None else {
+        "pen_contact": s.pen_down, "pen_tip_m_enu": flown - [0.0, 0.0, brush_m],
+        "pen_width_m": np.full(n, 0.004)}  # fmt: skip
     trace = recorded_trace(
-        "j1", 1, s.t_s, flown, s.velocity_mps_enu, s.position_m_enu, s.pen_down, None
+        "j1", 1, s.t_s, flown, s.velocity_mps_enu, s.position_m_enu, s.pen_down, **pen
     )
     write_job_report(setup, prepared, trace, job_metrics(setup, prepared, trace))
     show_path = tmp_path / "solo.yaml"
@@ -73,3 +78,28 @@ def test_an_unknown_job_or_attempt_is_one_line_naming_what_is_kept(
     assert skyquill(["replay", str(show_path), "j1", "--attempt", "3"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "no attempt 3 (kept: 1)" in err
+
+
+def test_a_replay_hangs_the_writing_point_below_the_vehicle_and_inks_there(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    show_path = _flown_job(tmp_path, brush_m=0.3)
+    monkeypatch.chdir(tmp_path)
+    assert skyquill(["replay", str(show_path), "j1"]) == 0
+    topics: dict[str, list[object]] = {}
+    with (tmp_path / "j1-uav1-1.mcap").open("rb") as f:
+        for schema, channel, message in make_reader(f).iter_messages():
+            assert schema is not None
+            value = decoded(channel.message_encoding, schema.name, schema.data, message.data)
+            topics.setdefault(channel.topic, []).append(value)
+    with np.load(tmp_path / "jobs" / "j1-uav1-1" / "flight.npz") as flight:
+        base, tips = flight["base_m_enu"], flight["writing_point_m_enu"]
+    body, tip = topics["/tf"][-1].transforms[:2]  # type: ignore[attr-defined]
+    assert [body.translation.x, body.translation.y, body.translation.z] == pytest.approx(base[-1])
+    assert (tip.parent_frame_id, tip.child_frame_id) == ("uav1", "uav1/writing_point")
+    offset = [tip.translation.x, tip.translation.y, tip.translation.z]
+    assert offset == pytest.approx([0.0, 0.0, -0.3], abs=1e-5)  # float32 files
+    paths = topics["/scene/paths"][-1].entities[0]  # type: ignore[attr-defined]
+    ink = next(line for line in paths.lines if line.type == 2)  # LINE_LIST
+    ink_xyz = {tuple(round(c, 4) for c in (p.x, p.y, p.z)) for p in ink.points}
+    assert ink_xyz and ink_xyz <= {tuple(round(float(c), 4) for c in tip) for tip in tips}

@@ -15,7 +15,6 @@ that flew it to its end), and no vehicle put ink for a job while or after anothe
 from __future__ import annotations
 
 import itertools
-import json
 import os
 import pty
 import signal
@@ -47,6 +46,7 @@ from cli.showrun import ShowRun, Stagehand, derived_show, snapshot, submit_texts
 from cli.supervisor import child_env, skyquill_argv
 from showfile import Show, load_show
 from trust.settings import ensure_show_keys, session_settings
+from vehicle_agent.job_files import written_whole
 
 pytestmark = [pytest.mark.multiprocess, pytest.mark.slow, pytest.mark.timeout(120)]
 
@@ -184,7 +184,8 @@ class LiveShow:
         assert all(states[j] == "done" for j in self.acknowledged), states
         folders = [p for p in (show.database_path.parent / "jobs").iterdir()]
         for job_id in self.acknowledged:  # a broken-off attempt keeps its folder too
-            written = [p.name for p in folders if p.name.startswith(f"{job_id}-") and _whole(p)]
+            mine = [p for p in folders if p.name.startswith(f"{job_id}-")]
+            written = [p.name for p in mine if written_whole(p)]
             assert len(written) == 1, f"{job_id} written completely {len(written)} times"
         with self.lock:
             ink = list(self.ink)
@@ -192,13 +193,6 @@ class LiveShow:
             spans = sorted(_ink_spans(ink, job_id))
             for earlier, later in itertools.pairwise(spans):
                 assert earlier[1] < later[0], f"{job_id}: {earlier[2]} and {later[2]} both inked"
-
-
-def _whole(job_dir: Path) -> bool:
-    """Whether a job folder holds an attempt written to its end (``metrics.json`` names no
-    abort)."""
-    summary = json.loads((job_dir / "metrics.json").read_text(encoding="utf-8"))
-    return summary.get("abort_reason") is None
 
 
 def _ink_spans(ink: list[Ink], job_id: str) -> list[tuple[float, float, str]]:

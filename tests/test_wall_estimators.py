@@ -1,4 +1,5 @@
-"""The wall writer's estimators: the attitude filter and the pen-spring observer of the normal."""
+"""The wall writer's estimators: the attitude filter, the pen-spring observer of the normal and
+the disturbance observer of the wind."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ import numpy as np
 import pytest
 
 from vehicles.hexarotor_sponge.attitude_filter import AttitudeFilter
+from vehicles.hexarotor_sponge.disturbance_observer import DisturbanceObserver
 from vehicles.hexarotor_sponge.normal_observer import NormalObserver
 from vehicles.hexarotor_sponge.params import HexarotorParams
 from vehicles.hexarotor_sponge.rotations import rotation_of
@@ -50,3 +52,31 @@ def test_normal_observer_reads_the_tip_off_the_pen_spring() -> None:
     assert obs.contact_position_m(0.1) is None
     assert not obs.touching(0.1)
     assert obs.contact_position_m(0.4) == 0.0
+
+
+def test_disturbance_observer_finds_a_steady_push_behind_a_late_noisy_mocap() -> None:
+    """A 3.2 kg body pushed by an unknown (0.3, -0.2, 0.1) N while its known forces wave it
+    about, seen through motion capture 10 ms late with 1 mm and 5 mm/s of noise: over the
+    fourth second the estimate is within 0.015 N of the push on every axis on average
+    (measured at most 0.004 N) and scatters by under 0.07 N RMS (measured 0.04-0.055 N; a
+    finite difference of the velocity readings, 5 mm/s over 10 ms on 3.2 kg, scatters by
+    2.3 N)."""
+    rng = np.random.default_rng(2)
+    dt, mass = 0.01, 3.2
+    push = np.array([0.3, -0.2, 0.1])
+    observer = DisturbanceObserver(mass, dt)
+    p, v = np.zeros(3), np.zeros(3)
+    readings = [(p.copy(), v.copy())]
+    estimates = []
+    for k in range(400):
+        known = np.array([0.5, -0.3, 0.2]) * np.sin(np.array([1.0, 2.0, 3.0]) * k * dt)
+        a = known + push / mass  # over this period; the observer hears of it at its end
+        p, v = p + v * dt + 0.5 * a * dt**2, v + a * dt
+        readings.append((p.copy(), v.copy()))
+        late_p, late_v = readings.pop(0)  # motion capture: the state one period ago
+        noisy_p = late_p + 1e-3 * rng.standard_normal(3)
+        noisy_v = late_v + 5e-3 * rng.standard_normal(3)
+        estimates.append(observer.update(noisy_p, noisy_v, known))
+    error_n = np.array(estimates[300:]) - push
+    assert np.abs(error_n.mean(axis=0)).max() < 0.015
+    assert np.sqrt(np.mean(error_n**2, axis=0)).max() < 0.07

@@ -19,9 +19,10 @@ from planner.glyphs.text import text_glyph
 from vehicles.hexarotor_sponge.corridor import corridor_rows, segment_times_s, turns_rad
 from vehicles.hexarotor_sponge.fidelity import distance_to_strokes_m
 from vehicles.hexarotor_sponge.kind import WallSettings, with_default_widths
+from vehicles.hexarotor_sponge.limits import Limits
 from vehicles.hexarotor_sponge.long_periods import split_long
 from vehicles.hexarotor_sponge.metrics import as_flown, plan_fidelity, score_writing
-from vehicles.hexarotor_sponge.nlp import Limits, solve_period
+from vehicles.hexarotor_sponge.nlp import solve_period
 from vehicles.hexarotor_sponge.parabolas import FIT_TOLERANCE_M, refined
 from vehicles.hexarotor_sponge.params import HexarotorParams
 from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing

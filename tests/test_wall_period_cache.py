@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from vehicles.hexarotor_sponge import period_cache
-from vehicles.hexarotor_sponge.nlp import Limits, PeriodSolution, PeriodStart, solve_period
+from vehicles.hexarotor_sponge.limits import Limits
+from vehicles.hexarotor_sponge.nlp import PeriodSolution, PeriodStart, solve_period
 from vehicles.hexarotor_sponge.params import HexarotorParams
 from vehicles.hexarotor_sponge.period_cache import SolvedPeriods
 from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing

@@ -11,7 +11,8 @@ import pytest
 
 from planner.errors import InfeasibleTrajectoryError, PlannerError
 from vehicles.hexarotor_sponge import nlp, period_cache, period_nlp, solver_cache, steps
-from vehicles.hexarotor_sponge.nlp import Limits, solve_period
+from vehicles.hexarotor_sponge.limits import Limits
+from vehicles.hexarotor_sponge.nlp import solve_period
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
 from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing
 from vehicles.hexarotor_sponge.waypoints import Period, periods_of

@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 from planner.errors import InfeasibleTrajectoryError, PlannerError
-from vehicles.hexarotor_sponge import nlp
+from vehicles.hexarotor_sponge import nlp, solver_cache
 from vehicles.hexarotor_sponge.diagnosis import least_time_s
-from vehicles.hexarotor_sponge.nlp import Limits, solve_period
+from vehicles.hexarotor_sponge.limits import Limits
+from vehicles.hexarotor_sponge.nlp import solve_period
 from vehicles.hexarotor_sponge.params import HexarotorParams
 from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing
 from vehicles.hexarotor_sponge.waypoints import Period, periods_of
@@ -86,8 +87,8 @@ def _failing(status: str, iterate: str) -> Any:
     was given (``start``) as the last iterate."""
     solve = nlp._solve
 
-    def failing(n: int, rows: bool, problem: Any, params: Any, limits: Any) -> Any:
-        w, stats, iterations, ipopt_s = solve(n, rows, problem, params, limits)
+    def failing(n: int, rows: bool, problem: Any, params: Any, limits: Any, cap: int) -> Any:
+        w, stats, iterations, ipopt_s = solve(n, rows, problem, params, limits, cap)
         w = w if iterate == "solved" else problem.guess
         return w, {**stats, "success": False, "return_status": status}, iterations, ipopt_s
 
@@ -146,3 +147,26 @@ def test_a_limit_that_is_not_positive_is_refused_by_name(name: str, value: float
     with pytest.raises(PlannerError, match=f"planner limit {name} must be positive") as err:
         Limits(**{name: value})
     assert err.value.field == name
+
+
+def test_an_attempt_with_a_retry_after_it_stops_early(monkeypatch: pytest.MonkeyPatch) -> None:
+    """In corridors a period IPOPT finds no trajectory for is tried again with more steps; the
+    attempts before the last stop at the trial cap (a doomed first attempt burned 600 iterations,
+    2.2 s of CPU, before the retry planned it in 19), the last has the full cap, and each
+    attempt has more steps than the one before."""
+    failing = _failing("Maximum_Iterations_Exceeded", "start")
+    calls: list[tuple[int, bool, int]] = []
+
+    def recorded(n: int, rows: bool, problem: Any, params: Any, limits: Any, cap: int) -> Any:
+        calls.append((n, rows, cap))
+        return failing(n, rows, problem, params, limits, cap)
+
+    monkeypatch.setattr(nlp, "_solve", recorded)
+    with pytest.raises(PlannerError):
+        solve_period(_two_corner_strokes()[1], PARAMS, Limits())
+    screening = [(n, cap) for n, rows, cap in calls if not rows]
+    caps = [cap for _, cap in screening]
+    assert caps == [solver_cache.TRIAL_MAX_ITERATIONS] * 2 + [solver_cache.MAX_ITERATIONS]
+    assert solver_cache.TRIAL_MAX_ITERATIONS < solver_cache.MAX_ITERATIONS
+    steps = [n for n, _ in screening]
+    assert steps == sorted(steps) and len(set(steps)) == 3

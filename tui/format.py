@@ -154,8 +154,10 @@ def job_detail(row: QueueRow) -> str:
         return f"{short_id(job.vehicle_id or '?', 16)} {100 * job.progress:.0f}%"
     if row.section == "done":
         return metrics_text(job)
-    reason = job.error.message if job.error is not None else ""
-    return clean(reason or job.state, DETAIL_CHARS)
+    reason = (job.error.message if job.error is not None else "") or job.state
+    if job.state == "cancelled" and job.metrics is not None:  # what its vehicle had written
+        reason = f"{job.metrics.flown_fraction:.0%} written; {reason}"
+    return clean(reason, DETAIL_CHARS)
 
 
 def metrics_text(job: JobState) -> str:

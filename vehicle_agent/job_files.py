@@ -14,6 +14,7 @@ its age limit. Job records in the orchestrator's database are never touched: onl
 
 from __future__ import annotations
 
+import json
 import shutil
 import time
 from dataclasses import dataclass
@@ -82,6 +83,18 @@ def compact_arrays(
         narrow = part.dtype == np.float64 and name != "t_s"
         out[prefix + name] = part.astype(np.float32) if narrow else part
     return out
+
+
+def written_whole(job_dir: Path) -> bool:
+    """Whether a job directory holds an attempt flown to its end: its ``metrics.json`` names no
+    reason it was broken off (``abort_reason``: a safety abort, a cancel, a land, an emergency
+    stop, a fault, a lease given up, ``vehicle_agent/end_reasons.py``); False when it has none or
+    it cannot be read (a directory being written)."""
+    try:
+        summary = json.loads((job_dir / "metrics.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(summary, dict) and summary.get("abort_reason") is None
 
 
 def directory_bytes(path: Path) -> int:

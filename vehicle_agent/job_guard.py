@@ -12,9 +12,8 @@ to confirm it, which the service queues.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
 
-from bus.messages import AgentReport, VehicleCommand
+from bus.messages import AgentReport
 from vehicle_agent.events import EventOutbox
 from vehicle_agent.job_runner import JobRunner
 from vehicle_agent.lease import JobLease
@@ -32,14 +31,11 @@ class JobGuard:
         runner: JobRunner,
         events: EventOutbox,
         vehicle_id: str,
-        now_s: Callable[[], float],
     ) -> None:
         self.lease = lease
         self.runner = runner
         self.events = events
         self.vehicle_id = vehicle_id
-        self._now_s = now_s
-        """The agent's clock, in [s] (commands to the runner are stamped with it)."""
 
     def before_tick(self, wall_s: float, stalled_s: float, progress: float) -> AgentReport | None:
         """Give the job up if it may be someone else's by now; the report asking the orchestrator
@@ -79,7 +75,7 @@ class JobGuard:
         runner, job_id = self.runner, self.runner.job_id
         if job_id is None or runner.phase not in ACTIVE_PHASES:
             return
-        runner.handle_command(VehicleCommand(command="cancel", job_id=job_id), self._now_s())
+        runner.give_up()
         runner.message = f"gave {job_id} up ({why}): brush lifted, returning"
         log.warning("%s: gave job %s up: %s", self.vehicle_id, job_id, why)
         message = f"{self.vehicle_id} gave job {job_id} up: {why}"

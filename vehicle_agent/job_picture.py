@@ -3,16 +3,19 @@ never skipped.
 
 A finished job's picture is first an order (:class:`PictureOrder`: everything drawing it needs),
 written as ``picture.order`` into the job's directory; ``report.png`` replaces it once drawn.
-:class:`PictureWorker` draws the orders in one background thread of the planning worker (a
+:class:`PictureWorker` draws the orders from one background thread of the planning worker (a
 process apart from the agent's control loop, in the batch scheduling class), oldest first, at a
-lower priority than the worker's planning. Its queue in memory holds at most
-:data:`QUEUE_CAPACITY` directories; the orders beyond it wait on disk, and so do those that a
-stopped agent left undrawn: from its first order on, the worker takes up every order of its
-vehicle it finds on disk whenever its queue runs dry. Before, a picture asked for while another
-was being drawn was dropped (212 of 445 jobs pictured in a 20-minute soak at time scale 4).
+lower priority than the worker's planning, each batch in a short-lived drawing process
+(:mod:`vehicle_agent.picture_process`: matplotlib stays out of the worker, issue 35). Its queue
+in memory holds at most :data:`QUEUE_CAPACITY` directories; the orders beyond it wait on disk,
+and so do those that a stopped agent left undrawn: from its first order on, the worker takes up
+every order of its vehicle it finds on disk whenever its queue runs dry. Before, a picture asked
+for while another was being drawn was dropped (212 of 445 jobs pictured in a 20-minute soak at
+time scale 4).
 
 ``python -m vehicle_agent.job_picture JOBS_DIR`` draws every order waiting there now (after a
-show, for the orders that agents stopped before drawing).
+show, for the orders that agents stopped before drawing); ``--each JOB_DIR...`` is the drawing
+process's own command.
 """
 
 from __future__ import annotations
@@ -24,7 +27,6 @@ import pickle
 import sys
 import threading
 import time
-from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -33,6 +35,18 @@ from vehicle_agent.job_files import (
     COMPACT_PICTURE_COLOURS,
     COMPACT_PICTURE_DPI,
     FULL_PICTURE_DPI,
+)
+from vehicle_agent.picture_process import (
+    CPU,
+    DRAWING,
+    DRAWN,
+    FAILED,
+    GONE,
+    BatchOutcome,
+    die_with_parent,
+    draw_apart,
+    drawing_turn,
+    say,
 )
 from vehicles.kind import FlownWriting, WritingPlan
 
@@ -48,9 +62,17 @@ QUEUE_CAPACITY = 64
 """Orders held in memory (directory names only); more wait on disk."""
 PICTURE_NICE_STEP = 5
 """How many nice levels the drawing thread takes below the planning worker's (planning a job
-comes before picturing one already flown; Linux gives each thread its own nice value)."""
+comes before picturing one already flown; Linux gives each thread its own nice value, and the
+drawing processes it starts inherit it)."""
 BACKLOG_WARNING = 4
 """Orders waiting at which the worker first says that pictures fall behind (then at 8, 16...)."""
+DRAW_BATCH = 8
+"""Orders one drawing process draws at most before it exits: its start (interpreter, numpy,
+pydantic, matplotlib: about 1 s of CPU) is shared by a backlog, and its memory (matplotlib's,
+with a figure) is held for a few pictures at a time, not for the show."""
+RETRY_AFTER_S = 10.0
+"""Wall time in [s] before a drawing process is started again after one got nowhere (it could
+not start, or died before its first order): the orders wait on disk meanwhile."""
 
 
 @dataclass(frozen=True)
@@ -114,17 +136,21 @@ def draw_order(job_dir: Path) -> Path | None:
 
 
 class PictureWorker:
-    """Draws one vehicle's job pictures in a background thread, one at a time, every one."""
+    """Draws one vehicle's job pictures, every one: a background thread hands the orders, a
+    batch at a time, to a drawing process apart (:func:`vehicle_agent.picture_process.draw_apart`)
+    that takes the thread's lower priority and exits with its batch."""
 
     def __init__(self, name: str, capacity: int = QUEUE_CAPACITY) -> None:
         self.name = name
         """The vehicle whose pictures these are (its job directories: ``*-<name>-*``)."""
         self.drawn = 0
         """Pictures drawn so far."""
+        self.drawing_cpu_s = 0.0
+        """CPU time in [s] of the drawing processes so far (their imports included)."""
         self._capacity = capacity
-        self._queue: deque[Path] = deque()
+        self._queue: dict[Path, None] = {}  # in order, each directory once
+        self._drawing: list[Path] = []
         self._cond = threading.Condition()
-        self._busy = False
         self._on_disk = False  # orders may wait on disk that are not in the queue
         self._jobs_dir: Path | None = None
         self._thread: threading.Thread | None = None
@@ -132,9 +158,9 @@ class PictureWorker:
 
     @property
     def waiting(self) -> int:
-        """Orders not drawn yet that this worker knows of (the one being drawn included)."""
+        """Orders not drawn yet that this worker knows of (those being drawn included)."""
         with self._cond:
-            return len(self._queue) + self._busy
+            return self._known()
 
     def submit(self, job_dir: Path, order: PictureOrder) -> None:
         """Write ``order`` into ``job_dir`` and queue it (it waits on disk when the queue is
@@ -147,11 +173,12 @@ class PictureWorker:
                     target=self._run, name=f"pictures-{self.name}", daemon=True
                 )
                 self._thread.start()
-            elif len(self._queue) < self._capacity:
-                self._queue.append(job_dir)
-            else:
-                self._on_disk = True
-            waiting = len(self._queue) + self._busy
+            elif job_dir not in self._queue and job_dir not in self._drawing:
+                if len(self._queue) < self._capacity:
+                    self._queue[job_dir] = None
+                else:
+                    self._on_disk = True
+            waiting = self._known()
             self._cond.notify_all()
         self._say_backlog(waiting)
 
@@ -160,8 +187,11 @@ class PictureWorker:
         with self._cond:
             return self._cond.wait_for(self._idle, timeout_s)
 
+    def _known(self) -> int:
+        return len(self._queue) + len(self._drawing)
+
     def _idle(self) -> bool:
-        return not self._queue and not self._busy and not self._on_disk
+        return not self._queue and not self._drawing and not self._on_disk
 
     def _run(self) -> None:
         with contextlib.suppress(OSError):  # a step down in priority is always allowed
@@ -170,17 +200,24 @@ class PictureWorker:
             os.setpriority(os.PRIO_PROCESS, tid, nice + PICTURE_NICE_STEP)
         while True:
             with self._cond:
+                self._drawing = []
                 while not self._queue:
                     if self._on_disk:
                         self._on_disk = False
-                        self._queue.extend(self._orders_on_disk())
+                        for job_dir in self._orders_on_disk():
+                            self._queue.setdefault(job_dir)
                         continue
-                    self._busy = False
                     self._cond.notify_all()
                     self._cond.wait()
-                job_dir = self._queue.popleft()
-                self._busy = True
-            self._draw(job_dir)
+                assert self._jobs_dir is not None
+            with drawing_turn(self._jobs_dir):  # what waits meanwhile joins this batch
+                with self._cond:
+                    self._drawing = list(self._queue)[:DRAW_BATCH]
+                    for job_dir in self._drawing:
+                        del self._queue[job_dir]
+                got_somewhere = self._draw(self._drawing)
+            if not got_somewhere:
+                time.sleep(RETRY_AFTER_S)
 
     def _orders_on_disk(self) -> list[Path]:
         """This vehicle's undrawn orders on disk, oldest first, as many as the queue holds
@@ -195,17 +232,31 @@ class PictureWorker:
             self._on_disk = True
         return [job_dir for _, job_dir in found[: self._capacity]]
 
-    def _draw(self, job_dir: Path) -> None:
-        started_s = time.thread_time()
+    def _draw(self, batch: list[Path]) -> bool:
+        """Draw ``batch`` in a process apart; False when no drawing process got anywhere
+        (its orders stay on disk, taken up again after :data:`RETRY_AFTER_S`)."""
         try:
-            picture = draw_order(job_dir)
-        except Exception:
-            log.exception("%s: cannot draw the picture of %s", self.name, job_dir.name)
-            return
-        if picture is not None:
-            self.drawn += 1
-            cpu_s = time.thread_time() - started_s
-            log.debug("%s: drew %s in %.2f s of CPU", self.name, picture, cpu_s)
+            outcome = draw_apart(batch)
+        except OSError as exc:
+            log.error("%s: cannot start drawing pictures: %s", self.name, exc)
+            outcome = BatchOutcome(not_reached=batch)
+        self.drawn += len(outcome.drawn)
+        self.drawing_cpu_s += outcome.cpu_s or 0.0
+        for job_dir, reason in outcome.failed:
+            log.error("%s: cannot draw the picture of %s: %s", self.name, job_dir.name, reason)
+        if outcome.died_on is not None:  # what killed the child would kill the next one
+            with contextlib.suppress(FileNotFoundError):
+                os.replace(outcome.died_on / ORDER_NAME, outcome.died_on / FAILED_NAME)
+            log.error(
+                "%s: the drawing process died (code %s) on the picture of %s; set aside",
+                self.name,
+                outcome.exit_code,
+                outcome.died_on.name,
+            )
+        if outcome.not_reached:
+            with self._cond:
+                self._on_disk = True
+        return len(outcome.not_reached) < len(batch)
 
     def _say_backlog(self, waiting: int) -> None:
         """Warn when the backlog reaches 4, 8, 16... pictures (once per level until it drains)."""
@@ -220,8 +271,26 @@ class PictureWorker:
             )
 
 
+def draw_each(job_dirs: list[str]) -> int:
+    """The drawing process's work (``--each``): draw the orders of ``job_dirs`` in turn and
+    say what became of each on stdout (:mod:`vehicle_agent.picture_process`)."""
+    die_with_parent()
+    for text in job_dirs:
+        say(DRAWING, text)
+        try:
+            picture = draw_order(Path(text))
+        except Exception as exc:
+            say(FAILED, text, f"{type(exc).__name__}: {exc}")
+        else:
+            say(GONE if picture is None else DRAWN, text)
+    say(CPU, f"{time.process_time():.3f}")
+    return 0
+
+
 def main(argv: list[str]) -> int:
     """Draw every order waiting in the job directories under ``argv[0]``, oldest first."""
+    if argv[:1] == ["--each"]:
+        return draw_each(argv[1:])
     if len(argv) != 1 or not Path(argv[0]).is_dir():
         print("usage: python -m vehicle_agent.job_picture JOBS_DIR", file=sys.stderr)
         return 2

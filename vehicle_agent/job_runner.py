@@ -33,11 +33,15 @@ metrics of what was flown (``TickActions.aborted``). After an abort the vehicle 
 Reports: ``started``, ``progress`` and, for a job flown to its end, the service's result report
 (``done`` only within the writing bounds); ``failed`` when the job cannot be planned, or with
 ``retry_after_s`` when the vehicle refused to take off (pre-arm checks). An interrupted or
-stopped job is abandoned without a report: the status drops its ``job_id`` at once, and the
-orchestrator, which asked for the interruption or was away, puts the job back in the queue for
-another vehicle (or cancels it). Whatever breaks a job off after its writing began (an abort, an
-interruption, a stop), what was flown of it goes out in ``TickActions.aborted``: the service
-measures it against the whole plan and keeps its files as a finished job's.
+stopped job (a cancel, a land, an emergency stop, a fault, the job given up on its lease:
+:meth:`JobRunner.give_up`) is abandoned with no result: the status drops its ``job_id`` at once,
+and the orchestrator, which asked for the interruption or was away, puts the job back in the
+queue for another vehicle (or cancels it); an ``ended`` report only tells it what was written
+(``vehicle_agent/end_reasons.py``). Whatever breaks a job off after its writing began (an
+abort, an interruption, a stop), what was flown of it goes out in ``TickActions.aborted``: the
+service measures it against the whole plan, keeps its files as a finished job's and sends its
+report (the abort's ``failed``, else ``ended``); before, an ``ended`` report that nothing was
+written goes out at once.
 """
 
 from __future__ import annotations
@@ -49,6 +53,7 @@ from bus.messages import (
     VehicleCommand,
 )
 from vehicle_agent.backends.base import Vec3, VehicleSnapshot
+from vehicle_agent.end_reasons import GIVEN_UP
 from vehicle_agent.preflight import PreflightReadings, preflight_problem
 from vehicle_agent.runner_io import (
     ACTIVE_PHASES,
@@ -207,6 +212,12 @@ class JobRunner(RunnerPhases):
         if self.phase in ACTIVE_PHASES:
             self._interrupt("cancelled", "job cancelled: returning home")
         return CommandReply(ok=True, message=f"cancelled {job_id}")
+
+    def give_up(self) -> None:
+        """Stop the job on its lease (``vehicle_agent/job_guard.py``): as a cancel does, its
+        end said ``given_up`` (``vehicle_agent/end_reasons.py``)."""
+        if self._job is not None and self.phase in ACTIVE_PHASES:
+            self._interrupt(GIVEN_UP, f"gave {self.job_id} up: returning home")
 
     def _land(self) -> CommandReply:
         if self.phase == "stopped":

@@ -16,6 +16,7 @@ from bus.public_text import drawing_label
 from planner.errors import PlannerError
 from planner.glyphs import Glyph, parse_strokes_json, text_glyph
 from planner.samples import FloatArray
+from vehicle_agent.end_reasons import flown_fraction, how_it_ended
 from vehicle_agent.job_files import JobFilesPolicy, compact_arrays, prune
 from vehicle_agent.job_picture import PictureOrder, PictureWorker, draw_picture
 from vehicle_agent.job_runner import PreparedJob
@@ -122,19 +123,6 @@ def job_metrics(setup: VehicleSetup, prepared: PreparedJob, trace: JobTrace) -> 
     return msgspec.structs.replace(metrics, extra=metrics.extra | pace_figures(plan.pace))
 
 
-def flown_fraction(prepared: PreparedJob, trace: JobTrace) -> float:
-    """Fraction 0..1 of the plan flown: the trace's last tick (writing time from the start of
-    the plan, as :class:`vehicle_agent.runner_job.RunningJob` records it) over the plan's
-    duration; 1 for a plan of no duration."""
-    duration_s = prepared.samples.duration_s
-    t_s = trace.flown.t_s
-    if duration_s <= 0.0:
-        return 1.0
-    if not t_s.size:
-        return 0.0
-    return float(np.clip(t_s[-1] / duration_s, 0.0, 1.0))
-
-
 def _measured(
     setup: VehicleSetup, prepared: PreparedJob, trace: JobTrace
 ) -> tuple[JobMetrics, FloatArray | None]:
@@ -173,7 +161,8 @@ def job_report_dir(setup: VehicleSetup, trace: JobTrace) -> Path:
 def write_job_report(
     setup: VehicleSetup, prepared: PreparedJob, trace: JobTrace, metrics: JobMetrics | None
 ) -> Path:
-    """Write ``metrics.json`` (the job, its label, why it was broken off or null, its metrics),
+    """Write ``metrics.json`` (the job, its label, why it was broken off and how far, in a
+    sentence, or nulls: ``vehicle_agent/end_reasons.py``, its metrics),
     the planned reference (``TRAJ.json``) and ``flight.npz`` (what was flown, every tick:
     :func:`flight_arrays`) of a job, flown to its end or broken off; compact (the show's
     ``storage.job_files``): ``flight.npz`` alone holds both at 20 Hz in float32, the reference
@@ -188,6 +177,7 @@ def write_job_report(
         "board_id": setup.runner_config.board_id,
         "label": prepared.label,
         "abort_reason": trace.flown.abort_reason,
+        "ended": how_it_ended(prepared, trace),
         "metrics": None if metrics is None else msgspec.to_builtins(metrics),
     }
     (out / "metrics.json").write_text(json.dumps(summary, indent=2), encoding="utf-8")
@@ -245,15 +235,15 @@ def picture_order(
 def picture_title(setup: VehicleSetup, prepared: PreparedJob, trace: JobTrace) -> str:
     """The first line of a job's picture title: what it writes (its label on one line, cut to
     :data:`TITLE_LABEL_CHARS`), which job, and how much of it was flown when it was broken off:
-    ``永 · job j1 on uav1, attempt 1, broken off (deviation) at 42% of its plan``."""
+    ``永 · job j1 on uav1, attempt 1, cancelled at 42% of its plan``."""
     label = " ".join(prepared.label.split())
     if len(label) > TITLE_LABEL_CHARS:
         label = label[: TITLE_LABEL_CHARS - 3] + "..."
     title = f"job {trace.job_id} on {setup.vehicle_id}, attempt {trace.attempt}"
     if label:
         title = f"{label} · {title}"
-    if (reason := trace.flown.abort_reason) is not None:
-        title += f", broken off ({reason}) at {flown_fraction(prepared, trace):.0%} of its plan"
+    if (ended := how_it_ended(prepared, trace)) is not None:
+        title += f", {ended}"
     return title
 
 

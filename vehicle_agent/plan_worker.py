@@ -6,12 +6,14 @@ agent process; a fleet host shares a few among all its vehicles, ``vehicle_agent
 one-stroke character planned, every module of a plan imported) before its vehicle joins the show,
 so its first job plans as fast as any other. It serves the requests of
 :mod:`vehicle_agent.worker_protocol` on stdin/stdout, one at a time, below the control loop
-(:func:`main`), and imports the planner, the solvers and matplotlib so that the agent does not.
-After each job's record (``archive``) it collects its garbage and gives the freed heap back to the
-system (a worker kept for the show holds what it reuses: modules and caches, not the figures of
-past pictures). It exits at the end of its stdin, on ``close``, and with its agent
-(``PR_SET_PDEATHSIG``); it ignores SIGINT/SIGTERM sent to the terminal's process group (its agent
-stops it, after a picture still being drawn).
+(:func:`main`), and imports the planner and the solvers so that the agent does not; it draws no
+picture itself (a short-lived process draws each batch, ``vehicle_agent/picture_process.py``:
+matplotlib stays out). After each job's record (``archive``) it collects its garbage and gives
+the freed heap back to the system (a worker kept for the show holds what it reuses: modules and
+caches, not what past jobs left). ``("loaded", prefixes)`` answers which modules it has
+imported, for the tests that keep what it loads in check. It exits at the end of its stdin, on
+``close``, and with its agent (``PR_SET_PDEATHSIG``); it ignores SIGINT/SIGTERM sent to the
+terminal's process group (its agent stops it, after a picture still being drawn).
 """
 
 from __future__ import annotations
@@ -41,12 +43,14 @@ PICTURE_WAIT_S = 20.0
 A picture takes under a second on a quiet machine; beside four busy processes the worker (nice
 5) did not finish one within the former 3 s (the suite run under load lost it). A picture is the
 job's record, so an idle worker waits for it; when an agent is stopped, the supervisor's grace
-for the agent bounds the wait (``cli/supervisor.py``)."""
+for the agent bounds the wait (``cli/supervisor.py``). Drawn in a process apart, a picture costs
+about 1 s more CPU (the process's start), and it may wait for another vehicle's turn to draw
+(``vehicle_agent/picture_process.py``); what is not drawn by then stays ordered on disk."""
 PR_SET_PDEATHSIG = 1
 WARM_TEXT = "一"
 """What ``warm`` plans: one stroke is enough to import and run every module a plan uses (after it,
-the Airshow corpus's characters cost 0.02-0.05 s CPU each, cold 1.0-1.3 s: 0.6 s of it
-``scipy.signal``, ``vehicles/quadrotor_brush/control/tip.py``)."""
+the Airshow corpus's characters cost 0.02-0.05 s CPU each, cold 1.0-1.3 s, of which 0.6 s was
+``scipy.signal`` until ``vehicles/quadrotor_brush/control/tip.py`` filtered on its own)."""
 
 log = logging.getLogger("vehicle_agent.plan_worker")
 
@@ -70,6 +74,8 @@ class Worker:
         name = request[0]
         if name == "init":
             return self._init(*request[1:])
+        if name == "loaded":
+            return loaded_modules(request[1])
         if self._show is None:
             raise RuntimeError("the planning worker was not told its show")
         if name == "vehicle":
@@ -131,6 +137,14 @@ class Worker:
         return replace(prepared, context=sealed)
 
 
+def loaded_modules(prefixes: tuple[str, ...]) -> list[str]:
+    """The modules this process has imported whose names are or start with one of
+    ``prefixes`` (``"scipy.signal"`` matches ``scipy.signal`` and ``scipy.signal._sigtools``)."""
+    return sorted(
+        name for name in sys.modules if any(name == p or name.startswith(f"{p}.") for p in prefixes)
+    )
+
+
 def _opened(prepared: Any) -> Any:
     """A prepared job with its sealed context opened again."""
     context = prepared.context
@@ -174,10 +188,10 @@ def _innermost(request: tuple[Any, ...]) -> tuple[Any, ...]:
 
 
 def give_back() -> None:
-    """Collect the garbage (a job's picture leaves cycles, 30-50 MiB that only a full
-    collection frees) and give the free heap back to the system (``malloc_trim``: freed pages
-    inside the heap stay mapped otherwise). Measured in one process after three Airshow jobs
-    and their pictures: 217 MiB, 204 MiB trimmed alone, 170 MiB collected and trimmed; the
+    """Collect the garbage (a job leaves cycles that only a full collection frees) and give
+    the free heap back to the system (``malloc_trim``: freed pages inside the heap stay mapped
+    otherwise). Measured in one process after three Airshow jobs and their pictures, when the
+    worker still drew them: 217 MiB, 204 MiB trimmed alone, 170 MiB collected and trimmed; the
     collection costs 0.14 s CPU once the warm-up's objects are frozen (0.23 s before)."""
     gc.collect()
     with contextlib.suppress(OSError, AttributeError):

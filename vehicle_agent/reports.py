@@ -3,7 +3,8 @@ until some reply acknowledges it (``progress`` and ``holding`` reports are best 
 superseded by newer ones). Once a result (``done``/``failed``) is answered, ``settled`` is told
 (the agent's :class:`vehicle_agent.results.ResultJournal` lets it go). An acknowledgement
 renews the job lease; a ``not_assigned`` answer about the running job makes the agent give it
-up."""
+up. Neither follows an ``ended`` report: its job is over for this vehicle, which may hold it
+again by now."""
 
 from __future__ import annotations
 
@@ -99,6 +100,10 @@ class ReportOutbox:
         except Exception as exc:
             log.warning("%s: report %s refused: %s", vid, report.event, exc)
             return True  # the orchestrator answered: it has seen the report
+        if report.event == "ended":  # over for this vehicle: no lease to renew, none to give up
+            if not reply.ok:
+                log.warning("%s: report ended not accepted: %s", vid, reply.message)
+            return True
         if reply.ok:
             ready = report.planned_duration_s if report.event == "holding" else None
             self._lease.acknowledged(report.job_id, sent_at_s, ready)

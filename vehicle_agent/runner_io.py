@@ -220,7 +220,7 @@ def telemetry_message(
     progress: float,
 ) -> Telemetry:
     """Telemetry of the vehicle in ``snap`` following ``setpoint`` (pen from the backend when it
-    knows the brush, else from the reference)."""
+    knows the brush, else from the reference; attitude and writing point when it knows them)."""
     ref = None if setpoint is None else setpoint.position_m_enu
     pen = (
         snap.pen_contact
@@ -241,6 +241,8 @@ def telemetry_message(
         progress=progress,
         force_n=snap.force_n,
         force_reference_n=_wanted_force_n(snap, setpoint),
+        attitude_xyzw_enu=snap.attitude_xyzw_enu,
+        writing_point_m_enu=snap.pen_tip_m_enu,
     )
 
 

@@ -12,6 +12,7 @@ from typing import Literal
 
 from bus.messages import AgentReport, Telemetry, VehicleStateName, VehicleStatus
 from vehicle_agent.backends.base import Setpoint, Vec3, VehicleSnapshot
+from vehicle_agent.end_reasons import ended_report
 from vehicle_agent.motion import Move, plan_move
 from vehicle_agent.runner_io import (
     AbortedJob,
@@ -310,13 +311,21 @@ class RunnerPhases:
     def _end_job(self, job: RunningJob, reason: str, report: AgentReport | None = None) -> None:
         """``job`` stops before its end (``reason``): once its writing has begun, what was flown
         goes out with ``report`` (:class:`AbortedJob`: measured first, its report then carries
-        the metrics); before, ``report`` goes at once. A job written to its end has its result
-        from the finished job's measure already."""
+        the metrics; None: an ``ended`` report is made of it, ``vehicle_agent/job_end.py``);
+        before, ``report`` goes at once, or else an ``ended`` report that nothing was written
+        (``vehicle_agent/end_reasons.py``). A job written to its end has its result from the
+        finished job's measure already."""
         trace = job.broken_off(reason)
         if trace is not None:
             self._aborted = AbortedJob(trace, report)
-        elif report is not None and not job.written:
+        elif job.written:
+            return
+        elif report is not None:
             self._reports.append(report)
+        else:  # nothing of its writing flown: said so, with no figure of a writing
+            vid = self.config.vehicle_id
+            ended = ended_report(vid, job.job_id, reason, 0.0, None, pen_came_down=False)
+            self._reports.append(ended)
 
     def _write_tick(
         self, snap: VehicleSnapshot, now_s: float, setpoint: Setpoint

@@ -133,9 +133,7 @@ class AgentService:
         self._lease = JobLease(settings.lost_after_s, time_scale=settings.time_scale)
         self.results = ResultJournal(self.vehicle_id, settings.results_dir)
         """Results of written jobs until the orchestrator has answered them."""
-        self._guard = JobGuard(
-            self._lease, runner, self.events, self.vehicle_id, lambda: self.clock.now_s
-        )
+        self._guard = JobGuard(self._lease, runner, self.events, self.vehicle_id)
         self.reports = ReportOutbox(
             self.keys,
             self.vehicle_id,
@@ -442,13 +440,14 @@ class AgentService:
         """Measure the flown job (``aborted``: broken off), record it, then report it: a job
         reported has its record on disk (its picture may still be drawn). From the tick its
         writing ended until the orchestrator answers, its result is in ``results`` and the
-        status names the job."""
+        status names the job; not an ``ended`` report (``vehicle_agent/end_reasons.py``): the
+        job is no longer this vehicle's, and the report only says what was written of it."""
         prepared = self._prepared[trace.job_id]
         metrics = await measured_and_kept(self.work, prepared, trace, self.vehicle_id)
-        result = job_result(self.vehicle_id, trace, metrics, self.runner.safety.writing, aborted)
-        if result is None:  # broken off, unreported: its files only
-            return
-        self.results.measured(result)
+        writing = self.runner.safety.writing
+        result = job_result(self.vehicle_id, prepared, trace, metrics, writing, aborted)
+        if result.event != "ended":
+            self.results.measured(result)
         self.reports.queue(result)
 
     # --- outputs -------------------------------------------------------------------------------

@@ -199,6 +199,9 @@ class LiveState:
     """Width in [m] of the ink laid now (0 without contact)."""
     force_n: float | None = None
     """Measured normal contact force in [N], for kinds that sense it."""
+    attitude_xyzw_enu: tuple[float, float, float, float] | None = None
+    """The body's attitude: unit quaternion (x, y, z, w) turning body FLU into world ENU
+    (``vehicles.attitude``); None: the room does not say."""
 
 
 class LiveStateView(Protocol):
@@ -222,6 +225,9 @@ class LiveStateView(Protocol):
 
     @property
     def force_n(self) -> float | None: ...
+
+    @property
+    def attitude_xyzw_enu(self) -> tuple[float, float, float, float] | None: ...
 
 
 @dataclass(frozen=True)

@@ -41,6 +41,8 @@ from typing import Generic, Literal, Protocol, TypeVar, runtime_checkable
 
 Vec3 = tuple[float, float, float]
 """A 3-vector in the world frame ENU."""
+Quaternion = tuple[float, float, float, float]
+"""A unit quaternion (x, y, z, w)."""
 
 BackendMode = Literal["idle", "takeoff", "hold", "offboard", "landing", "estop"]
 """What the vehicle is doing, as its autopilot (or the simulator) sees it."""
@@ -124,7 +126,11 @@ class VehicleSnapshot:
     """Whether the pen touches the board, when the backend knows (the simulator; MAVLink: the
     kind's pen model, from the pose)."""
     pen_tip_m_enu: Vec3 | None = None
-    """Where the pen tip is in [m], ENU, when the backend knows (for ink metrics)."""
+    """Where the pen tip is in [m], ENU, when the backend knows: the writing point (brush tip,
+    sponge, marker) of ink metrics and of ``Telemetry.writing_point_m_enu``."""
+    attitude_xyzw_enu: Quaternion | None = None
+    """The body's attitude, when the backend knows: unit quaternion (x, y, z, w) turning body
+    FLU into world ENU (the simulator's truth; MAVLink: the autopilot's ATTITUDE)."""
     pen_width_m: float | None = None
     """Width in [m] of the stroke the pen lays now (0 without contact), when known."""
     force_n: float | None = None

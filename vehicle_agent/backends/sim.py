@@ -271,6 +271,7 @@ class SimVehicle:
             pen_tip_m_enu=tip,
             pen_width_m=state.pen_width_m if contact else 0.0,
             force_n=state.force_n,
+            attitude_xyzw_enu=state.attitude_xyzw_enu,
             battery_fraction=fraction,
             battery_voltage_v=voltage_v,
             battery_minutes_left=minutes,

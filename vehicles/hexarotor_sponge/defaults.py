@@ -1,6 +1,6 @@
 """The hexarotor sponge writer's default figures, in one light module (plain constants, no imports):
 the kind's own settings (:class:`~vehicles.hexarotor_sponge.params.HexarotorParams`,
-:class:`~vehicles.hexarotor_sponge.pen.PenCurve`, :class:`~vehicles.hexarotor_sponge.nlp.Limits`,
+:class:`~vehicles.hexarotor_sponge.pen.PenCurve`, :class:`~vehicles.hexarotor_sponge.limits.Limits`,
 :class:`~vehicles.hexarotor_sponge.plan.PlanSettings`) and a show file's ``hexarotor`` section
 (``vehicles.hexarotor_sponge.show_section``, which the show file loads: it cannot import the
 CasADi/MuJoCo modules) both default to these, so a show left at its defaults and ``skyquill fly

@@ -22,19 +22,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from planner.errors import InfeasibleTrajectoryError, PlannerError
 from vehicles.hexarotor_sponge.contact_model import acceleration_mps2
+from vehicles.hexarotor_sponge.limits import Limits
 from vehicles.hexarotor_sponge.params import HexarotorParams
 from vehicles.hexarotor_sponge.solver_cache import thrust_function
 from vehicles.hexarotor_sponge.waypoints import Period
-
-if TYPE_CHECKING:
-    from vehicles.hexarotor_sponge.nlp import Limits
 
 FloatArray = NDArray[np.float64]
 

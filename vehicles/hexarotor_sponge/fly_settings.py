@@ -48,6 +48,10 @@ class FlySettings:
     """Wind and sensor noise."""
     contact_model: bool = True
     """False: the paper's control baseline (no contact wrench model in the controller)."""
+    disturbance_observer: bool = True
+    """Cancel the wind with ``disturbance_observer`` in the motion control (our extension, in
+    both the contact-aware loop and the control baseline); False: the paper's eq. 12, whose only
+    answer to the wind is the position integral."""
     settle_s: float = 1.0
     """Hover at the first reference point before writing starts, in [s]."""
     control_dt_s: float = 0.01

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from planner.samples import TrajectorySamples
 from vehicles.hexarotor_sponge.fly_settings import FlySettings
-from vehicles.hexarotor_sponge.nlp import Limits
+from vehicles.hexarotor_sponge.limits import Limits
 from vehicles.hexarotor_sponge.params import HexarotorParams
 from vehicles.hexarotor_sponge.pen import PenCurve
 from vehicles.hexarotor_sponge.plan import PlanSettings, plan_writing

@@ -9,6 +9,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from vehicles.attitude import quaternion_of_wxyz
 from vehicles.hexarotor_sponge.controller import Reference
 from vehicles.hexarotor_sponge.fly_settings import FlySettings
 from vehicles.hexarotor_sponge.loop import WallLoop
@@ -48,6 +49,8 @@ class WallLiveState:
     """Width in [m] of the ink laid now."""
     force_n: float | None
     """Normal contact force in [N]."""
+    attitude_xyzw_enu: tuple[float, float, float, float]
+    """The body's attitude: quaternion (x, y, z, w), body FLU -> world ENU."""
 
 
 def _vec(v: FloatArray) -> Vec3:
@@ -97,4 +100,5 @@ class WallVehicle:
             pen_contact=truth.contact_force_n > 0.0,
             pen_width_m=width,
             force_n=truth.contact_force_n,
+            attitude_xyzw_enu=quaternion_of_wxyz(truth.attitude_wxyz_enu),
         )

@@ -23,7 +23,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from vehicles.hexarotor_sponge.corridor import SHORTEST_CHORD_M, turns_rad
-from vehicles.hexarotor_sponge.nlp import Limits
+from vehicles.hexarotor_sponge.limits import Limits
 from vehicles.hexarotor_sponge.steps import steps_per_segment
 from vehicles.hexarotor_sponge.waypoints import Period
 

@@ -40,7 +40,11 @@ class WallLoop:
             control_dt_s=settings.control_dt_s,
         )
         self.controller = HybridController(
-            params, surface, dt_s=self.world.control_dt_s, contact_model=settings.contact_model
+            params,
+            surface,
+            dt_s=self.world.control_dt_s,
+            contact_model=settings.contact_model,
+            disturbance_observer=settings.disturbance_observer,
         )
         self.dt_s = self.world.control_dt_s
         """Control period in [s]."""

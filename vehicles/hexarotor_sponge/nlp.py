@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import dataclasses
 import enum
-import math
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -28,72 +27,22 @@ import numpy as np
 from numpy.typing import NDArray
 
 from planner.errors import PlannerError
-from vehicles.hexarotor_sponge import defaults
 from vehicles.hexarotor_sponge.contact_model import acceleration_mps2, contact_direction
 from vehicles.hexarotor_sponge.corridor import SHORTEST_CHORD_M, chords, corridor_rows
 from vehicles.hexarotor_sponge.diagnosis import Iterate, infeasible_error
+from vehicles.hexarotor_sponge.limits import Limits
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
 from vehicles.hexarotor_sponge.period_nlp import ACTION, NODE, STATE, Rows
-from vehicles.hexarotor_sponge.solver_cache import period_solver, thrust_function
+from vehicles.hexarotor_sponge.solver_cache import (
+    MAX_ITERATIONS,
+    TRIAL_MAX_ITERATIONS,
+    period_solver,
+    thrust_function,
+)
 from vehicles.hexarotor_sponge.steps import steps_per_segment, waypoint_nodes
 from vehicles.hexarotor_sponge.waypoints import Period
 
 FloatArray = NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class Limits:
-    """Planner limits and weights (paper's defaults)."""
-
-    v_max_mps: float = defaults.V_MAX_MPS
-    """Largest speed of the writing point in [m/s]."""
-    a_max_mps2: float = defaults.A_MAX_MPS2
-    """Largest acceleration in [m/s^2]."""
-    force_rate_max_nps: float = defaults.FORCE_RATE_MAX_NPS
-    """Largest |dF/dt| in [N/s]."""
-    h_init_s: float = 0.15
-    """Time step in [s] the steps are allocated at and IPOPT starts from (paper: 0.1 s; its
-    bound ``h_max_s`` allows 0.2 s). 0.15 s plans letters A, I, R and three Chinese characters
-    with a third fewer steps and IPOPT iterations than 0.1 s, their durations within 0.6 %;
-    0.2 s leaves no slack under ``h_max_s`` and a stroke's force ramp is found infeasible."""
-    h_max_s: float = 0.2
-    """Upper bound of a time step in [s] (eq. 7c)."""
-    weight_v: float = 1.0
-    """Cost weight of |v|^2 in [1/(m/s)^2 s] (eq. 7a)."""
-    weight_u: float = 1e-3
-    """Cost weight of the control force's change from hover, per [N^2 s]."""
-    weight_du: float = 1e-2
-    """Cost weight of the control force's change between steps, per [N^2 s]."""
-    time_weight: float = 1.0
-    """gamma: cost per second of writing (eq. 7a)."""
-    weight_force: float = 20.0
-    """Cost weight per [N^2 s] of the force's departure from the waypoint forces interpolated
-    along the stroke (an addition to eq. 7a: the wanted width holds between waypoints too)."""
-    weight_dh: float = 10.0
-    """Cost weight per [s^2] of a time step's change from the step before (an addition to eq. 7a).
-    Without it, moving time between neighbouring steps barely changes the cost, and IPOPT spends
-    most of its iterations at the last barrier creeping along those flat, indefinite directions
-    (the Hessian regularised at nearly every iteration, neighbouring steps 0.02 and 0.19 s). 10
-    takes the six bench glyphs from 1148 iterations to 618 (0.75 -> 0.38 s CPU per letter,
-    median, solvers built), their durations within 0.3 % and steps within 0.03 s of their
-    neighbours."""
-    corridor_m: float | None = 0.5e-3
-    """Half width in [m] of the corridor around the stroke's parabola between two waypoints of
-    a contact period that its nodes are held in (``corridor``: our extension of eq. 7, which
-    pins positions at the waypoints only); None: the paper's eq. 7. The parabolas lie within
-    1 mm of the stroke (``parabolas.FIT_TOLERANCE_M``), so the nodes lie within 1.5 mm; the
-    pen rides the corridor's inner edge on curves, and a line 10 mm wide laid 2 mm off its
-    target has an IoU of 0.67, so the corridor is narrow: 2 mm around chords gave the 1 m "8"
-    a plan IoU of 0.79, 0.5 mm around parabolas 0.95."""
-
-    def __post_init__(self) -> None:
-        names = ["v_max_mps", "a_max_mps2", "force_rate_max_nps", "h_init_s", "h_max_s"]
-        for name in names + ([] if self.corridor_m is None else ["corridor_m"]):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise PlannerError(
-                    f"planner limit {name} must be positive, not {value}", field=name
-                )
 
 
 class PeriodStart(enum.Enum):
@@ -174,8 +123,9 @@ RETRY_STEP_SCALES = (0.75, 0.5)
 """In corridors (``Limits.corridor_m``), a period IPOPT found no trajectory for is solved again
 with its steps allotted at these shares of ``h_init`` (a third more steps, then twice as many):
 a near-stop in a corridor, where the pen turns sharply at the end of a piece, can leave IPOPT
-wandering for its 600 iterations on the first count (the 1 m cursive run: one piece of 57 steps
-ran out, at 0.75 h_init it plans in 19 iterations)."""
+wandering for its iterations on the first count (the 1 m cursive run: one piece of 57 steps
+ran out of 600, at 0.75 h_init it plans in 19 iterations), so an attempt with a retry after it
+stops at ``solver_cache.TRIAL_MAX_ITERATIONS``."""
 
 
 def solve_own_frame(
@@ -184,7 +134,9 @@ def solve_own_frame(
     """Optimise ``local`` (``period`` in its own frame, see :func:`in_own_frame`); positions of
     the result in that frame. ``period`` names the waypoints on the wall in an error. In
     corridors, a period without a trajectory is tried again with more steps
-    (:data:`RETRY_STEP_SCALES`); the error is that of the first count's."""
+    (:data:`RETRY_STEP_SCALES`, all but the last attempt capped at
+    :data:`~vehicles.hexarotor_sponge.solver_cache.TRIAL_MAX_ITERATIONS`); the error is that of
+    the first count's."""
     attempts = [limits]
     if limits.corridor_m is not None:
         attempts += [
@@ -192,9 +144,10 @@ def solve_own_frame(
             for scale in RETRY_STEP_SCALES
         ]
     first: PlannerError | None = None
-    for attempt in attempts:
+    for i, attempt in enumerate(attempts):
+        cap = TRIAL_MAX_ITERATIONS if i < len(attempts) - 1 else MAX_ITERATIONS
         try:
-            return _solve_steps(local, period, params, attempt)
+            return _solve_steps(local, period, params, attempt, cap)
         except PlannerError as err:  # IPOPT found no trajectory (``diagnosis``)
             first = first or err
     assert first is not None
@@ -218,9 +171,14 @@ def force_rows(period: Period, nodes: NDArray[np.int_], *, corridor: bool) -> Fl
 
 
 def _solve_steps(
-    local: Period, period: Period, params: HexarotorParams, limits: Limits
+    local: Period,
+    period: Period,
+    params: HexarotorParams,
+    limits: Limits,
+    max_iter: int,
 ) -> PeriodSolution:
-    """:func:`solve_own_frame` with the steps allotted at ``limits.h_init_s``.
+    """:func:`solve_own_frame` with the steps allotted at ``limits.h_init_s``, the first solve
+    capped at ``max_iter`` IPOPT iterations.
 
     The NLP of ``n`` steps is built once per ``(n, params, cost weights)`` (see
     :func:`period_solver`); the period's waypoints, contact mode and limits enter as variable and
@@ -242,10 +200,10 @@ def _solve_steps(
     started = time.perf_counter()
     step_parameters = np.column_stack([forces, corridor]).ravel(order="F")
     problem = _Problem(guess, step_parameters, lbx, ubx, lower, upper)
-    w, stats, iterations, ipopt_s = _solve(n, False, problem, params, limits)
+    w, stats, iterations, ipopt_s = _solve(n, False, problem, params, limits, max_iter)
     xs, us, hs = unpack(w, n)
     if _thrust_margin_n(xs, us, params) < -THRUST_SLACK_N:
-        w, stats, more, more_s = _solve(n, True, problem, params, limits)
+        w, stats, more, more_s = _solve(n, True, problem, params, limits, MAX_ITERATIONS)
         iterations, ipopt_s = iterations + more, ipopt_s + more_s
         xs, us, hs = unpack(w, n)
     solve_s = time.perf_counter() - started
@@ -277,13 +235,18 @@ class _Problem:
 
 
 def _solve(
-    n: int, thrust_rows: bool, problem: _Problem, params: HexarotorParams, limits: Limits
+    n: int,
+    thrust_rows: bool,
+    problem: _Problem,
+    params: HexarotorParams,
+    limits: Limits,
+    max_iter: int,
 ) -> tuple[FloatArray, dict[str, Any], int, float]:
-    """IPOPT on the NLP of ``n`` steps from ``problem``: its variables, statistics, iterations
-    and own wall-clock seconds."""
+    """IPOPT, stopping after ``max_iter`` iterations, on the NLP of ``n`` steps from
+    ``problem``: its variables, statistics, iterations and own wall-clock seconds."""
     rows = Rows(thrust=thrust_rows, corridor=limits.corridor_m is not None)
     lbg, ubg = _constraint_bounds(n, rows, problem, params, limits)
-    solver, lock = period_solver(n, rows, params, cost_weights(limits), limits.weight_dh)
+    solver, lock = period_solver(n, rows, params, cost_weights(limits), limits.weight_dh, max_iter)
     with lock:
         out = solver(
             x0=problem.guess,

@@ -22,9 +22,9 @@ import threading
 from collections import OrderedDict
 from dataclasses import dataclass, replace
 
+from vehicles.hexarotor_sponge.limits import Limits
 from vehicles.hexarotor_sponge.nlp import (
     FloatArray,
-    Limits,
     PeriodSolution,
     PeriodStart,
     in_own_frame,

@@ -19,8 +19,9 @@ from planner.errors import InfeasibleTrajectoryError, PlannerError
 from planner.samples import TrajectorySamples
 from vehicles.hexarotor_sponge import defaults
 from vehicles.hexarotor_sponge.allocation import Allocator
+from vehicles.hexarotor_sponge.limits import Limits
 from vehicles.hexarotor_sponge.long_periods import split_long
-from vehicles.hexarotor_sponge.nlp import Limits, PeriodSolution, PeriodStart
+from vehicles.hexarotor_sponge.nlp import PeriodSolution, PeriodStart
 from vehicles.hexarotor_sponge.params import GRAVITY_MPS2, HexarotorParams
 from vehicles.hexarotor_sponge.period_cache import solve_period_reusing
 from vehicles.hexarotor_sponge.waypoints import Period, periods_of, stroke_forces_n

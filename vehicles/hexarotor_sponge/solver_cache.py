@@ -52,7 +52,6 @@ def spread_steps(needed: list[int], total: int) -> list[int]:
 IPOPT_OPTIONS: dict[str, Any] = {
     "print_level": 0,
     "sb": "yes",
-    "max_iter": 600,
     "tol": 1e-4,
     "constr_viol_tol": 1e-6,
     "acceptable_tol": 1e-4,
@@ -65,7 +64,17 @@ IPOPT_OPTIONS: dict[str, Any] = {
 iterations at mu 0.1; a monotone barrier from 1e-2 with a first Hessian perturbation of 1e-2
 (the friction direction's curvature at low speed makes the Hessian indefinite early) and tol
 1e-4 (dynamics and limits still to 1e-6) takes the six bench glyphs from 2831 iterations to
-1148, their durations within 0.1 %."""
+1148, their durations within 0.1 %. The iteration cap is the solver's own
+(:data:`MAX_ITERATIONS`, :data:`TRIAL_MAX_ITERATIONS`)."""
+
+MAX_ITERATIONS = 600
+"""IPOPT's iteration cap on a period's last (or only) attempt."""
+TRIAL_MAX_ITERATIONS = 150
+"""IPOPT's iteration cap on an attempt that has a retry with more steps after it (``nlp``'s
+``RETRY_STEP_SCALES``). The 1 m letters 8, 永, R, & and 中 and the quick corpus's words,
+spirals and cursive runs solve in at most 48 iterations a period; the one first attempt that
+failed (cursive:6, 60 steps) ran out of its 600 iterations (2.2 s of CPU) before the retry
+planned it in 19. 150 is three times the most a solve that succeeds was seen to need."""
 
 
 @lru_cache(maxsize=64)
@@ -75,19 +84,21 @@ def period_solver(
     params: HexarotorParams,
     weights: tuple[float, ...],
     weight_dh: float,
+    max_iter: int = MAX_ITERATIONS,
 ) -> tuple[ca.Function, threading.Lock]:
     """IPOPT on the NLP of ``n`` RK4 steps with the optional ``rows`` (:func:`period_nlp`,
     options :data:`IPOPT_OPTIONS`), and the lock that keeps one solve (and its stats) at a time
     on it.
 
     ``weights``: the cost weights ``(v, u, du, force, time)`` of the planner's limits;
-    ``weight_dh``: the cost per [s^2] of a time step's change from the step before.
+    ``weight_dh``: the cost per [s^2] of a time step's change from the step before;
+    ``max_iter``: IPOPT's iteration cap.
     """
     nlp, derivatives = period_nlp(n, rows, params, weights, weight_dh)
     options: dict[str, Any] = {
         "print_time": False,
         "record_time": True,
-        "ipopt": IPOPT_OPTIONS,
+        "ipopt": {**IPOPT_OPTIONS, "max_iter": max_iter},
         **derivatives,
     }
     return ca.nlpsol(f"period_{n}", "ipopt", nlp, options), threading.Lock()

@@ -5,17 +5,13 @@ built solvers (``solver_cache``)."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 from numpy.typing import NDArray
 
 from vehicles.hexarotor_sponge.corridor import segment_times_s
+from vehicles.hexarotor_sponge.limits import Limits
 from vehicles.hexarotor_sponge.solver_cache import spread_steps, step_count
 from vehicles.hexarotor_sponge.waypoints import Period
-
-if TYPE_CHECKING:
-    from vehicles.hexarotor_sponge.nlp import Limits
 
 TRAVEL_SLACK = 1.3
 """Steps allotted per least travel time at ``h_init`` (and ``h_max = 4/3 h_init`` on top). In

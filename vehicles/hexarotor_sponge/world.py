@@ -51,6 +51,8 @@ class Truth:
     contact_force_n: float
     """Normal force in [N] between pen and wall over the last control period (mean of the
     physics steps; 0 without contact)."""
+    attitude_wxyz_enu: FloatArray
+    """(4,) body attitude, MuJoCo's quaternion (w, x, y, z): body FLU -> world ENU."""
 
 
 def facing_rotation(surface: Surface) -> FloatArray:
@@ -221,6 +223,7 @@ class WallWorld:
             base_m_enu=self.data.xpos[self._base_id].copy(),
             tip_m_enu=self.data.xpos[self._pen_id].copy(),
             contact_force_n=self._mean_force_n,
+            attitude_wxyz_enu=self.data.xquat[self._base_id].copy(),
         )
 
     def _contact_force_n(self) -> float:

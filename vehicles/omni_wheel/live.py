@@ -20,6 +20,7 @@ from typing import Protocol
 
 import numpy as np
 
+from vehicles.attitude import quaternion_of_matrix
 from vehicles.omni_wheel.floor_plan import OmniSettings
 from vehicles.omni_wheel.writing import FloorWriter
 from vehicles.surface import Vec3
@@ -60,6 +61,8 @@ class OmniLiveState:
     """Width in [m] of the line laid now (0 with the marker up)."""
     force_n: float | None = None
     """Not sensed by this kind."""
+    attitude_xyzw_enu: tuple[float, float, float, float] | None = None
+    """The rear part's attitude: quaternion (x, y, z, w), body FLU -> world ENU."""
 
 
 def _vec(values: np.ndarray) -> Vec3:
@@ -97,4 +100,5 @@ class OmniLiveVehicle:
             pen_tip_m_enu=_vec(truth.pen_m_enu),
             pen_contact=down,
             pen_width_m=self.settings.marker_width_m if down else 0.0,
+            attitude_xyzw_enu=quaternion_of_matrix(truth.rotation),
         )

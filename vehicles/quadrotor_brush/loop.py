@@ -19,6 +19,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from vehicles.attitude import quaternions_of_euler
 from vehicles.kind import LiveReference, LiveState
 from vehicles.quadrotor_brush.control.config import ControllerConfig
 from vehicles.quadrotor_brush.control.controller import PositionController, ReferenceTick
@@ -153,6 +154,7 @@ class QuadrotorFleet:
             brush.tip_m_enu.tolist(),
             brush.contact.tolist(),
             brush.width_m.tolist(),
+            quaternions_of_euler(world.state.attitude_rad).tolist(),
             strict=True,
         )
         return [
@@ -162,8 +164,9 @@ class QuadrotorFleet:
                 pen_tip_m_enu=(t[0], t[1], t[2]),
                 pen_contact=contact,
                 pen_width_m=width if contact else 0.0,
+                attitude_xyzw_enu=(q[0], q[1], q[2], q[3]),
             )
-            for p, v, t, contact, width in rows
+            for p, v, t, contact, width, q in rows
         ]
 
 

@@ -106,6 +106,13 @@ def euler_to_quaternion(roll: float, pitch: float, yaw: float) -> Quaternion:
     )
 
 
+def attitude_ned_to_xyzw_enu(roll: float, pitch: float, yaw: float) -> Quaternion:
+    """Euler angles of an FRD body in NED (MAVLink's ATTITUDE) -> the quaternion (x, y, z, w)
+    of the same attitude of the FLU body in ENU (``Telemetry.attitude_xyzw_enu``)."""
+    w, x, y, z = euler_to_quaternion(*attitude_ned_to_enu(roll, pitch, yaw))
+    return (x, y, z, w) if w >= 0 else (-x, -y, -z, -w)
+
+
 def quaternion_to_euler(q: Quaternion) -> Vec3:
     """Quaternion (w, x, y, z) -> Z-Y-X Euler angles (roll, pitch, yaw)."""
     w, x, y, z = q

@@ -1,16 +1,17 @@
 """What the MAVLink backend reports of its vehicle each tick, in the show frame (pure).
 
-Position and velocity are the autopilot's own estimate (LOCAL_NED turned ENU); on the ground when
-EXTENDED_SYS_STATE says landed (before it does: when disarmed). The pen is modelled from the
-simulator's true pose when the backend reads it (SITL), otherwise from the estimate and ATTITUDE.
-Idle on the ground and disarmed, ``preflight`` is why the autopilot would not arm (SYS_STATUS,
-and its words in STATUSTEXT); while a landing ends (PX4 put in Hold) it is not asked yet.
+Position, velocity and attitude are the autopilot's own estimate (LOCAL_NED and ATTITUDE turned
+ENU, the body FLU); on the ground when EXTENDED_SYS_STATE says landed (before it does: when
+disarmed). The pen is modelled from the simulator's true pose when the backend reads it (SITL),
+otherwise from the estimate and ATTITUDE. Idle on the ground and disarmed, ``preflight`` is why
+the autopilot would not arm (SYS_STATUS, and its words in STATUSTEXT); while a landing ends (PX4
+put in Hold) it is not asked yet.
 """
 
 from __future__ import annotations
 
 from vehicle_agent.backends.base import BackendMode, LinkHealth, Vec3, VehicleSnapshot
-from vehicle_agent.backends.mavlink.frames import ned_to_enu
+from vehicle_agent.backends.mavlink.frames import attitude_ned_to_xyzw_enu, ned_to_enu
 from vehicle_agent.backends.mavlink.pen import PenOverBoard
 from vehicle_agent.backends.mavlink.state import LinkState
 from vehicle_agent.backends.mavlink.truth import TruthSample
@@ -38,6 +39,8 @@ def vehicle_snapshot(
     reading = None
     if pen is not None and attitude is not None:
         reading = pen.read(body, attitude)
+    estimated = st.attitude_ned
+    estimated_attitude = None if estimated is None else attitude_ned_to_xyzw_enu(*estimated)
     return VehicleSnapshot(
         t_s=now_s,
         position_m_enu=position_m_enu,
@@ -52,6 +55,7 @@ def vehicle_snapshot(
         pen_tip_m_enu=None if reading is None else reading.tip_m_enu,
         pen_width_m=None if reading is None else reading.width_m,
         pen_contact=None if reading is None else reading.contact,
+        attitude_xyzw_enu=estimated_attitude,
         autopilot_mode=None if st.flavor is None else st.flavor.mode_name(st.custom_mode or 0),
         true_position_m_enu=None if truth is None else truth.position_m_enu,
         preflight=st.preflight if mode == "idle" and on_ground and not st.armed else None,
