@@ -40,7 +40,6 @@ MIN_PLAN_SPANS = 8
 FIDELITY_SHARE = 0.8
 """At pace ``"limits"`` the re-timing also keeps the fit within this share of
 ``fit_tolerance_m`` of every written data point (slower where a corner would be cut)."""
-REFINE_FLOOR = True
 QP_PHASE_MAX_ITER = 8
 """Descent iterations on the QP cost (after the closed-form phase); most of the gain comes early."""
 
@@ -251,9 +250,7 @@ def refine_rebuilder(
 
     def rebuild(problem: FitProblem, weights: FloatArray, durations: FloatArray) -> FitProblem:
         current = problem.segment_durations()
-        floor = np.where(
-            (durations > current) & REFINE_FLOOR, durations, options.min_segment_time_s
-        )
+        floor = np.where(durations > current, durations, options.min_segment_time_s)
         found = allocate(problem, weights, current, options, limits, point_tolerance_m, floor)
         return found.problem
 

@@ -40,10 +40,20 @@ def test_the_active_set_is_the_qp_optimum_under_the_floor(seed: int, m: int, sha
     floor = min(float(np.quantile(free[:, 2], share)), float(np.min(ends)) - 1e-3)
     fitter = QpFitter(_floor_limits(floor))
     fit = fitter.fit(p)
-    exact = _tight_solve(build_qp(p, _floor_limits(floor)))
+    qp = build_qp(p, _floor_limits(floor))
+    exact = _tight_solve(qp)
     tau = fit.spline.control_points
-    scale = 1.0 + float(np.max(np.abs(tau)))
-    np.testing.assert_allclose(tau.T.ravel(), exact.x, atol=1e-6 * scale)
+    # The optimum's cost, not its argument: where the jerk term leaves a nearly flat valley the
+    # argument is not unique to 1e-6 (seed 69, m 68, share 0.5: 3.8e-5 m apart at costs equal
+    # to 2e-11 relative).
+    upper = qp.P_upper.toarray()
+    hessian = upper + np.triu(upper, 1).T
+
+    def cost(x: np.ndarray) -> float:
+        return float(0.5 * x @ hessian @ x + qp.c @ x)
+
+    ours, best = cost(tau.T.ravel()), cost(exact.x)
+    assert ours <= best + 1e-9 * (1.0 + abs(best))
     assert np.min(tau[:, 2]) >= floor - 1e-12
     np.testing.assert_array_equal(tau[:, :2], free[:, :2])
     if np.min(free[:, 2]) < floor:

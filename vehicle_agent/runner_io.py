@@ -137,8 +137,9 @@ class AbortedJob:
     """What was flown until it stopped (``flown.abort_reason``: why)."""
     report: AgentReport | None
     """Its ``failed`` result (a safety abort: final), to send with its metrics once measured;
-    None: no result is sent (an interruption: the orchestrator asked for it, or takes the job
-    back itself, ``vehicle_agent/job_runner.py``)."""
+    None: an interruption (the orchestrator asked for it, or takes the job back itself,
+    ``vehicle_agent/job_runner.py``): no result decides the job, only an ``ended`` report says
+    what was written (``vehicle_agent/end_reasons.py``)."""
 
 
 @dataclass(frozen=True)
