@@ -50,6 +50,11 @@ async def agent(
         yield AgentService(settings, JobRunner(config()), backend, work), orchestrator, events
 
 
+def stop_landing(events: list[Event]) -> list[Event]:
+    """The events an agent says about landing before it stops, in the order they came."""
+    return [e for e in events if e.kind == "stop_landing"]
+
+
 async def writing(service: AgentService, orch: FakeOrchestrator) -> None:
     assert (await orch.command(assign("j1"))).ok
     await wait_for(lambda: service.runner.phase == "write")
@@ -76,7 +81,8 @@ def test_a_stop_lands_a_writing_vehicle_first_and_refuses_jobs_meanwhile(
             assert service.runner.job_id is None  # abandoned: the orchestrator takes it back
             await landing
             await asyncio.wait_for(running, 10.0)
-            said = [e.message for e in events if e.kind == "stop_landing"]
+            await wait_for(lambda: len(stop_landing(events)) >= 2, 5.0)  # the bus is asynchronous
+            said = [e.message for e in stop_landing(events)]
             assert len(said) == 2 and "landing first" in said[0] and "landed in" in said[1]
             assert "done" not in orch.events()  # the character was not finished
 
@@ -111,7 +117,8 @@ def test_a_vehicle_that_does_not_land_is_left_after_the_bound_with_an_alert(
             assert stop.is_set() and 3.0 <= waited_s < 6.0
             assert service.airborne()
             await asyncio.wait_for(running, 10.0)
-            alerts = [e for e in events if e.kind == "stop_landing" and e.level == "alert"]
+            await wait_for(lambda: len(stop_landing(events)) >= 2, 5.0)  # the bus is asynchronous
+            alerts = [e for e in stop_landing(events) if e.level == "alert"]
             assert alerts and "has not landed in 3 s" in alerts[0].message
 
     asyncio.run(scenario())

@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 
 from bus.keys import ShowKeys
-from bus.messages import OperatorCommand, SubmitReply, SubmitRequest
+from bus.messages import OperatorCommand, ShowSnapshot, SubmitReply, SubmitRequest
 from bus.rpc import query_one
 from bus.session import free_tcp_endpoint, open_session
 from orchestrator.app import serve_show
@@ -145,6 +145,51 @@ def test_console_approves_and_pauses_with_the_real_orchestrator(tmp_path: Path) 
         async def main() -> None:
             async with app.run_test(size=(100, 30)) as pilot:
                 await scenario(pilot)
+
+        asyncio.run(main())
+
+
+class UnansweredAtFirst(ConsoleLink):
+    """A link whose asks for the snapshot go unanswered for its first :attr:`busy_s`, as from an
+    orchestrator too busy to reply within an ask's 2 s (the console asks on start and again
+    when the orchestrator's token appears, maybe twice: all of those are lost)."""
+
+    busy_s = 3.0
+
+    def __init__(self, *args: Any) -> None:
+        super().__init__(*args)
+        self.created_s = time.monotonic()
+        self.lost = 0
+
+    async def query_snapshot(self, timeout_s: float = 2.0) -> ShowSnapshot | None:
+        if time.monotonic() - self.created_s < self.busy_s:
+            self.lost += 1
+            return None
+        return await super().query_snapshot(timeout_s)
+
+
+def test_a_console_whose_first_asks_go_unanswered_asks_again_until_it_has_the_show(
+    tmp_path: Path,
+) -> None:
+    show = moderated_show(tmp_path)
+    keys = ShowKeys(show.show_id)
+    with Orchestrator(show), open_session(show.zenoh, role="client") as session:
+        request = SubmitRequest(text="永", client_id="test")
+        reply = query_one(session, keys.submit, request, SubmitReply, timeout_s=10.0)
+        assert reply.ok, reply
+        link = UnansweredAtFirst(session, keys)
+        app = ConsoleApp(settings_from_show(show), link=link)
+
+        async def main() -> None:
+            async with app.run_test(size=(100, 30)) as pilot:
+                await until(  # from before the console joined: only the snapshot has it
+                    pilot,
+                    lambda: "job_submitted" in [e.kind for _, e in app.model.events.after(0)],
+                    "the show's recent history",
+                )
+                said = [e.message for _, e in app.model.events.after(0) if e.kind == "console"]
+                assert len(said) == 1 and "no snapshot from the orchestrator yet" in said[0]
+                assert link.lost >= 1
 
         asyncio.run(main())
 

@@ -7,6 +7,7 @@ at once and redraws the views from it on a timer, at most ``redraw_hz`` times pe
 
 from __future__ import annotations
 
+import asyncio
 import time
 from collections.abc import Callable
 from typing import ClassVar
@@ -55,6 +56,9 @@ PREVIEW_MIN_WIDTH = 100
 """Narrowest terminal, in cells, that shows the small preview next to the queue."""
 TABLE_HZ = 5.0
 """Highest update rate of the fleet table's numbers, in [Hz]."""
+SNAPSHOT_RETRY_S = 2.0
+"""Between asks for the show's snapshot while the orchestrator does not answer, [s] (each ask
+waits up to 2 s: a loaded orchestrator answers in well under that)."""
 
 
 class ConsoleApp(App[None]):
@@ -133,6 +137,8 @@ class ConsoleApp(App[None]):
         self._drawn: dict[str, int] = {}
         self._drawn_boards: tuple[int, int, int] | None = None
         self._alerted: set[str] = set()
+        self._snapshot_wait_said = False
+        """The event log says that the show's snapshot is awaited (once until it comes)."""
         self._fleet = FleetTable(id="fleet")
         self._queue = QueueTable(id="queue")
         self._preview = PreviewPane(id="preview")
@@ -193,15 +199,21 @@ class ConsoleApp(App[None]):
 
     @work(exclusive=True, group="snapshot")
     async def join_show(self) -> None:
-        """Late joiner: ask the orchestrator for the whole show, then follow live messages."""
+        """Late joiner: ask the orchestrator for the whole show until it answers (said once in
+        the event log when it does not at first), then follow live messages. A new appearance
+        of the orchestrator asks afresh (``exclusive``: the asking before it is cancelled)."""
         if self.link is None:
             return
-        snapshot = await self.link.query_snapshot()
-        now_s = self.clock()
-        if snapshot is None:
-            self.model.events.note(now_s, "warning", "console", "no snapshot from the orchestrator")
-        else:
-            self.model.apply_snapshot(snapshot, now_s, full=True)
+        while (snapshot := await self.link.query_snapshot()) is None:
+            if not self._snapshot_wait_said:
+                message = (
+                    f"no snapshot from the orchestrator yet: asking every {SNAPSHOT_RETRY_S:.0f} s"
+                )
+                self.model.events.note(self.clock(), "warning", "console", message)
+                self._snapshot_wait_said = True
+            await asyncio.sleep(SNAPSHOT_RETRY_S)
+        self._snapshot_wait_said = False
+        self.model.apply_snapshot(snapshot, self.clock(), full=True)
 
     # --- redraw ----------------------------------------------------------------------------------
     def _tick(self) -> None:
