@@ -19,11 +19,12 @@ import shutil
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from showfile import Show
+if TYPE_CHECKING:  # a drawing process imports this module; the show file's models cost 0.2 s
+    from showfile import Show
 
 COMPACT_RATE_HZ = 20.0
 """Rate in [Hz] of the flight kept in a compact job directory."""

@@ -1,8 +1,10 @@
 """Autopilot parameters a show depends on: chosen in pure code, set and read back over MAVLink.
 
 At connect the backend sets each :class:`ParamSpec` with PARAM_SET, waits for the autopilot's
-PARAM_VALUE, then asks again with PARAM_REQUEST_READ and compares: a parameter that is unknown,
-never answered or answered with another value makes the vehicle unusable (:class:`ParamError`).
+PARAM_VALUE, then asks again with PARAM_REQUEST_READ and compares (set and read again, up to the
+channel's attempts, when the value read back is another): a parameter that is unknown, never
+answered or answered with another value every time makes the vehicle unusable
+(:class:`ParamError`).
 
 ArduPilot carries every value as a float (integers cast); PX4 packs integer parameters bytewise
 into the float field (MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE): :func:`encode_value` and
@@ -323,13 +325,20 @@ class ParamChannel:
                     f"parameter {spec.name} ({spec.why}) was {current:g}; set to {want:g}, it "
                     "takes effect only after the autopilot reboots"
                 )
-        echoed = await self.write(spec.name, want, spec.param_type)
-        read_back = await self.read(spec.name)
-        if not (same_value(echoed, want) and same_value(read_back, want)):
-            raise ParamError(
-                f"parameter {spec.name} ({spec.why}) is {read_back:g} after setting it to {want:g}"
-            )
-        return read_back
+        read_back = math.nan
+        for _ in range(self.attempts):
+            await self.write(spec.name, want, spec.param_type)
+            read_back = await self.read(spec.name)
+            if same_value(read_back, want):
+                return read_back
+            # A PARAM_VALUE sent before the set may come after it and answer for it (a
+            # parameter list being streamed, a late answer to an earlier try): PX4 SITL under
+            # load read MPC_XY_VEL_I_ACC back as its old 0.4 once, and the vehicle was refused
+            # for good. The value that holds is the one read back after a set, tried again.
+        raise ParamError(
+            f"parameter {spec.name} ({spec.why}) is {read_back:g} after setting it to {want:g} "
+            f"{self.attempts} times"
+        )
 
     async def _ask(self, name: str, build: Callable[[], Any]) -> tuple[float, int]:
         loop = asyncio.get_running_loop()
