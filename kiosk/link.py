@@ -3,7 +3,10 @@
 Job states arrive on ``jobs/*`` (every change) and in the 1 Hz ``fleet`` snapshot (queue positions
 and ETAs that move as other jobs finish). Zenoh's threads push them into a FIFO channel; one task in
 the event loop applies them to the :class:`JobBook` and wakes the pages watching those tickets.
-The time of the last ``fleet`` snapshot says whether what the pages show is current.
+The time of the last ``fleet`` snapshot says whether what the pages show is current. The ``fleet``
+snapshot lists no finished job: a job a page follows that is neither finished here nor listed
+there has ended unheard (its last ``jobs/<id>`` message lost, e.g. across a reconnection), and
+its final state is asked of the orchestrator's ``snapshot`` (:meth:`OrchestratorLink._catch_up`).
 
 A submission whose first try gets no answer stays pending: :meth:`OrchestratorLink.follow_up`
 sends it again with the same idempotency key (so it becomes at most one job) until the
@@ -26,7 +29,7 @@ from bus.pubsub import subscribe
 from bus.rpc import NoReplyError, RemoteError, aquery_one
 from bus.session import Session
 from kiosk.errors import KioskError
-from kiosk.jobs import JobBook
+from kiosk.jobs import FINAL_STATES, JobBook
 
 log = logging.getLogger(__name__)
 
@@ -67,13 +70,15 @@ class OrchestratorLink:
         self._follow_ups: set[asyncio.Task[None]] = set()
         self._paused_seen = False
         """Whether the latest ``fleet`` snapshot had the queue paused (Zenoh's thread writes)."""
-        self._inbox: FifoChannel[JobState | None] | None = None
+        self._inbox: FifoChannel[JobState | frozenset[str]] | None = None
+        self._asking: set[str] = set()
+        """Jobs whose final state is being asked for (one ask at a time per job)."""
         self._subscribers: list[Any] = []
         self._task: asyncio.Task[None] | None = None
 
     async def start(self) -> None:
         """Subscribe to job states; call inside the running event loop."""
-        inbox: FifoChannel[JobState | None] = FifoChannel()
+        inbox: FifoChannel[JobState | frozenset[str]] = FifoChannel()
         self._inbox = inbox
 
         def on_job(_key: str, state: JobState) -> None:
@@ -83,7 +88,8 @@ class OrchestratorLink:
             for state in snapshot.jobs:
                 inbox.push(state)
             self._paused_seen = snapshot.queue_paused  # read with the marker below
-            inbox.push(None)  # marks the snapshot's arrival (fresh news of the orchestrator)
+            # marks the snapshot's arrival (fresh news of the orchestrator), with what it lists
+            inbox.push(frozenset(state.job_id for state in snapshot.jobs))
 
         self._subscribers = [
             subscribe(self._session, self._keys.jobs_all, JobState, on_job),
@@ -105,17 +111,41 @@ class OrchestratorLink:
             with contextlib.suppress(asyncio.CancelledError):
                 await self._task
 
-    async def _pump(self, inbox: FifoChannel[JobState | None]) -> None:
+    async def _pump(self, inbox: FifoChannel[JobState | frozenset[str]]) -> None:
         while True:
             try:
-                state = await inbox.get()
+                item = await inbox.get()
             except ChannelClosedError:
                 return
-            if state is None:
+            if isinstance(item, frozenset):
                 self.fleet_seen_s = self._clock()
                 self._follow_pause(self._paused_seen)
+                self._catch_up(item)
             else:
-                self.apply(state)
+                self.apply(item)
+
+    def _catch_up(self, listed: frozenset[str]) -> None:
+        """Ask for the final state of every job a page follows that is not finished here and
+        not ``listed`` in the ``fleet`` snapshot (which lists no finished job)."""
+        for ticket in self._watchers:
+            job = self.book.get(ticket)
+            if job is None or job.job_id is None:
+                continue
+            states = self.book.characters(job) if job.phrase_size else [self.book.state(job.job_id)]
+            for state in states:
+                if state is None or state.state in FINAL_STATES or state.job_id in listed:
+                    continue
+                if state.job_id not in self._asking:
+                    self._asking.add(state.job_id)
+                    task = asyncio.create_task(self._ask_final(state.job_id))
+                    self._follow_ups.add(task)
+                    task.add_done_callback(self._follow_ups.discard)
+
+    async def _ask_final(self, job_id: str) -> None:
+        try:
+            await self.fetch(job_id)
+        finally:
+            self._asking.discard(job_id)
 
     def stale(self, max_age_s: float) -> bool:
         """No ``fleet`` snapshot for ``max_age_s``: the orchestrator or the bus is down."""
