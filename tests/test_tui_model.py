@@ -189,6 +189,21 @@ def test_full_snapshot_keeps_newer_live_updates_and_drops_what_ended_before_it()
     assert model.job("j3").state == "done"
 
 
+def test_a_job_left_out_of_a_fleet_publication_older_than_it_ended_unheard_until_a_snapshot() -> (
+    None
+):
+    model = ConsoleModel(SETTINGS)
+    model.apply(job("j1", "writing", updated=5.0), 0.0)  # its "done" message never came
+    model.apply(job("j2", "queued", updated=12.0), 0.0)  # newer than the publication below
+    model.apply(job("j3", "done", updated=6.0), 0.0)  # finished: never listed in fleet
+    model.apply(job("j4", "queued", updated=7.0), 0.0)
+    model.apply(snapshot([job("j4", "assigned", updated=9.0)], time_s=10.0), 0.0)  # fleet
+    assert model.ended_unheard == {"j1"}
+    assert model.job("j1").state == "writing"  # the console asks the orchestrator (app.py)
+    model.apply_snapshot(snapshot([job("j1", "done", updated=8.0)], time_s=11.0), 0.0, full=True)
+    assert model.ended_unheard == set() and model.job("j1").state == "done"
+
+
 def test_a_drawings_strokes_survive_messages_without_them_and_reach_the_preview() -> None:
     strokes = {"units": "m", "y_axis": "up", "strokes": [[[0.0, 0.0], [1.0, 1.0]]]}
     model = ConsoleModel(SETTINGS)

@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 
 from bus.keys import ShowKeys
-from bus.messages import OperatorCommand, ShowSnapshot, SubmitReply, SubmitRequest
+from bus.messages import JobState, OperatorCommand, ShowSnapshot, SubmitReply, SubmitRequest
 from bus.rpc import query_one
 from bus.session import free_tcp_endpoint, open_session
 from orchestrator.app import serve_show
@@ -20,6 +20,7 @@ from showfile import Show, dump_show, load_show
 from tui.app import ConsoleApp
 from tui.commands import clear_fault
 from tui.link import ConsoleLink
+from tui.records import FINAL_JOB_STATES
 from tui.settings import settings_from_show
 
 pytestmark = [pytest.mark.timeout(90), pytest.mark.slow]
@@ -190,6 +191,42 @@ def test_a_console_whose_first_asks_go_unanswered_asks_again_until_it_has_the_sh
                 said = [e.message for _, e in app.model.events.after(0) if e.kind == "console"]
                 assert len(said) == 1 and "no snapshot from the orchestrator yet" in said[0]
                 assert link.lost >= 1
+
+        asyncio.run(main())
+
+
+class FinalsLost(ConsoleLink):
+    """A link that loses every ``jobs/<id>`` message of a finished job (as across a
+    reconnection); the orchestrator's ``fleet`` publications and snapshot answers arrive."""
+
+    def start(self, deliver: Any) -> None:
+        def losing(item: Any) -> None:
+            if not (isinstance(item, JobState) and item.state in FINAL_JOB_STATES):
+                deliver(item)
+
+        super().start(losing)
+
+
+def test_a_job_whose_end_was_not_heard_is_shown_ended_from_the_orchestrators_snapshot(
+    tmp_path: Path,
+) -> None:
+    show = moderated_show(tmp_path)
+    keys = ShowKeys(show.show_id)
+    with Orchestrator(show), open_session(show.zenoh, role="client") as session:
+        request = SubmitRequest(text="永", client_id="test")
+        reply = query_one(session, keys.submit, request, SubmitReply, timeout_s=10.0)
+        assert reply.ok, reply
+        app = ConsoleApp(settings_from_show(show), link=FinalsLost(session, keys))
+
+        async def main() -> None:
+            async with app.run_test(size=(100, 30)) as pilot:
+                await until(pilot, lambda: app.model.job(reply.job_id) is not None, "the job")
+                app.send(OperatorCommand(command="cancel", job_id=reply.job_id))
+                await until(  # its "cancelled" message was lost; the fleet leaves it out
+                    pilot,
+                    lambda: getattr(app.model.job(reply.job_id), "state", None) == "cancelled",
+                    "the job cancelled",
+                )
 
         asyncio.run(main())
 

@@ -139,6 +139,8 @@ class ConsoleApp(App[None]):
         self._alerted: set[str] = set()
         self._snapshot_wait_said = False
         """The event log says that the show's snapshot is awaited (once until it comes)."""
+        self._joining = False
+        """A snapshot is being asked for (:meth:`join_show`)."""
         self._fleet = FleetTable(id="fleet")
         self._queue = QueueTable(id="queue")
         self._preview = PreviewPane(id="preview")
@@ -196,6 +198,8 @@ class ConsoleApp(App[None]):
             self.model.apply(item, now_s)
             if isinstance(item, OrchestratorPresence) and item.alive and not was_online:
                 self.join_show()  # once per appearance: Zenoh may announce a token twice
+        if self.model.ended_unheard and not self._joining:
+            self.join_show()  # a job's final message was lost: the snapshot has its end
 
     @work(exclusive=True, group="snapshot")
     async def join_show(self) -> None:
@@ -204,6 +208,14 @@ class ConsoleApp(App[None]):
         of the orchestrator asks afresh (``exclusive``: the asking before it is cancelled)."""
         if self.link is None:
             return
+        self._joining = True
+        try:
+            await self._ask_snapshot()
+        finally:
+            self._joining = False
+
+    async def _ask_snapshot(self) -> None:
+        assert self.link is not None
         while (snapshot := await self.link.query_snapshot()) is None:
             if not self._snapshot_wait_said:
                 message = (

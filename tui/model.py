@@ -70,6 +70,10 @@ class ConsoleModel:
         """When :attr:`orchestrator` last changed (arrival time)."""
         self.last_snapshot_s: float | None = None
         """Arrival time of the latest snapshot or fleet message."""
+        self.ended_unheard: set[str] = set()
+        """Jobs unfinished here that a ``fleet`` publication (which lists no finished job) left
+        out although they are older than it: they ended and their last message was lost; the
+        console asks for the whole show again (cleared when it has)."""
         self.queue_paused = False
         self.job_counts: dict[str, int] = {}
         """Jobs of the show per state, all of them, as the orchestrator last counted (the job
@@ -260,12 +264,21 @@ class ConsoleModel:
                 if known is None or known.updated_at_s <= job.updated_at_s:
                     jobs[job.job_id] = with_known_strokes(job, self._jobs.get(job.job_id))
             self._jobs = jobs
+            self.ended_unheard = set()
             self._evict_finished()
             self.queue_version += 1
             self.events.history(snapshot.events)
         else:
             for job in snapshot.jobs:
                 self._job(job)
+            listed = {job.job_id for job in snapshot.jobs}
+            self.ended_unheard = {
+                j.job_id
+                for j in self._jobs.values()
+                if j.state not in FINAL_JOB_STATES
+                and j.job_id not in listed
+                and j.updated_at_s < snapshot.time_s
+            }
         for summary in snapshot.vehicles:
             self._summary(summary, now_s)
         if self.dirty_boards != frozenset(snapshot.dirty_boards):
