@@ -55,6 +55,10 @@ GOOD = PreflightReadings(health=HEALTHY, battery_fraction=0.9, clock_offset_s=0.
             {"health": replace(HEALTHY, mocap_age_s=math.inf)},
             "mocap: no pose sent to the autopilot yet",
         ),
+        (  # the cause before its effect, whichever the autopilot said first
+            {"health": replace(HEALTHY, mocap_age_s=math.inf, estimator="no horizontal position")},
+            "mocap: no pose sent to the autopilot yet",
+        ),
         ({"has_fence": False}, "geofence: none loaded"),
         (
             {

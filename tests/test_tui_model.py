@@ -189,14 +189,16 @@ def test_full_snapshot_keeps_newer_live_updates_and_drops_what_ended_before_it()
     assert model.job("j3").state == "done"
 
 
-def test_a_job_left_out_of_a_fleet_publication_older_than_it_ended_unheard_until_a_snapshot() -> (
-    None
-):
+def test_a_listed_job_left_out_of_a_newer_fleet_publication_ended_unheard() -> None:
     model = ConsoleModel(SETTINGS)
+    listed = [job(j, "queued", updated=4.0) for j in ("j1", "j2", "j4")]
+    model.apply(snapshot(listed, time_s=4.5), 0.0)  # a fleet publication
+    assert model.ended_unheard == set()
     model.apply(job("j1", "writing", updated=5.0), 0.0)  # its "done" message never came
     model.apply(job("j2", "queued", updated=12.0), 0.0)  # newer than the publication below
     model.apply(job("j3", "done", updated=6.0), 0.0)  # finished: never listed in fleet
     model.apply(job("j4", "queued", updated=7.0), 0.0)
+    model.apply(job("rogue", "writing", updated=3.0), 0.0)  # never listed: not the orchestrator's
     model.apply(snapshot([job("j4", "assigned", updated=9.0)], time_s=10.0), 0.0)  # fleet
     assert model.ended_unheard == {"j1"}
     assert model.job("j1").state == "writing"  # the console asks the orchestrator (app.py)

@@ -71,9 +71,12 @@ class ConsoleModel:
         self.last_snapshot_s: float | None = None
         """Arrival time of the latest snapshot or fleet message."""
         self.ended_unheard: set[str] = set()
-        """Jobs unfinished here that a ``fleet`` publication (which lists no finished job) left
-        out although they are older than it: they ended and their last message was lost; the
-        console asks for the whole show again (cleared when it has)."""
+        """Jobs unfinished here that the orchestrator listed, then a ``fleet`` publication (which
+        lists no finished job) left out although they are older than it: they ended and their
+        last message was lost; the console asks for the whole show again (cleared when it has).
+        A job the orchestrator never listed (a rogue publisher's) is not its to end."""
+        self._listed: set[str] = set()
+        """The jobs the orchestrator's latest snapshot or ``fleet`` publication listed."""
         self.queue_paused = False
         self.job_counts: dict[str, int] = {}
         """Jobs of the show per state, all of them, as the orchestrator last counted (the job
@@ -265,6 +268,7 @@ class ConsoleModel:
                     jobs[job.job_id] = with_known_strokes(job, self._jobs.get(job.job_id))
             self._jobs = jobs
             self.ended_unheard = set()
+            self._listed = {job.job_id for job in snapshot.jobs}
             self._evict_finished()
             self.queue_version += 1
             self.events.history(snapshot.events)
@@ -276,9 +280,11 @@ class ConsoleModel:
                 j.job_id
                 for j in self._jobs.values()
                 if j.state not in FINAL_JOB_STATES
+                and j.job_id in self._listed
                 and j.job_id not in listed
                 and j.updated_at_s < snapshot.time_s
             }
+            self._listed = listed
         for summary in snapshot.vehicles:
             self._summary(summary, now_s)
         if self.dirty_boards != frozenset(snapshot.dirty_boards):

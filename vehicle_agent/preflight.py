@@ -77,15 +77,17 @@ def _link(health: LinkHealth, limits: PreflightLimits) -> str | None:
 
 
 def _estimator(health: LinkHealth, limits: PreflightLimits) -> str | None:
+    """The mocap the autopilot fuses first: missing, it is the cause of the estimator's missing
+    position (which an ESTIMATOR_STATUS says only once it has come, at 0.5-1 Hz)."""
+    age_s = health.mocap_age_s
+    if age_s is not None and math.isinf(age_s):
+        return "mocap: no pose sent to the autopilot yet"
+    if age_s is not None and age_s > limits.mocap_age_max_s:
+        bound_ms = 1e3 * limits.mocap_age_max_s
+        return f"mocap: last pose sent {1e3 * age_s:.0f} ms ago (limit {bound_ms:.0f} ms)"
     if health.estimator is not None:
         return f"estimator: {health.estimator}"
-    age_s = health.mocap_age_s
-    if age_s is None or age_s <= limits.mocap_age_max_s:
-        return None
-    if math.isinf(age_s):
-        return "mocap: no pose sent to the autopilot yet"
-    bound_ms = 1e3 * limits.mocap_age_max_s
-    return f"mocap: last pose sent {1e3 * age_s:.0f} ms ago (limit {bound_ms:.0f} ms)"
+    return None
 
 
 def _fences(health: LinkHealth, readings: PreflightReadings, limits: PreflightLimits) -> str | None:
