@@ -12,6 +12,7 @@ import pytest
 
 from bus.keys import ShowKeys
 from bus.messages import AgentReport, CommandReply, ErrorInfo
+from bus.rpc import RemoteError
 from vehicle_agent import reports
 from vehicle_agent.lease import JobLease
 from vehicle_agent.reports import ReportOutbox
@@ -56,3 +57,23 @@ def test_a_report_refused_otherwise_is_still_a_warning(
     assert [(r.levelno, r.getMessage()) for r in caplog.records] == [
         (logging.WARNING, "uav2: report holding not accepted: p1 is done")
     ]
+
+
+@pytest.mark.parametrize(("code", "resent"), [("remote_error", True), ("not_assigned", False)])
+def test_a_done_report_is_settled_only_by_the_orchestrators_own_answer(
+    monkeypatch: pytest.MonkeyPatch, code: str, resent: bool
+) -> None:
+    """A Zenoh error reply with no ErrorInfo (``remote_error``, e.g. a router's "Timeout") is
+    no receipt: the result is sent again, not let go (the job would be written twice)."""
+
+    async def error_reply(*_args: Any, **_kw: Any) -> CommandReply:
+        raise RemoteError(ErrorInfo(code=code, message="Timeout"))
+
+    monkeypatch.setattr(reports, "aquery_one", error_reply)
+    outbox = ReportOutbox(
+        ShowKeys("t"), "uav1", JobLease(lost_after_s=1.5), retry_s=0.1, timeout_s=1.0,
+        running_job=lambda: None, refused=lambda _why: None, settled=lambda _job: None,
+    )  # fmt: skip
+    done = AgentReport(vehicle_id="uav1", job_id="j1", event="done")
+    delivered = asyncio.run(outbox._deliver(None, done))  # type: ignore[arg-type]
+    assert delivered is not resent  # delivered: answered, and a result then settled
