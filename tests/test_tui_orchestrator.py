@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -169,17 +170,27 @@ class UnansweredAtFirst(ConsoleLink):
         return await super().query_snapshot(timeout_s)
 
 
-def test_a_console_whose_first_asks_go_unanswered_asks_again_until_it_has_the_show(
-    tmp_path: Path,
-) -> None:
+@contextlib.contextmanager
+def console_after_a_submission(
+    tmp_path: Path, link_type: type[ConsoleLink]
+) -> Iterator[tuple[ConsoleApp, str]]:
+    """The real orchestrator with 永 submitted (awaiting approval), and a console (not yet
+    running) that joins it through a ``link_type`` link; yields the console and the job's id."""
     show = moderated_show(tmp_path)
     keys = ShowKeys(show.show_id)
     with Orchestrator(show), open_session(show.zenoh, role="client") as session:
         request = SubmitRequest(text="永", client_id="test")
         reply = query_one(session, keys.submit, request, SubmitReply, timeout_s=10.0)
-        assert reply.ok, reply
-        link = UnansweredAtFirst(session, keys)
-        app = ConsoleApp(settings_from_show(show), link=link)
+        assert reply.ok and reply.job_id is not None, reply
+        yield ConsoleApp(settings_from_show(show), link=link_type(session, keys)), reply.job_id
+
+
+def test_a_console_whose_first_asks_go_unanswered_asks_again_until_it_has_the_show(
+    tmp_path: Path,
+) -> None:
+    with console_after_a_submission(tmp_path, UnansweredAtFirst) as (app, _job_id):
+        link = app.link
+        assert isinstance(link, UnansweredAtFirst)
 
         async def main() -> None:
             async with app.run_test(size=(100, 30)) as pilot:
@@ -210,21 +221,15 @@ class FinalsLost(ConsoleLink):
 def test_a_job_whose_end_was_not_heard_is_shown_ended_from_the_orchestrators_snapshot(
     tmp_path: Path,
 ) -> None:
-    show = moderated_show(tmp_path)
-    keys = ShowKeys(show.show_id)
-    with Orchestrator(show), open_session(show.zenoh, role="client") as session:
-        request = SubmitRequest(text="永", client_id="test")
-        reply = query_one(session, keys.submit, request, SubmitReply, timeout_s=10.0)
-        assert reply.ok, reply
-        app = ConsoleApp(settings_from_show(show), link=FinalsLost(session, keys))
+    with console_after_a_submission(tmp_path, FinalsLost) as (app, job_id):
 
         async def main() -> None:
             async with app.run_test(size=(100, 30)) as pilot:
-                await until(pilot, lambda: app.model.job(reply.job_id) is not None, "the job")
-                app.send(OperatorCommand(command="cancel", job_id=reply.job_id))
+                await until(pilot, lambda: app.model.job(job_id) is not None, "the job")
+                app.send(OperatorCommand(command="cancel", job_id=job_id))
                 await until(  # its "cancelled" message was lost; the fleet leaves it out
                     pilot,
-                    lambda: getattr(app.model.job(reply.job_id), "state", None) == "cancelled",
+                    lambda: getattr(app.model.job(job_id), "state", None) == "cancelled",
                     "the job cancelled",
                 )
 
