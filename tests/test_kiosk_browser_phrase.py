@@ -83,6 +83,13 @@ def _characters(show: PhraseShow, phrase_id: str) -> list[Any]:
 
 
 def _items(page: Any) -> list[str]:
+    """The characters' lines as laid out: read once the list is rendered (read while it is
+    redrawn, an item's text comes without its line break: '新等待批准', a fresh clone's CI)."""
+    page.wait_for_function(
+        "() => [...document.querySelectorAll('#phrase-chars li')]"
+        ".every(li => li.innerText.includes('\\n'))",
+        timeout=UI_WAIT_MS,
+    )
     return [str(t).replace("\n", " ") for t in page.locator("#phrase-chars li").all_inner_texts()]
 
 
