@@ -41,9 +41,16 @@ DEFAULT_TIMEOUT_S = 2.0
 
 Queryable = zenoh.Queryable
 
+NOT_THE_SERVICES = "remote_error"
+"""The code of an error reply whose payload is no ErrorInfo. Every skyquill service answers with
+an ErrorInfo, so such a reply is not the service's answer: it is Zenoh's own (a router's
+"Timeout" for a query that outlived a link, found when a partition healed) or a stranger's, and
+a caller is told there was no reply (:class:`NoReplyError`), never that the service refused."""
+
 
 class NoReplyError(BusError, TimeoutError):
-    """Nobody answered the query before the timeout."""
+    """The service did not answer before the timeout (at most Zenoh itself did, see
+    :data:`NOT_THE_SERVICES`)."""
 
 
 class RemoteError(BusError):
@@ -104,7 +111,7 @@ def _decode_reply(reply: zenoh.Reply, reply_type: type[M]) -> QueryReply[M]:
     try:
         info = decode(raw, ErrorInfo)
     except MessageError:
-        info = ErrorInfo(code="remote_error", message=raw.decode("utf-8", "replace") or "error")
+        info = ErrorInfo(code=NOT_THE_SERVICES, message=raw.decode("utf-8", "replace") or "error")
     return QueryReply(None, None, info)
 
 
@@ -135,9 +142,10 @@ def _first(replies: list[QueryReply[M]], key_expr: str) -> M:
         if reply.value is not None:
             return reply.value
     for reply in replies:
-        if reply.error is not None:
+        if reply.error is not None and reply.error.code != NOT_THE_SERVICES:
             raise RemoteError(reply.error)
-    raise NoReplyError(f"no reply on {key_expr}")
+    why = "; ".join(r.error.message for r in replies if r.error is not None)
+    raise NoReplyError(f"no reply on {key_expr}" + (f" (only: {why})" if why else ""))
 
 
 def query_one(

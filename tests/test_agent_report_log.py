@@ -12,7 +12,7 @@ import pytest
 
 from bus.keys import ShowKeys
 from bus.messages import AgentReport, CommandReply, ErrorInfo
-from bus.rpc import RemoteError
+from bus.rpc import NoReplyError, RemoteError
 from vehicle_agent import reports
 from vehicle_agent.lease import JobLease
 from vehicle_agent.reports import ReportOutbox
@@ -59,15 +59,23 @@ def test_a_report_refused_otherwise_is_still_a_warning(
     ]
 
 
-@pytest.mark.parametrize(("code", "resent"), [("remote_error", True), ("not_assigned", False)])
+@pytest.mark.parametrize(
+    ("silence", "resent"),
+    [
+        (NoReplyError("no reply on t/report (only: Timeout)"), True),
+        (RemoteError(ErrorInfo(code="busy", message="busy")), True),
+        (RemoteError(ErrorInfo(code="not_assigned", message="not yours")), False),
+    ],
+)
 def test_a_done_report_is_settled_only_by_the_orchestrators_own_answer(
-    monkeypatch: pytest.MonkeyPatch, code: str, resent: bool
+    monkeypatch: pytest.MonkeyPatch, silence: Exception, resent: bool
 ) -> None:
-    """A Zenoh error reply with no ErrorInfo (``remote_error``, e.g. a router's "Timeout") is
-    no receipt: the result is sent again, not let go (the job would be written twice)."""
+    """No answer (``bus.rpc`` also reports Zenoh's own "Timeout" as none) or an orchestrator
+    that could not take it is no receipt: the result is sent again, not let go (the job would be
+    written twice); a refusal is the orchestrator's answer."""
 
     async def error_reply(*_args: Any, **_kw: Any) -> CommandReply:
-        raise RemoteError(ErrorInfo(code=code, message="Timeout"))
+        raise silence
 
     monkeypatch.setattr(reports, "aquery_one", error_reply)
     outbox = ReportOutbox(

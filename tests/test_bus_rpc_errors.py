@@ -16,9 +16,20 @@ from typing import Any
 import msgspec
 import pytest
 
+from bus.codec import encode
 from bus.keys import ShowKeys
 from bus.messages import CommandReply, ErrorInfo, OperatorCommand, ShowSnapshot
-from bus.rpc import ErrorReply, error_info_from_exception, query, serve, serve_async
+from bus.rpc import (
+    ErrorReply,
+    NoReplyError,
+    RemoteError,
+    aquery_one,
+    error_info_from_exception,
+    query,
+    query_one,
+    serve,
+    serve_async,
+)
 from bus.session import BusSettings, Session, loopback_settings, open_session
 from planner.errors import InfeasibleTrajectoryError, PlannerError
 
@@ -163,6 +174,35 @@ def test_a_reply_that_cannot_be_encoded_is_an_internal_error(
         assert reply.value.error is not None and reply.value.error.code == "internal"
     finally:
         q.undeclare()  # type: ignore[no-untyped-call]
+
+
+@pytest.mark.parametrize("ask", ["thread", "asyncio"])
+def test_an_error_reply_that_is_no_errorinfo_is_no_answer(
+    clients: tuple[Session, Session], ask: str
+) -> None:
+    """Zenoh's own error reply (a router's "Timeout", no ErrorInfo in it) is not the service's
+    answer: the caller hears no reply, as for silence, while the service's own ErrorInfo stays a
+    refusal. Taken as an answer, it let an agent's ``done`` go unstored and a character was
+    written twice."""
+    a, b = clients
+    refusal = encode(ErrorInfo(code="busy", message="b"))
+    payloads = {KEYS.command: b"Timeout", KEYS.snapshot: refusal}
+
+    def answer(query: Any) -> None:
+        query.reply_err(payloads[str(query.key_expr)])
+        query.drop()
+
+    queryables = [b.declare_queryable(key, answer, complete=True) for key in payloads]
+    try:
+        _served(a, KEYS.command)
+        ask_one = query_one if ask == "thread" else lambda *a: asyncio.run(aquery_one(*a))
+        with pytest.raises(NoReplyError, match="only: Timeout"):
+            ask_one(a, KEYS.command, None, CommandReply)
+        with pytest.raises(RemoteError, match="busy"):
+            ask_one(a, KEYS.snapshot, None, CommandReply)
+    finally:
+        for q in queryables:
+            q.undeclare()
 
 
 class _CodedError(Exception):

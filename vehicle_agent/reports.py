@@ -22,13 +22,13 @@ from vehicle_agent.lease import JobLease
 
 log = logging.getLogger(__name__)
 
-RETRY_CODES = frozenset({"internal", "unavailable", "busy", "remote_error"})
-"""Error replies to a report after which it is sent again: the orchestrator could not take it,
-or the error is not the orchestrator's at all (``remote_error``: no ErrorInfo in it, such as
-Zenoh's own "Timeout" from a router whose query outlived a link just healed). Taken as an
-answer, that one settled a ``done`` the orchestrator never stored: the agent stopped naming the
-job, the orchestrator gave it to another vehicle, and a character was written twice (a fresh
-clone's CI, ``test_multihost_show``)."""
+RETRY_CODES = frozenset({"internal", "unavailable", "busy"})
+"""Error replies to a report after which it is sent again: the orchestrator could not take it.
+An error reply that is not the orchestrator's at all (Zenoh's own "Timeout" from a router whose
+query outlived a link just healed) is no answer (``bus.rpc.NOT_THE_SERVICES``): taken as one, it
+settled a ``done`` the orchestrator never stored, the agent stopped naming the job, the
+orchestrator gave it to another vehicle, and a character was written twice (a fresh clone's CI,
+``test_multihost_show``)."""
 BEST_EFFORT = frozenset({"progress", "holding"})
 """Reports sent once, and superseded by a newer report of the same job not yet sent."""
 PHRASE_WAITS = "phrase_waits"
