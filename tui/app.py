@@ -7,7 +7,6 @@ at once and redraws the views from it on a timer, at most ``redraw_hz`` times pe
 
 from __future__ import annotations
 
-import asyncio
 import time
 from collections.abc import Callable
 from typing import ClassVar
@@ -26,6 +25,7 @@ from tui import commands as cmd
 from tui.format import job_totals_text
 from tui.inbox import Inbox
 from tui.inputs import BusInput, OrchestratorPresence
+from tui.joining import ShowJoiner
 from tui.link import ConsoleLink
 from tui.model import ConsoleModel
 from tui.safe_text import clean
@@ -56,9 +56,6 @@ PREVIEW_MIN_WIDTH = 100
 """Narrowest terminal, in cells, that shows the small preview next to the queue."""
 TABLE_HZ = 5.0
 """Highest update rate of the fleet table's numbers, in [Hz]."""
-SNAPSHOT_RETRY_S = 2.0
-"""Between asks for the show's snapshot while the orchestrator does not answer, [s] (each ask
-waits up to 2 s: a loaded orchestrator answers in well under that)."""
 
 
 class ConsoleApp(App[None]):
@@ -137,10 +134,7 @@ class ConsoleApp(App[None]):
         self._drawn: dict[str, int] = {}
         self._drawn_boards: tuple[int, int, int] | None = None
         self._alerted: set[str] = set()
-        self._snapshot_wait_said = False
-        """The event log says that the show's snapshot is awaited (once until it comes)."""
-        self._joining = False
-        """A snapshot is being asked for (:meth:`join_show`)."""
+        self._joiner = ShowJoiner(link, self.model, clock) if link is not None else None
         self._fleet = FleetTable(id="fleet")
         self._queue = QueueTable(id="queue")
         self._preview = PreviewPane(id="preview")
@@ -198,34 +192,16 @@ class ConsoleApp(App[None]):
             self.model.apply(item, now_s)
             if isinstance(item, OrchestratorPresence) and item.alive and not was_online:
                 self.join_show()  # once per appearance: Zenoh may announce a token twice
-        if self.model.ended_unheard and not self._joining:
+        if self.model.ended_unheard and self._joiner is not None and not self._joiner.asking:
             self.join_show()  # a job's final message was lost: the snapshot has its end
 
     @work(exclusive=True, group="snapshot")
     async def join_show(self) -> None:
-        """Late joiner: ask the orchestrator for the whole show until it answers (said once in
-        the event log when it does not at first), then follow live messages. A new appearance
-        of the orchestrator asks afresh (``exclusive``: the asking before it is cancelled)."""
-        if self.link is None:
-            return
-        self._joining = True
-        try:
-            await self._ask_snapshot()
-        finally:
-            self._joining = False
-
-    async def _ask_snapshot(self) -> None:
-        assert self.link is not None
-        while (snapshot := await self.link.query_snapshot()) is None:
-            if not self._snapshot_wait_said:
-                message = (
-                    f"no snapshot from the orchestrator yet: asking every {SNAPSHOT_RETRY_S:.0f} s"
-                )
-                self.model.events.note(self.clock(), "warning", "console", message)
-                self._snapshot_wait_said = True
-            await asyncio.sleep(SNAPSHOT_RETRY_S)
-        self._snapshot_wait_said = False
-        self.model.apply_snapshot(snapshot, self.clock(), full=True)
+        """Late joiner: ask the orchestrator for the whole show until it answers
+        (:mod:`tui.joining`), then follow live messages. A new appearance of the orchestrator
+        asks afresh (``exclusive``: the asking before it is cancelled)."""
+        if self._joiner is not None:
+            await self._joiner.join()
 
     # --- redraw ----------------------------------------------------------------------------------
     def _tick(self) -> None:
