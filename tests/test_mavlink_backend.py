@@ -31,11 +31,12 @@ from vehicle_agent.backends.base import (
 from vehicle_agent.backends.mavlink.backend import MavlinkBackend
 from vehicle_agent.backends.mavlink.errors import (
     ArmingRefusedError,
+    EstimateOffMocapError,
     LinkLostError,
     PrearmFailingError,
     VehicleFaultError,
 )
-from vehicle_agent.backends.mavlink.mocap import MocapPose
+from vehicle_agent.backends.mavlink.mocap import PX4_ORIGIN_AFTER_POSES_S, MocapPose
 from vehicle_agent.backends.mavlink.settings import MavlinkSettings, settings_from_show
 from vehicle_agent.backends.mavlink.state import ARDUPILOT, PX4, PX4_OFFBOARD_ON_GROUND
 from vehicle_agent.motion import plan_move
@@ -471,18 +472,59 @@ def test_a_mocap_vehicle_is_set_up_at_connect_and_arms_only_while_poses_flow(
         asyncio.run(scenario(server))
 
 
-def test_px4_on_mocap_gets_its_ekf_origin_at_altitude_zero_at_connect() -> None:
+def test_px4_on_mocap_gets_its_ekf_origin_at_altitude_zero_once_poses_flow() -> None:
     # EKF2 (v1.16) takes vision z as down from altitude 0: with its origin anywhere else its
-    # local z is off by that altitude (SIH: +584 m on the ground). ArduPilot gets it later, when
-    # it says it uses external nav (its own GPS origin crashes 4.7 SITL meanwhile).
+    # local z is off by that altitude (SIH: +584 m on the ground). Given before the first pose
+    # (a loaded machine), EKF2 took the barometer's height at the origin and stayed 583.85 m off.
+    # ArduPilot gets it when it says it uses external nav (its own GPS origin crashes 4.7 SITL).
+    poses = {"on": False}
+
+    def source(_now_s: float) -> MocapPose | None:
+        return MocapPose(position_m_enu=HOME) if poses["on"] else None
+
     async def scenario(server: MavsimServer) -> None:
         ap = server.endpoints[0].autopilot
         settings = {"mocap": "vision_position_estimate", "set_params": False}
-        async with connected(server, **settings) as (_backend, driver):
-            await driver.until(lambda _s: ap.ekf_origin_lla is not None, 1.0)
+        async with connected(server, **settings) as (backend, driver):
+            backend._mocap.source = source
+            for _ in range(60):  # 0.6 s of agent time, no pose yet
+                await driver.tick()
+            assert ap.ekf_origin_lla is None
+            poses["on"] = True
+            await driver.until(lambda _s: backend._mocap.sent > 0, 1.0)
+            first_s = driver.now
+            await driver.until(lambda _s: ap.ekf_origin_lla is not None, 3.0)
+            assert driver.now - first_s >= PX4_ORIGIN_AFTER_POSES_S - 0.1
         assert ap.ekf_origin_lla is not None and ap.ekf_origin_lla[2] == 0.0
 
     with vehicle(autopilot="px4") as server:
+        asyncio.run(scenario(server))
+
+
+def test_a_vehicle_whose_estimate_is_not_where_the_mocap_puts_it_is_not_armed() -> None:
+    # The autopilot's estimator has not taken the mocap (PX4 SIH: 583.85 m off): a take-off
+    # would climb from the wrong place. Refused with nothing sent; the job goes back, no fault.
+    off = {"z_m": 0.5}
+
+    def source(_now_s: float) -> MocapPose:
+        return MocapPose(position_m_enu=(HOME[0], HOME[1], HOME[2] + off["z_m"]))
+
+    async def scenario(server: MavsimServer) -> None:
+        ap = server.endpoints[0].autopilot
+        async with connected(server, mocap="vision_position_estimate", mocap_rate_hz=50.0,
+                             set_params=False) as (backend, driver):  # fmt: skip
+            backend._mocap.source = source
+            await driver.until(lambda _s: backend._mocap.sent > 10, 2.0)
+            with pytest.raises(EstimateOffMocapError, match=r"0\.50 m from the mocap") as refused:
+                await backend.takeoff(HOVER)
+            assert isinstance(refused.value, CommandRefusedError)
+            assert not ap.armed and backend.mode == "idle" and backend.fault is None
+            off["z_m"] = 0.0
+            await driver.until(lambda _s: backend._mocap.position_m_enu == HOME, 1.0)
+            await airborne(backend, driver)
+            assert ap.armed
+
+    with vehicle() as server:
         asyncio.run(scenario(server))
 
 

@@ -56,3 +56,16 @@ class PrearmFailingError(ArmingRefusedError, NotReadyError):
 
 class VehicleFaultError(MavlinkError):
     """A command while the vehicle is in a fault (pilot has control, link lost, failsafe)."""
+
+
+class EstimateOffMocapError(MavlinkError, CommandRefusedError):
+    """Nothing was asked of the vehicle: its position estimate is not where the mocap poses we
+    send put it (its estimator has not taken them: EKF2 with a barometer height, 583 m off); a
+    take-off would climb from the wrong place."""
+
+    def __init__(self, off_m: float) -> None:
+        super().__init__(
+            f"not arming: the autopilot's position estimate is {off_m:.2f} m from the mocap's"
+            " (its estimator has not taken the mocap: restart the autopilot if it stays so)"
+        )
+        self.off_m = off_m

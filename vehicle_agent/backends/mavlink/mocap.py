@@ -45,6 +45,12 @@ its local frame is the mocap's whichever origin it has, but its EKF needs one. A
 its GPS would set later while it fuses ExternalNav crashes ArduCopter 4.7 SITL (floating point
 exception at "origin set", measured); set first, the GPS leaves it alone. PX4 gets it at altitude
 0 (see ``params.PX4_HGT_REF_VISION``)."""
+PX4_ORIGIN_AFTER_POSES_S = 1.0
+"""How long in [s] poses flow to PX4 before it gets its EKF origin. Given at connect, before the
+first pose (a loaded machine: the simulator's truth came late), EKF2 took its height from the
+barometer at the origin, 583.85 m, and never took the vision's 0 after it: the vehicle armed with
+its local z at -583.85 m, climbed towards the ground and was disarmed by PX4's preflight timeout
+(PX4 1.16 SIH, load 6, issue 31). With the vision fused first its local z is the mocap's."""
 
 
 @dataclass(frozen=True)
@@ -113,6 +119,10 @@ class MocapForwarder:
         self.failed = 0
         self.pose_at_s = -math.inf
         """Capture time in [s] (agent clock) of the latest pose sent."""
+        self.first_pose_at_s = math.inf
+        """Capture time in [s] (agent clock) of the first pose sent."""
+        self.position_m_enu: Vec3 | None = None
+        """Where the latest pose sent puts the vehicle, show frame ENU in [m]."""
 
     def start(self, link: Callable[[], MavlinkLink | None], clock: TickTime) -> None:
         """Forward from a task of its own (:meth:`run`) when the settings ask for mocap."""
@@ -130,8 +140,12 @@ class MocapForwarder:
         return None if self.kind == "none" else now_s - self.pose_at_s
 
     def set_ekf_origin(self, link: MavlinkLink, system_id: int) -> None:
-        """An autopilot fusing our mocap: give its EKF an origin (once), before its GPS does."""
+        """An autopilot fusing our mocap: give its EKF an origin (once), before its GPS does;
+        PX4's once poses have flowed for :data:`PX4_ORIGIN_AFTER_POSES_S` (asked every tick)."""
         if self._origin_sent or self.kind == "none":
+            return
+        flowed_s = self.pose_at_s - self.first_pose_at_s  # -inf before the first pose
+        if self.flavor() == "px4" and not flowed_s >= PX4_ORIGIN_AFTER_POSES_S:
             return
         self._origin_sent = True
         lat, lon, alt = EKF_ORIGIN_LLA
@@ -179,3 +193,5 @@ class MocapForwarder:
         if link.send(message):
             self.sent += 1
             self.pose_at_s = usec * 1e-6
+            self.first_pose_at_s = min(self.first_pose_at_s, self.pose_at_s)
+            self.position_m_enu = pose.position_m_enu
