@@ -52,8 +52,9 @@ class PlanSettings:
     """Largest distance in [m] of a stroke point from the writing area's centre (1 mm more is
     let through: ``defaults.REACH_SLACK_M``)."""
     longest_period_steps: int = 117
-    """Most steps of one contact period: a longer stroke is planned in pieces from rest to rest
-    (``long_periods``)."""
+    """Most steps one contact period may need (``steps.steps_per_segment``, before they are
+    rounded up the ladder of built solvers): a longer stroke is planned in pieces from rest to
+    rest (``long_periods``)."""
 
 
 def _checked_strokes(

@@ -1,7 +1,7 @@
 """IPOPT solvers of the period NLP (paper eq. 7), built once per step count and kept, and the
 step-count ladder that lets periods of nearby lengths share one built solver.
 
-A solver is built per ``(steps, optional rows, params, cost weights)`` only (about 20 ms of CPU
+A solver is built per ``(steps, optional rows, params, cost weights)`` only (5-10 ms of CPU
 whatever the step count, see ``period_nlp``); a period's waypoints, contact mode and limits reach
 it as variable and constraint bounds (``nlp``), its force profile as a parameter.
 """
@@ -20,16 +20,20 @@ from vehicles.hexarotor_sponge.contact_model import rotor_thrusts
 from vehicles.hexarotor_sponge.params import HexarotorParams
 from vehicles.hexarotor_sponge.period_nlp import ACTION, STATE, Rows, period_nlp
 
-STEP_COUNT_RATIO = 1.25
+STEP_COUNT_RATIO = 1.1
 """Ratio of consecutive step counts a period is planned with: a period's steps are rounded up to
-the next count so periods of nearby lengths share one built solver (about 12 % more steps on
-average; building a count costs about 20 ms of CPU, an iteration on 48 steps about 1 ms)."""
+the next count so periods of nearby lengths share one built solver (about 5 % more steps on
+average; building a count costs 5-10 ms of CPU and about 1 MB, an iteration on 48 steps about
+1 ms). Against 1.25 (about 12 % more steps) it cuts IPOPT's work (iterations times steps) on
+the 1 m letters 永, R, &, O by 17, 18, 15, 24 % (8: +10 %), with 19 solvers built for the five
+letters instead of 11."""
 SMALLEST_STEP_COUNT = 8
 """Smallest count of the ladder (the shortest period, leaving the wall, needs 8 at 0.15 s)."""
 
 
 def step_count(needed: int) -> int:
-    """The smallest count of the ladder ``ceil(8 * 1.25^k)`` that is at least ``needed``."""
+    """The smallest count of the ladder ``ceil(8 * STEP_COUNT_RATIO^k)`` that is at least
+    ``needed``."""
     count = SMALLEST_STEP_COUNT
     k = 0
     while count < needed:
@@ -69,12 +73,13 @@ iterations at mu 0.1; a monotone barrier from 1e-2 with a first Hessian perturba
 
 MAX_ITERATIONS = 600
 """IPOPT's iteration cap on a period's last (or only) attempt."""
-TRIAL_MAX_ITERATIONS = 150
+TRIAL_MAX_ITERATIONS = 80
 """IPOPT's iteration cap on an attempt that has a retry with more steps after it (``nlp``'s
-``RETRY_STEP_SCALES``). The 1 m letters 8, 永, R, & and 中 and the quick corpus's words,
-spirals and cursive runs solve in at most 48 iterations a period; the one first attempt that
-failed (cursive:6, 60 steps) ran out of its 600 iterations (2.2 s of CPU) before the retry
-planned it in 19. 150 is three times the most a solve that succeeds was seen to need."""
+``RETRY_STEP_SCALES``). An attempt that fails runs to its cap (cursive:6's pieces: 150
+iterations, 0.3-0.6 s of CPU each, at the earlier cap of 150), and its retry plans it in about
+20. The most a solve that succeeded took on the 215 inputs of ``bench_wall_corpus.py`` is 64
+(the 1 m P), most take under 30; 15 of the inputs have a first attempt that fails
+(``steps.CORRIDOR_TRAVEL_SLACK``), all planned by their retries."""
 
 
 @lru_cache(maxsize=64)
