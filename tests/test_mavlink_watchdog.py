@@ -18,9 +18,12 @@ def heartbeat(state: LinkState, custom_mode: int, armed: bool) -> None:
     state.custom_mode, state.armed = custom_mode, armed
 
 
-def verdicts(beats: list[tuple[int, bool]], mode: str, commanded_mode: int) -> list[str | None]:
+def verdicts(
+    beats: list[tuple[int, bool]], mode: str, commanded_mode: int, landed_state: int | None = None
+) -> list[str | None]:
     """The watchdog's verdict after each heartbeat (one tick each, 1 s apart, setpoints fresh)."""
     state, dog = LinkState(1), Watchdog(LIMITS)
+    state.landed_state = landed_state
     commanded = Commanded(commanded_mode, at_heartbeat=0, last_sent_s=0.0)
     out = []
     for k, (custom_mode, armed) in enumerate(beats):
@@ -48,3 +51,13 @@ def test_a_mode_change_said_twice_is_a_fault() -> None:
 def test_a_mode_said_once_between_ours_is_forgotten() -> None:
     beats = [(OFFBOARD, True), (LAND, True), (OFFBOARD, True), (LAND, True), (OFFBOARD, True)]
     assert verdicts(beats, "offboard", OFFBOARD) == [None] * 5
+
+
+def test_a_disarm_says_whether_the_vehicle_had_left_the_ground() -> None:
+    """PX4 disarms a vehicle that did not climb within its preflight timeout: on the ground, the
+    fault says so instead of a disarm in flight (PX4 SIH at load 6, issue 31)."""
+    beats = [(OFFBOARD, True), (OFFBOARD, False)]
+    on_ground = verdicts(beats, "takeoff", OFFBOARD, landed_state=1)
+    in_air = verdicts(beats, "takeoff", OFFBOARD, landed_state=2)
+    assert on_ground[0] is None and "on the ground before it climbed" in str(on_ground[1])
+    assert in_air[0] is None and "disarmed in flight" in str(in_air[1])

@@ -21,6 +21,8 @@ from vehicle_agent.backends.base import BackendMode
 from vehicle_agent.backends.mavlink.state import SEVERITY_WARNING, Flavor, LinkState
 
 FLYING_MODES = ("takeoff", "hold", "offboard", "landing")
+ON_GROUND = 1
+"""EXTENDED_SYS_STATE landed_state MAV_LANDED_STATE_ON_GROUND."""
 
 
 @dataclass(frozen=True)
@@ -127,6 +129,11 @@ class Watchdog:
                 if state.heartbeats > self._other_mode_at_hb:  # said twice in a row
                     name = flavor.mode_name(state.custom_mode or 0)
                     return f"mode changed to {name} by the pilot or the autopilot: not streaming"
+            elif not state.armed and mode == "takeoff" and state.landed_state == ON_GROUND:
+                return (
+                    "vehicle disarmed on the ground before it climbed (a take-off that did not"
+                    " leave the ground: PX4's preflight disarm timeout, or the pilot)"
+                )
             elif not state.armed:
                 return "vehicle disarmed in flight by the pilot or the autopilot"
         gap_s = now_s - commanded.last_sent_s
