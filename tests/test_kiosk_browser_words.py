@@ -31,6 +31,7 @@ from test_kiosk_browser import (
     START_WAIT_S,
     UI_WAIT_MS,
     Show,
+    _relay_until_shown,
     _wait_for_orchestrator,
     browser,
     touch_stroke,
@@ -243,8 +244,9 @@ def test_the_finished_page_shows_the_ink_the_drone_left(
     page = open_page(browser, show.url, locale, device)
     job_id = hand_in_typed(page, "十")
     assert show.command(command="approve", job_id=job_id).ok
-    show.relay(job_id, "writing", vehicle_id="uav1", progress=0.5, queue_position=None)
-    page.locator("#status-text").filter(has_text="50%").wait_for(timeout=UI_WAIT_MS)
+    status = page.locator("#status-text")  # relayed until shown: a put beside a busy CI worker
+    _relay_until_shown(show, status, job_id, "50%", "writing", vehicle_id="uav1", progress=0.5,
+                       queue_position=None)  # fmt: skip
     assert page.is_hidden("#written-figure")  # only the plan while it is being written
     metrics, pixels = cross_ink()
     deadline = time.monotonic() + UI_WAIT_MS / 1000
