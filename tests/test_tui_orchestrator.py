@@ -99,8 +99,20 @@ async def until(pilot: Any, condition: Callable[[], object], what: str) -> None:
     deadline = time.monotonic() + 20.0
     while not condition():
         if time.monotonic() > deadline:
-            raise AssertionError(f"console never showed: {what}")
+            raise AssertionError(f"console never showed: {what} ({_console_state(pilot.app)})")
         await pilot.pause(0.05)
+
+
+def _console_state(app: ConsoleApp) -> str:
+    """What the console knew when a wait ran out: the orchestrator, its snapshot, the jobs, the
+    queue's selection and the event log's last lines (a fresh clone's CI once saw no selection
+    for 20 s, which no local run at load 3 reproduced: 0.01 s)."""
+    model = app.model
+    last = [e.message for _, e in model.events.after(0)][-4:]
+    return (
+        f"orchestrator {model.orchestrator}, snapshot at {model.last_snapshot_s}, jobs"
+        f" {sorted(model._jobs)}, selected {app._queue.selected_job}, events {last}"
+    )
 
 
 def test_console_approves_and_pauses_with_the_real_orchestrator(tmp_path: Path) -> None:
