@@ -58,7 +58,11 @@ from vehicle_agent.backends.mavlink.pen import PenOverBoard
 from vehicle_agent.backends.mavlink.response import ResponseAid
 from vehicle_agent.backends.mavlink.settings import MavlinkSettings
 from vehicle_agent.backends.mavlink.snapshot import vehicle_snapshot
-from vehicle_agent.backends.mavlink.state import SEVERITY_WARNING, LinkState
+from vehicle_agent.backends.mavlink.state import (
+    MAV_LANDED_STATE_ON_GROUND,
+    SEVERITY_WARNING,
+    LinkState,
+)
 from vehicle_agent.backends.mavlink.stream import SetpointStream
 from vehicle_agent.backends.mavlink.url import parse_mavlink_url
 from vehicle_agent.backends.mavlink.watchdog import Commanded, Watchdog, WatchLimits
@@ -387,8 +391,6 @@ class MavlinkBackend:
         self._tell_texts()  # the part of a chunked text that waited its time for the rest
         if self._link is not None:
             self._ask_why_not_ready(now_s)
-            if self._flavor().name == "px4":  # once poses have flowed (mocap.py)
-                self._mocap.set_ekf_origin(self._link, self.state.system_id or 0)
         if self.fault is None and self._link is not None:
             self._advance(now_s)
             self._stream(setpoint, now_s)
@@ -419,7 +421,8 @@ class MavlinkBackend:
     def _observe_after_fault(self) -> None:
         """In a fault we only watch: a vehicle landed and disarmed (by its pilot) is idle."""
         st = self.state
-        on_ground = st.landed_state == 1 if st.landed_state is not None else True
+        said = st.landed_state
+        on_ground = said == MAV_LANDED_STATE_ON_GROUND if said is not None else True
         if self.mode != "estop" and not st.armed and on_ground:
             self._set_backend_mode("idle")
 

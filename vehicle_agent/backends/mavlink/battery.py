@@ -18,14 +18,13 @@ from __future__ import annotations
 
 from vehicle_agent.backends.base import BackendError
 from vehicle_agent.backends.mavlink.commands import CommandChannel
-from vehicle_agent.backends.mavlink.state import LinkState
+from vehicle_agent.backends.mavlink.state import MAV_LANDED_STATE_ON_GROUND, LinkState
 
 CMD_BATTERY_RESET = 42651
 FIRST_BATTERY_MASK = 1.0
 """param1 of MAV_CMD_BATTERY_RESET: bit 0, the first battery."""
 FULL_PERCENT = 100.0
 """param2: the charge left in the fresh pack, [%]."""
-MAV_LANDED_STATE_ON_GROUND = 1
 
 
 def swap_refusal(state: LinkState) -> str | None:

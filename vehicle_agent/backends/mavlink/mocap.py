@@ -112,6 +112,8 @@ class MocapForwarder:
         self.velocity = PoseVelocity()
         self._task: asyncio.Task[None] | None = None
         self._origin_sent = False
+        self._origin_for: int | None = None
+        """System id whose EKF origin is asked for and not sent yet (PX4: until poses flowed)."""
         self.period_s = 1.0 / settings.mocap_rate_hz
         self.frame = frame
         self.source = source
@@ -141,9 +143,11 @@ class MocapForwarder:
 
     def set_ekf_origin(self, link: MavlinkLink, system_id: int) -> None:
         """An autopilot fusing our mocap: give its EKF an origin (once), before its GPS does;
-        PX4's once poses have flowed for :data:`PX4_ORIGIN_AFTER_POSES_S` (asked every tick)."""
+        PX4's once poses have flowed for :data:`PX4_ORIGIN_AFTER_POSES_S` (then sent by
+        :meth:`forward`)."""
         if self._origin_sent or self.kind == "none":
             return
+        self._origin_for = system_id
         flowed_s = self.pose_at_s - self.first_pose_at_s  # -inf before the first pose
         if self.flavor() == "px4" and not flowed_s >= PX4_ORIGIN_AFTER_POSES_S:
             return
@@ -195,3 +199,5 @@ class MocapForwarder:
             self.pose_at_s = usec * 1e-6
             self.first_pose_at_s = min(self.first_pose_at_s, self.pose_at_s)
             self.position_m_enu = pose.position_m_enu
+            if self._origin_for is not None:
+                self.set_ekf_origin(link, self._origin_for)

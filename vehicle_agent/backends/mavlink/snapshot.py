@@ -13,7 +13,7 @@ from __future__ import annotations
 from vehicle_agent.backends.base import BackendMode, LinkHealth, Vec3, VehicleSnapshot
 from vehicle_agent.backends.mavlink.frames import attitude_ned_to_xyzw_enu, ned_to_enu
 from vehicle_agent.backends.mavlink.pen import PenOverBoard
-from vehicle_agent.backends.mavlink.state import LinkState
+from vehicle_agent.backends.mavlink.state import MAV_LANDED_STATE_ON_GROUND, LinkState
 from vehicle_agent.backends.mavlink.truth import TruthSample
 
 
@@ -33,7 +33,8 @@ def vehicle_snapshot(
     ``mode`` and ``fault``; ``pen``: the pen it carries (None: none); ``health``: the figures
     of the agent's preflight."""
     st = state
-    on_ground = st.landed_state == 1 if st.landed_state is not None else not st.armed
+    said = st.landed_state
+    on_ground = said == MAV_LANDED_STATE_ON_GROUND if said is not None else not st.armed
     body, attitude = (position_m_enu, st.attitude_ned) if truth is None else (
         truth.position_m_enu, truth.attitude_ned_rad)  # fmt: skip
     reading = None

@@ -374,6 +374,8 @@ PREARM_DENIAL = "Arming denied:"
 an explanation only until a better one comes."""
 PREARM_UNSAID = "pre-arm checks failing"
 """The explanation while SYS_STATUS says the checks fail and the autopilot has not said why."""
+MAV_LANDED_STATE_ON_GROUND = 1
+"""EXTENDED_SYS_STATE ``landed_state``: on the ground."""
 PX4_OFFBOARD_ON_GROUND = "in OFFBOARD on the ground, its pre-arm checks unknown: going to Hold"
 """The explanation while PX4 sits disarmed in OFFBOARD (see :attr:`LinkState.preflight`)."""
 

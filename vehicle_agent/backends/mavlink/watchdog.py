@@ -18,11 +18,10 @@ import math
 from dataclasses import dataclass
 
 from vehicle_agent.backends.base import BackendMode
+from vehicle_agent.backends.mavlink.state import MAV_LANDED_STATE_ON_GROUND as ON_GROUND
 from vehicle_agent.backends.mavlink.state import SEVERITY_WARNING, Flavor, LinkState
 
 FLYING_MODES = ("takeoff", "hold", "offboard", "landing")
-ON_GROUND = 1
-"""EXTENDED_SYS_STATE landed_state MAV_LANDED_STATE_ON_GROUND."""
 
 
 @dataclass(frozen=True)
