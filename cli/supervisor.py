@@ -137,6 +137,9 @@ class Supervisor:
         self.stopping = False
         self.hurried = False
         """Whether stops are hurried (:meth:`hurry`)."""
+        self._told_now: set[int] = set()
+        """Pids already sent ``NOW_SIGNAL``: a stop after a hurry tells only the children started
+        since (told twice, an agent handled its hurry twice; a fresh clone's CI)."""
 
     @property
     def names(self) -> list[str]:
@@ -218,7 +221,10 @@ class Supervisor:
         self.hurried = self.stopping = True
         for child in list(self._children.values()):
             process = child.process
-            if child.spec.lands_on_stop and process is not None and process.poll() is None:
+            if not child.spec.lands_on_stop or process is None or process.poll() is not None:
+                continue
+            if process.pid not in self._told_now:
+                self._told_now.add(process.pid)
                 process.send_signal(NOW_SIGNAL)
 
     def stop(self, grace_s: float | None = None, *, grounded: bool = False) -> StopReport:

@@ -84,9 +84,13 @@ def test_a_hurried_stop_signals_the_agents_first_and_stops_every_group_at_once(
     supervisor.start()
     wait_ready(tmp_path, 3)
     supervisor.hurry()
+    deadline = time.monotonic() + 10.0  # the agent has heard the hurry before the stop begins:
+    while "agent now" not in (record.read_text() if record.exists() else ""):  # told once only
+        assert time.monotonic() < deadline, "the agent never heard the hurry"
+        time.sleep(0.01)
     report = supervisor.stop()
     lines = record.read_text().splitlines()
-    assert lines[0] == "agent now"
+    assert lines[0] == "agent now" and lines.count("agent now") == 1
     terms = {line.split()[0]: float(line.split()[2]) for line in lines[1:]}
     assert sorted(terms) == ["agent", "orchestrator", "router"]
     # each takes 1 s to stop: group by group, each SIGTERM would come a second after the last
