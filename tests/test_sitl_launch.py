@@ -175,6 +175,22 @@ def test_a_claimed_number_stays_taken_while_the_process_started_on_it_runs(
     assert again == index
 
 
+def test_a_crashing_arducopter_finds_its_stack_dumper_in_its_folder(
+    launch: ModuleType, sitl: ModuleType, tmp_path: Path
+) -> None:
+    """ArduPilot SITL runs ``sh dumpstack.sh PID`` in its folder when it dies of a signal: a
+    floating point exception left only "cannot open dumpstack.sh" until start.py put it there."""
+    binary = copter_binary(tmp_path / "src")
+    script = tmp_path / "src" / "Tools" / "scripts" / "dumpstack.sh"
+    script.parent.mkdir(parents=True)
+    script.write_text("gdb -batch --pid $1\n")
+    index, fd = sitl.claim("ardupilot", lock_dir=tmp_path)
+    inst = sitl.Instance("ardupilot", index, 1, (0.0, 0.0, 0.0), binary, tmp_path / "run",
+                         47610, claim_fd=fd)  # fmt: skip
+    launch.stop(launch.start(inst))
+    assert (tmp_path / "run" / "dumpstack.sh").read_text() == script.read_text()
+
+
 def test_a_number_a_px4_runs_as_is_skipped(
     sitl: ModuleType, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -234,6 +250,8 @@ def test_arducopter_boots_with_the_mocap_sources_the_agent_sets(sitl: ModuleType
     # the mocap: the boot defaults must be what the agent sets (position alone).
     booted = dict(line.split() for line in sitl.mocap_parm_text().splitlines())
     agent = {spec.name: spec.value for spec in mocap_params("ardupilot")}
+    # And no GPS: indoors a GPS has no fix; the simulated one would set the origin first.
+    assert booted.pop("GPS1_TYPE") == "0"
     assert booted.keys() == {"VISO_TYPE"} | {k for k in agent if k.startswith("EK3_SRC1_")}
     assert all(float(value) == agent[name] for name, value in booted.items())
 

@@ -34,10 +34,11 @@ def instance(kind: str, *, mocap: bool, imu_vibration: float | None = None) -> A
 def test_arducopter_on_mocap_is_ready_with_its_boot_parameters_and_its_ekf_aligned(
     readiness: ModuleType,
 ) -> None:
-    """No local position and no pre-arm: those wait for the mocap the agent forwards."""
+    """No local position and no pre-arm: those wait for the mocap the agent forwards. No GPS
+    fix either: it boots without a GPS, whose origin would race the agent's."""
     inst = instance("ardupilot", mocap=True)
     state = readiness.Readiness("ardupilot", True, sys.modules["instances"].boot_params(inst))
-    state.update(msg("GPS_RAW_INT", fix_type=3))
+    assert state.params_expected["GPS1_TYPE"] == 0.0
     state.update(msg("ESTIMATOR_STATUS", flags=1))  # PX4's message: not this autopilot's
     for name, value in state.params_expected.items():
         state.update(msg("PARAM_VALUE", param_id=name, param_value=value))
@@ -82,7 +83,7 @@ def test_the_summary_says_what_was_waited_for_and_what_waits_for_the_agent(
     state = readiness.Readiness("ardupilot", True, {"VISO_TYPE": 1.0})
     state.update(msg("STATUSTEXT", text="PreArm: VisOdom: not healthy"))
     summary = state.summary()
-    assert summary.startswith("gps fix, boot parameters VISO_TYPE, EKF attitude")
+    assert summary.startswith("boot parameters VISO_TYPE, EKF attitude")
     assert summary.endswith("wait for the agent's mocap (last: 'PreArm: VisOdom: not healthy')")
     assert readiness.Readiness("px4", False, {}).summary() == (
         "gps fix, local position, pre-arm good"

@@ -8,8 +8,9 @@ takes one client). It asks on :attr:`Instance.probe_url` instead and waits for:
   (SYS_STATUS's pre-arm bit): it could arm now;
 - **a vehicle on mocap**: the agent forwards the mocap only after it has connected, so the
   pre-arm checks cannot pass before (ArduCopter: "PreArm: VisOdom: not healthy") and neither
-  can a position on the mocap. Ready is then: booted and the simulator running (a 3-D fix of the
-  simulated GPS: the sensors are simulated and read), the boot parameters loaded (each of
+  can a position on the mocap. Ready is then: booted and the simulator running (PX4: a 3-D fix
+  of the simulated GPS, the sensors simulated and read; ArduCopter boots without a GPS on mocap,
+  its running EKF shows the same), the boot parameters loaded (each of
   :func:`boot_params` read back with its value: the instance will fuse what the agent sends),
   and the EKF running with its attitude aligned (EKF_STATUS_REPORT on ArduCopter,
   ESTIMATOR_STATUS on PX4, flag ESTIMATOR_ATTITUDE): what is left is the position, which only
@@ -89,8 +90,11 @@ class Readiness:
             return {"gps fix": self.gps_fix, "local position": self.local_position,
                     "pre-arm good": self.prearm}  # fmt: skip
         loaded = f"boot parameters {', '.join(self.params_expected)}"
-        return {"gps fix": self.gps_fix, loaded: not self.params_missing(),
-                f"EKF attitude ({EKF_MESSAGE[self.kind]})": self.ekf_attitude}  # fmt: skip
+        running = {loaded: not self.params_missing(),
+                   f"EKF attitude ({EKF_MESSAGE[self.kind]})": self.ekf_attitude}  # fmt: skip
+        if self.kind == "ardupilot":  # booted without a GPS (instances.MOCAP_BOOT_PARAMS)
+            return running
+        return {"gps fix": self.gps_fix} | running
 
     def ready(self) -> bool:
         return all(self.conditions().values())

@@ -23,7 +23,8 @@ writing (scripts/sitl/source_edits.py says what was measured).
 
 Each instance starts at the geodetic point of the vehicle's ``home_m_enu`` (east/north metres from
 a reference point), which is also its LOCAL_NED origin, and runs in its own directory
-``--run-dir``/VEHICLE (eeprom, logs, parameters; its console output in ``console.log``), with its
+``--run-dir``/VEHICLE (eeprom, logs, parameters; its console output in ``console.log``; an
+ArduCopter that crashes writes its stack there, ``dumpstack.sh_arducopter.PID.out``), with its
 parameters at their defaults: ArduCopter's wiped to Tools/autotest/default_params/copter.parm,
 PX4's saved ones removed. Use binaries whose listeners are bound to 127.0.0.1 (README, "Real
 autopilot SITL").
@@ -37,6 +38,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -109,6 +111,8 @@ def start(inst: Instance) -> subprocess.Popen[bytes]:
         inst.run_dir.mkdir(parents=True, exist_ok=True)
         if inst.mocap and inst.kind == "ardupilot":
             (inst.run_dir / MOCAP_PARM).write_text(mocap_parm_text())
+        if inst.kind == "ardupilot":
+            _leave_stack_dumper(inst)
         if inst.kind == "px4":  # boot from the airframe's defaults, as ArduCopter's --wipe
             for name in PX4_PARAMETER_FILES:
                 (inst.run_dir / name).unlink(missing_ok=True)
@@ -126,6 +130,15 @@ def start(inst: Instance) -> subprocess.Popen[bytes]:
     finally:
         if inst.claim_fd is not None:
             os.close(inst.claim_fd)
+
+
+def _leave_stack_dumper(inst: Instance) -> None:
+    """ArduPilot SITL that dies of a signal (a floating point exception, a segfault) runs
+    ``sh dumpstack.sh PID`` in its working directory: put the source tree's script (gdb, all
+    threads) there, beside the binary's ``build/sitl/bin``, if it has one."""
+    script = inst.binary.resolve().parents[3] / "Tools" / "scripts" / "dumpstack.sh"
+    if script.is_file():
+        shutil.copy(script, inst.run_dir / script.name)
 
 
 def stop(proc: subprocess.Popen[bytes], timeout_s: float = 10.0) -> int:
