@@ -43,7 +43,9 @@ EKF_ORIGIN_LLA = (-35.363261, 149.165230, 584.0)
 """EKF origin (lat [deg], lon [deg], alt [m]) given to an autopilot flying on forwarded mocap:
 its local frame is the mocap's whichever origin it has, but its EKF needs one. ArduPilot: the one
 its GPS would set later while it fuses ExternalNav crashes ArduCopter 4.7 SITL (floating point
-exception at "origin set", measured); set first, the GPS leaves it alone. PX4 gets it at altitude
+exception at "origin set", measured); set first, the GPS leaves it alone, but a GPS with a fix
+can still come first (SITL under load: scripts/sitl/instances.py boots it without one, as
+indoors). PX4 gets it at altitude
 0 (see ``params.PX4_HGT_REF_VISION``)."""
 PX4_ORIGIN_AFTER_POSES_S = 1.0
 """How long in [s] poses flow to PX4 before it gets its EKF origin. Given at connect, before the
