@@ -10,7 +10,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from vehicle_agent.backends.mavlink.truth import EARTH_RADIUS_M, TruthTracker
-from vehicle_agent.backends.mavlink.truth_filter import SmoothedTruthTracker
+from vehicle_agent.backends.mavlink.truth_filter import SmoothedTruthTracker, simulator_time_s
 
 LAT0, LON0, ALT0 = -35.363261, 149.165230, 584.0
 HOME = (0.0, -1.0, 0.0)
@@ -30,16 +30,29 @@ def sim_state(
     )  # fmt: skip
 
 
-def fly(tracker: TruthTracker) -> float:
-    """A slow diagonal stroke (0.07 m/s east, 0.05 m/s north, 0.03 m/s up) sampled at 50 Hz;
-    the RMS in [m] of the tracker's positions from the true ones after the first second."""
-    v = (0.07, 0.05, 0.03)
+def fly(
+    tracker: TruthTracker,
+    *,
+    v: tuple[float, float, float] = (0.07, 0.05, 0.03),
+    wall_per_sim: float = 1.0,
+    simulator_clock: bool = False,
+) -> float:
+    """A slow diagonal stroke (``v`` in [m/s], ENU) sampled at 50 Hz of the simulator's clock,
+    which runs ``wall_per_sim`` times slower than the agent's (a loaded machine), the tracker
+    told the simulator's clock when ``simulator_clock``; the RMS in [m] of the tracker's
+    positions from the true ones after the first two seconds."""
     errors = []
-    for k in range(400):
+    for k in range(500):
         t = k * 0.02
         north, east, up = v[1] * t, v[0] * t, v[2] * t
-        assert tracker.absorb(sim_state(north, east, up, v), t, resting_at_home=(k == 0))
-        if t >= 1.0:
+        message, arrived_s = sim_state(north, east, up, v), t * wall_per_sim
+        if isinstance(tracker, SmoothedTruthTracker):
+            simulator_s = simulator_time_s(message, round(t * 1000)) if simulator_clock else None
+            assert tracker.absorb(message, arrived_s, resting_at_home=(k == 0),
+                                  simulator_s=simulator_s)  # fmt: skip
+        else:
+            assert tracker.absorb(message, arrived_s, resting_at_home=(k == 0))
+        if t >= 2.0:
             got = np.subtract(tracker.samples[-1].position_m_enu, HOME)
             errors.append(float(np.linalg.norm(got - np.array([east, north, up]))))
     return float(np.sqrt(np.mean(np.square(errors))))
@@ -49,6 +62,29 @@ def test_the_smoothing_removes_most_of_the_quantization() -> None:
     raw, smoothed = fly(TruthTracker(HOME)), fly(SmoothedTruthTracker(HOME))
     assert raw > 0.004  # about a centimetre's steps on each axis
     assert smoothed < 0.3 * raw
+
+
+def test_the_velocity_moves_the_position_by_the_simulators_seconds() -> None:
+    """A loaded SITL runs slower than the agent's clock: integrated over the agent's seconds,
+    its velocity carried the smoothed truth ahead of the vehicle along a writing stroke."""
+    stroke = (0.2, 0.0, 0.0)
+    by_arrival = fly(SmoothedTruthTracker(HOME), v=stroke, wall_per_sim=1.5)
+    by_simulator = fly(SmoothedTruthTracker(HOME), v=stroke, wall_per_sim=1.5,
+                       simulator_clock=True)  # fmt: skip
+    assert by_arrival > 0.01  # half the velocity again, over the time constant
+    assert by_simulator < 0.002
+    assert by_simulator == pytest.approx(fly(SmoothedTruthTracker(HOME), v=stroke,
+                                             simulator_clock=True), abs=1e-9)  # fmt: skip
+
+
+def test_the_simulators_clock_of_each_truth_message() -> None:
+    hil = mav.MAVLink_hil_state_quaternion_message(
+        12_340_000, [1, 0, 0, 0], 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0
+    )
+    assert simulator_time_s(hil, 99) == pytest.approx(12.34)  # its own stamp
+    state = sim_state(0.0, 0.0, 0.0, (0.0, 0.0, 0.0))
+    assert simulator_time_s(state, 5_250) == pytest.approx(5.25)  # the ATTITUDE beside it
+    assert simulator_time_s(state, 0) is None  # no ATTITUDE yet: its arrival
 
 
 def test_a_jump_the_velocity_does_not_explain_is_taken_as_it_is() -> None:

@@ -195,7 +195,8 @@ class MavlinkBackend:
             self.params.on_param_value(message)
         elif kind in ("SIM_STATE", "HIL_STATE_QUATERNION"):
             now_s = self.tick_time.now_s(time.monotonic())
-            self.aid.on_message(message, now_s, resting_at_home=not self.state.armed)
+            self.aid.on_message(message, now_s, resting_at_home=not self.state.armed,
+                                autopilot_time_ms=self.state.attitude_time_ms)  # fmt: skip
         elif kind == "STATUSTEXT":
             self._tell_texts()
 

@@ -17,10 +17,9 @@ from vehicle_agent.backends.mavlink.settings import MavlinkSettings
 from vehicle_agent.backends.mavlink.truth import (
     TRUTH_MESSAGES,
     TruthSample,
-    TruthTracker,
     truth_mocap,
 )
-from vehicle_agent.backends.mavlink.truth_filter import SmoothedTruthTracker
+from vehicle_agent.backends.mavlink.truth_filter import SmoothedTruthTracker, simulator_time_s
 
 log = logging.getLogger(__name__)
 
@@ -30,7 +29,7 @@ class ResponseAid:
 
     def __init__(self, settings: MavlinkSettings, *, seed: int = 0) -> None:
         self.settings = settings
-        self.truth: TruthTracker | None = None
+        self.truth: SmoothedTruthTracker | None = None
         """The simulator's state, smoothed of its centimetre steps (None: not asked for)."""
         if settings.truth == "sitl":
             self.truth = SmoothedTruthTracker(settings.origin_m_enu)
@@ -58,9 +57,15 @@ class ResponseAid:
         """The message id to ask the autopilot for (None: no truth wanted)."""
         return TRUTH_MESSAGES.get(flavor) if self.truth is not None else None
 
-    def on_message(self, message: Any, now_s: float, *, resting_at_home: bool) -> None:
+    def on_message(
+        self, message: Any, now_s: float, *, resting_at_home: bool, autopilot_time_ms: int
+    ) -> None:
+        """A truth message arrived at agent time ``now_s`` [s]; ``autopilot_time_ms``: the
+        autopilot's clock as its last ATTITUDE said (0: none yet)."""
         if self.truth is not None:
-            self.truth.absorb(message, now_s, resting_at_home=resting_at_home)
+            simulator_s = simulator_time_s(message, autopilot_time_ms)
+            self.truth.absorb(message, now_s, resting_at_home=resting_at_home,
+                              simulator_s=simulator_s)  # fmt: skip
 
     def true_state(self, now_s: float) -> TruthSample | None:
         """The latest truth if it is fresh (younger than half a second)."""

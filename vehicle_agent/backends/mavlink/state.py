@@ -187,6 +187,8 @@ class LinkState:
         self.velocity_ned: Vec3 = (0.0, 0.0, 0.0)
         self.position_time_ms = 0
         self.attitude_ned: Vec3 | None = None
+        self.attitude_time_ms = 0
+        """``time_boot_ms`` of the last ATTITUDE: the autopilot's clock (SITL: the simulator's)."""
         self.battery_fraction: float | None = None
         self.battery_voltage_v: float | None = None
         self.battery_minutes_left: float | None = None
@@ -299,6 +301,7 @@ class LinkState:
 
     def _attitude(self, m: Any) -> None:
         self.attitude_ned = (float(m.roll), float(m.pitch), float(m.yaw))
+        self.attitude_time_ms = int(m.time_boot_ms)
 
     def _battery_status(self, m: Any) -> None:
         """BATTERY_STATUS: charge left, the pack voltage (the cells sent, summed: ArduPilot puts

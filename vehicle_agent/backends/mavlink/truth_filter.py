@@ -4,10 +4,11 @@ ArduPilot SITL sends SIM_STATE positions as ``lat_int``/``lon_int`` in 1e-7 degr
 in whole centimetres, PX4 SIH's HIL_STATE_QUATERNION lat/lon the same way: the truth moves in
 steps of 0.9-1.1 cm (measured on ArduCopter SITL: x holds still for 1.2 s, then jumps 9 mm). As
 the mocap forwarded to the autopilot and as the yardstick of a job's writing, that staircase is
-a centimetre of error by itself. Both messages carry the velocity unquantized (SIM_STATE in m/s,
-HIL_STATE_QUATERNION in cm/s), so :class:`SmoothedTruthTracker` carries the position forward on
-the velocity between samples and pulls it towards each quantized sample with time constant
-``time_constant_s``: the steps average out, the motion stays.
+a centimetre of error by itself. Both messages carry the velocity (SIM_STATE in m/s, as floats;
+HIL_STATE_QUATERNION in whole cm/s), so :class:`SmoothedTruthTracker` carries the position
+forward on the velocity between samples, over the simulator's own clock, and pulls it towards
+each quantized sample with a time constant set by how good that velocity is
+(:data:`TIME_CONSTANT_S`): the steps average out, the motion stays.
 """
 
 from __future__ import annotations
@@ -17,6 +18,14 @@ from typing import Any
 from vehicle_agent.backends.mavlink.frames import Vec3
 from vehicle_agent.backends.mavlink.truth import TruthSample, TruthTracker
 
+TIME_CONSTANT_S = {"SIM_STATE": 2.0, "HIL_STATE_QUATERNION": 0.4}
+"""How long in [s] the smoothed position takes to come to each quantized one, per message.
+SIM_STATE's velocity is unquantized, so a long pull only averages more steps out. Fed back as
+the mocap, the steps are a quantizer in the position loop: at 0.4 s ArduCopter SITL circled
+them, +-1-2 cm at 0.3-0.5 Hz on a straight stroke and one approach in four `not_settled`
+(issue 31, two vehicles, load 1: pen-down RMSE median 8.9 mm, IoU 0.59); at 2.0 s 5.3 mm, IoU
+0.68, all settled. HIL_STATE_QUATERNION's velocity is in whole cm/s: the pull must stay short,
+since a velocity off by up to 5 mm/s leaves the position that times the time constant behind."""
 SNAP_M = 0.03
 """A quantized sample further than this in [m] from the smoothed one restarts the smoothing
 (a reset of the simulator, a jump the velocity did not announce)."""
@@ -34,40 +43,61 @@ def truth_velocity_mps_enu(message: Any) -> Vec3 | None:
     return (east, north, -down)
 
 
+def simulator_time_s(message: Any, autopilot_time_ms: int) -> float | None:
+    """When in [s] on the simulator's clock the truth ``message`` was sent: HIL_STATE_QUATERNION
+    says it (``time_usec``); SIM_STATE does not, and goes out with the ATTITUDE asked for at its
+    rate, whose ``time_boot_ms`` (``autopilot_time_ms``, 0: none yet) stands for it."""
+    if message.get_type() == "HIL_STATE_QUATERNION":
+        return float(message.time_usec) * 1e-6
+    return autopilot_time_ms * 1e-3 if autopilot_time_ms > 0 else None
+
+
 class SmoothedTruthTracker(TruthTracker):
     """A :class:`TruthTracker` whose samples are the velocity-aided smoothing of the quantized
     positions (attitudes and times as they came)."""
 
-    def __init__(
-        self, home_m_enu: Vec3, history_s: float = 1.0, time_constant_s: float = 0.4
-    ) -> None:
+    def __init__(self, home_m_enu: Vec3, history_s: float = 1.0) -> None:
         super().__init__(home_m_enu, history_s)
-        self.time_constant_s = time_constant_s
-        """Time in [s] over which the smoothed position is pulled to the quantized one."""
         self._last: TruthSample | None = None
+        self._last_clock_s: float | None = None
+        """The clock of the last sample: the simulator's when known, else arrival time."""
         self._velocity: Vec3 = (0.0, 0.0, 0.0)
 
-    def absorb(self, message: Any, now_s: float, *, resting_at_home: bool) -> bool:
+    def absorb(
+        self,
+        message: Any,
+        now_s: float,
+        *,
+        resting_at_home: bool,
+        simulator_s: float | None = None,
+    ) -> bool:
+        """As :meth:`TruthTracker.absorb`; ``simulator_s``: when in [s] on the simulator's clock
+        the message was sent (:func:`simulator_time_s`; None: its arrival, ``now_s``). A loaded
+        simulator's clock runs slower than the agent's, and the velocity moves the position by
+        the simulator's seconds."""
         if not super().absorb(message, now_s, resting_at_home=resting_at_home):
             return False
         raw = self.samples[-1]
         velocity = truth_velocity_mps_enu(message) or (0.0, 0.0, 0.0)
-        smoothed = self._smooth(raw, velocity)
+        clock_s = now_s if simulator_s is None else simulator_s
+        smoothed = self._smooth(raw, velocity, clock_s, TIME_CONSTANT_S[message.get_type()])
         self.samples[-1] = smoothed
-        self._last, self._velocity = smoothed, velocity
+        self._last, self._velocity, self._last_clock_s = smoothed, velocity, clock_s
         return True
 
-    def _smooth(self, raw: TruthSample, velocity: Vec3) -> TruthSample:
+    def _smooth(
+        self, raw: TruthSample, velocity: Vec3, clock_s: float, time_constant_s: float
+    ) -> TruthSample:
         last = self._last
-        if last is None:
+        if last is None or self._last_clock_s is None:
             return raw
-        dt = max(0.0, raw.time_s - last.time_s)
+        dt = max(0.0, clock_s - self._last_clock_s)
         mean_v = [(velocity[i] + self._velocity[i]) / 2.0 for i in range(3)]
         predicted = [last.position_m_enu[i] + mean_v[i] * dt for i in range(3)]
         gap = [raw.position_m_enu[i] - predicted[i] for i in range(3)]
         if max(abs(g) for g in gap) > SNAP_M:
             return raw
-        gain = min(1.0, dt / self.time_constant_s)
+        gain = min(1.0, dt / time_constant_s)
         p = (predicted[0] + gain * gap[0], predicted[1] + gain * gap[1],
              predicted[2] + gain * gap[2])  # fmt: skip
         return TruthSample(raw.time_s, p, raw.attitude_ned_rad)
