@@ -211,7 +211,8 @@ def choose_pace(
     ``target_rmse_m`` (``first_stretch`` without a model), ``fastest`` being 1 or the model's
     fastest flight over :data:`SPEEDUP_MAX`: with ``x = 1 / k^2`` the prediction squared is
     ``floor2 + speed2 x + accel2 x^2``, increasing in ``x``, so the largest ``x`` meeting the
-    target is the positive root of that quadratic."""
+    target is the positive root of that quadratic. A model that sees no gain in slowing down
+    flies at ``fastest`` while its floor meets the target, else no faster than it has flown."""
     if not (target_rmse_m > 0.0 and 1.0 <= first_stretch <= max_stretch):
         raise PlannerError(
             f"need target > 0 and 1 <= first {first_stretch} <= max {max_stretch}",
@@ -222,8 +223,10 @@ def choose_pace(
     floor2, speed2, accel2 = model.mean_squares(samples)
     room = target_rmse_m**2 - floor2
     fastest = min(max(model.statistics.fastest_stretch / SPEEDUP_MAX, 1.0), max_stretch)
-    if speed2 + accel2 == 0.0:  # slowing down gains nothing (as far as the model has seen)
+    if speed2 + accel2 == 0.0 and room > 0.0:  # slowing down gains nothing (as far as seen)
         stretch = fastest
+    elif speed2 + accel2 == 0.0:  # above the target all the same: nothing says faster is as good
+        stretch = min(model.statistics.fastest_stretch, max_stretch)
     elif room <= 0.0:
         stretch = max_stretch
     else:  # the positive root, in the form without cancellation (accel2 may be ~0)

@@ -11,7 +11,12 @@ import logging
 from typing import Any
 
 from vehicle_agent.backends.base import Setpoint, Vec3
-from vehicle_agent.backends.mavlink.lag import ResponseDelayEstimator, lead_setpoint, plan_jerk
+from vehicle_agent.backends.mavlink.lag import (
+    ResponseDelayEstimator,
+    aim_pen,
+    lead_setpoint,
+    plan_jerk,
+)
 from vehicle_agent.backends.mavlink.mocap import MocapSource
 from vehicle_agent.backends.mavlink.settings import MavlinkSettings
 from vehicle_agent.backends.mavlink.truth import (
@@ -63,7 +68,7 @@ class ResponseAid:
         """A truth message arrived at agent time ``now_s`` [s]; ``autopilot_time_ms``: the
         autopilot's clock as its last ATTITUDE said (0: none yet)."""
         if self.truth is not None:
-            simulator_s = simulator_time_s(message, autopilot_time_ms)
+            simulator_s = simulator_time_s(autopilot_time_ms)
             self.truth.absorb(message, now_s, resting_at_home=resting_at_home,
                               simulator_s=simulator_s)  # fmt: skip
 
@@ -74,16 +79,17 @@ class ResponseAid:
             return None
         return sample
 
-    def lead(self, setpoint: Setpoint, now_s: float) -> Setpoint:
+    def lead(self, setpoint: Setpoint, now_s: float, lean_s2: float = 0.0) -> Setpoint:
         """The plan's setpoint at agent time ``now_s`` [s] led by the autopilot's delay
-        (position setpoints only), along the plan's jerk between consecutive setpoints."""
+        (position setpoints only), along the plan's jerk between consecutive setpoints, for the
+        vehicle whose pen leans ``lean_s2`` [m per m/s^2] (:func:`aim_pen`)."""
         lead_s = self.lead_s
         if abs(lead_s - self._logged_lead) >= 0.01:
             self._logged_lead = lead_s
             log.info("leading setpoints by %.3f s", lead_s)
         jerk = plan_jerk(self._previous, now_s, setpoint)
         self._previous = (now_s, setpoint)
-        return lead_setpoint(setpoint, lead_s, jerk)
+        return aim_pen(lead_setpoint(setpoint, lead_s, jerk), lean_s2, jerk)
 
     def sent(self, now_s: float, position_m_enu: Vec3) -> None:
         self.lag.sent(now_s, position_m_enu)

@@ -26,6 +26,8 @@ them, +-1-2 cm at 0.3-0.5 Hz on a straight stroke and one approach in four `not_
 (issue 31, two vehicles, load 1: pen-down RMSE median 8.9 mm, IoU 0.59); at 2.0 s 5.3 mm, IoU
 0.68, all settled. HIL_STATE_QUATERNION's velocity is in whole cm/s: the pull must stay short,
 since a velocity off by up to 5 mm/s leaves the position that times the time constant behind."""
+CLOCK_SLACK_S = 0.1
+"""How far in [s] the simulator's clock may run ahead of the arrivals between two samples."""
 SNAP_M = 0.03
 """A quantized sample further than this in [m] from the smoothed one restarts the smoothing
 (a reset of the simulator, a jump the velocity did not announce)."""
@@ -43,13 +45,21 @@ def truth_velocity_mps_enu(message: Any) -> Vec3 | None:
     return (east, north, -down)
 
 
-def simulator_time_s(message: Any, autopilot_time_ms: int) -> float | None:
-    """When in [s] on the simulator's clock the truth ``message`` was sent: HIL_STATE_QUATERNION
-    says it (``time_usec``); SIM_STATE does not, and goes out with the ATTITUDE asked for at its
-    rate, whose ``time_boot_ms`` (``autopilot_time_ms``, 0: none yet) stands for it."""
-    if message.get_type() == "HIL_STATE_QUATERNION":
-        return float(message.time_usec) * 1e-6
+def simulator_time_s(autopilot_time_ms: int) -> float | None:
+    """When in [s] on the simulator's clock a truth message was sent: neither carries it
+    (SIM_STATE has no stamp, PX4 leaves HIL_STATE_QUATERNION's ``time_usec`` 0), but each goes
+    out beside the ATTITUDE asked for at its rate, whose ``time_boot_ms`` (``autopilot_time_ms``,
+    0: none yet) stands for it."""
     return autopilot_time_ms * 1e-3 if autopilot_time_ms > 0 else None
+
+
+def elapsed_s(clock_dt_s: float | None, arrival_dt_s: float) -> float:
+    """The time in [s] to carry the position over: the simulator's (``clock_dt_s``), unless it
+    stood still or ran ahead of the arrivals by more than :data:`CLOCK_SLACK_S` (an ATTITUDE
+    lost or late), then the arrivals'."""
+    if clock_dt_s is None or not 0.0 < clock_dt_s <= arrival_dt_s + CLOCK_SLACK_S:
+        return max(0.0, arrival_dt_s)
+    return clock_dt_s
 
 
 class SmoothedTruthTracker(TruthTracker):
@@ -60,7 +70,7 @@ class SmoothedTruthTracker(TruthTracker):
         super().__init__(home_m_enu, history_s)
         self._last: TruthSample | None = None
         self._last_clock_s: float | None = None
-        """The clock of the last sample: the simulator's when known, else arrival time."""
+        """The simulator's clock at the last sample (None: not known)."""
         self._velocity: Vec3 = (0.0, 0.0, 0.0)
 
     def absorb(
@@ -72,26 +82,27 @@ class SmoothedTruthTracker(TruthTracker):
         simulator_s: float | None = None,
     ) -> bool:
         """As :meth:`TruthTracker.absorb`; ``simulator_s``: when in [s] on the simulator's clock
-        the message was sent (:func:`simulator_time_s`; None: its arrival, ``now_s``). A loaded
-        simulator's clock runs slower than the agent's, and the velocity moves the position by
-        the simulator's seconds."""
+        the message was sent (:func:`simulator_time_s`; None: not known). A loaded simulator's
+        clock runs slower than the agent's, and the velocity moves the position by the
+        simulator's seconds."""
         if not super().absorb(message, now_s, resting_at_home=resting_at_home):
             return False
         raw = self.samples[-1]
         velocity = truth_velocity_mps_enu(message) or (0.0, 0.0, 0.0)
-        clock_s = now_s if simulator_s is None else simulator_s
-        smoothed = self._smooth(raw, velocity, clock_s, TIME_CONSTANT_S[message.get_type()])
+        smoothed = self._smooth(raw, velocity, simulator_s, TIME_CONSTANT_S[message.get_type()])
         self.samples[-1] = smoothed
-        self._last, self._velocity, self._last_clock_s = smoothed, velocity, clock_s
+        self._last, self._velocity, self._last_clock_s = smoothed, velocity, simulator_s
         return True
 
     def _smooth(
-        self, raw: TruthSample, velocity: Vec3, clock_s: float, time_constant_s: float
+        self, raw: TruthSample, velocity: Vec3, clock_s: float | None, time_constant_s: float
     ) -> TruthSample:
         last = self._last
-        if last is None or self._last_clock_s is None:
+        if last is None:
             return raw
-        dt = max(0.0, clock_s - self._last_clock_s)
+        clock_dt = None if clock_s is None or self._last_clock_s is None else (
+            clock_s - self._last_clock_s)  # fmt: skip
+        dt = elapsed_s(clock_dt, raw.time_s - last.time_s)
         mean_v = [(velocity[i] + self._velocity[i]) / 2.0 for i in range(3)]
         predicted = [last.position_m_enu[i] + mean_v[i] * dt for i in range(3)]
         gap = [raw.position_m_enu[i] - predicted[i] for i in range(3)]
