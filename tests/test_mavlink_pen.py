@@ -6,15 +6,10 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import numpy as np
 import pytest
-from hypothesis import given
-from hypothesis import strategies as st
 
 from showfile import load_show
-from vehicle_agent.backends.base import Setpoint
 from vehicle_agent.backends.mavlink.create import create_backend
-from vehicle_agent.backends.mavlink.lag import aim_pen
 from vehicle_agent.backends.mavlink.pen import PenOverBoard
 from vehicle_agent.setup import vehicle_setup
 from vehicles.quadrotor_brush.autopilot_pen import BrushPen
@@ -63,30 +58,3 @@ def test_the_backend_carries_the_kinds_pen_over_its_board_and_its_mocap() -> Non
     low_m = board_z_m + setup.settings.flight.world.brush.length_m - 0.01
     assert backend.pen.read((-1.0, 0.0, low_m), (0.0, 0.0, 0.0)).contact
     assert not backend.pen.read((-1.0, 0.8, low_m), (0.0, 0.0, 0.0)).contact
-
-
-@given(ax=st.floats(-1.5, 1.5), ay=st.floats(-1.5, 1.5), jx=st.floats(-3.0, 3.0))
-def test_the_aimed_vehicle_puts_its_leaning_brush_on_the_setpoint(
-    ax: float, ay: float, jx: float
-) -> None:
-    """Tilted to carry ``a`` (body z along a + g), the vehicle at the aimed setpoint holds its
-    brush tip on the plan's point; at the plan's point itself the tip trails by
-    ``lever a / g``."""
-    g, board_m = 9.81, 0.75
-    brush = BrushPen(PARAMS, board_m, g)
-    lever_m = PARAMS.length_m - PARAMS.nominal_press_m
-    plan = Setpoint(position_m_enu=(0.3, -0.2, board_m + lever_m), velocity_mps_enu=(0.1, 0, 0),
-                    acceleration_mps2_enu=(ax, ay, 0.0))  # fmt: skip
-    aimed = aim_pen(plan, brush.lean_s2, (jx, 0.0, 0.0))
-    z = np.array([ax, ay, g]) / math.hypot(ax, ay, g)
-    x = np.array([1.0, 0.0, 0.0]) - z[0] * z
-    x /= np.linalg.norm(x)
-    rotation = np.column_stack([x, np.cross(z, x), z]).tolist()
-    tip = brush.read(aimed.position_m_enu, rotation).tip_m_enu
-    trailing = brush.read(plan.position_m_enu, rotation).tip_m_enu
-    tilt = math.hypot(ax, ay) / g
-    assert math.dist(tip[:2], plan.position_m_enu[:2]) <= lever_m * tilt**3 + 1e-12  # small angles
-    assert math.dist(trailing[:2], plan.position_m_enu[:2]) == pytest.approx(
-        lever_m * tilt, rel=0.02, abs=1e-9)  # fmt: skip
-    assert aimed.velocity_mps_enu[0] == pytest.approx(0.1 + lever_m * jx / g)
-    assert aimed.acceleration_mps2_enu == plan.acceleration_mps2_enu

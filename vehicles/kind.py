@@ -247,13 +247,6 @@ class AutopilotPen(Protocol):
     the vehicle's pose alone, as its kind's simulated world models it, so that the agent can
     measure ink and the writing point's error of a vehicle it only hears over MAVLink."""
 
-    @property
-    def lean_s2(self) -> float:
-        """How far in [m] the pen trails the vehicle reference point horizontally per [m/s^2]
-        of horizontal acceleration (small angles): the tilt that carries the acceleration
-        leans a hanging pen back, so the vehicle leads its pen by this much; 0: it does not."""
-        ...
-
     def read(self, position_m_enu: Vec3, rotation_body_to_enu: Mat3) -> PenReading:
         """The pen of a vehicle whose reference point is at ``position_m_enu`` in [m] and whose
         body (forward-left-up) is turned into the world (ENU) by ``rotation_body_to_enu``."""

@@ -32,14 +32,6 @@ class BrushPen:
     """Length, travel and width model of the brush."""
     board_height_m: float
     """Height of the horizontal board surface in [m] (world z)."""
-    gravity_mps2: float = 9.81
-    """Gravitational acceleration in [m/s^2]."""
-
-    @property
-    def lean_s2(self) -> float:
-        """The writing lever (reference point to tip at the nominal press) over g: tilted by
-        ``a / g`` to accelerate, the vehicle writes ``lever a / g`` behind itself."""
-        return (self.params.length_m - self.params.nominal_press_m) / self.gravity_mps2
 
     def read(self, position_m_enu: Vec3, rotation_body_to_enu: Mat3) -> PenReading:
         """The brush of a vehicle at ``position_m_enu`` in [m] turned by ``rotation_body_to_enu``
@@ -57,7 +49,7 @@ class BrushPen:
 def autopilot_world(world: WorldParams) -> AutopilotWorld:
     """The brush over the board and the motion capture of the simulated ``world``."""
     return AutopilotWorld(
-        pen=BrushPen(world.brush, world.board_height_m, world.quadrotor.gravity_mps2),
+        pen=BrushPen(world.brush, world.board_height_m),
         mocap_latency_s=world.mocap.latency_s,
         mocap_noise_std_m=world.mocap.noise_std_m,
     )

@@ -481,8 +481,7 @@ class MavlinkBackend:
             if self.mode != "offboard":
                 self._set_backend_mode("offboard")
             self._hold = Setpoint(position_m_enu=setpoint.position_m_enu)
-            lean_s2 = 0.0 if self.pen is None else self.pen.pen.lean_s2
-            target = self.aid.lead(setpoint, now_s, lean_s2)
+            target = self.aid.lead(setpoint, now_s)
         elif self.mode in ("hold", "offboard") and self._hold is not None:
             if self.mode == "offboard":
                 self._set_backend_mode("hold")

@@ -200,23 +200,6 @@ def lead_setpoint(
     )
 
 
-def aim_pen(setpoint: Setpoint, lean_s2: float, jerk_mps3_enu: Vec3 = (0.0, 0.0, 0.0)) -> Setpoint:
-    """The vehicle's setpoint that puts a pen leaning ``lean_s2`` [m per m/s^2] (the kind's
-    :attr:`vehicles.kind.AutopilotPen.lean_s2`) on ``setpoint``: horizontally ahead by
-    ``lean a``, and its velocity by ``lean j`` (``jerk_mps3_enu`` in [m/s^3]), so that the tilt
-    the autopilot gives the acceleration swings the pen onto the letter, not behind it."""
-    if lean_s2 == 0.0:
-        return setpoint
-    (x, y, z), (vx, vy, vz) = setpoint.position_m_enu, setpoint.velocity_mps_enu
-    (ax, ay, _), (jx, jy, _) = setpoint.acceleration_mps2_enu, jerk_mps3_enu
-    return Setpoint(
-        position_m_enu=(x + lean_s2 * ax, y + lean_s2 * ay, z),
-        velocity_mps_enu=(vx + lean_s2 * jx, vy + lean_s2 * jy, vz),
-        acceleration_mps2_enu=setpoint.acceleration_mps2_enu,
-        pen_down=setpoint.pen_down,
-    )
-
-
 def plan_jerk(previous: tuple[float, Setpoint] | None, now_s: float, setpoint: Setpoint) -> Vec3:
     """The plan's jerk in [m/s^3] between the previous setpoint (time [s], setpoint) and this
     one, clipped to +-:data:`JERK_MAX_MPS3`; zero without a previous one at most

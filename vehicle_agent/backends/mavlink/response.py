@@ -11,12 +11,7 @@ import logging
 from typing import Any
 
 from vehicle_agent.backends.base import Setpoint, Vec3
-from vehicle_agent.backends.mavlink.lag import (
-    ResponseDelayEstimator,
-    aim_pen,
-    lead_setpoint,
-    plan_jerk,
-)
+from vehicle_agent.backends.mavlink.lag import ResponseDelayEstimator, lead_setpoint, plan_jerk
 from vehicle_agent.backends.mavlink.mocap import MocapSource
 from vehicle_agent.backends.mavlink.settings import MavlinkSettings
 from vehicle_agent.backends.mavlink.truth import (
@@ -79,17 +74,16 @@ class ResponseAid:
             return None
         return sample
 
-    def lead(self, setpoint: Setpoint, now_s: float, lean_s2: float = 0.0) -> Setpoint:
+    def lead(self, setpoint: Setpoint, now_s: float) -> Setpoint:
         """The plan's setpoint at agent time ``now_s`` [s] led by the autopilot's delay
-        (position setpoints only), along the plan's jerk between consecutive setpoints, for the
-        vehicle whose pen leans ``lean_s2`` [m per m/s^2] (:func:`aim_pen`)."""
+        (position setpoints only), along the plan's jerk between consecutive setpoints."""
         lead_s = self.lead_s
         if abs(lead_s - self._logged_lead) >= 0.01:
             self._logged_lead = lead_s
             log.info("leading setpoints by %.3f s", lead_s)
         jerk = plan_jerk(self._previous, now_s, setpoint)
         self._previous = (now_s, setpoint)
-        return aim_pen(lead_setpoint(setpoint, lead_s, jerk), lean_s2, jerk)
+        return lead_setpoint(setpoint, lead_s, jerk)
 
     def sent(self, now_s: float, position_m_enu: Vec3) -> None:
         self.lag.sent(now_s, position_m_enu)
