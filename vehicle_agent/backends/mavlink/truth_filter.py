@@ -22,9 +22,9 @@ TIME_CONSTANT_S = {"SIM_STATE": 2.0, "HIL_STATE_QUATERNION": 0.4}
 """How long in [s] the smoothed position takes to come to each quantized one, per message.
 SIM_STATE's velocity is unquantized, so a long pull only averages more steps out. Fed back as
 the mocap, the steps are a quantizer in the position loop: at 0.4 s ArduCopter SITL circled
-them, +-1-2 cm at 0.3-0.5 Hz on a straight stroke and one approach in four `not_settled`
-(issue 31, two vehicles, load 1: pen-down RMSE median 8.9 mm, IoU 0.59); at 2.0 s 5.3 mm, IoU
-0.68, all settled. HIL_STATE_QUATERNION's velocity is in whole cm/s: the pull must stay short,
+them, +-1-2 cm at 0.3-0.5 Hz on a straight stroke, two `not_settled` in four jobs (issue 31,
+two vehicles, load 1: pen-down RMSE median 8.9 mm, IoU 0.59); at 2.0 s 5.3 mm, IoU 0.68, all
+settled. HIL_STATE_QUATERNION's velocity is in whole cm/s: the pull must stay short,
 since a velocity off by up to 5 mm/s leaves the position that times the time constant behind."""
 CLOCK_SLACK_S = 0.1
 """How far in [s] the simulator's clock may run ahead of the arrivals between two samples."""
