@@ -428,7 +428,7 @@ MOCAP_AUTOPILOTS = [
     ("ardupilot", (("VISO_TYPE", 1),), "PreArm: VisOdom: not healthy"),
     ("px4", (("EKF2_ASP_DELAY", 0.0), ("EKF2_DELAY_MAX", 20.0)), "Arming denied: Resolve"),
 ]
-VELOCITY_FUSED = {"ardupilot": ("EK3_SRC1_VELXY", 6.0), "px4": ("EKF2_EV_CTRL", 7.0)}
+VELOCITY_FUSED = {"ardupilot": ("EK3_SRC1_VELXY", 6.0), "px4": ("EKF2_EV_CTRL", 15.0)}
 """The parameter that makes each estimator fuse the velocity ODOMETRY carries, and its value."""
 
 

@@ -49,6 +49,14 @@ PX4_EV_CTRL_POSITION_3D = 3
 """EKF2_EV_CTRL bits 0 and 1: fuse external-vision horizontal and vertical position."""
 PX4_EV_CTRL_VELOCITY = 4
 """EKF2_EV_CTRL bit 2: fuse external-vision velocity (ODOMETRY carries it)."""
+PX4_EV_CTRL_YAW = 8
+"""EKF2_EV_CTRL bit 3: take the heading from the mocap (the compass is then left out), as PX4's
+guide to motion capture has it. Without it EKF2 (v1.16, ev_height_control.cpp) turns every vision
+position by a low-passed rotation from the vision's attitude to its own (``_ev_q_error_filt``),
+roll and pitch included, so its own tilt error enters the height as tilt times the distance from
+the local origin. Measured on SIH (issue 31): two vehicles 1.2-1.8 m from their origins flew 0-6
+and 12-14 mm above what EKF2 took from the mocap, and the second one's brush pressed 0.9-2.4 mm
+instead of 15. With the yaw fused EKF2 keeps the vision's frame and turns nothing."""
 PX4_MOCAP_VELOCITY_NOISE_MPS = 0.02
 """EKF2_EVV_NOISE in [m/s] (default 0.1): the velocity of poses 20 ms apart with the show's
 0.2 mm mocap noise is ~0.014 m/s off."""
@@ -191,7 +199,7 @@ def show_params(
 def mocap_params(flavor: Flavor, *, with_velocity: bool = False) -> list[ParamSpec]:
     """What fusing forwarded motion capture needs: ArduPilot's EKF3 takes position (and, with
     ``with_velocity``, the velocity ODOMETRY carries) from ExternalNav (VISO_TYPE 1, MAVLink;
-    read at boot) with yaw from its compass; PX4's EKF2 fuses external-vision position (and
+    read at boot) with yaw from its compass; PX4's EKF2 fuses external-vision position, heading (and
     velocity) with GPS off (a consumer GPS next to it would pull the estimate off by decimetres),
     height from the vision too (see PX4_HGT_REF_VISION)."""
     if flavor == "px4":
@@ -218,7 +226,9 @@ def mocap_params(flavor: Flavor, *, with_velocity: bool = False) -> list[ParamSp
 
 
 def _px4_mocap_params(with_velocity: bool) -> list[ParamSpec]:
-    ev_ctrl = PX4_EV_CTRL_POSITION_3D | (PX4_EV_CTRL_VELOCITY if with_velocity else 0)
+    ev_ctrl = (
+        PX4_EV_CTRL_POSITION_3D | PX4_EV_CTRL_YAW | (PX4_EV_CTRL_VELOCITY if with_velocity else 0)
+    )
     specs = [
         ParamSpec("EKF2_EV_CTRL", ev_ctrl, MAV_PARAM_TYPE_INT32, why="fuse mocap"),
         ParamSpec("EKF2_HGT_REF", PX4_HGT_REF_VISION, MAV_PARAM_TYPE_INT32,
