@@ -23,7 +23,6 @@ Refused commands raise :class:`CommandRejectedError` with the autopilot's STATUS
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 import math
 import time
@@ -33,7 +32,7 @@ from typing import Any
 
 from vehicle_agent.backends.base import BackendError, BackendMode, Setpoint, Vec3, VehicleSnapshot
 from vehicle_agent.backends.mavlink.battery import reset_after_swap
-from vehicle_agent.backends.mavlink.commands import REASON_GRACE_S, CommandChannel
+from vehicle_agent.backends.mavlink.commands import CommandChannel
 from vehicle_agent.backends.mavlink.connect import (
     GCS_HEARTBEAT_PERIOD_S,
     await_autopilot,
@@ -43,9 +42,7 @@ from vehicle_agent.backends.mavlink.connect import (
 )
 from vehicle_agent.backends.mavlink.errors import (
     CommandRejectedError,
-    EstimateOffMocapError,
     LinkLostError,
-    PrearmFailingError,
     UnsupportedAutopilotError,
     VehicleFaultError,
 )
@@ -64,26 +61,26 @@ from vehicle_agent.backends.mavlink.state import (
     LinkState,
 )
 from vehicle_agent.backends.mavlink.stream import SetpointStream
+from vehicle_agent.backends.mavlink.takeoff_checks import (
+    CMD_NAV_TAKEOFF,
+    PrearmAsker,
+    heading_ned_rad,
+    prove_life,
+    refuse_off_the_mocap,
+    refuse_while_prearm_fails,
+)
 from vehicle_agent.backends.mavlink.url import parse_mavlink_url
 from vehicle_agent.backends.mavlink.watchdog import Commanded, Watchdog, WatchLimits
 from vehicle_agent.motion import Move, plan_move
 
 log = logging.getLogger(__name__)
 
-CMD_NAV_LAND, CMD_NAV_TAKEOFF, CMD_DO_SET_MODE = 21, 22, 176
-CMD_ARM_DISARM, CMD_RUN_PREARM_CHECKS = 400, 401
-PREARM_ASK_PERIOD_S = 5.0
-"""How often in [s] an autopilot whose pre-arm checks fail unexplained is asked why."""
+CMD_NAV_LAND, CMD_DO_SET_MODE, CMD_ARM_DISARM = 21, 176, 400
 GROUND_MODE_ASK_PERIOD_S = 0.5
 """How often in [s] a PX4 disarmed in OFFBOARD is asked to go to Hold (a heartbeat is 1 s)."""
 GROUND_MODE_WAIT_S = 3.0
 """How long in [s] a landing waits for the ground mode before the vehicle is idle anyway (its
 pre-arm state then says it is not in Hold yet)."""
-ESTIMATE_FROM_MOCAP_MAX_M = 0.10
-"""Largest distance in [m] at take-off between the autopilot's position and the mocap pose
-sent to it. Fused, they agree within 2-8 cm after a take-off on PX4 SIH and 3 mm at rest
-(``params.PX4_HGT_REF_VISION``, ``params.PX4_MOCAP_ACC_NOISE_MPS2``); one that had not taken the
-mocap was 583.85 m off."""
 FORCE_DISARM = 21196.0
 TextHandler = Callable[[int, str], None]
 
@@ -130,7 +127,7 @@ class MavlinkBackend:
         self._commanded_mode: int | None = None
         self._commanded_at = 0  # heartbeat count when our last mode/arming change was accepted
         self._last_gcs_heartbeat_s = -math.inf
-        self._prearm_asked_s = -math.inf
+        self._prearm = PrearmAsker(self.state, self.commands)
         self._ground_mode_asked_s = -math.inf
         self._ground_mode_since_s = math.inf  # when we began to ask for it (inf: not asking)
         self._hold: Setpoint | None = None
@@ -235,14 +232,16 @@ class MavlinkBackend:
         self._check_usable()
         if self.mode != "idle":
             raise BackendError(f"cannot take off in mode {self.mode}")
-        await self._refuse_while_prearm_fails()
+        await refuse_while_prearm_fails(self.state, self.commands)
         flavor = self._flavor()
         here = self._position_m_enu()
-        self._refuse_off_the_mocap(here)
-        self.stream.new_flight(await self._heading_now())
+        refuse_off_the_mocap(here, self._mocap.position_m_enu)
+        self.stream.new_flight(await heading_ned_rad(self.state))
         self.aid.lag.reset()
         if flavor.name == "px4":
-            await self._prove_life(Setpoint(position_m_enu=here))
+            self._hold = Setpoint(position_m_enu=here)
+            await prove_life(self.stream, self._hold, self.settings.setpoint_rate_hz,
+                             self._now_s, self._send_gcs_heartbeat)  # fmt: skip
         await self._set_mode(flavor.offboard_mode)
         await self.commands.run(CMD_ARM_DISARM, 1.0, arming=True)
         self._commanded_at = self.state.heartbeats
@@ -260,64 +259,6 @@ class MavlinkBackend:
             self._climb_to = (here, top)
         self._hold = Setpoint(position_m_enu=hover_m_enu)
         self._set_backend_mode("takeoff")
-
-    def _refuse_off_the_mocap(self, here: Vec3) -> None:
-        """Raise :class:`EstimateOffMocapError`, nothing sent, when the autopilot's position
-        (``here``, [m]) is more than :data:`ESTIMATE_FROM_MOCAP_MAX_M` from the latest mocap
-        pose we sent it."""
-        pose = self._mocap.position_m_enu
-        if pose is None:
-            return
-        off_m = math.dist(here, pose)
-        if off_m > ESTIMATE_FROM_MOCAP_MAX_M:
-            raise EstimateOffMocapError(off_m)
-
-    async def _refuse_while_prearm_fails(self) -> None:
-        """Raise :class:`PrearmFailingError` while SYS_STATUS says the pre-arm checks fail,
-        having sent no mode change and no ARM (a ground station offers no arming then): the
-        refusal the autopilot would give, in its words, asked for if it has not said them."""
-        if self.state.preflight is None:
-            return
-        if self.state.prearm_text is None:
-            with contextlib.suppress(BackendError):  # an autopilot without the command
-                await self.commands.run(CMD_RUN_PREARM_CHECKS)
-                await asyncio.sleep(REASON_GRACE_S)  # ArduPilot queues its texts after the ACK
-        why = self.state.preflight  # None: they passed meanwhile
-        if why is not None:
-            raise PrearmFailingError(why)
-
-    def _ask_why_not_ready(self, now_s: float) -> None:
-        """SYS_STATUS says the pre-arm checks fail and the autopilot has not said why (it said
-        it before we listened; ArduPilot repeats it only every 30 s): ask, as a ground
-        station's "check" does, without waiting for the answer."""
-        st = self.state
-        unsaid = st.preflight is not None and st.prearm_text is None and not st.armed
-        if unsaid and now_s - self._prearm_asked_s >= PREARM_ASK_PERIOD_S:
-            self._prearm_asked_s = now_s
-            self.commands.send(CMD_RUN_PREARM_CHECKS)
-
-    async def _heading_now(self) -> float:
-        """The vehicle's heading in [rad] from north (ATTITUDE), held for the whole flight; a
-        vehicle that has not said it within a second is refused the take-off (try again)."""
-        for _ in range(20):
-            if self.state.attitude_ned is not None:
-                return self.state.attitude_ned[2]
-            await asyncio.sleep(0.05)
-        raise CommandRejectedError(
-            CMD_NAV_TAKEOFF, 1, "no ATTITUDE from the vehicle yet: its heading is unknown"
-        )
-
-    async def _prove_life(self, hold: Setpoint) -> None:
-        """PX4: OFFBOARD and arming need a live setpoint stream; stream a second and a bit of
-        the current position on a running clock."""
-        self._hold = hold
-        rate = self.settings.setpoint_rate_hz
-        for k in range(int(rate) + 5):
-            self.stream.send_proof_of_life(hold, self._now_s + k / rate)
-            if k % max(1, round(rate * GCS_HEARTBEAT_PERIOD_S)) == 0:
-                self._send_gcs_heartbeat()  # no tick meanwhile: stay a ground station for PX4
-            await asyncio.sleep(1.0 / rate)
-        self.stream.last_sent_s = self._now_s  # the agent's clock did not run meanwhile
 
     async def _disarm_on_ground(self) -> None:
         """Armed but refused the take-off: disarm (best effort) so that it may be retried."""
@@ -391,7 +332,7 @@ class MavlinkBackend:
         self._supervise(now_s)
         self._tell_texts()  # the part of a chunked text that waited its time for the rest
         if self._link is not None:
-            self._ask_why_not_ready(now_s)
+            self._prearm.ask_why_not_ready(now_s)
         if self.fault is None and self._link is not None:
             self._advance(now_s)
             self._stream(setpoint, now_s)
