@@ -22,7 +22,6 @@ from bus.messages import (
     MAX_SNAPSHOT_ALERTS,
     AgentReport,
     CommandReply,
-    ErrorInfo,
     Event,
     ShowSnapshot,
     SubmitReply,
@@ -33,6 +32,7 @@ from orchestrator import (
     assignment,
     battery_swaps,
     holders,
+    job_intake,
     phrase_intake,
     phrases,
     positions,
@@ -41,16 +41,23 @@ from orchestrator import (
 )
 from orchestrator.alerts import OpenAlerts
 from orchestrator.batteries import Swaps
-from orchestrator.battery_drain import Drains
 from orchestrator.battery_records import BatteryRecords
 from orchestrator.core_types import CoreConfig, Effects, Level
 from orchestrator.finished import MAX_FINAL_JOBS, FinishedJobs
-from orchestrator.fleet import VehicleView, queue_etas
-from orchestrator.jobs import WAITING_STATES, Job, to_state, transition, update
+from orchestrator.fleet import landing_of, queue_etas, usable_boards_of
+from orchestrator.jobs import WAITING_STATES, Job
 from orchestrator.kinds import KindMatch, KindPlans
 from orchestrator.operator import apply_operator
-from orchestrator.quotas import is_operator
-from orchestrator.sheets import Sheets
+from orchestrator.restart import (
+    dirty_boards_at_start,
+    drains_at_start,
+    jobs_at_start,
+    keys_of,
+    sheets_at_start,
+    vehicles_at_start,
+)
+from orchestrator.snapshot_jobs import snapshot_jobs
+from orchestrator.vehicle_jobs import VehicleJobs
 
 __all__ = ["MAX_FINAL_JOBS", "Book", "CoreConfig", "Effects", "Level"]
 
@@ -80,30 +87,17 @@ class Book:
         boards that waited for the crew's sheet; ``batteries``: the swaps and drains stored."""
         self.config = config
         self.queue_paused = queue_paused
-        self.vehicles = {v.vehicle_id: VehicleView(v, gone_since_s=now_s) for v in config.vehicles}
-        for vid in paused_vehicles:
-            if vid in self.vehicles:
-                self.vehicles[vid].paused = True
-        for vid in held_vehicles:
-            if vid in self.vehicles:
-                self.vehicles[vid].paused = self.vehicles[vid].held = True
+        self.vehicles = vehicles_at_start(config, now_s, paused=paused_vehicles, held=held_vehicles)
         self.jobs: dict[str, Job] = {}
-        self._active: dict[str, str] = {}
-        self._awaited: dict[str, str] = {}
-        """Vehicle id -> id of the queued job that waits for it (``orchestrator/holders.py``)."""
-        """Vehicle id -> id of its active job: every status, snapshot and assignment asks,
-        and scanning every job held (up to ``MAX_FINAL_JOBS`` finished) per vehicle cost ~50 ms
-        of CPU per status at 250 vehicles (``benchmarks/bench_heartbeat.py``)."""
-        for job in jobs:  # restart: active jobs must be confirmed by their vehicle again
-            self._index(None, update(job, now_s, assigned_at_s=now_s) if job.active else job)
+        self._by_vehicle = VehicleJobs()
+        """Vehicle id -> its active job, and the queued job that waits for it
+        (``orchestrator/vehicle_jobs.py``)."""
+        for job in jobs_at_start(jobs, now_s):
+            self._index(None, job)
         self.finished = FinishedJobs(self.jobs.values(), job_counts, max_final_jobs)
         """Jobs per state and the held finished jobs (``orchestrator/finished.py``)."""
         self.next_seq = max((j.seq for j in self.jobs.values()), default=0) + 1
-        self.by_key: dict[tuple[str, str], str] = {
-            (j.client_id, j.idempotency_key): j.job_id
-            for j in self.jobs.values()
-            if j.idempotency_key is not None
-        }
+        self.by_key = keys_of(self.jobs.values())
         """(client_id, idempotency_key) -> job id of every keyed submission in memory."""
         self._forget(self.finished.overflow())
         self._announced: positions.Announced = {}
@@ -112,21 +106,14 @@ class Book:
         settings, so a restart keeps them."""
         self.kinds = KindMatch({v.vehicle_id: v.kind for v in config.vehicles})
         """Which kind may take a job and how long it would write it (``orchestrator/kinds.py``)."""
-        boards = {v.board_id for v in config.vehicles}
-        self.dirty_boards: set[str] = {b for b in dirty_boards if b in boards}
+        self.dirty_boards = dirty_boards_at_start(config, dirty_boards)
         """Boards left half-written: no job there until the operator's ``fresh_sheet``."""
-        self.sheets = Sheets(
-            dict(config.boards),
-            time_scale=config.eta.time_scale,
-            sheet_change_s=config.sheet_change_s,
-            waiting=sheet_boards,
-            now_s=now_s,
-        )
+        self.sheets = sheets_at_start(config, sheet_boards, now_s)
         """Boards waiting for the crew's sheet or drying (``orchestrator/sheets.py``)."""
         self.swaps = Swaps(time_scale=config.eta.time_scale, swap_s=config.battery_swap_s)
         """Vehicles waiting for the crew's battery swap (``orchestrator/batteries.py``)."""
         stored = batteries or BatteryRecords()
-        self.drains = Drains(r for r in stored.drains if r.vehicle_id in self.vehicles)
+        self.drains = drains_at_start(stored, self.vehicles)
         """Each vehicle's drain learned from its reports (``orchestrator/battery_drain.py``)."""
         battery_swaps.restore(self, stored)
         self.router_down_since_s: float | None = None
@@ -153,21 +140,21 @@ class Book:
         return sum(1 for j in self.jobs.values() if j.state in ("awaiting_approval", "queued"))
 
     def active_job_of(self, vehicle_id: str) -> Job | None:
-        job_id = self._active.get(vehicle_id)
+        job_id = self._by_vehicle.active.get(vehicle_id)
         return None if job_id is None else self.jobs[job_id]
 
     def awaited_by(self, vehicle_id: str) -> Job | None:
         """The queued job that was taken back from this lost vehicle and may wait for it."""
-        job_id = self._awaited.get(vehicle_id)
+        job_id = self._by_vehicle.awaited.get(vehicle_id)
         return None if job_id is None else self.jobs[job_id]
 
     def vehicles_with_jobs(self) -> set[str]:
         """Ids of the vehicles holding an active job."""
-        return set(self._active)
+        return set(self._by_vehicle.active)
 
     def active_jobs(self) -> list[Job]:
         """Assigned and writing jobs, in submission order."""
-        return sorted((self.jobs[j] for j in self._active.values()), key=lambda j: j.seq)
+        return sorted((self.jobs[j] for j in self._by_vehicle.active.values()), key=lambda j: j.seq)
 
     def busy_boards(self) -> set[str]:
         return {j.board_id for j in self.active_jobs() if j.board_id is not None}
@@ -177,18 +164,8 @@ class Book:
         queue = self.queue()
         if not queue:
             return {}
-        usable = {
-            vid: v.info.board_id
-            for vid, v in self.vehicles.items()
-            if v.alive and not v.lost and not (v.paused or v.held)
-        }
+        usable = usable_boards_of(self.vehicles)
         active = self.active_jobs()
-        busy = {j.vehicle_id for j in active}
-        landing = [
-            vid
-            for vid in usable
-            if vid not in busy and self.vehicles[vid].state in ("returning", "landing")
-        ]
         etas = (
             {}
             if self.queue_paused
@@ -198,7 +175,7 @@ class Book:
                 usable,
                 now_s,
                 self.config.eta,
-                landing=landing,
+                landing=landing_of(self.vehicles, usable, active),
                 may_take=self.kinds.may_take,
                 writing_s_on=self.kinds.writing_s_on,
                 board_free_s={b: self.sheets.free_at_s(b, now_s) for b in usable.values()},
@@ -234,20 +211,13 @@ class Book:
         drawn jobs carry their strokes, oldest first, while their JSON fits the budget.
         ``events``: the latest lines of the event log (the service reads them from its store).
         """
-        etas = self.etas(now_s)
-        finals = sorted((j.seq for j in self.jobs.values() if j.final), reverse=True)
-        oldest_final = finals[max_final - 1] if include_final and len(finals) >= max_final else 0
-        budget = strokes_budget_bytes
-        jobs = []
-        for j in sorted(self.jobs.values(), key=lambda j: j.seq):
-            if j.final and not (include_final and j.seq >= oldest_final):
-                continue
-            waiting = j.state in WAITING_STATES and j.strokes is not None
-            size = len(msgspec.json.encode(j.strokes)) if waiting and budget > 0 else 0
-            with_strokes = 0 < size <= budget
-            budget -= size if with_strokes else 0
-            position, eta = etas.get(j.job_id, (None, None))
-            jobs.append(to_state(j, queue_position=position, eta_s=eta, with_strokes=with_strokes))
+        jobs = snapshot_jobs(
+            self.jobs.values(),
+            self.etas(now_s),
+            include_final=include_final,
+            max_final=max_final,
+            strokes_budget_bytes=strokes_budget_bytes,
+        )
         vehicles = [
             view.summary(job.job_id if (job := self.active_job_of(vid)) else None)
             for vid, view in self.vehicles.items()
@@ -320,39 +290,16 @@ class Book:
                 self.by_key.pop((job.client_id, job.idempotency_key), None)
 
     def _index(self, previous: Job | None, job: Job) -> None:
-        """Hold ``job`` (replacing ``previous``, its older version) and keep ``_active`` and
-        ``_awaited`` true."""
+        """Hold ``job`` (replacing ``previous``, its older version) and keep ``_by_vehicle``
+        true."""
         self.jobs[job.job_id] = job
-        was = previous.vehicle_id if previous is not None and previous.active else None
-        if was is not None and self._active.get(was) == job.job_id:
-            del self._active[was]
-        if job.active and job.vehicle_id is not None:
-            self._active[job.vehicle_id] = job.job_id
-        held_for = previous.vehicle_id if previous is not None else None
-        if held_for is not None and self._awaited.get(held_for) == job.job_id:
-            del self._awaited[held_for]
-        if job.state == "queued" and job.holder_hold_until_s is not None and job.vehicle_id:
-            self._awaited[job.vehicle_id] = job.job_id
+        self._by_vehicle.hold(previous, job)
 
     # --- submissions --------------------------------------------------------------------------
     def waiting_of(self, identity: str) -> int:
         """Jobs that ``identity`` submitted on the bus awaiting approval or queued."""
         jobs = self.jobs.values()
         return sum(1 for j in jobs if j.submitted_by == identity and j.state in WAITING_STATES)
-
-    def _full(self, submitted_by: str | None) -> ErrorInfo | None:
-        """Why the state a new job enters takes no more (None: there is room). Jobs awaiting
-        approval count apart from the queue (``max_awaiting``): unmoderated jobs never block
-        approved ones. The operator's own submissions are never refused."""
-        if submitted_by is not None and is_operator(submitted_by):
-            return None
-        moderated = self.config.moderation
-        state = "awaiting_approval" if moderated else "queued"
-        limit = self.config.max_awaiting if moderated else self.config.max_queue
-        if self.job_counts[state] < limit:
-            return None
-        waiting = "jobs awaiting approval" if moderated else "jobs queued"
-        return ErrorInfo(code="queue_full", message=f"the queue is full ({limit} {waiting})")
 
     def submit(
         self,
@@ -369,44 +316,8 @@ class Book:
 
         ``submitted_by``: the identity on the bus (None: not known, capped as any client).
         A repeated ``idempotency_key`` of the same client answers with the job it made first
-        (and ``job_id`` is not used)."""
-        eff = Effects()
-        key = request.idempotency_key
-        first = self.by_key.get((request.client_id, key)) if key is not None else None
-        if first is not None and first in self.jobs:
-            return self.submit_reply(first, now_s), eff
-        if job_id in self.jobs:
-            raise ValueError(f"duplicate job id {job_id}")
-        full = self._full(submitted_by)
-        if full is not None:
-            return SubmitReply(ok=False, error=full), eff
-        job = Job(
-            job_id=job_id,
-            seq=self.next_seq,
-            state="submitted",
-            kind="text" if request.text is not None else "strokes",
-            text=request.text,
-            strokes=request.strokes,
-            label=label,
-            client_id=request.client_id,
-            priority=request.priority,
-            created_at_s=now_s,
-            updated_at_s=now_s,
-            estimate_s=estimate_s,
-            idempotency_key=key,
-            submitted_by=submitted_by,
-        )
-        self.next_seq += 1
-        if key is not None:
-            self.by_key[(request.client_id, key)] = job_id
-        job = transition(job, "awaiting_approval" if self.config.moderation else "queued", now_s)
-        self.put(eff, job)
-        self.event(
-            eff, now_s, "info", "job_submitted", f"{label} from {request.client_id}", job_id=job_id
-        )
-        self.assign(eff, now_s)
-        self.settle(eff, now_s)
-        return self.submit_reply(job_id, now_s), eff
+        (and ``job_id`` is not used). The job is made by ``orchestrator/job_intake.py``."""
+        return job_intake.submit(self, job_id, request, label, estimate_s, now_s, submitted_by)
 
     def submit_phrase(
         self,
@@ -432,18 +343,9 @@ class Book:
         """What each kind's planner made of a job: its duration in [s] by vehicle kind (the
         job's own estimate is the first vehicle's kind's, the shortest if that kind cannot plan
         it; the ETAs use the kind of the vehicle that would take it), and the kinds that cannot
-        plan it, which are then not sent it while another kind may write it."""
-        eff = Effects()
-        job = self.jobs.get(job_id)
-        if job is not None and not job.final:
-            if plans.refused:
-                self.kinds.refuse_kinds(job_id, plans.refused, self.config.vehicles)
-            by_kind = plans.durations_s
-            if by_kind:
-                first = by_kind.get(self.config.vehicles[0].kind, min(by_kind.values()))
-                self.kinds.estimates[job_id] = dict(by_kind)
-                self.put(eff, update(job, now_s, estimate_s=first))
-        return self.settle(eff, now_s)
+        plan it, which are then not sent it while another kind may write it
+        (``orchestrator/job_intake.py``)."""
+        return job_intake.set_estimate(self, job_id, plans, now_s)
 
     # --- assignment (orchestrator/assignment.py) -----------------------------------------------
     def assign(self, eff: Effects, now_s: float) -> None:

@@ -175,6 +175,27 @@ def waiting_on_ground(view: VehicleView, now_s: float) -> bool:
     )
 
 
+def usable_boards_of(vehicles: Mapping[str, VehicleView]) -> dict[str, str]:
+    """Vehicle id -> board of every vehicle that may take jobs, for :func:`queue_etas`: alive,
+    present, neither paused nor held."""
+    return {
+        vid: v.info.board_id
+        for vid, v in vehicles.items()
+        if v.alive and not v.lost and not (v.paused or v.held)
+    }
+
+
+def landing_of(
+    vehicles: Mapping[str, VehicleView], usable: Iterable[str], active: Iterable[Job]
+) -> list[str]:
+    """The ``usable`` vehicles without an ``active`` job still on their way down, for
+    :func:`queue_etas`."""
+    busy = {j.vehicle_id for j in active}
+    return [
+        vid for vid in usable if vid not in busy and vehicles[vid].state in ("returning", "landing")
+    ]
+
+
 @dataclass(frozen=True)
 class EtaModel:
     """Timing assumptions of the ETA estimate, in sim seconds unless said otherwise.
@@ -245,63 +266,143 @@ def queue_etas(
     of adjacent boards has a vehicle free for each, and the vehicles of the boards it could
     use start nothing behind it before (``orchestrator/phrases.py``).
     """
-    scale = model.time_scale
+    schedule = _Schedule(
+        boards=usable_boards,
+        model=model,
+        vehicle_free_s=_vehicles_free_s(usable_boards, landing, charges, now_s, model),
+        board_free_s={
+            b: max(now_s, (board_free_s or {}).get(b, now_s)) for b in usable_boards.values()
+        },
+        may_take=may_take,
+        writing_s_on=writing_s_on,
+        after_character_s=after_character_s,
+        charges=charges,
+    )
+    for job in active:
+        _hold_active(schedule, job, now_s)
+    etas: dict[str, float] = {}
+    if not schedule.vehicle_free_s:
+        return etas
+    for unit in phrase_rows.units(queue):
+        _place(schedule, unit, row, now_s, etas)
+    return etas
+
+
+@dataclass
+class _Schedule:
+    """The list schedule of :func:`queue_etas` as it fills: when each usable vehicle and each
+    board is next free, Unix time [s], and what decides how long each job takes them."""
+
+    boards: Mapping[str, str]
+    """Vehicle id -> board, of every vehicle that may take jobs."""
+    model: EtaModel
+    vehicle_free_s: dict[str, float]
+    """Vehicle id -> when it may take its next job, Unix time [s]."""
+    board_free_s: dict[str, float]
+    """Board id -> when it may take its next job, Unix time [s]."""
+    may_take: Callable[[Job, str], bool] | None
+    writing_s_on: Callable[[Job, str], float] | None
+    after_character_s: Callable[[str], float] | None
+    charges: EtaCharges | None
+
+
+def _vehicles_free_s(
+    usable_boards: Mapping[str, str],
+    landing: Iterable[str],
+    charges: EtaCharges | None,
+    now_s: float,
+    model: EtaModel,
+) -> dict[str, float]:
+    """When each usable vehicle is free but for the active jobs, Unix time [s]: now, half of
+    ``after_write_s`` on if it is landing, once its battery swap is done if it waits for one."""
     vehicle_free = dict.fromkeys(usable_boards, now_s)
     for vid in set(landing) & vehicle_free.keys():
-        vehicle_free[vid] = now_s + model.after_write_s / 2 / scale
+        vehicle_free[vid] = now_s + model.after_write_s / 2 / model.time_scale
     for vid, free_s in (charges.free_at_s if charges else {}).items():
         if vid in vehicle_free:
             vehicle_free[vid] = max(vehicle_free[vid], free_s)
-    board_free = {b: max(now_s, (board_free_s or {}).get(b, now_s)) for b in usable_boards.values()}
+    return vehicle_free
 
-    def after_s(board_id: str) -> float:
-        return after_character_s(board_id) / scale if after_character_s else 0.0
 
-    for job in active:
-        done = now_s + remaining_s(job, now_s, model) / scale
-        if job.board_id is not None:
-            free = done + after_s(job.board_id)
-            board_free[job.board_id] = max(board_free.get(job.board_id, now_s), free)
-        if job.vehicle_id in vehicle_free:
-            vehicle_free[job.vehicle_id] = done + model.after_write_s / scale
-            if charges is not None:  # the whole job, though part of it is flown: on the safe side
-                charges.spend(job, job.vehicle_id)
-    etas: dict[str, float] = {}
-    if not vehicle_free:
-        return etas
+def _after_s(schedule: _Schedule, board_id: str) -> float:
+    """Wall seconds the board takes no job after each character (the crew's sheet)."""
+    after_character_s = schedule.after_character_s
+    return after_character_s(board_id) / schedule.model.time_scale if after_character_s else 0.0
 
-    def can_start(job: Job, vid: str) -> tuple[float, str]:
-        swap_s = charges.swap_s / scale if charges and charges.swap_first(job, vid) else 0.0
-        return max(vehicle_free[vid] + swap_s, board_free[usable_boards[vid]]), vid
 
-    def option(job: Job, board_id: str | None = None) -> tuple[float, str] | None:
-        takers = [
-            v
-            for v in vehicle_free
-            if (may_take is None or may_take(job, v)) and board_id in (None, usable_boards[v])
-        ]
-        return min((can_start(job, v) for v in takers), default=None)
+def _hold_active(schedule: _Schedule, job: Job, now_s: float) -> None:
+    """An active job keeps its vehicle until written, then its board is free and the vehicle
+    lands; its charge is spent."""
+    scale, charges = schedule.model.time_scale, schedule.charges
+    done = now_s + remaining_s(job, now_s, schedule.model) / scale
+    board_free = schedule.board_free_s
+    if job.board_id is not None:
+        free = done + _after_s(schedule, job.board_id)
+        board_free[job.board_id] = max(board_free.get(job.board_id, now_s), free)
+    if job.vehicle_id in schedule.vehicle_free_s:
+        schedule.vehicle_free_s[job.vehicle_id] = done + schedule.model.after_write_s / scale
+        if charges is not None:  # the whole job, though part of it is flown: on the safe side
+            charges.spend(job, job.vehicle_id)
 
-    for unit in phrase_rows.units(queue):
-        if phrase_rows.together(unit[0]):  # all start when a window of them is free
-            best = phrase_rows.best_window(unit, row, option)
-        else:
-            first = option(unit[0])
-            best = None if first is None else (first[0], [(unit[0], first[1])])
-        if best is None:
-            continue
-        assigned, seats = best
-        for job, vid in seats:
-            if charges is not None:
-                charges.spend(job, vid)
-            start = assigned + model.before_write_s / scale
-            done = start + (writing_s_on(job, vid) if writing_s_on else writing_s(job)) / scale
-            etas[job.job_id] = start - now_s
-            board_free[usable_boards[vid]] = done + after_s(usable_boards[vid])
-            vehicle_free[vid] = done + model.after_write_s / scale
-        if phrase_rows.together(unit[0]):  # nothing behind it goes first where it could go
-            held = phrase_rows.could_use(unit, row, usable_boards, may_take)
-            for v, board_id in usable_boards.items():
-                if board_id in held:
-                    vehicle_free[v] = max(vehicle_free[v], assigned)
-    return etas
+
+def _can_start(schedule: _Schedule, job: Job, vid: str) -> tuple[float, str]:
+    """When ``vid`` could start ``job`` (it and its board free, after a swap if the job needs
+    one), and ``vid``."""
+    scale, charges = schedule.model.time_scale, schedule.charges
+    swap_s = charges.swap_s / scale if charges and charges.swap_first(job, vid) else 0.0
+    board_free_s = schedule.board_free_s[schedule.boards[vid]]
+    return max(schedule.vehicle_free_s[vid] + swap_s, board_free_s), vid
+
+
+def _option(schedule: _Schedule, job: Job, board_id: str | None = None) -> tuple[float, str] | None:
+    """The earliest start of ``job`` and its vehicle, among those that may take it (on
+    ``board_id`` only, unless None); None: no usable vehicle may take it."""
+    takers = [
+        v
+        for v in schedule.vehicle_free_s
+        if (schedule.may_take is None or schedule.may_take(job, v))
+        and board_id in (None, schedule.boards[v])
+    ]
+    return min((_can_start(schedule, job, v) for v in takers), default=None)
+
+
+def _place(
+    schedule: _Schedule,
+    unit: Sequence[Job],
+    row: Sequence[str],
+    now_s: float,
+    etas: dict[str, float],
+) -> None:
+    """Seat a unit of the queue (a job, or a phrase's characters) where it starts first, and
+    put its jobs' ETAs in ``etas``."""
+    together = phrase_rows.together(unit[0])
+    if together:  # all start when a window of them is free
+        best = phrase_rows.best_window(unit, row, lambda job, b: _option(schedule, job, b))
+    else:
+        first = _option(schedule, unit[0])
+        best = None if first is None else (first[0], [(unit[0], first[1])])
+    if best is None:
+        return
+    assigned, seats = best
+    for job, vid in seats:
+        etas[job.job_id] = _seat(schedule, job, vid, assigned) - now_s
+    if together:  # nothing behind it goes first where it could go
+        held = phrase_rows.could_use(unit, row, schedule.boards, schedule.may_take)
+        for v, board_id in schedule.boards.items():
+            if board_id in held:
+                schedule.vehicle_free_s[v] = max(schedule.vehicle_free_s[v], assigned)
+
+
+def _seat(schedule: _Schedule, job: Job, vid: str, assigned_s: float) -> float:
+    """``vid`` takes ``job`` at ``assigned_s`` (its charge spent, it and its board busy until
+    the job is written); returns when the job starts writing, Unix time [s]."""
+    scale = schedule.model.time_scale
+    if schedule.charges is not None:
+        schedule.charges.spend(job, vid)
+    start = assigned_s + schedule.model.before_write_s / scale
+    writing = schedule.writing_s_on(job, vid) if schedule.writing_s_on else writing_s(job)
+    done = start + writing / scale
+    board_id = schedule.boards[vid]
+    schedule.board_free_s[board_id] = done + _after_s(schedule, board_id)
+    schedule.vehicle_free_s[vid] = done + schedule.model.after_write_s / scale
+    return start

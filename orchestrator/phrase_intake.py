@@ -78,7 +78,7 @@ def submit(
 
 def _full(book: BookProtocol, count: int, submitted_by: str | None) -> ErrorInfo | None:
     """Why the state the phrase's jobs enter has no room for ``count`` more (None: it has), as
-    ``Book._full`` says for one job."""
+    ``job_intake._full`` says for one job."""
     if submitted_by is not None and is_operator(submitted_by):
         return None
     moderated = book.config.moderation
