@@ -148,15 +148,18 @@ def _start(argv: list[str], log: Path) -> subprocess.Popen[bytes]:
 
 
 def _wait_line(log: Path, proc: subprocess.Popen[bytes], text: str, limit_s: float) -> None:
-    deadline = time.monotonic() + limit_s
-    while time.monotonic() < deadline:
+    start_s = time.monotonic()
+    while time.monotonic() < start_s + limit_s:
         if text in log.read_text(encoding="utf-8", errors="replace"):
             return
         if proc.poll() is not None:
             break
         time.sleep(1.0)
     tail = log.read_text(encoding="utf-8", errors="replace").splitlines()[-8:]
-    raise ShowRunError(f"{log.name}: no {text!r} in {limit_s:.0f} s: " + " | ".join(tail))
+    waited = f"{time.monotonic() - start_s:.0f} s"
+    ended = f"it exited (rc {proc.returncode}) after {waited}" if proc.poll() is not None else (
+        f"not in {waited}")  # fmt: skip
+    raise ShowRunError(f"{log.name}: no {text!r}, {ended}: " + " | ".join(tail))
 
 
 def _stop(proc: subprocess.Popen[bytes], limit_s: float = 60.0) -> None:

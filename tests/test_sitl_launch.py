@@ -113,6 +113,22 @@ def bind(held: list[socket.socket], protocol: str, port: int) -> None:
     held.append(sock)
 
 
+def test_a_tcp_port_a_finished_show_left_in_time_wait_is_free(sitl: ModuleType) -> None:
+    # ArduCopter SITL listens with SO_REUSEADDR: the TIME_WAIT of its agent's closed link is no
+    # obstacle to the next show, and a listener still there is
+    with socket.socket() as listener:
+        listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        listener.bind(("127.0.0.1", 0))
+        listener.listen()
+        port = listener.getsockname()[1]
+        with socket.create_connection(("127.0.0.1", port)) as agent:
+            served, _ = listener.accept()
+            served.close()  # the SITL side closes first: its port goes to TIME_WAIT
+            agent.recv(1)
+        assert not sitl.port_free("tcp", port)
+    assert sitl.port_free("tcp", port)
+
+
 @pytest.mark.parametrize("kind", ["ardupilot", "px4"])
 def test_a_number_with_a_busy_port_is_skipped(
     sitl: ModuleType, tmp_path: Path, held: list[socket.socket], kind: str

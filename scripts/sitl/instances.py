@@ -201,9 +201,13 @@ def instance_ports(kind: Kind, index: int) -> tuple[tuple[Protocol, int], ...]:
 
 def port_free(protocol: Protocol, port: int) -> bool:
     """Whether ``port`` can be bound now on every interface (so no process holds it on any
-    address; a TCP port in TIME_WAIT counts as held)."""
+    address). A TCP port is asked as ArduPilot SITL binds its listeners, with SO_REUSEADDR: the
+    TIME_WAIT a finished show leaves on its agent's port for a minute does not hold it (asked
+    without, a show started right after another was refused, "tcp:127.0.0.1:25810 is in use")."""
     kind = socket.SOCK_STREAM if protocol == "tcp" else socket.SOCK_DGRAM
     with socket.socket(socket.AF_INET, kind) as sock:
+        if protocol == "tcp":
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
             sock.bind(("0.0.0.0", port))
         except OSError:
