@@ -19,9 +19,12 @@ from vehicle_agent.backends.mavlink.lag import (
     lead_setpoint,
     plan_jerk,
 )
+from vehicle_agent.backends.mavlink.pen import PenOverBoard
 from vehicle_agent.backends.mavlink.response import ResponseAid
 from vehicle_agent.backends.mavlink.settings import MavlinkSettings
 from vehicle_agent.backends.mavlink.truth import TruthSample
+from vehicles.quadrotor_brush.autopilot_pen import BrushPen
+from vehicles.quadrotor_brush.params import BrushParams
 
 DT_S = 0.02
 
@@ -171,14 +174,43 @@ def test_the_lag_is_fitted_on_the_truth_when_the_backend_has_it() -> None:
         estimate = path(np.array([t - 0.07]), 0.3, 2.0, 0.0)[0]
         aid.truth.samples.append(TruthSample(t, tuple(truth), (0.0, 0.0, 0.0)))
         aid.sent(t, tuple(sent))
-        aid.measured(t, tuple(estimate))
+        aid.measured(t, tuple(estimate), None, None)
     assert aid.lag.delay_s == pytest.approx(0.05, abs=0.004)
     stale = ResponseAid(MavlinkSettings(url="udpin:127.0.0.1:1", origin_m_enu=(0.0, 0.0, 0.0)))
     for k in range(400):
         t = k * DT_S
         stale.sent(t, tuple(path(np.array([t]), 0.3, 2.0, 0.0)[0]))
-        stale.measured(t, tuple(path(np.array([t - 0.07]), 0.3, 2.0, 0.0)[0]))
+        stale.measured(t, tuple(path(np.array([t - 0.07]), 0.3, 2.0, 0.0)[0]), None, None)
     assert stale.lag.delay_s == pytest.approx(0.07, abs=0.004)
+
+
+@pytest.mark.parametrize("pressing", [True, False])
+def test_the_lag_is_fitted_on_the_pen_tip_which_trails_a_vehicle_leaning_into_its_drag(
+    pressing: bool,
+) -> None:
+    """A vehicle leans into its drag by ``k`` [rad] per m/s, so the brush pressed on the board
+    ``lever`` below it trails its body by ``lever * k`` times the velocity: to the writing, a
+    further delay of ``lever * k``, which the lead must cover (on the body alone the fit says
+    0.05 s). The brush in the air writes nothing: there the body's delay is the lead (a transit's
+    acceleration swings the tip by 3 cm, which is no delay)."""
+    brush = BrushParams()
+    lever_m = brush.length_m - 0.01 if pressing else 0.5
+    pen = PenOverBoard(BrushPen(brush, 1.0 - lever_m))  # the path flies at 1 m
+    lean_rad_per_mps = 0.05
+    aid = ResponseAid(MavlinkSettings(url="udpin:127.0.0.1:1", origin_m_enu=(0.0, 0.0, 0.0),
+                                      truth="sitl"))  # fmt: skip
+    assert aid.truth is not None
+    for k in range(400):
+        t = k * DT_S
+        body = path(np.array([t - 0.05]), 0.3, 2.0, 0.0)[0]
+        velocity = (path(np.array([t - 0.05 + 1e-4]), 0.3, 2.0, 0.0)[0] - body) / 1e-4
+        # NED attitude, heading north: roll right to go east, nose down to go north
+        lean = (lean_rad_per_mps * velocity[0], -lean_rad_per_mps * velocity[1], 0.0)
+        aid.truth.samples.append(TruthSample(t, tuple(body), lean))
+        aid.sent(t, tuple(path(np.array([t]), 0.3, 2.0, 0.0)[0]))
+        aid.measured(t, tuple(body), None, pen)
+    expected_s = 0.05 + (lever_m * lean_rad_per_mps if pressing else 0.0)
+    assert aid.lag.delay_s == pytest.approx(expected_s, abs=0.004)
 
 
 def test_a_delay_is_identified_only_by_a_clear_fit_and_then_refined_by_weaker_ones() -> None:

@@ -436,7 +436,7 @@ class MavlinkBackend:
         if self.mode in ("hold", "offboard") and self.state.position_ned is not None:
             if self.stream.sent > sent:
                 self.aid.sent(now_s, target.position_m_enu)
-            self.aid.measured(now_s, self._position_m_enu())
+            self.aid.measured(now_s, self._position_m_enu(), self.state.attitude_ned, self.pen)
 
     # --- state out ---------------------------------------------------------------------------
     def _position_m_enu(self) -> Vec3:

@@ -4,7 +4,8 @@ An autopilot's position loop (ArduCopter's, PX4's) follows a p, v, a setpoint st
 on ArduCopter SITL the vehicle sits 0.10-0.13 s behind the target along the path, at a gain of
 about one. :class:`ResponseDelayEstimator` measures that delay from the flight itself (any leg
 where the setpoint moves: the transit to the first stroke comes before the brush goes down): it
-keeps the last seconds of setpoints sent and positions read back and finds the delay ``d`` that
+keeps the last seconds of setpoints sent and positions read back (the body's in the air, the
+brush tip's on the board: ``ResponseAid.measured``) and finds the delay ``d`` that
 best explains ``measured(t) = sent(t - d)`` (no free offset: along a straight leg a delay and an
 offset would be the same thing) in the horizontal plane, where the brush writes on a board: the
 vertical loop (thrust) answers a climb or a descent not as a delay (on ArduCopter SITL its climb
