@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from vehicle_agent.service import HEARTBEAT_SLACK_S, status_due_s
+from vehicle_agent.heartbeat import HEARTBEAT_SLACK_S, status_due_s
 
 LOST_AFTER_S = 1.5
 STATUS_PERIOD_S = 1.0

@@ -11,9 +11,9 @@ Tasks of a running agent (one process, one event loop):
   ``skyquill agent``), awaited off the loop;
 - reports: :class:`vehicle_agent.reports.ReportOutbox`;
 - presence: the agent's liveliness token; the orchestrator's token watched and fed to the runner;
-  the status heartbeat (:func:`status_due_s`): the status at least every ``status_period_s``,
-  and something of its own (status or telemetry) at least every 1.1 ``lost_after_s / 3`` (the
-  orchestrator takes a silent vehicle as lost, token or not);
+  the status heartbeat (:class:`vehicle_agent.heartbeat.StatusHeartbeat`): the status at least
+  every ``status_period_s``, and something of its own (status or telemetry) at least every 1.1
+  ``lost_after_s / 3`` (the orchestrator takes a silent vehicle as lost, token or not);
 - the job lease (``vehicle_agent/lease.py``, held by :class:`vehicle_agent.job_guard.JobGuard`):
   before each tick, a job that may have been given to another vehicle (this agent stalled, its
   writing went unacknowledged, or the orchestrator said ``not_assigned``) is given up: brush
@@ -34,12 +34,10 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import math
 import secrets
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import replace
 from datetime import date
 
 import msgspec
@@ -54,23 +52,18 @@ from bus.messages import (
     VehicleCommand,
     VehicleStatus,
 )
-from bus.pubsub import MessagePublisher, declare_token, publish, watch_liveliness
+from bus.pubsub import declare_token, publish, watch_liveliness
 from bus.rpc import error_info_from_exception, serve_async
 from bus.session import Session, open_session
-from vehicle_agent.backends.base import (
-    BackendError,
-    CommandRefusedError,
-    NotReadyError,
-    Vec3,
-    VehicleBackend,
-    VehicleSnapshot,
-)
+from vehicle_agent.backend_step import step_backend
+from vehicle_agent.backends.base import VehicleBackend, VehicleSnapshot
 from vehicle_agent.battery import swap_battery, with_battery
 from vehicle_agent.clock import TickClock
 from vehicle_agent.clock_sync import ClockSample, ClockSync
 from vehicle_agent.events import EventOutbox
 from vehicle_agent.fault import clear_fault
 from vehicle_agent.flight_day import FlightDay, with_day
+from vehicle_agent.heartbeat import StatusHeartbeat
 from vehicle_agent.job_end import job_result, measured_and_kept
 from vehicle_agent.job_guard import JobGuard
 from vehicle_agent.job_runner import JobRunner, PreparedJob, TickActions
@@ -88,12 +81,8 @@ log = logging.getLogger(__name__)
 
 TICK_HISTORY = 4096
 """How many tick start times the service keeps (``AgentService.tick_starts_s``)."""
-HEARTBEAT_SLACK_S = 0.005
-"""A heartbeat status due within this is sent now rather than after a sleep that short, [s]."""
 STOP_POLL_S = 0.05
 """How often in wall [s] a landing before the agent stops looks whether it is down."""
-SILENCE_SHARE = 1.1 / 3.0
-"""The longest an agent stays silent, as a share of ``lost_after_s`` (:func:`status_due_s`)."""
 
 
 class AgentService:
@@ -126,7 +115,6 @@ class AgentService:
             skip_when_late=settings.skip_when_late,
         )
         self._prepared: dict[str, PreparedJob] = {}
-        self._status_sent: VehicleStatus | None = None
         self.incarnation = secrets.token_hex(8)
         """This start of the vehicle's agent, on its statuses (``bus.messages.VehicleStatus``)."""
         self._tasks: set[asyncio.Task[None]] = set()
@@ -152,11 +140,6 @@ class AgentService:
         self.tick_starts_s: deque[float] = deque(maxlen=TICK_HISTORY)
         """Wall (monotonic) times in [s] at which the latest ticks began: the loop's pace and
         period jitter, for measurements (``benchmarks/bench_agent.py``) and tests."""
-        self._stalled_s = 0.0
-        self._status_at_s = -math.inf
-        """Wall (monotonic) time in [s] of the latest status published."""
-        self._spoke_at_s = -math.inf
-        """Wall (monotonic) time in [s] of the latest status or telemetry published."""
         self._progress = 0.0
         self._snapshot: VehicleSnapshot | None = None
         self.flight = FlightDay()
@@ -199,14 +182,21 @@ class AgentService:
             self._on_assign,
             on_error=_error_reply,
         )
-        self._telemetry = MessagePublisher(session, self.keys.telemetry(self.vehicle_id))
+        self._heartbeat = StatusHeartbeat(
+            session,
+            self.keys.vehicle_status(self.vehicle_id),
+            self.keys.telemetry(self.vehicle_id),
+            self._status,
+            status_period_s=self.settings.status_period_s,
+            lost_after_s=self.settings.lost_after_s,
+        )
         snapshot = await self.backend.start()
         log.info("vehicle %s ready on show %s", self.vehicle_id, self.settings.show_id)
         workers = [
             asyncio.create_task(self._control_loop(snapshot)),
             asyncio.create_task(self.reports.send_forever(session)),
             asyncio.create_task(self._follow_presence(presence)),
-            asyncio.create_task(self._status_heartbeat()),
+            asyncio.create_task(self._heartbeat.run()),
             asyncio.create_task(self.clock_sync.run(session, self._clock_measured)),
         ]
         stopping = asyncio.create_task(stop.wait())
@@ -252,7 +242,7 @@ class AgentService:
             return reply
         reply = self.runner.handle_command(command, self.clock.now_s)
         log.info("%s %s -> %s", self.vehicle_id, command.command, reply.message)
-        self._publish_status()
+        self._heartbeat.publish_status()
         return reply
 
     async def _follow_presence(self, presence: FifoChannel[bool]) -> None:
@@ -260,7 +250,7 @@ class AgentService:
             log.info("%s: orchestrator %s", self.vehicle_id, "present" if alive else "lost")
             self._wake_up()
             self.runner.set_orchestrator_alive(alive, self.clock.now_s)
-            self._publish_status()
+            self._heartbeat.publish_status()
 
     # --- stopping ------------------------------------------------------------------------------
     def airborne(self) -> bool:
@@ -322,7 +312,7 @@ class AgentService:
         else:
             self.events.push("warning", "fault_kept", reply.message)
         log.info("%s clear_fault -> %s", self.vehicle_id, reply.message)
-        self._publish_status()
+        self._heartbeat.publish_status()
         return reply
 
     # --- the control loop ----------------------------------------------------------------------
@@ -336,13 +326,15 @@ class AgentService:
             self.tick_starts_s.append(time.monotonic())
             now_s = self.clock.now_s
             wall_s = time.monotonic()
-            probe = self._guard.before_tick(wall_s, self._stalled_s, self._progress)
-            self._stalled_s = 0.0
+            stalled_s = self._heartbeat.take_stalled()
+            probe = self._guard.before_tick(wall_s, stalled_s, self._progress)
             if probe is not None:
                 self.reports.queue(probe)
             self.runner.may_begin_writing = self._lease.may_begin_writing(wall_s)
             actions = self.runner.step(snapshot, now_s)
-            snapshot = await self._fly(actions, snapshot, now_s)
+            snapshot = await step_backend(
+                self.backend, self.runner, self.events, actions, snapshot, now_s
+            )
             self._snapshot = snapshot
             self.flight.tick(snapshot, now_s, date.today().toordinal())
             self.clock.advance()
@@ -367,38 +359,6 @@ class AgentService:
             self.clock.catch_up()
             self._wake.set()
 
-    async def _fly(
-        self, actions: TickActions, snapshot: VehicleSnapshot, now_s: float
-    ) -> VehicleSnapshot:
-        try:
-            if actions.backend_command is not None:
-                name, hover = actions.backend_command
-                if name == "takeoff" and hover is not None:
-                    await self._takeoff(hover, now_s)
-                elif name == "land":
-                    await self.backend.land()
-                elif name == "estop":
-                    await self.backend.estop()
-            return await self.backend.tick(actions.setpoint, now_s)
-        except BackendError as exc:
-            log.error("%s: backend fault: %s", self.vehicle_id, exc)
-            return _with_fault(snapshot, str(exc))
-
-    async def _takeoff(self, hover: Vec3, now_s: float) -> None:
-        """Take off; a refusal (pre-arm checks) hands the job back, any other error is a fault;
-        a vehicle that was not asked (its checks had just begun failing) waits for them again."""
-        try:
-            await self.backend.takeoff(hover)
-        except NotReadyError as exc:
-            log.info("%s: not taking off yet: %s", self.vehicle_id, exc)
-            self.runner.takeoff_refused(str(exc), now_s, not_ready=True)
-        except CommandRefusedError as exc:
-            job_id = self.runner.job_id
-            log.warning("%s: take-off refused: %s", self.vehicle_id, exc)
-            self.runner.takeoff_refused(str(exc), now_s)
-            message = f"{self.vehicle_id} take-off refused: {exc}"
-            self.events.push("warning", "takeoff_refused", message, job_id=job_id)
-
     def _carry_out(self, actions: TickActions) -> None:
         if actions.plan_request is not None:
             self._spawn(self._plan(actions.plan_request))
@@ -412,14 +372,13 @@ class AgentService:
                 self.results.measured(aborted.report)
             self._spawn(self._finish(aborted.trace, aborted))
         if actions.telemetry is not None:
-            self._telemetry.put(actions.telemetry)
-            self._spoke_at_s = time.monotonic()
+            self._heartbeat.publish_telemetry(actions.telemetry)
             self._progress = actions.telemetry.progress
         for said in actions.events:
             self.events.push(said.level, said.kind, said.message, job_id=said.job_id)
         for event in self.events.drain():
             publish(self._session, self.keys.vehicle_events(self.vehicle_id), event)
-        self._publish_status(only_if_changed=True)
+        self._heartbeat.publish_status(only_if_changed=True)
 
     def _spawn(self, coro: object) -> None:
         task: asyncio.Task[None] = asyncio.create_task(coro)  # type: ignore[arg-type]
@@ -451,48 +410,15 @@ class AgentService:
         self.reports.queue(result)
 
     # --- outputs -------------------------------------------------------------------------------
-    def _publish_status(self, *, only_if_changed: bool = False) -> None:
+    def _status(self) -> VehicleStatus:
+        """The status as it is now; a job whose result the orchestrator has not answered yet
+        stays on it."""
         status = with_battery(self.runner.status(self.incarnation), self._snapshot)
         status = with_day(status, self._snapshot, self.flight)
         pending = self.results.pending() if status.job_id is None else None
         if pending is not None:  # not over until the orchestrator has its result
             status = msgspec.structs.replace(status, job_id=pending)
-        if only_if_changed and status == self._status_sent:
-            return
-        self._status_sent = status
-        publish(self._session, self.keys.vehicle_status(self.vehicle_id), status)
-        self._status_at_s = self._spoke_at_s = time.monotonic()
-
-    async def _status_heartbeat(self) -> None:
-        """The heartbeat; also the agent's stall detector: when this task wakes up late, nothing
-        of the agent ran meanwhile (frozen, starved), whatever the control loop was doing."""
-        settings = self.settings
-        while True:
-            due_s = status_due_s(
-                self._status_at_s, self._spoke_at_s, settings.status_period_s, settings.lost_after_s
-            )
-            if time.monotonic() >= due_s - HEARTBEAT_SLACK_S:
-                self._publish_status()
-                continue
-            sleep_s = due_s - time.monotonic()
-            slept_from_s = time.monotonic()
-            await asyncio.sleep(sleep_s)
-            late_s = time.monotonic() - slept_from_s - sleep_s
-            self._stalled_s = max(self._stalled_s, late_s)
-
-
-def status_due_s(
-    status_at_s: float, spoke_at_s: float, status_period_s: float, lost_after_s: float
-) -> float:
-    """When the next heartbeat status is due, [s] (the clock of the arguments): a status at
-    least every ``status_period_s``, and something (status or telemetry) at least every
-    ``lost_after_s / 3`` and a tenth. A vehicle at rest sends its telemetry at 1 Hz: its status
-    goes out half-way between (1 Hz too), so the orchestrator hears it every 0.5 s with two
-    messages a second, where a status every ``lost_after_s / 4`` beside that telemetry made 3.7
-    (the orchestrator and the router spend per message: 250 vehicles sent 900 a second). The
-    tenth lets the telemetry, due half a second after the status, go first: without it the two
-    were due at the same instant and the status often won (1.8 statuses a second measured)."""
-    return min(status_at_s + status_period_s, spoke_at_s + SILENCE_SHARE * lost_after_s)
+        return status
 
 
 def _refusal(code: str, message: str, *, field: str | None = None) -> CommandReply:
@@ -503,7 +429,3 @@ def _refusal(code: str, message: str, *, field: str | None = None) -> CommandRep
 
 def _error_reply(info: ErrorInfo) -> CommandReply:
     return CommandReply(ok=False, message=info.message, error=info)
-
-
-def _with_fault(snapshot: VehicleSnapshot, fault: str) -> VehicleSnapshot:
-    return replace(snapshot, fault=fault)
