@@ -2,7 +2,8 @@
 
 Zenoh threads hand decoded messages to an :class:`~tui.inbox.Inbox` and wake the app with one
 ``post_message`` per batch; the app merges them into the pure :class:`~tui.model.ConsoleModel`
-at once and redraws the views from it on a timer, at most ``redraw_hz`` times per second.
+at once and redraws the views from it (:mod:`tui.redraw`) on a timer, at most ``redraw_hz`` times
+per second. Which key runs which action, and when, is :mod:`tui.keymap`'s.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from typing import ClassVar
 import msgspec
 from textual import work
 from textual.app import App, ComposeResult
-from textual.binding import Binding, BindingType
+from textual.binding import BindingType
 from textual.containers import Horizontal, Vertical
 from textual.events import Resize
 from textual.message import Message
@@ -22,12 +23,13 @@ from textual.widgets import Footer
 
 from bus.messages import CommandReply, ErrorInfo, JobState, OperatorCommand, Telemetry
 from tui import commands as cmd
-from tui.format import job_totals_text
 from tui.inbox import Inbox
 from tui.inputs import BusInput, OrchestratorPresence
 from tui.joining import ShowJoiner
+from tui.keymap import KEYS, Focus, acts_now
 from tui.link import ConsoleLink
 from tui.model import ConsoleModel
+from tui.redraw import Redrawer, answer_text
 from tui.safe_text import clean
 from tui.settings import ConsoleSettings
 from tui.throttle import RedrawThrottle
@@ -46,16 +48,8 @@ from tui.widgets.queue_table import QueueTable
 from tui.widgets.vehicle_detail_screen import VehicleDetailScreen
 from tui.widgets.venue_screen import VenueScreen
 
-JOB_ACTIONS = frozenset(
-    {"approve", "reject", "cancel_job", "priority", "preview", "mark", "reject_marked"}
-)
-"""Act on the job selected in the queue: only while the queue has the focus."""
-VEHICLE_ACTIONS = frozenset({"vehicle", "detail", "fresh_sheet"})
-"""Act on the vehicle selected in the fleet table: only while the fleet has the focus."""
 PREVIEW_MIN_WIDTH = 100
 """Narrowest terminal, in cells, that shows the small preview next to the queue."""
-TABLE_HZ = 5.0
-"""Highest update rate of the fleet table's numbers, in [Hz]."""
 
 
 class ConsoleApp(App[None]):
@@ -64,34 +58,7 @@ class ConsoleApp(App[None]):
     CSS_PATH = "console.tcss"
     TITLE = "skyquill"
     ENABLE_COMMAND_PALETTE = False
-    BINDINGS: ClassVar[list[BindingType]] = [  # E-STOP and help first: the footer keeps them
-        Binding("e", "estop", "E-STOP"),
-        Binding("question_mark,f1", "help", "help"),
-        Binding("a", "approve", "approve"),
-        Binding("r", "reject", "reject"),
-        Binding("c", "cancel_job", "cancel"),
-        Binding("plus", "priority('raise')", "prio+"),
-        Binding("minus", "priority('lower')", "prio-"),
-        Binding("v", "preview", "view"),
-        Binding("space", "mark", "mark", show=False),
-        Binding("M", "mark(True)", "mark client", show=False),
-        Binding("R", "reject_marked", "reject marked", show=False),
-        Binding("l", "vehicle('land')", "land"),
-        Binding("u", "vehicle('release')", "release"),
-        Binding("f", "vehicle('clear_fault')", "reset fault"),
-        Binding("F", "clear_all", "reset all", show=False),
-        Binding("U", "release_all", "release all", show=False),
-        Binding("s", "fresh_sheet", "fresh sheet", show=False),
-        Binding("b", "vehicle('battery_swapped')", "battery swapped", show=False),
-        Binding("d", "detail", "detail", show=False),
-        Binding("m", "venue", "venue plan", show=False),
-        Binding("p", "toggle_pause", "pause"),
-        Binding("P", "vehicle('pause')", "pause vehicle", show=False),
-        Binding("L", "land_all", "land all"),
-        Binding("x", "acknowledge", "ack", show=False),
-        Binding("q", "quit", "quit", show=False),
-        Binding("ctrl+c", "quit", "quit", show=False, priority=True),  # as q: a terminal's habit
-    ]
+    BINDINGS: ClassVar[list[BindingType]] = KEYS
 
     class BusWake(Message):
         """Messages wait in the inbox (posted from a Zenoh thread, once per batch)."""
@@ -123,17 +90,10 @@ class ConsoleApp(App[None]):
         self.inbox: Inbox[BusInput] = Inbox(lambda item: isinstance(item, Telemetry))
         self._tick_s = 1.0 / (2.0 * settings.redraw_hz)
         self.throttle = RedrawThrottle(settings.redraw_hz, slack_s=self._tick_s / 2)
-        self.table_throttle = RedrawThrottle(
-            min(settings.redraw_hz, TABLE_HZ), slack_s=self._tick_s / 2
-        )
-        """Numbers are unreadable above a few changes per second; paths are drawn faster."""
         self.frames = 0
         """Redraws done so far."""
         self.frame_time_s = 0.0
         """Time spent in the latest redraw, in [s]."""
-        self._drawn: dict[str, int] = {}
-        self._drawn_boards: tuple[int, int, int] | None = None
-        self._alerted: set[str] = set()
         self._joiner = ShowJoiner(link, self.model, clock) if link is not None else None
         self._fleet = FleetTable(id="fleet")
         self._queue = QueueTable(id="queue")
@@ -144,6 +104,20 @@ class ConsoleApp(App[None]):
         self._alerts = AlertBar(id="alerts")
         self._strip = BoardStrip(self.model, settings, id="board-strip")
         self._queue_pane = Horizontal(id="queue-pane")
+        self._redrawer = Redrawer(
+            self.model,
+            redraw_hz=settings.redraw_hz,
+            slack_s=self._tick_s / 2,
+            bell=self.bell,
+            header=self._header,
+            alerts=self._alerts,
+            fleet=self._fleet,
+            strip=self._strip,
+            boards=self._boards,
+            queue=self._queue,
+            preview=self._preview,
+            event_log=self._event_log,
+        )
 
     # --- layout ----------------------------------------------------------------------------------
     def compose(self) -> ComposeResult:
@@ -205,78 +179,22 @@ class ConsoleApp(App[None]):
 
     # --- redraw ----------------------------------------------------------------------------------
     def _tick(self) -> None:
-        if self.throttle.due(time.monotonic(), self.model.version != self._drawn.get("all")):
+        if self.throttle.due(time.monotonic(), self._redrawer.stale):
             self.redraw()
 
     def redraw(self) -> None:
         """Bring every view in line with the model (only the parts that changed)."""
         start = time.perf_counter()
         now_s = self.clock()
-        self._redraw_status()
-        table_done = self._redraw_fleet(now_s)
-        self._redraw_queue()
-        self._redraw_boards(now_s)
-        if self.model.events.seq != self._event_log.last_seq:
-            self._event_log.add_events(self.model.events.after(self._event_log.last_seq))
+        self._redrawer.redraw(now_s)
         stack = self.screen_stack  # empty while the app is being torn down
         if stack and isinstance(stack[-1], VehicleDetailScreen | VenueScreen):
             stack[-1].sync(now_s)
-        if table_done:  # else the next tick comes back for the table
-            self._drawn["all"] = self.model.version
         self.frames += 1
         self.frame_time_s = time.perf_counter() - start
 
-    def _redraw_status(self) -> None:
-        m = self.model
-        self._header.orchestrator = m.orchestrator
-        self._header.queue_paused = m.queue_paused
-        self._header.can_fly = m.can_fly_count()
-        self._header.faults = len(m.fault_ids())
-        self._header.awaiting = m.awaiting_count()
-        counts = m.state_counts()
-        text = f"{sum(counts.values())} vehicles, {counts.get('writing', 0)} writing"
-        text += f", {counts['lost']} lost" if counts.get("lost") else ""
-        self._header.counts = text + job_totals_text(m.job_counts)
-        if m.last_reply is not None:
-            command, reply = m.last_reply
-            self._header.last_reply = f"{command.command}: {_reply_text(reply)}"
-            self._header.last_reply_ok = reply.ok
-        alerts = m.alerts()
-        self._alerts.alerts = tuple(alert.message for alert in alerts)
-        keys = {alert.key for alert in alerts}
-        if keys - self._alerted:
-            self.bell()  # a new alert: the operator may be looking elsewhere
-        self._alerted = keys
-
-    def _redraw_fleet(self, now_s: float) -> bool:
-        """Update the fleet table if it is due; False when it changed but had to wait."""
-        dirty = self._drawn.get("table") != self.model.fleet_version
-        if not self.table_throttle.due(time.monotonic(), dirty):
-            return not dirty
-        self._drawn["table"] = self.model.fleet_version
-        self._fleet.show_rows(self.model.vehicle_rows(now_s))
-        self._strip.display = not self._boards.all_visible  # at the table's (lower) rate
-        if self._strip.display:
-            self._strip.sync(now_s)
-        return True
-
-    def _redraw_queue(self) -> None:
-        if self._drawn.get("queue") != self.model.queue_version:
-            self._drawn["queue"] = self.model.queue_version
-            self._queue.show_rows(self.model.queue_rows())
-            self._preview.job = self.model.job(self._queue.selected_job)
-
-    def _redraw_boards(self, now_s: float) -> None:
-        m = self.model
-        key = (m.tracks_version, m.fleet_version, round(self._boards.scroll_y))
-        if self._drawn_boards != key:  # new samples, new states, or other boards scrolled in
-            self._drawn_boards = key
-            self._boards.sync(now_s)
-
     def on_board_grid_relaid(self, message: BoardGrid.Relaid) -> None:
-        self._strip.display = not message.all_visible
-        if self._strip.display:
-            self._strip.sync(self.clock())
+        self._redrawer.show_strip(not message.all_visible, self.clock())
 
     def on_resize(self, event: Resize) -> None:
         """Narrow terminals give the queue the preview's columns (``v`` shows it full-screen)."""
@@ -286,7 +204,7 @@ class ConsoleApp(App[None]):
         self._preview.styles.width = 30 if wide else 12
         self._queue_pane.styles.max_width = 104 if wide else 72
         self._event_log.styles.max_height = 12 if height < 40 else height // 4
-        self._drawn_boards = None
+        self._redrawer.forget_boards()
 
     # --- selection -------------------------------------------------------------------------------
     def on_queue_table_job_highlighted(self, message: QueueTable.JobHighlighted) -> None:
@@ -303,21 +221,13 @@ class ConsoleApp(App[None]):
 
     # --- commands --------------------------------------------------------------------------------
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
-        """Only the keys that act now: job keys with the queue focused, vehicle keys with the
-        fleet focused (so a command never acts on a selection out of sight), none behind a
-        question; the detail view has its own keys. False also hides the key in the footer."""
-        screen = self.screen
-        if action == "pop_screen":  # "back" of the screens above the main one
-            return len(self.screen_stack) > 1
-        if isinstance(screen, ConfirmScreen | HelpScreen | PreviewScreen):
-            return action == "quit" and not isinstance(screen, ConfirmScreen)
-        if isinstance(screen, VehicleDetailScreen | VenueScreen):
-            return action in ("quit", "land_all", "estop", "help")
-        if action in JOB_ACTIONS:
-            return self.focused is self._queue
-        if action in VEHICLE_ACTIONS:
-            return self.focused is self._fleet
-        return True
+        """Only the keys that act now (:func:`tui.keymap.acts_now`); False also hides the key in
+        the footer."""
+        screen, focused = self.screen, self.focused
+        focus: Focus = (
+            "queue" if focused is self._queue else "fleet" if focused is self._fleet else None
+        )
+        return acts_now(action, screen, len(self.screen_stack), focus)
 
     def on_descendant_focus(self) -> None:
         self.refresh_bindings()
@@ -449,14 +359,8 @@ class ConsoleApp(App[None]):
 
     def on_console_app_command_done(self, message: CommandDone) -> None:
         self.model.record_command(message.command, message.reply, self.clock())
-        text = clean(f"{message.command.command}: {_reply_text(message.reply)}")
+        text = clean(answer_text(message.command, message.reply))
         self.notify(  # the answer may quote bus data
             text, severity="information" if message.reply.ok else "error", markup=False
         )
         self.redraw()
-
-
-def _reply_text(reply: CommandReply) -> str:
-    if reply.error is not None:
-        return f"{reply.message + ': ' if reply.message else ''}{reply.error.message}"
-    return reply.message or ("ok" if reply.ok else "refused")
