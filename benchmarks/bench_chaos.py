@@ -124,8 +124,6 @@ def run_show(args: argparse.Namespace, out: Path, chaos: bool) -> Result:
 def _run_show(args: argparse.Namespace, out: Path, chaos: bool, disk: OwnDisk | None) -> Result:
     path, show = derived_show(SHOW, out, time_scale=args.time_scale)
     path, show, relay_port, router_port = _through_relay(path, show)
-    wall_s = args.show_minutes * 60.0 / args.time_scale
-    rng = random.Random(args.seed)
     log, jobs = Log(), Jobs()
     if disk is None:
         log.skipped["disk_full"] = str(unavailable())
@@ -141,64 +139,100 @@ def _run_show(args: argparse.Namespace, out: Path, chaos: bool, disk: OwnDisk | 
             subscribe(session, run.keys.events, Event, log.on_event),
             subscribe(session, run.keys.jobs_all, JobState, jobs.on_job),
         ]
-        vehicles = len(show.vehicles)
-        wait_ready(run, session, vehicles, timeout_s=180.0)
+        wait_ready(run, session, len(show.vehicles), timeout_s=180.0)
         memory_start = _memory(run)
-        op, stop = Operator(session, run), threading.Event()
-        strike = Chaos(op, run, relay, disk, log, args.hold_scale)
-        feeder = threading.Thread(
-            target=keep_waiting, args=(stop, run, session, jobs, args.waiting), daemon=True
-        )
-        start = time.monotonic()
-        done_at_start = jobs.counts()["done"]
-        feeder.start()
-        order = [kind for kind in FAULTS if kind not in log.skipped]
-        rng.shuffle(order)
-        next_fault = start + _gap_s(args, rng)
-        while time.monotonic() < start + wall_s:
-            time.sleep(0.5)
-            release_holds(op, log)
-            if not chaos or time.monotonic() < next_fault:
-                continue
-            if not order and args.once:
-                break  # every kind struck once, and the show given a gap after the last
-            kind = order.pop(0) if order else rng.choice(FAULTS)
-            if kind in log.skipped:
-                continue
-            struck = time.time()
-            log.faults.append((struck, kind))
-            print(f"  {time.monotonic() - start:6.0f} s  {kind}", flush=True)
-            if (actual := inject(kind, strike)) != kind:
-                print(f"           (struck as {actual})", flush=True)
-                log.faults[-1] = (struck, actual)
-            released = lambda: release_holds(op, log)  # noqa: E731 - the operator watches on
-            op.until(lambda f: not recovered(f, vehicles), NOTICE_S)  # a kill shows late
-            if op.until(lambda f: recovered(f, vehicles), 120.0, released):
-                log.recovered_s[log.faults[-1][1]].append(time.time() - struck)
-            next_fault = time.monotonic() + _gap_s(args, rng)
-        minutes = (time.monotonic() - start) / 60.0
-        done = jobs.counts()["done"] - done_at_start
-        stop.set()
-        feeder.join()
+        strike = Chaos(Operator(session, run), run, relay, disk, log, args.hold_scale)
+        minutes, done = _feed_and_strike(args, chaos, strike, session, jobs)
         memory_end = _memory(run)
         acknowledged = list(jobs.last)
         for sub in subs:
             sub.undeclare()  # type: ignore[no-untyped-call]
+    memory = {k: (memory_start.get(k), memory_end.get(k)) for k in {*memory_start, *memory_end}}
+    name = "chaos" if chaos else "fault-free"
+    return Result(name, minutes, done, acknowledged, _stored_states(show), _whole_folders(show),
+                  log, memory, os.getloadavg())  # fmt: skip
+
+
+def _feed_and_strike(
+    args: argparse.Namespace, chaos: bool, strike: Chaos, session: object, jobs: Jobs
+) -> tuple[float, int]:
+    """Keep ``args.waiting`` characters waiting while the faults are struck (none in the
+    fault-free run); the wall minutes it ran and the characters done meanwhile."""
+    stop = threading.Event()
+    feeder = threading.Thread(
+        target=keep_waiting, args=(stop, strike.run, session, jobs, args.waiting), daemon=True
+    )
+    start = time.monotonic()
+    done_at_start = jobs.counts()["done"]
+    feeder.start()
+    _strike_faults(args, chaos, strike, start)
+    minutes = (time.monotonic() - start) / 60.0
+    done = jobs.counts()["done"] - done_at_start
+    stop.set()
+    feeder.join()
+    return minutes, done
+
+
+def _strike_faults(args: argparse.Namespace, chaos: bool, strike: Chaos, start: float) -> None:
+    """For ``args.show_minutes`` of show time from ``start`` (monotonic [s]) release the vehicles
+    held, and in the chaos run strike a fault after every gap, each kind once before any repeats
+    (``--once``: each kind once, then end)."""
+    wall_s = args.show_minutes * 60.0 / args.time_scale
+    rng = random.Random(args.seed)
+    op, log = strike.op, strike.log
+    order = [kind for kind in FAULTS if kind not in log.skipped]
+    rng.shuffle(order)
+    next_fault = start + _gap_s(args, rng)
+    while time.monotonic() < start + wall_s:
+        time.sleep(0.5)
+        release_holds(op, log)
+        if not chaos or time.monotonic() < next_fault:
+            continue
+        if not order and args.once:
+            break  # every kind struck once, and the show given a gap after the last
+        kind = order.pop(0) if order else rng.choice(FAULTS)
+        if kind in log.skipped:
+            continue
+        _strike(kind, strike, start)
+        next_fault = time.monotonic() + _gap_s(args, rng)
+
+
+def _strike(kind: str, strike: Chaos, start: float) -> None:
+    """Strike a fault of ``kind`` (logged by the kind it was struck as; printed with the seconds
+    since ``start``, monotonic [s]), watch for it to show, then time the recovery, the operator
+    releasing holds meanwhile."""
+    op, log = strike.op, strike.log
+    vehicles = len(strike.run.show.vehicles)
+    struck = time.time()
+    log.faults.append((struck, kind))
+    print(f"  {time.monotonic() - start:6.0f} s  {kind}", flush=True)
+    if (actual := inject(kind, strike)) != kind:
+        print(f"           (struck as {actual})", flush=True)
+        log.faults[-1] = (struck, actual)
+    released = lambda: release_holds(op, log)  # noqa: E731 - the operator watches on
+    op.until(lambda f: not recovered(f, vehicles), NOTICE_S)  # a kill shows late
+    if op.until(lambda f: recovered(f, vehicles), 120.0, released):
+        log.recovered_s[log.faults[-1][1]].append(time.time() - struck)
+
+
+def _stored_states(show: Show) -> dict[str, str]:
+    """Every job's state in the show's database (read-only, once the show has stopped)."""
     stored = sqlite3.connect(f"file:{show.database_path}?mode=ro", uri=True)
     try:
-        states = dict(stored.execute("SELECT job_id, state FROM jobs").fetchall())
+        return dict(stored.execute("SELECT job_id, state FROM jobs").fetchall())
     finally:
         stored.close()
+
+
+def _whole_folders(show: Show) -> Counter[str]:
+    """Job folders per job: attempts written to their end (a broken-off one keeps its folder
+    too)."""
     job_dirs = show.database_path.parent / "jobs"
-    folders = (  # attempts written to their end: a broken-off one keeps its folder too
+    return (
         Counter(p.name.split("-")[0] for p in job_dirs.iterdir() if written_whole(p))
         if job_dirs.is_dir()
         else Counter()
     )
-    memory = {k: (memory_start.get(k), memory_end.get(k)) for k in {*memory_start, *memory_end}}
-    name = "chaos" if chaos else "fault-free"
-    return Result(name, minutes, done, acknowledged, states, folders, log, memory,
-                  os.getloadavg())  # fmt: skip
 
 
 NOTICE_S = 3.0
