@@ -11,8 +11,10 @@ from pymavlink.dialects.v20 import ardupilotmega as mav
 
 from vehicle_agent.backends.mavlink.truth import EARTH_RADIUS_M, TruthTracker
 from vehicle_agent.backends.mavlink.truth_filter import (
+    CLOCK_SLACK_S,
+    SimulatorClock,
     SmoothedTruthTracker,
-    elapsed_s,
+    carry_s,
     simulator_time_s,
 )
 
@@ -87,15 +89,36 @@ def test_a_clock_that_stands_still_or_runs_ahead_leaves_the_arrivals_time() -> N
     its geofence), nor a jump throw it ahead."""
     assert simulator_time_s(5_250) == pytest.approx(5.25)
     assert simulator_time_s(0) is None  # no ATTITUDE yet
-    assert elapsed_s(0.015, 0.02) == 0.015  # the simulator's, slower than the agent's
-    assert elapsed_s(None, 0.02) == elapsed_s(0.0, 0.02) == 0.02
-    assert elapsed_s(0.5, 0.02) == 0.02
+    clock = SimulatorClock(seen_s=1.0, at_s=1.0)
+    assert carry_s(clock, 1.015, 0.02)[0] == pytest.approx(0.015)  # slower than the agent
+    assert carry_s(clock, None, 0.02)[0] == carry_s(clock, 1.0, 0.02)[0] == 0.02
+    assert carry_s(clock, 1.5, 0.02)[0] == pytest.approx(0.02 + CLOCK_SLACK_S)
     tracker = SmoothedTruthTracker(HOME)
     for k in range(100):  # climbing at 0.5 m/s on a clock that never moves
         up, v = 0.005 * k, (0.0, 0.0, 0.5)
         tracker.absorb(sim_state(0.0, 0.0, up, v), 0.01 * k, resting_at_home=(k == 0),
                        simulator_s=7.0)  # fmt: skip
     assert tracker.samples[-1].position_m_enu[2] == pytest.approx(0.495, abs=0.006)
+
+
+@pytest.mark.parametrize("attitudes_per_truth", [1.0, 0.5, 0.8])
+def test_a_clock_that_skips_a_sample_is_not_counted_twice(attitudes_per_truth: float) -> None:
+    """The ATTITUDE standing for the simulator's clock does not always come between two truth
+    samples: the time carried over on the arrivals while it stood still is paid back by its next
+    step, so a steady transit is neither ahead nor behind (counted twice, PX4 SIH's smoothed
+    truth ran 2-3 cm ahead and snapped back)."""
+    tracker = SmoothedTruthTracker(HOME)
+    speed_mps, period_s, errors_m = 0.5, 0.02, []
+    for k in range(200):  # east at 0.5 m/s, a truth sample each 20 ms
+        t = k * period_s
+        clock_ms = 1000 + round(math.floor(k * attitudes_per_truth) / attitudes_per_truth * 20)
+        tracker.absorb(sim_state(0.0, speed_mps * t, 0.0, (speed_mps, 0.0, 0.0)), t,
+                       resting_at_home=(k == 0), simulator_s=clock_ms * 1e-3)  # fmt: skip
+        if k > 20:
+            errors_m.append(tracker.samples[-1].position_m_enu[0] - HOME[0] - speed_mps * t)
+    # counted twice: 12-14 mm ahead on average, up to 31 mm
+    assert abs(float(np.mean(errors_m))) < 0.003
+    assert max(abs(e) for e in errors_m) < 0.008
 
 
 def test_a_jump_the_velocity_does_not_explain_is_taken_as_it_is() -> None:
