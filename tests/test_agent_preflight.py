@@ -41,7 +41,11 @@ GOOD = PreflightReadings(health=HEALTHY, battery_fraction=0.9, clock_offset_s=0.
         ),
         (
             {"health": replace(HEALTHY, link_loss_fraction=0.12)},
-            "link: 12% of the autopilot's messages lost (limit 5%)",
+            "link: 12.0% of the autopilot's messages lost (limit 5%)",
+        ),
+        (  # just over the limit says so (to the percent it read "5% ... (limit 5%)" on SITL)
+            {"health": replace(HEALTHY, link_loss_fraction=0.052)},
+            "link: 5.2% of the autopilot's messages lost (limit 5%)",
         ),
         (
             {"health": replace(HEALTHY, estimator="no horizontal position")},

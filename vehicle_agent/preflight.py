@@ -72,7 +72,7 @@ def _link(health: LinkHealth, limits: PreflightLimits) -> str | None:
         return f"link: no autopilot heartbeat for {age_s:.1f} s (limit {limits.link_age_max_s:g} s)"
     if loss is not None and loss > limits.link_loss_max_fraction:
         bound = 100 * limits.link_loss_max_fraction
-        return f"link: {100 * loss:.0f}% of the autopilot's messages lost (limit {bound:g}%)"
+        return f"link: {100 * loss:.1f}% of the autopilot's messages lost (limit {bound:g}%)"
     return None
 
 
