@@ -78,8 +78,9 @@ def carry_s(
     (issue 31, its ULogs): in one vehicle's flights the mocap made of the smoothed truth ran
     0.4-0.7 cm ahead of the simulator's along transits, up to 3 cm, snapped back, and its
     velocity jumped to -1 m/s (13-25 times a flight); EKF2 rejected the velocity (test ratio
-    12-13), dropped the vision height for 0.1 s, and the vehicle left its transit by 0.15-0.21 m:
-    three jobs in a row given up. The other vehicle's mocap trailed by the mocap latency."""
+    12-14), dropped the vision height for 0.1 s, and the vehicle left its transit by 0.15-0.21 m
+    seven times: its jobs handed back, one given up after three tries. The other vehicle's mocap
+    trailed by the mocap latency."""
     arrival_s = max(0.0, arrival_dt_s)
     if clock_s is None:
         return arrival_s, clock
