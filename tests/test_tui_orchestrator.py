@@ -267,7 +267,12 @@ def test_console_holds_releases_rejects_with_reason_and_reprioritises(tmp_path: 
             return app._fleet.cell_text(vid, "state") in ("lost held", "idle held")
 
         async def scenario(pilot: Any) -> None:
-            await until(pilot, lambda: app._queue.selected_job == job_ids[0], "the submissions")
+            await until(pilot, lambda: app._queue.row_count == 2, "the submissions")
+            app._queue.focus()
+            for _ in range(2):  # the cursor stays on the job it was on when the rows came
+                if app._queue.selected_job != job_ids[0]:
+                    await pilot.press("up")
+            await until(pilot, lambda: app._queue.selected_job == job_ids[0], "j0 chosen")
             await until(  # from before the console joined: only the snapshot has them
                 pilot,
                 lambda: [e.kind for _, e in app.model.events.after(0)].count("job_submitted") == 2,
