@@ -91,7 +91,7 @@ def _serve(show: Show, args: argparse.Namespace) -> int:
         print(f"skyquill view: {exc}", file=sys.stderr)
         return 1
     context = foxglove.Context()
-    view = LiveView(show, context)
+    view = LiveView(show, context)  # opens every channel: before the server starts (scene.live)
     server = foxglove.start_server(
         name=f"skyquill {show.show_id}",
         host=args.host,

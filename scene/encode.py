@@ -35,6 +35,20 @@ def encoded(topic: str, message: FoxgloveMessage) -> DerivedMessage:
     )
 
 
+def declared(topic: str, message_type: type[FoxgloveMessage]) -> DerivedMessage:
+    """``topic``'s channel as :func:`encoded` describes it for ``message_type``, with no message
+    (an empty payload): what a channel is opened from before anything is sent on it."""
+    schema = message_type.get_schema()
+    return DerivedMessage(
+        topic=topic,
+        schema_name=schema.name,
+        schema_encoding=schema.encoding,
+        schema_data=bytes(schema.data),
+        message_encoding=schema.encoding,
+        payload=b"",
+    )
+
+
 def json_encoded(topic: str, name: str, schema: dict[str, Any], value: Any) -> DerivedMessage:
     """A JSON message with its JSON schema (plot series: Foxglove plots any numeric field)."""
     return DerivedMessage(

@@ -2,10 +2,19 @@
 
 :class:`LiveView` takes every sample of the show's bus (a read-only watcher's subscription),
 turns it into the scene's messages (:class:`scene.show_scene.ShowScene`) and logs them on the
-SDK's channels, one per topic, created as they first appear; the SDK's server sends each
-message to the viewers subscribed to its channel. The venue is sent every
-:data:`LIVE_VENUE_PERIOD_S`, so a viewer who connects late sees it at once. The view is its own
-process: viewers cost the show only this one subscriber, whatever their number.
+SDK's channels, one per topic; the SDK's server sends each message to the viewers subscribed to
+its channel. The venue is sent every :data:`LIVE_VENUE_PERIOD_S`, so a viewer who connects late
+sees it at once. The view is its own process: viewers cost the show only this one subscriber,
+whatever their number.
+
+Every channel is opened when the view is made, before its server starts
+(:func:`scene.show_scene.scene_channels`), never as its first message comes. When a channel
+opens while a viewer is connected, the SDK's server sends that viewer the advertisement before
+it records the channel as advertised to it (``ConnectedClient::advertise_channels``), so a
+viewer that subscribes as soon as it reads the advertisement, as Foxglove does, can be refused
+("Unknown channel ID") and never get the channel: about 1 viewer in 20 on a loaded machine
+(foxglove-sdk 0.30.3). The channels open before a viewer connects are advertised to it, and
+recorded, before the server reads anything from it.
 
 Zenoh calls :meth:`LiveView.on_sample` on its own threads, and they must never wait on a viewer:
 a sample of the scene (telemetry, an event) only goes into a bounded queue there, and the view's
@@ -30,7 +39,7 @@ from bus.keys import ShowKeys
 from bus.mcap_channels import DerivedMessage
 from bus.messages import Event, Telemetry
 from bus.recorder import message_type_for_topic
-from scene.show_scene import ShowScene
+from scene.show_scene import ShowScene, scene_channels
 from showfile import Show
 
 LIVE_VENUE_PERIOD_S = 1.0
@@ -56,6 +65,8 @@ class LiveView:
         self.keys = ShowKeys(show.show_id)
         self.max_queued = max_queued
         self._channels: dict[str, foxglove.Channel] = {}
+        for channel in scene_channels():  # all of them, before any viewer connects
+            self._channel(channel)
         self._queue: deque[tuple[str, type[msgspec.Struct], bytes, int]] = deque()
         self._wake = threading.Condition()
         self._fixed_due = False
@@ -144,6 +155,8 @@ class LiveView:
             self._channel(message).log(message.payload, log_time=stamp_ns)
 
     def _channel(self, message: DerivedMessage) -> foxglove.Channel:
+        """``message``'s channel: one of those opened with the view (a topic the scene does not
+        declare would open here, late, see the module's docstring)."""
         channel = self._channels.get(message.topic)
         if channel is None:
             schema = foxglove.Schema(

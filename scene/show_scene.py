@@ -10,13 +10,14 @@ paths, events become log lines, and the fixed venue is sent again every
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import replace
 
 import foxglove.messages as fg
 import msgspec
 
 from bus.mcap_channels import DerivedMessage
 from bus.messages import Event, Telemetry
-from scene.encode import encoded, json_encoded, timestamp
+from scene.encode import declared, encoded, json_encoded, timestamp
 from scene.models import vehicle_models
 from scene.vehicles import JobPaths, transforms
 from scene.venue import venue_update
@@ -28,9 +29,10 @@ VENUE_PERIOD_S = 10.0
 """The venue and the vehicle models are sent again this often, in [s] of log time."""
 PATHS_PERIOD_S = 0.5
 """A vehicle's paths are sent at most this often, in [s] (they grow by 10 points)."""
+PLOT_SCHEMA_NAME = "skyquill.WritingPlot"
 LOG_LEVELS = {"info": fg.LogLevel.Info, "warning": fg.LogLevel.Warning, "alert": fg.LogLevel.Error}
 PLOT_SCHEMA = {
-    "title": "skyquill.WritingPlot",
+    "title": PLOT_SCHEMA_NAME,
     "type": "object",
     "properties": {
         "vehicle_id": {"type": "string"},
@@ -42,6 +44,22 @@ PLOT_SCHEMA = {
     },
     "required": ["vehicle_id", "tracking_error_m", "pen_down", "progress"],
 }
+
+
+def scene_channels() -> list[DerivedMessage]:
+    """Every topic :class:`ShowScene` sends on, each with the schema its messages carry and no
+    message (an empty payload): the live view opens all its channels from these before a viewer
+    can connect (``scene.live``)."""
+    protobuf = {
+        TF_TOPIC: fg.FrameTransforms,
+        VENUE_TOPIC: fg.SceneUpdate,
+        VEHICLES_TOPIC: fg.SceneUpdate,
+        PATHS_TOPIC: fg.SceneUpdate,
+        LOG_TOPIC: fg.Log,
+    }
+    channels = [declared(topic, message_type) for topic, message_type in protobuf.items()]
+    plot = json_encoded(PLOT_TOPIC, PLOT_SCHEMA_NAME, PLOT_SCHEMA, None)
+    return [*channels, replace(plot, payload=b"")]
 
 
 class ShowScene:
@@ -81,7 +99,7 @@ class ShowScene:
             encoded(TF_TOPIC, transforms(t, stamp_ns)),
             json_encoded(
                 PLOT_TOPIC,
-                "skyquill.WritingPlot",
+                PLOT_SCHEMA_NAME,
                 PLOT_SCHEMA,
                 {
                     "vehicle_id": t.vehicle_id,

@@ -32,6 +32,8 @@ AIRSHOW = Path(__file__).resolve().parent.parent / "shows" / "airshow-2014.yaml"
 SUBPROTOCOLS = ["foxglove.sdk.v1", "foxglove.websocket.v1"]
 MESSAGE_DATA = 0x01
 """Opcode of a server's binary message carrying one subscribed channel's message."""
+STATUS_ERROR = 2
+"""Level of a server's status message that reports an error (e.g. a subscription refused)."""
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +52,8 @@ def _port() -> int:
 
 
 async def _watch(url: str, topics: set[str], timeout_s: float) -> dict[str, Any]:
-    """Subscribe to ``topics`` once advertised; the first message of each, decoded."""
+    """Subscribe to ``topics`` once advertised; the first message of each, decoded. A status
+    the server reports as an error (a subscription it refused) fails at once."""
     got: dict[str, Any] = {}
     async with websockets.connect(url, subprotocols=SUBPROTOCOLS) as ws:  # type: ignore[arg-type]
         channels: dict[int, dict[str, Any]] = {}
@@ -60,6 +63,7 @@ async def _watch(url: str, topics: set[str], timeout_s: float) -> dict[str, Any]
             frame = await asyncio.wait_for(ws.recv(), timeout=deadline - time.monotonic())
             if isinstance(frame, str):
                 op = json.loads(frame)
+                assert not (op["op"] == "status" and op["level"] == STATUS_ERROR), op
                 if op["op"] != "advertise":
                     continue
                 wanted = []

@@ -4,6 +4,8 @@ newest samples are the ones drawn."""
 
 from __future__ import annotations
 
+import asyncio
+import json
 import threading
 import time
 from pathlib import Path
@@ -11,12 +13,14 @@ from pathlib import Path
 import foxglove
 import msgspec
 import pytest
+import websockets
 from mcap.reader import make_reader
 from scene_decode import decoded
 
 from bus.keys import ShowKeys
 from bus.messages import Telemetry
 from scene.live import LiveView
+from scene.show_scene import scene_channels
 from showfile import load_show
 
 SHOW = load_show("shows/mixed.yaml")
@@ -89,3 +93,27 @@ def test_a_sample_that_cannot_be_drawn_is_counted_and_the_view_goes_on() -> None
         while view.drawn < 1 and time.monotonic() < deadline:
             time.sleep(0.01)
         assert (view.failures, view.drawn, view.dropped) == (1, 1, 0)
+
+
+def test_a_viewer_that_connects_before_any_sample_is_told_of_every_channel() -> None:
+    """Every channel exists before the server starts: a viewer connecting to a show that has
+    sent nothing yet is advertised all of the scene's topics at once, so none opens later
+    while it is connected (foxglove-sdk can then refuse its subscription: scene.live)."""
+    context = foxglove.Context()
+    LiveView(SHOW, context)
+    server = foxglove.start_server(name="advertise", host="127.0.0.1", port=0, context=context)
+
+    async def first_advertise() -> set[str]:
+        url = f"ws://127.0.0.1:{server.port}"
+        async with websockets.connect(url, subprotocols=["foxglove.sdk.v1"]) as ws:  # type: ignore[arg-type]
+            while True:
+                op = json.loads(await asyncio.wait_for(ws.recv(), timeout=10.0))
+                if op["op"] == "advertise":
+                    return {channel["topic"] for channel in op["channels"]}
+
+    try:
+        topics = asyncio.run(first_advertise())
+    finally:
+        server.stop()
+    assert topics == {channel.topic for channel in scene_channels()}
+    assert {"/tf", "/scene/venue", "/scene/vehicles", "/scene/paths"} <= topics
