@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 from bus.messages import ErrorInfo, SubmitReply, SubmitRequest
 from orchestrator.core_types import Effects
-from orchestrator.jobs import Job, transition, update
+from orchestrator.jobs import new_job, transition, update
 from orchestrator.kinds import KindPlans
 from orchestrator.quotas import is_operator
 
@@ -40,7 +40,18 @@ def submit(
     full = _full(book, submitted_by)
     if full is not None:
         return SubmitReply(ok=False, error=full), eff
-    job = _new_job(job_id, book.next_seq, request, label, estimate_s, now_s, submitted_by)
+    job = new_job(
+        job_id,
+        book.next_seq,
+        request,
+        text=request.text,
+        strokes=request.strokes,
+        label=label,
+        estimate_s=estimate_s,
+        now_s=now_s,
+        idempotency_key=key,
+        submitted_by=submitted_by,
+    )
     book.next_seq += 1
     if key is not None:
         book.by_key[(request.client_id, key)] = job_id
@@ -52,34 +63,6 @@ def submit(
     book.assign(eff, now_s)
     book.settle(eff, now_s)
     return book.submit_reply(job_id, now_s), eff
-
-
-def _new_job(
-    job_id: str,
-    seq: int,
-    request: SubmitRequest,
-    label: str,
-    estimate_s: float,
-    now_s: float,
-    submitted_by: str | None,
-) -> Job:
-    """The job ``request`` asks for, as it was submitted (submission order ``seq``)."""
-    return Job(
-        job_id=job_id,
-        seq=seq,
-        state="submitted",
-        kind="text" if request.text is not None else "strokes",
-        text=request.text,
-        strokes=request.strokes,
-        label=label,
-        client_id=request.client_id,
-        priority=request.priority,
-        created_at_s=now_s,
-        updated_at_s=now_s,
-        estimate_s=estimate_s,
-        idempotency_key=request.idempotency_key,
-        submitted_by=submitted_by,
-    )
 
 
 def _full(book: BookProtocol, submitted_by: str | None) -> ErrorInfo | None:

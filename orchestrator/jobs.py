@@ -16,7 +16,7 @@ from typing import Any, Literal
 
 import msgspec
 
-from bus.messages import ErrorInfo, JobMetrics, JobState, JobStateName, PhrasePlace
+from bus.messages import ErrorInfo, JobMetrics, JobState, JobStateName, PhrasePlace, SubmitRequest
 
 FINAL_STATES: frozenset[str] = frozenset({"done", "failed", "cancelled", "rejected"})
 ACTIVE_STATES: frozenset[str] = frozenset({"assigned", "writing"})
@@ -123,6 +123,43 @@ class Job(msgspec.Struct, frozen=True, kw_only=True):
     def sort_key(self) -> tuple[int, int]:
         """Queue order: higher priority first, then submission order."""
         return (-self.priority, self.seq)
+
+
+def new_job(
+    job_id: str,
+    seq: int,
+    request: SubmitRequest,
+    *,
+    text: str | None,
+    strokes: dict[str, Any] | None,
+    label: str,
+    estimate_s: float,
+    now_s: float,
+    idempotency_key: str | None,
+    submitted_by: str | None,
+    phrase: PhrasePlace | None = None,
+) -> Job:
+    """A job ``request`` hands in, as submitted at ``now_s`` [s] (submission order ``seq``,
+    expected to take ``estimate_s`` [s]): of kind ``text`` when it has ``text``, else
+    ``strokes``. A job alone takes the request's text, strokes and key; a phrase's character
+    its own text and place, and the key only for the first (``orchestrator/phrase_intake.py``)."""
+    return Job(
+        job_id=job_id,
+        seq=seq,
+        state="submitted",
+        kind="text" if text is not None else "strokes",
+        text=text,
+        strokes=strokes,
+        label=label,
+        client_id=request.client_id,
+        priority=request.priority,
+        created_at_s=now_s,
+        updated_at_s=now_s,
+        estimate_s=estimate_s,
+        idempotency_key=idempotency_key,
+        submitted_by=submitted_by,
+        phrase=phrase,
+    )
 
 
 def transition(job: Job, state: JobStateName, now_s: float, **changes: Any) -> Job:

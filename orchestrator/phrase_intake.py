@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 from bus.messages import ErrorInfo, JobStateName, PhrasePlace, SubmitReply, SubmitRequest
 from orchestrator.core_types import Effects
-from orchestrator.jobs import Job, transition
+from orchestrator.jobs import new_job, transition
 from orchestrator.quotas import is_operator
 
 if TYPE_CHECKING:
@@ -47,18 +47,15 @@ def submit(
     for index, (job_id, char, estimate_s) in enumerate(
         zip(job_ids, characters, estimates_s, strict=True)
     ):
-        job = Job(
-            job_id=job_id,
-            seq=book.next_seq,
-            state="submitted",
-            kind="text",
+        job = new_job(
+            job_id,
+            book.next_seq,
+            request,
             text=char,
+            strokes=None,
             label=char,
-            client_id=request.client_id,
-            priority=request.priority,
-            created_at_s=now_s,
-            updated_at_s=now_s,
             estimate_s=estimate_s,
+            now_s=now_s,
             idempotency_key=key if index == 0 else None,
             submitted_by=submitted_by,
             phrase=PhrasePlace(phrase_id=job_ids[0], index=index, size=len(characters)),

@@ -22,6 +22,7 @@ from vehicle_agent.backends.mavlink.lag import (
 from vehicle_agent.backends.mavlink.pen import PenOverBoard
 from vehicle_agent.backends.mavlink.response import ResponseAid
 from vehicle_agent.backends.mavlink.settings import MavlinkSettings
+from vehicle_agent.backends.mavlink.snapshot import pen_reading
 from vehicle_agent.backends.mavlink.truth import TruthSample
 from vehicles.quadrotor_brush.autopilot_pen import BrushPen
 from vehicles.quadrotor_brush.params import BrushParams
@@ -174,13 +175,13 @@ def test_the_lag_is_fitted_on_the_truth_when_the_backend_has_it() -> None:
         estimate = path(np.array([t - 0.07]), 0.3, 2.0, 0.0)[0]
         aid.truth.samples.append(TruthSample(t, tuple(truth), (0.0, 0.0, 0.0)))
         aid.sent(t, tuple(sent))
-        aid.measured(t, tuple(estimate), None, None)
+        aid.measured(t, tuple(estimate), None)
     assert aid.lag.delay_s == pytest.approx(0.05, abs=0.004)
     stale = ResponseAid(MavlinkSettings(url="udpin:127.0.0.1:1", origin_m_enu=(0.0, 0.0, 0.0)))
     for k in range(400):
         t = k * DT_S
         stale.sent(t, tuple(path(np.array([t]), 0.3, 2.0, 0.0)[0]))
-        stale.measured(t, tuple(path(np.array([t - 0.07]), 0.3, 2.0, 0.0)[0]), None, None)
+        stale.measured(t, tuple(path(np.array([t - 0.07]), 0.3, 2.0, 0.0)[0]), None)
     assert stale.lag.delay_s == pytest.approx(0.07, abs=0.004)
 
 
@@ -208,7 +209,7 @@ def test_the_lag_is_fitted_on_the_pen_tip_which_trails_a_vehicle_leaning_into_it
         lean = (lean_rad_per_mps * velocity[0], -lean_rad_per_mps * velocity[1], 0.0)
         aid.truth.samples.append(TruthSample(t, tuple(body), lean))
         aid.sent(t, tuple(path(np.array([t]), 0.3, 2.0, 0.0)[0]))
-        aid.measured(t, tuple(body), None, pen)
+        aid.measured(t, tuple(body), pen_reading(pen, tuple(body), None, aid.true_state(t)))
     expected_s = 0.05 + (lever_m * lean_rad_per_mps if pressing else 0.0)
     assert aid.lag.delay_s == pytest.approx(expected_s, abs=0.004)
 

@@ -10,8 +10,9 @@ climb ramp; not while SYS_STATUS says the pre-arm checks fail: then nothing is s
 refusal carries the autopilot's words (asked for with MAV_CMD_RUN_PREARM_CHECKS if unsaid).
 ``tick`` streams SET_POSITION_TARGET_LOCAL_NED (p, v, a and the take-off heading) or
 SET_ATTITUDE_TARGET at ``setpoint_rate_hz``; ``land`` switches to the autopilot's landing mode;
-``estop`` force-disarms; ``recover`` makes a vehicle at rest ``idle`` again. ENU inside,
-LOCAL_NED on the wire (origin ``origin_m_enu``).
+``estop`` force-disarms; ``recover`` makes a vehicle at rest ``idle`` again (the commands:
+:mod:`~vehicle_agent.backends.mavlink.flight_commands`). ENU inside, LOCAL_NED on the wire
+(origin ``origin_m_enu``).
 
 Failsafe, never fighting the pilot (:mod:`~vehicle_agent.backends.mavlink.watchdog`): a lost
 heartbeat, a mode or arming change we did not command, a STATUSTEXT naming a failsafe, or a gap in
@@ -41,10 +42,14 @@ from vehicle_agent.backends.mavlink.connect import (
     set_show_params,
 )
 from vehicle_agent.backends.mavlink.errors import (
-    CommandRejectedError,
     LinkLostError,
     UnsupportedAutopilotError,
     VehicleFaultError,
+)
+from vehicle_agent.backends.mavlink.flight_commands import (
+    FlightCommands,
+    disarmed_on_ground,
+    refuse_recovery,
 )
 from vehicle_agent.backends.mavlink.frames import LocalFrame
 from vehicle_agent.backends.mavlink.health import fence_problem, link_health
@@ -54,15 +59,10 @@ from vehicle_agent.backends.mavlink.params import ParamChannel
 from vehicle_agent.backends.mavlink.pen import PenOverBoard
 from vehicle_agent.backends.mavlink.response import ResponseAid
 from vehicle_agent.backends.mavlink.settings import MavlinkSettings
-from vehicle_agent.backends.mavlink.snapshot import vehicle_snapshot
-from vehicle_agent.backends.mavlink.state import (
-    MAV_LANDED_STATE_ON_GROUND,
-    SEVERITY_WARNING,
-    LinkState,
-)
+from vehicle_agent.backends.mavlink.snapshot import pen_reading, vehicle_snapshot
+from vehicle_agent.backends.mavlink.state import SEVERITY_WARNING, LinkState
 from vehicle_agent.backends.mavlink.stream import SetpointStream
 from vehicle_agent.backends.mavlink.takeoff_checks import (
-    CMD_NAV_TAKEOFF,
     PrearmAsker,
     heading_ned_rad,
     prove_life,
@@ -75,13 +75,6 @@ from vehicle_agent.motion import Move, plan_move
 
 log = logging.getLogger(__name__)
 
-CMD_NAV_LAND, CMD_DO_SET_MODE, CMD_ARM_DISARM = 21, 176, 400
-GROUND_MODE_ASK_PERIOD_S = 0.5
-"""How often in [s] a PX4 disarmed in OFFBOARD is asked to go to Hold (a heartbeat is 1 s)."""
-GROUND_MODE_WAIT_S = 3.0
-"""How long in [s] a landing waits for the ground mode before the vehicle is idle anyway (its
-pre-arm state then says it is not in Hold yet)."""
-FORCE_DISARM = 21196.0
 TextHandler = Callable[[int, str], None]
 
 
@@ -124,12 +117,10 @@ class MavlinkBackend:
                              settings.takeoff_timeout_s, settings.land_timeout_s)  # fmt: skip
         self.watchdog = Watchdog(limits)
         self._now_s = 0.0
-        self._commanded_mode: int | None = None
-        self._commanded_at = 0  # heartbeat count when our last mode/arming change was accepted
+        self.flight = FlightCommands(self.state, self.commands, self._flavor)
+        """Mode changes and arming, and the record of them the watchdog reads."""
         self._last_gcs_heartbeat_s = -math.inf
         self._prearm = PrearmAsker(self.state, self.commands)
-        self._ground_mode_asked_s = -math.inf
-        self._ground_mode_since_s = math.inf  # when we began to ask for it (inf: not asking)
         self._hold: Setpoint | None = None
         self._climb: Move | None = None
         self._climb_to: tuple[Vec3, Vec3] | None = None  # (from, to): planned at the next tick
@@ -211,12 +202,6 @@ class MavlinkBackend:
                 self._on_text(severity, text)
 
     # --- commands ----------------------------------------------------------------------------
-    async def _set_mode(self, custom_mode: int) -> None:
-        flavor = self._flavor()
-        await self.commands.run(CMD_DO_SET_MODE, *flavor.set_mode_params(custom_mode))
-        self._commanded_mode = custom_mode
-        self._commanded_at = self.state.heartbeats
-
     def _flavor(self) -> Any:
         flavor = self.state.flavor
         if flavor is None:
@@ -242,69 +227,41 @@ class MavlinkBackend:
             self._hold = Setpoint(position_m_enu=here)
             await prove_life(self.stream, self._hold, self.settings.setpoint_rate_hz,
                              self._now_s, self._send_gcs_heartbeat)  # fmt: skip
-        await self._set_mode(flavor.offboard_mode)
-        await self.commands.run(CMD_ARM_DISARM, 1.0, arming=True)
-        self._commanded_at = self.state.heartbeats
         top = (here[0], here[1], hover_m_enu[2])
+        await self.flight.take_off(flavor, top[2] - self.frame.origin_m_enu[2])
         if flavor.name == "ardupilot":
-            try:
-                await self.commands.run(
-                    CMD_NAV_TAKEOFF, *([0.0] * 6), top[2] - self.frame.origin_m_enu[2]
-                )
-            except CommandRejectedError:
-                await self._disarm_on_ground()
-                raise
             self._climb = None
         else:
             self._climb_to = (here, top)
         self._hold = Setpoint(position_m_enu=hover_m_enu)
         self._set_backend_mode("takeoff")
 
-    async def _disarm_on_ground(self) -> None:
-        """Armed but refused the take-off: disarm (best effort) so that it may be retried."""
-        try:
-            await self.commands.run(CMD_ARM_DISARM, 0.0)
-            self._commanded_at = self.state.heartbeats
-        except BackendError as exc:
-            log.warning("vehicle %s: disarm after a refused take-off: %s",
-                        self.state.system_id, exc)  # fmt: skip
-
     async def land(self) -> None:
         """The autopilot's landing mode (ArduPilot LAND, PX4 AUTO.LAND) where the vehicle is."""
         self._check_usable()
         if self.mode in ("idle", "estop", "landing"):
             return
-        await self._set_mode(self._flavor().land_mode)
+        await self.flight.land()
         self._set_backend_mode("landing")
 
     async def estop(self) -> None:
         """Force-disarm now (motors off); best effort, never raises for a silent vehicle."""
         self._set_backend_mode("estop")
-        if self._link is None or not self.state.connected:
-            return
-        try:
-            await self.commands.run(CMD_ARM_DISARM, 0.0, FORCE_DISARM)
-        except BackendError as exc:
-            log.error("estop of vehicle %s not confirmed: %s", self.state.system_id, exc)
+        if self._link is not None and self.state.connected:
+            await self.flight.force_disarm()
 
     async def recover(self) -> None:
         """After an e-stop (a force-disarm) or a fault: ``idle`` again once the autopilot, heard
         within its heartbeat timeout, says it is disarmed on the ground. Nothing is sent: the
         next take-off sets the mode and arms through the autopilot's own pre-arm checks."""
-        st = self.state
-        if self._link is None or not st.connected:
-            raise LinkLostError("no link to the autopilot: it cannot be recovered")
-        silent_s = self.watchdog.link_silent_s(self._now_s)
-        if not silent_s <= self.settings.heartbeat_timeout_s:
-            raise LinkLostError(f"no heartbeat from the autopilot for {silent_s:.1f} s")
-        if st.armed:
-            raise BackendError("its motors are still armed")
-        if st.landed_state is not None and st.landed_state != 1:
-            raise BackendError("the autopilot does not say it is on the ground")
+        refuse_recovery(self.state, linked=self._link is not None,
+                        silent_s=self.watchdog.link_silent_s(self._now_s),
+                        heartbeat_timeout_s=self.settings.heartbeat_timeout_s)  # fmt: skip
         if self.fault is not None:
-            log.warning("vehicle %s: fault cleared by the operator: %s", st.system_id, self.fault)
+            log.warning("vehicle %s: fault cleared by the operator: %s",
+                        self.state.system_id, self.fault)  # fmt: skip
         self.fault, self._hold, self._climb, self._climb_to = None, None, None, None
-        self._commanded_at = st.heartbeats
+        self.flight.heard()
         self._set_backend_mode("idle")
 
     async def swap_battery(self) -> None:
@@ -333,15 +290,16 @@ class MavlinkBackend:
         self._tell_texts()  # the part of a chunked text that waited its time for the rest
         if self._link is not None:
             self._prearm.ask_why_not_ready(now_s)
+        measure = False
         if self.fault is None and self._link is not None:
             self._advance(now_s)
-            self._stream(setpoint, now_s)
-        elif self.state.heartbeats > self._commanded_at:
+            measure = self._stream(setpoint, now_s)
+        elif self.state.heartbeats > self.flight.commanded_at:
             self._observe_after_fault()
         if now_s - self._last_gcs_heartbeat_s >= GCS_HEARTBEAT_PERIOD_S:
             self._last_gcs_heartbeat_s = now_s
             self._send_gcs_heartbeat()
-        return self._snapshot(now_s)
+        return self._snapshot(now_s, measure=measure)
 
     def _send_gcs_heartbeat(self) -> None:
         if self._link is not None:
@@ -350,7 +308,7 @@ class MavlinkBackend:
     def _set_backend_mode(self, mode: BackendMode) -> None:
         self.mode = mode
         self.watchdog.mode_changed()
-        self._ground_mode_since_s = math.inf
+        self.flight.stop_asking_ground_mode()
 
     def _fail(self, reason: str) -> None:
         """Stop streaming for good; the autopilot (or the pilot) flies from here."""
@@ -362,14 +320,12 @@ class MavlinkBackend:
 
     def _observe_after_fault(self) -> None:
         """In a fault we only watch: a vehicle landed and disarmed (by its pilot) is idle."""
-        st = self.state
-        said = st.landed_state
-        on_ground = said == MAV_LANDED_STATE_ON_GROUND if said is not None else True
-        if self.mode != "estop" and not st.armed and on_ground:
+        if self.mode != "estop" and disarmed_on_ground(self.state):
             self._set_backend_mode("idle")
 
     def _supervise(self, now_s: float) -> None:
-        commanded = Commanded(self._commanded_mode, self._commanded_at, self.stream.last_sent_s)
+        flight = self.flight
+        commanded = Commanded(flight.commanded_mode, flight.commanded_at, self.stream.last_sent_s)
         reason = self.watchdog.check(now_s, self.control_period_s, self.state, self._flavor(),
                                      self.mode, commanded)  # fmt: skip
         if reason is not None:
@@ -391,32 +347,15 @@ class MavlinkBackend:
                     self.stream.new_flight(self.stream.heading_ned_rad)  # ground; start afresh
                 self._climb = None
                 self._set_backend_mode("hold")
-        elif self.mode == "landing" and not st.armed and st.heartbeats > self._commanded_at:
-            in_hold_unsaid = st.prearm_mode != st.custom_mode  # no SYS_STATUS in Hold yet
-            if (st.in_offboard_on_ground or in_hold_unsaid) and self._to_ground_mode(
-                now_s, GROUND_MODE_WAIT_S
-            ):
-                return  # landed; idle once in Hold and its pre-arm checks said there
-            self._set_backend_mode("idle")
-            self._hold = None
+        elif self.mode == "landing":
+            if self.flight.landing_over(now_s):
+                self._set_backend_mode("idle")
+                self._hold = None
         elif self.mode == "idle" and st.in_offboard_on_ground:
-            self._to_ground_mode(now_s, math.inf)  # a refused arming, or found so at connect
+            self.flight.ask_ground_mode(now_s, math.inf)  # a refused arming, or found so at connect
 
-    def _to_ground_mode(self, now_s: float, wait_s: float) -> bool:
-        """Ask for the autopilot's ground mode (PX4: Hold) now and then, not awaited (a refusal
-        leaves it where it is); False once asked for longer than ``wait_s``, or when it has
-        none."""
-        flavor = self._flavor()
-        if flavor.ground_mode is None:
-            return False
-        if math.isinf(self._ground_mode_since_s):
-            self._ground_mode_since_s = now_s
-        if now_s - self._ground_mode_asked_s >= GROUND_MODE_ASK_PERIOD_S:
-            self._ground_mode_asked_s = now_s
-            self.commands.send(CMD_DO_SET_MODE, *flavor.set_mode_params(flavor.ground_mode))
-        return now_s - self._ground_mode_since_s < wait_s
-
-    def _stream(self, setpoint: Setpoint | None, now_s: float) -> None:
+    def _stream(self, setpoint: Setpoint | None, now_s: float) -> bool:
+        """Send our mode's setpoint; True: the lag is to measure where the pen writes now."""
         if setpoint is not None and self.mode in ("takeoff", "hold", "offboard"):
             self._climb, self._climb_to = None, None
             if self.mode != "offboard":
@@ -430,26 +369,30 @@ class MavlinkBackend:
         elif self.mode == "takeoff" and self._climb is not None:
             target = self._climb.setpoint(now_s)
         else:
-            return
+            return False
         sent = self.stream.sent
         self.stream.send(target, now_s)
-        if self.mode in ("hold", "offboard") and self.state.position_ned is not None:
-            if self.stream.sent > sent:
-                self.aid.sent(now_s, target.position_m_enu)
-            self.aid.measured(now_s, self._position_m_enu(), self.state.attitude_ned, self.pen)
+        if self.mode not in ("hold", "offboard") or self.state.position_ned is None:
+            return False
+        if self.stream.sent > sent:
+            self.aid.sent(now_s, target.position_m_enu)
+        return True
 
     # --- state out ---------------------------------------------------------------------------
     def _position_m_enu(self) -> Vec3:
         ned = self.state.position_ned
         return self.frame.origin_m_enu if ned is None else self.frame.position_from_ned(ned)
 
-    def _snapshot(self, now_s: float) -> VehicleSnapshot:
-        position = self._position_m_enu()
+    def _snapshot(self, now_s: float, *, measure: bool = False) -> VehicleSnapshot:
+        """The vehicle now; ``measure``: the lag measures where the pen writes, as read here."""
+        position, truth = self._position_m_enu(), self.aid.true_state(now_s)
+        reading = pen_reading(self.pen, position, self.state.attitude_ned, truth)
+        if measure:
+            self.aid.measured(now_s, position, reading)
         asked = self.settings.fence is not None
         fence = fence_problem(asked, self.settings.set_params, self.params_set, self._flavor().name)
         losses = None if self._link is None else self._link.losses
         health = link_health(self.state, losses, self.watchdog.link_silent_s(now_s),
                              self._mocap.age_s(now_s), fence)  # fmt: skip
-        return vehicle_snapshot(self.state, now_s, position, self.aid.true_state(now_s),
-                                mode=self.mode, fault=self.fault, pen=self.pen,
-                                health=health)  # fmt: skip
+        return vehicle_snapshot(self.state, now_s, position, truth, mode=self.mode,
+                                fault=self.fault, reading=reading, health=health)  # fmt: skip

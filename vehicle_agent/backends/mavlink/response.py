@@ -13,7 +13,6 @@ from typing import Any
 from vehicle_agent.backends.base import Setpoint, Vec3
 from vehicle_agent.backends.mavlink.lag import ResponseDelayEstimator, lead_setpoint, plan_jerk
 from vehicle_agent.backends.mavlink.mocap import MocapSource
-from vehicle_agent.backends.mavlink.pen import PenOverBoard
 from vehicle_agent.backends.mavlink.settings import MavlinkSettings
 from vehicle_agent.backends.mavlink.truth import (
     TRUTH_MESSAGES,
@@ -21,6 +20,7 @@ from vehicle_agent.backends.mavlink.truth import (
     truth_mocap,
 )
 from vehicle_agent.backends.mavlink.truth_filter import SmoothedTruthTracker, simulator_time_s
+from vehicles.kind import PenReading
 
 log = logging.getLogger(__name__)
 
@@ -89,18 +89,12 @@ class ResponseAid:
     def sent(self, now_s: float, position_m_enu: Vec3) -> None:
         self.lag.sent(now_s, position_m_enu)
 
-    def measured(
-        self,
-        now_s: float,
-        estimate_m_enu: Vec3,
-        attitude_ned_rad: Vec3 | None,
-        pen: PenOverBoard | None,
-    ) -> None:
-        """Where the pen writes, for the lag: the tip of ``pen`` on the board, else the body
-        (``pen`` None, or the brush in the air); on the truth when it is fresh (on PX4 1.16 SIH
-        the autopilot's estimate trails it by 0.015-0.025 s, which a fit on the estimate added
-        to the lead), else on the autopilot's estimate and ATTITUDE (``attitude_ned_rad``,
-        [rad]).
+    def measured(self, now_s: float, estimate_m_enu: Vec3, reading: PenReading | None) -> None:
+        """Where the pen writes, for the lag: the tip on the board as ``reading`` has it (the pen
+        as :func:`~vehicle_agent.backends.mavlink.snapshot.pen_reading` read it this tick, for
+        the snapshot too), else the body (no pen, or the brush in the air); on the truth when
+        it is fresh (on PX4 1.16 SIH the autopilot's estimate trails it by 0.015-0.025 s, which
+        a fit on the estimate added to the lead), else on the autopilot's estimate.
 
         The tip on the board: a vehicle writing at a steady speed leans into its drag, and the
         brush pressed 0.3 m below trails its body. On ArduCopter 4.7 SITL (Airshow show, quiet,
@@ -110,8 +104,6 @@ class ResponseAid:
         brush by centimetres, which is no delay; fitted on it, mavsim's stiff loop was led by
         0.048 s and 一 went from 2.6 to 13.7 mm (tests/test_mavlink_e2e.py)."""
         truth = self.true_state(now_s)
-        body, attitude = (estimate_m_enu, attitude_ned_rad) if truth is None else (
-            truth.position_m_enu, truth.attitude_ned_rad)  # fmt: skip
-        reading = None if pen is None or attitude is None else pen.read(body, attitude)
+        body = estimate_m_enu if truth is None else truth.position_m_enu
         point = reading.tip_m_enu if reading is not None and reading.contact else body
         self.lag.measured(now_s, point)

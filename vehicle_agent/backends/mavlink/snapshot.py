@@ -15,6 +15,21 @@ from vehicle_agent.backends.mavlink.frames import attitude_ned_to_xyzw_enu, ned_
 from vehicle_agent.backends.mavlink.pen import PenOverBoard
 from vehicle_agent.backends.mavlink.state import MAV_LANDED_STATE_ON_GROUND, LinkState
 from vehicle_agent.backends.mavlink.truth import TruthSample
+from vehicles.kind import PenReading
+
+
+def pen_reading(
+    pen: PenOverBoard | None,
+    position_m_enu: Vec3,
+    attitude_ned_rad: Vec3 | None,
+    truth: TruthSample | None,
+) -> PenReading | None:
+    """The pen of a vehicle on the simulator's ``truth`` if read, else at ``position_m_enu`` in
+    [m] (the estimate in the show frame) with this ATTITUDE (``attitude_ned_rad``, [rad]); None
+    without a pen or an attitude."""
+    body, attitude = (position_m_enu, attitude_ned_rad) if truth is None else (
+        truth.position_m_enu, truth.attitude_ned_rad)  # fmt: skip
+    return None if pen is None or attitude is None else pen.read(body, attitude)
 
 
 def vehicle_snapshot(
@@ -25,21 +40,16 @@ def vehicle_snapshot(
     *,
     mode: BackendMode,
     fault: str | None,
-    pen: PenOverBoard | None,
+    reading: PenReading | None,
     health: LinkHealth | None = None,
 ) -> VehicleSnapshot:
     """The vehicle at ``now_s`` in [s] as ``state`` has it, at ``position_m_enu`` in [m] (the
     estimate in the show frame), with the simulator's ``truth`` if read and the backend's
-    ``mode`` and ``fault``; ``pen``: the pen it carries (None: none); ``health``: the figures
-    of the agent's preflight."""
+    ``mode`` and ``fault``; ``reading``: the pen it carries, as :func:`pen_reading` read it
+    (None: no pen); ``health``: the figures of the agent's preflight."""
     st = state
     said = st.landed_state
     on_ground = said == MAV_LANDED_STATE_ON_GROUND if said is not None else not st.armed
-    body, attitude = (position_m_enu, st.attitude_ned) if truth is None else (
-        truth.position_m_enu, truth.attitude_ned_rad)  # fmt: skip
-    reading = None
-    if pen is not None and attitude is not None:
-        reading = pen.read(body, attitude)
     estimated = st.attitude_ned
     estimated_attitude = None if estimated is None else attitude_ned_to_xyzw_enu(*estimated)
     return VehicleSnapshot(
