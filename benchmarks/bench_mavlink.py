@@ -302,6 +302,9 @@ def main() -> None:
     parser.add_argument("--targets", nargs="+", default=list(mavlink_writing.TARGETS),
                         choices=mavlink_writing.TARGETS)  # fmt: skip
     args = parser.parse_args()
+    if args.seconds <= WARM_UP_S:
+        parser.error(f"--seconds {args.seconds:g}: the tracking is measured after {WARM_UP_S:g} s, "
+                     f"so a run must be longer")  # fmt: skip
     if args.writing:
         writing(args.writing, args.targets)
     for rate in args.rates:
