@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import os
 import socket
+import struct
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -15,6 +16,8 @@ from pathlib import Path
 from types import ModuleType
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from module_by_path import load_module
 from test_sitl_side_by_side import with_ports
 
@@ -239,6 +242,32 @@ def test_homes_are_placed_east_and_north_of_the_reference(sitl: ModuleType) -> N
     east_m = math.radians(lon - lon0) * sitl.EARTH_RADIUS_M * math.cos(math.radians(lat0))
     assert north_m == pytest.approx(20.0, abs=1e-6) and east_m == pytest.approx(10.0, abs=1e-6)
     assert alt == pytest.approx(alt0 + 1.5)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.floats(-89.0, 89.0).filter(lambda d: abs(d) > 1e-3), st.integers(0, 1))
+def test_a_px4_home_sits_half_way_along_the_truths_step_so_its_truncation_is_unbiased(
+    sitl: ModuleType, degrees: float, as_longitude: int
+) -> None:
+    """PX4 sends the truth as int32(deg * 1e7), cut towards zero: a vehicle resting at a home
+    half-way along its step reads half a step short, as a flight's samples do on average, so the
+    show frame anchored on it is unbiased (bias = place in the step - 1/2)."""
+    value = sitl.px4_sih_degrees(degrees * (2.0 if as_longitude else 1.0))
+    assert struct.unpack("<f", struct.pack("<f", value))[0] == value  # SIH_LOC_*0 is a float32
+    steps = abs(value) * 1e7
+    assert abs(steps % 1.0 - 0.5) < 0.1  # at most a tenth of a step (1.1 mm) of bias
+    assert abs(value - degrees * (2.0 if as_longitude else 1.0)) < 40e-5  # within ~45 m
+    assert float(f"{value:.10f}") == pytest.approx(value, abs=1e-10)  # as PX4_HOME_LAT says it
+
+
+def test_px4_starts_at_its_home_half_way_along_the_truths_step(
+    sitl: ModuleType, tmp_path: Path
+) -> None:
+    inst = sitl.Instance("px4", 3, 9, sitl.home_lla((1.0, -1.2, 0.0)), tmp_path / "px4",
+                         tmp_path / "run", 24540)  # fmt: skip
+    _, env = sitl.command(inst)
+    for name in ("PX4_HOME_LAT", "PX4_HOME_LON"):
+        assert abs(abs(float(env[name])) * 1e7 % 1.0 - 0.5) < 0.1, env[name]
 
 
 def test_arducopter_listens_for_the_agent_on_the_show_port_and_for_start_py_on_serial2(

@@ -42,6 +42,10 @@ LOOPBACK_HOSTS = ("127.0.0.1", "localhost")
 REFERENCE_LLA = (-35.363261, 149.165230, 584.0)
 """Geodetic point (lat [deg], lon [deg], alt [m]) of the show frame's origin (ArduPilot's CMAC)."""
 EARTH_RADIUS_M = 6_378_137.0
+PX4_HOME_FLOAT32_STEPS = 16
+"""How many float32 steps (0.4 m north, 1.4 m east here) a PX4 home may move to sit half-way
+along the truth's 1e-7 degree step (:func:`px4_sih_degrees`); each vehicle simulates its own
+world, anchored on its own home."""
 MAX_INSTANCES = 20
 """Instance numbers tried, 0 .. 19: below it no two numbers' ports meet (ArduCopter's RC input
 5501 + 10*N stays under its serial ports 5760 + 10*N; PX4's probe 14560 + N under its 14580 + N)."""
@@ -286,6 +290,30 @@ def home_lla(home_m_enu: tuple[float, float, float]) -> tuple[float, float, floa
     return (lat, lon, alt0 + up)
 
 
+def px4_sih_degrees(value_deg: float) -> float:
+    """The latitude or longitude in [deg] nearest ``value_deg`` that PX4 SIH can start at and
+    whose truth is unbiased. SIH starts at its float32 SIH_LOC_LAT0/LON0 (PX4_HOME_LAT/LON);
+    PX4 sends the true position (HIL_STATE_QUATERNION) as ``int32(lat * 1e7)``, cut towards
+    zero (1.1 cm steps north, 0.9 cm east here), and the agent anchors the show frame on the
+    first sample at rest. A flight's samples then average half a step short of the truth, the
+    anchor short by where home lies in its step: together a fixed offset of up to half a step
+    per axis, which the mocap the autopilot flies and the job metrics share (in PX4's ULogs of
+    issue 31: 4-5 mm north on both vehicles, +1.6 and -2.0 mm east; predicted from the homes'
+    place in their steps 5.2 and -2.4 mm). A home half-way along its step takes it out: of the
+    float32 values within :data:`PX4_HOME_FLOAT32_STEPS` steps of ``value_deg``, the one whose
+    ``abs(value * 1e7)`` lies closest to half-way between two integers."""
+    half_way = math.copysign((math.floor(abs(value_deg) * 1e7) + 0.5) * 1e-7, value_deg)
+    candidates = [_float32(half_way)]  # exact enough where float32 steps are finer than 1e-7
+    here = struct.unpack("<i", struct.pack("<f", value_deg))[0]
+    candidates += [struct.unpack("<f", struct.pack("<i", here + k))[0]
+                   for k in range(-PX4_HOME_FLOAT32_STEPS, PX4_HOME_FLOAT32_STEPS + 1)]  # fmt: skip
+    return min(candidates, key=lambda v: (abs((abs(v) * 1e7) % 1.0 - 0.5), abs(v - value_deg)))
+
+
+def _float32(value: float) -> float:
+    return float(struct.unpack("<f", struct.pack("<f", value))[0])
+
+
 def binary_for(kind: Kind, explicit: str | None = None) -> Path:
     """The executable of ``kind``: ``explicit`` or its environment variable; SitlError if none."""
     value = explicit or os.environ.get(ENV_BINARY[kind], "")
@@ -324,8 +352,8 @@ def command(inst: Instance) -> tuple[list[str], dict[str, str]]:
     env.update(
         PX4_SIM_MODEL="sihsim_quadx",
         PX4_SIMULATOR="sihsim",
-        PX4_HOME_LAT=f"{lat:.7f}",
-        PX4_HOME_LON=f"{lon:.7f}",
+        PX4_HOME_LAT=f"{px4_sih_degrees(lat):.10f}",
+        PX4_HOME_LON=f"{px4_sih_degrees(lon):.10f}",
         PX4_HOME_ALT=f"{alt:.2f}",
         PX4_SYS_ID=str(inst.system_id),
         PX4_OFFBOARD_REMOTE_PORT=str(inst.agent_port),
