@@ -167,6 +167,15 @@ def test_every_length_comes_back_whole(length: int, text_id: int) -> None:
     assert state.take_texts() == [(WARNING, text)]
 
 
+def test_px4s_event_tab_never_reaches_the_operator() -> None:
+    """PX4 ends a text it also sends as an event with a tab; the refusal the operator reads
+    ended with it ("...health failures first\t")."""
+    state, _ = connected(mavlink.MAV_AUTOPILOT_PX4)
+    for message in chunks("Arming denied: Resolve system health failures first\t", 7):
+        state.absorb(message)
+    assert state.take_texts() == [(WARNING, "Arming denied: Resolve system health failures first")]
+
+
 def sys_status(prearm_good: bool) -> Any:
     """SYS_STATUS as PX4 sends it: the pre-arm bit in health only."""
     health = MAV_SYS_STATUS_PREARM_CHECK if prearm_good else 0

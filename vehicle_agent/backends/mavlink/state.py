@@ -344,12 +344,14 @@ class LinkState:
         self._keep_texts(whole)
         return bool(whole)
 
-    def _keep_texts(self, texts: list[tuple[int, str]]) -> None:
+    def _keep_texts(self, chunks_joined: list[tuple[int, str]]) -> None:
+        texts = [(severity, text.strip()) for severity, text in chunks_joined]
+        # PX4 ends the texts it also sends as events with a tab (Commander.cpp): "Arming denied:
+        # Resolve system health failures first\t" reached the operator's refusal message.
         self.texts.extend(texts)
         self.recent_texts.extend(texts)
         self.to_tell.extend(texts)
-        for _, text in texts:
-            said = text.strip()  # PX4 ends its event texts with a tab
+        for _, said in texts:
             if said.startswith(PREARM_EXPLANATIONS) or (
                 said.startswith(PREARM_DENIAL) and self.prearm_text is None
             ):
