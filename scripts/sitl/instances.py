@@ -45,7 +45,7 @@ EARTH_RADIUS_M = 6_378_137.0
 PX4_HOME_FLOAT32_STEPS = 16
 """How many float32 steps (0.4 m north, 1.4 m east here) a PX4 home may move to sit half-way
 along the truth's 1e-7 degree step (:func:`px4_sih_degrees`); each vehicle simulates its own
-world, anchored on its own home."""
+world, anchored on its own home, and fuses the mocap in the show frame."""
 MAX_INSTANCES = 20
 """Instance numbers tried, 0 .. 19: below it no two numbers' ports meet (ArduCopter's RC input
 5501 + 10*N stays under its serial ports 5760 + 10*N; PX4's probe 14560 + N under its 14580 + N)."""
@@ -300,14 +300,17 @@ def px4_sih_degrees(value_deg: float) -> float:
     per axis, which the mocap the autopilot flies and the job metrics share (in PX4's ULogs of
     issue 31: 4-5 mm north on both vehicles, +1.6 and -2.0 mm east; predicted from the homes'
     place in their steps 5.2 and -2.4 mm). A home half-way along its step takes it out: of the
-    float32 values within :data:`PX4_HOME_FLOAT32_STEPS` steps of ``value_deg``, the one whose
-    ``abs(value * 1e7)`` lies closest to half-way between two integers."""
+    float32 values within :data:`PX4_HOME_FLOAT32_STEPS` steps of ``value_deg``, the nearest
+    whose ``abs(value * 1e7)`` lies within a tenth of a step of half-way (a bias of at most
+    1.1 mm; at the show frame's origin the home moves by up to 3.5 m)."""
     half_way = math.copysign((math.floor(abs(value_deg) * 1e7) + 0.5) * 1e-7, value_deg)
     candidates = [_float32(half_way)]  # exact enough where float32 steps are finer than 1e-7
     here = struct.unpack("<i", struct.pack("<f", value_deg))[0]
     candidates += [struct.unpack("<f", struct.pack("<i", here + k))[0]
                    for k in range(-PX4_HOME_FLOAT32_STEPS, PX4_HOME_FLOAT32_STEPS + 1)]  # fmt: skip
-    return min(candidates, key=lambda v: (abs((abs(v) * 1e7) % 1.0 - 0.5), abs(v - value_deg)))
+    return min(
+        candidates, key=lambda v: (abs((abs(v) * 1e7) % 1.0 - 0.5) > 0.1, abs(v - value_deg))
+    )
 
 
 def _float32(value: float) -> float:
