@@ -65,6 +65,7 @@ class OrchestratorLink:
         self._clock = clock
         self.fleet_seen_s: float | None = None
         """``clock()`` when the last ``fleet`` snapshot arrived (None: never)."""
+        self._started_s = clock()
         self._watchers: dict[str, set[RingChannel[str]]] = {}
         """Ticket -> channels of the pages following it (woken with the ticket)."""
         self._follow_ups: set[asyncio.Task[None]] = set()
@@ -148,9 +149,13 @@ class OrchestratorLink:
             self._asking.discard(job_id)
 
     def stale(self, max_age_s: float) -> bool:
-        """No ``fleet`` snapshot for ``max_age_s``: the orchestrator or the bus is down."""
-        seen = self.fleet_seen_s
-        return seen is None or self._clock() - seen > max_age_s
+        """No ``fleet`` snapshot for ``max_age_s`` [s], counted from the link's start until the
+        first: the orchestrator or the bus is down. A kiosk just started has missed nothing yet;
+        said stale until its first snapshot, it told the first visitors "the show is slow to
+        answer" as their first ticket went in (a fresh-clone CI run, tests/test_kiosk_browser_
+        truth.py)."""
+        seen = self._started_s if self.fleet_seen_s is None else self.fleet_seen_s
+        return self._clock() - seen > max_age_s
 
     def apply(self, state: JobState) -> None:
         """Record a job state and wake the pages watching it (event-loop thread)."""

@@ -90,3 +90,18 @@ def test_a_followed_job_gone_from_the_fleet_snapshot_is_asked_for_and_ends_done(
 
 def test_a_job_still_listed_is_not_asked_for() -> None:
     assert _run(listed=True) == ("writing", 0)
+
+
+def test_a_kiosk_just_started_is_not_stale_until_it_missed_a_snapshot() -> None:
+    """Staleness counts from the link's start until the first ``fleet`` snapshot: a kiosk just
+    started has missed nothing, and its first visitors were told the show was slow."""
+    now = [100.0]
+    link = OrchestratorLink(None, KEYS, JobBook(), clock=lambda: now[0])  # type: ignore[arg-type]
+    assert not link.stale(2.0)
+    now[0] += 2.5  # no snapshot in 2.5 s: the orchestrator or the bus is down
+    assert link.stale(2.0)
+    link.fleet_seen_s = now[0]
+    now[0] += 1.0
+    assert not link.stale(2.0)
+    now[0] += 1.5
+    assert link.stale(2.0)
