@@ -24,20 +24,14 @@ class FoxgloveMessage(Protocol):
 
 def encoded(topic: str, message: FoxgloveMessage) -> DerivedMessage:
     """``message`` on ``topic`` in its Foxglove schema, protobuf-encoded as the SDK does."""
-    schema = message.get_schema()
-    return DerivedMessage(
-        topic=topic,
-        schema_name=schema.name,
-        schema_encoding=schema.encoding,
-        schema_data=bytes(schema.data),
-        message_encoding=schema.encoding,
-        payload=message.encode(),
-    )
+    return declared(topic, type(message), message.encode())
 
 
-def declared(topic: str, message_type: type[FoxgloveMessage]) -> DerivedMessage:
-    """``topic``'s channel as :func:`encoded` describes it for ``message_type``, with no message
-    (an empty payload): what a channel is opened from before anything is sent on it."""
+def declared(
+    topic: str, message_type: type[FoxgloveMessage], payload: bytes = b""
+) -> DerivedMessage:
+    """``topic``'s channel for ``message_type`` in its Foxglove schema, carrying ``payload``
+    (empty: no message, what a channel is opened from before anything is sent on it)."""
     schema = message_type.get_schema()
     return DerivedMessage(
         topic=topic,
@@ -45,7 +39,7 @@ def declared(topic: str, message_type: type[FoxgloveMessage]) -> DerivedMessage:
         schema_encoding=schema.encoding,
         schema_data=bytes(schema.data),
         message_encoding=schema.encoding,
-        payload=b"",
+        payload=payload,
     )
 
 

@@ -175,13 +175,15 @@ def test_the_lag_is_fitted_on_the_truth_when_the_backend_has_it() -> None:
         estimate = path(np.array([t - 0.07]), 0.3, 2.0, 0.0)[0]
         aid.truth.samples.append(TruthSample(t, tuple(truth), (0.0, 0.0, 0.0)))
         aid.sent(t, tuple(sent))
-        aid.measured(t, tuple(estimate), None)
+        aid.measured(t, tuple(estimate), aid.true_state(t), None)
     assert aid.lag.delay_s == pytest.approx(0.05, abs=0.004)
     stale = ResponseAid(MavlinkSettings(url="udpin:127.0.0.1:1", origin_m_enu=(0.0, 0.0, 0.0)))
     for k in range(400):
         t = k * DT_S
         stale.sent(t, tuple(path(np.array([t]), 0.3, 2.0, 0.0)[0]))
-        stale.measured(t, tuple(path(np.array([t - 0.07]), 0.3, 2.0, 0.0)[0]), None)
+        stale.measured(
+            t, tuple(path(np.array([t - 0.07]), 0.3, 2.0, 0.0)[0]), stale.true_state(t), None
+        )
     assert stale.lag.delay_s == pytest.approx(0.07, abs=0.004)
 
 
@@ -209,7 +211,8 @@ def test_the_lag_is_fitted_on_the_pen_tip_which_trails_a_vehicle_leaning_into_it
         lean = (lean_rad_per_mps * velocity[0], -lean_rad_per_mps * velocity[1], 0.0)
         aid.truth.samples.append(TruthSample(t, tuple(body), lean))
         aid.sent(t, tuple(path(np.array([t]), 0.3, 2.0, 0.0)[0]))
-        aid.measured(t, tuple(body), pen_reading(pen, tuple(body), None, aid.true_state(t)))
+        truth = aid.true_state(t)
+        aid.measured(t, tuple(body), truth, pen_reading(pen, tuple(body), None, truth))
     expected_s = 0.05 + (lever_m * lean_rad_per_mps if pressing else 0.0)
     assert aid.lag.delay_s == pytest.approx(expected_s, abs=0.004)
 

@@ -388,7 +388,7 @@ class MavlinkBackend:
         position, truth = self._position_m_enu(), self.aid.true_state(now_s)
         reading = pen_reading(self.pen, position, self.state.attitude_ned, truth)
         if measure:
-            self.aid.measured(now_s, position, reading)
+            self.aid.measured(now_s, position, truth, reading)
         asked = self.settings.fence is not None
         fence = fence_problem(asked, self.settings.set_params, self.params_set, self._flavor().name)
         losses = None if self._link is None else self._link.losses

@@ -89,12 +89,19 @@ class ResponseAid:
     def sent(self, now_s: float, position_m_enu: Vec3) -> None:
         self.lag.sent(now_s, position_m_enu)
 
-    def measured(self, now_s: float, estimate_m_enu: Vec3, reading: PenReading | None) -> None:
+    def measured(
+        self,
+        now_s: float,
+        estimate_m_enu: Vec3,
+        truth: TruthSample | None,
+        reading: PenReading | None,
+    ) -> None:
         """Where the pen writes, for the lag: the tip on the board as ``reading`` has it (the pen
         as :func:`~vehicle_agent.backends.mavlink.snapshot.pen_reading` read it this tick, for
-        the snapshot too), else the body (no pen, or the brush in the air); on the truth when
-        it is fresh (on PX4 1.16 SIH the autopilot's estimate trails it by 0.015-0.025 s, which
-        a fit on the estimate added to the lead), else on the autopilot's estimate.
+        the snapshot too), else the body (no pen, or the brush in the air): on ``truth``, the
+        caller's :meth:`true_state` this tick, when there is one (on PX4 1.16 SIH the
+        autopilot's estimate trails it by 0.015-0.025 s, which a fit on the estimate added to
+        the lead), else the estimate (``estimate_m_enu``, [m]).
 
         The tip on the board: a vehicle writing at a steady speed leans into its drag, and the
         brush pressed 0.3 m below trails its body. On ArduCopter 4.7 SITL (Airshow show, quiet,
@@ -103,7 +110,6 @@ class ResponseAid:
         worst 0.71 -> 0.74). The body in the air: a transit's acceleration swings the hanging
         brush by centimetres, which is no delay; fitted on it, mavsim's stiff loop was led by
         0.048 s and 一 went from 2.6 to 13.7 mm (tests/test_mavlink_e2e.py)."""
-        truth = self.true_state(now_s)
         body = estimate_m_enu if truth is None else truth.position_m_enu
         point = reading.tip_m_enu if reading is not None and reading.contact else body
         self.lag.measured(now_s, point)
