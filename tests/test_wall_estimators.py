@@ -49,9 +49,31 @@ def test_normal_observer_reads_the_tip_off_the_pen_spring() -> None:
         p, v = obs.update(-6.25e-3 + 2e-3 + 1e-3 * rng.standard_normal(), 0.0, force, 0.0)
     assert p == pytest.approx(-6.25e-3, abs=0.2e-3)
     assert abs(v) < 2e-3
-    assert obs.contact_position_m(0.1) is None
-    assert not obs.touching(0.1)
+    assert obs.touching
     assert obs.contact_position_m(0.4) == 0.0
+
+
+def test_normal_observer_tells_a_touch_from_noise_and_a_glitch() -> None:
+    """The touch flips after three readings in a row beyond 2.5 sigma (0.125 N): the world's
+    first F/T reading (0.53 N, one tick) is no touch, nor 20 s of free flight's 0.05 N noise;
+    a landing at 0.15 N is one from its third reading (the single reading above 0.25 N it
+    replaced missed it), a press at 0.25 N in that noise stays one, and a lift-off ends it
+    after three readings of nothing."""
+    params = HexarotorParams()
+    obs = NormalObserver(params, 0.01)
+    rng = np.random.default_rng(3)
+
+    def read(force_n: float) -> bool:
+        obs.update(0.0, 0.0, force_n, 0.0)
+        return obs.touching
+
+    assert not any(read(f) for f in [0.53, 0.0, 0.0, 0.0])
+    assert not any(read(0.05 * rng.standard_normal()) for _ in range(2000))
+    landing = [read(0.15) for _ in range(3)]
+    assert landing == [False, False, True]
+    assert all(read(0.25 + 0.05 * rng.standard_normal()) for _ in range(1000))
+    lift_off = [read(0.0) for _ in range(3)]
+    assert lift_off == [True, True, False]
 
 
 def test_disturbance_observer_finds_a_steady_push_behind_a_late_noisy_mocap() -> None:
