@@ -84,9 +84,20 @@ class Structure:
     """Flat index into the banded ``ab`` (4, n) of each entry of ``P``."""
 
 
-@lru_cache(maxsize=32)
+STRUCTURES_KEPT = 2
+"""Structures cached (the latest sizes): a plan's fit and its re-fits at the same size share
+one. Each holds 2.1 KiB per span (430 KiB at 200 spans, 10.7 MiB at 5000) and costs 0.2 ms to
+build at 50 spans, 0.3 ms at 200, 1 ms at 1000; an Airshow plan fits once, at a size of its
+own (36-225 spans). The 32 kept before held 14.4 MiB of a planning worker's heap after 300
+distinct characters (``benchmarks/bench_worker_memory.py --distinct 300``: 62 MiB anonymous,
+48 MiB with 2 kept) and hit 121 times in 200 jobs, each hit saving under 1 ms of a job's
+50-120 ms CPU: a kept worker holds what it reuses, not every size it once planned."""
+
+
+@lru_cache(maxsize=STRUCTURES_KEPT)
 def structure(n_spans: int, with_speed: bool) -> Structure:
-    """The rows (acceleration, then speed if ``with_speed``) and cost pattern of ``n_spans``."""
+    """The rows (acceleration, then speed if ``with_speed``) and cost pattern of ``n_spans``
+    (the latest :data:`STRUCTURES_KEPT` cached)."""
     n = n_spans + 3
     acc = kron(np.eye(3), acceleration_operator(n_spans))
     blocks = [acc]
