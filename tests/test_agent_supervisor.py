@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 import pytest
+from processes import running
 
 from bus.keys import ShowKeys
 from bus.messages import AIRBORNE_STATES
@@ -230,14 +231,6 @@ def _children_of(pid: int) -> set[int]:
     return found
 
 
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    return True
-
-
 @pytest.mark.multiprocess
 @pytest.mark.slow
 @pytest.mark.timeout(120)
@@ -284,5 +277,5 @@ def test_skyquill_up_runs_a_show_and_stops_every_process_on_ctrl_c(tmp_path: Pat
     assert "skyquill up: stopping" in stderr and "killing" not in stderr  # landing first
     assert "skyquill up: stopped 3 processes" in stderr
     assert "uav1 is in the air. Ctrl-C again" in stderr
-    assert not [pid for pid in children if _alive(pid)]
+    assert not [pid for pid in children if running(pid)]
     assert not run_file_path(show.database_path).exists()

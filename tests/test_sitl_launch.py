@@ -4,8 +4,11 @@ processes themselves run in tests/test_sitl_side_by_side.py and the conformance 
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import re
+import signal
 import socket
 import struct
 import subprocess
@@ -19,7 +22,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from module_by_path import load_module
-from test_sitl_side_by_side import with_ports
+from processes import running
+from test_sitl_side_by_side import free_ports, with_ports
 
 from vehicle_agent.backends.mavlink.params import PX4_DELAY_MAX_MS, mocap_params
 
@@ -406,3 +410,41 @@ def test_an_arducopter_show_port_in_use_is_named_before_anything_starts(
     binaries = {"ardupilot": str(binary), "px4": None}
     with pytest.raises(launch.SitlError, match=rf"uav1: tcp:127\.0\.0\.1:{busy} is in use"):
         launch.show_instances(tmp_path / "show.yaml", tmp_path / "run", binaries)
+
+
+@pytest.mark.parametrize("stop_signal", [signal.SIGINT, signal.SIGTERM])
+def test_start_py_stops_its_instances_on_a_signal_even_when_started_with_sigint_ignored(
+    tmp_path: Path, stop_signal: int
+) -> None:
+    """A start.py started in the background of a script inherits SIGINT ignored, and Python
+    then sets no handler of its own: ``kill -INT`` left it and its SITL instances running
+    (tests/test_sitl_side_by_side.py, from a background shell). Here its two instances are fake
+    ArduCopters that never answer, so it is still waiting for them when the signal comes."""
+    binary = copter_binary(tmp_path)
+    ports = free_ports("tcp", 2)
+    text, count = with_ports((ROOT / "shows" / "sitl-ardupilot.yaml").read_text(), ports)
+    assert count == 2
+    (tmp_path / "show.yaml").write_text(text)
+    proc = subprocess.Popen(
+        [sys.executable, str(START_PY), str(tmp_path / "show.yaml"), "--run-dir",
+         str(tmp_path / "run"), "--arducopter", str(binary), "--ready-timeout", "60"],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN),
+    )  # fmt: skip
+    assert proc.stdout is not None
+    pids: list[int] = []
+    try:
+        started = [proc.stdout.readline() for _ in range(2)]
+        assert all("ardupilot instance" in line for line in started), started
+        pids = [int(pid) for pid in re.findall(r"pid (\d+)", "".join(started))]
+        assert len(pids) == 2, started
+        proc.send_signal(stop_signal)
+        out, _ = proc.communicate(timeout=30)
+        left_running = [pid for pid in pids if running(pid)]
+    finally:  # nothing left running whatever failed
+        for pid in [proc.pid, *pids]:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
+    assert proc.returncode == 0, out
+    assert "stopped 2 instance(s)" in out
+    assert left_running == []

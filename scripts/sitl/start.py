@@ -232,11 +232,23 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+"""What stops the instances. SIGINT too, explicitly: a process started in the background of a
+script (``start.py &``, ``nohup``, a test's or a benchmark's child of one) inherits SIGINT
+ignored, and Python then sets no handler of its own: ``kill -INT`` left start.py and its SITL
+instances running (tests/test_sitl_side_by_side.py, run from a background shell)."""
+
+
+def _interrupt(_signum: int, _frame: object) -> None:
+    raise KeyboardInterrupt
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     run_dir = args.run_dir or Path("out") / f"{args.show.stem}-sitl"
     procs: list[subprocess.Popen[bytes]] = []
-    signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt))
+    for signum in STOP_SIGNALS:
+        signal.signal(signum, _interrupt)
     try:
         pairs = show_instances(
             args.show,
