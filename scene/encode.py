@@ -45,13 +45,21 @@ def declared(
 
 def json_encoded(topic: str, name: str, schema: dict[str, Any], value: Any) -> DerivedMessage:
     """A JSON message with its JSON schema (plot series: Foxglove plots any numeric field)."""
+    return json_declared(topic, name, schema, json.dumps(value, separators=(",", ":")).encode())
+
+
+def json_declared(
+    topic: str, name: str, schema: dict[str, Any], payload: bytes = b""
+) -> DerivedMessage:
+    """``topic``'s channel for JSON messages of ``schema`` named ``name``, carrying ``payload``
+    (empty: no message, as :func:`declared`)."""
     return DerivedMessage(
         topic=topic,
         schema_name=name,
         schema_encoding="jsonschema",
         schema_data=json.dumps(schema, sort_keys=True).encode(),
         message_encoding="json",
-        payload=json.dumps(value, separators=(",", ":")).encode(),
+        payload=payload,
     )
 
 

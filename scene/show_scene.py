@@ -10,14 +10,13 @@ paths, events become log lines, and the fixed venue is sent again every
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import replace
 
 import foxglove.messages as fg
 import msgspec
 
 from bus.mcap_channels import DerivedMessage
 from bus.messages import Event, Telemetry
-from scene.encode import declared, encoded, json_encoded, timestamp
+from scene.encode import declared, encoded, json_declared, json_encoded, timestamp
 from scene.models import vehicle_models
 from scene.vehicles import JobPaths, transforms
 from scene.venue import venue_update
@@ -58,8 +57,7 @@ def scene_channels() -> list[DerivedMessage]:
         LOG_TOPIC: fg.Log,
     }
     channels = [declared(topic, message_type) for topic, message_type in protobuf.items()]
-    plot = json_encoded(PLOT_TOPIC, PLOT_SCHEMA_NAME, PLOT_SCHEMA, None)
-    return [*channels, replace(plot, payload=b"")]
+    return [*channels, json_declared(PLOT_TOPIC, PLOT_SCHEMA_NAME, PLOT_SCHEMA)]
 
 
 class ShowScene:
