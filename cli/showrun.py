@@ -178,16 +178,20 @@ def snapshot(session: Session, keys: ShowKeys, *, timeout_s: float = 5.0) -> Sho
 
 
 class Stagehand:
-    """Replaces the sheet of every board a lost or stopped vehicle left half-written, or whose
-    character a visitor takes away (``sheets: per_character``), with the operator's
-    ``fresh_sheet``, as the crew would at a show; a thread, for tests and the demo. ``replaced``
-    lists the boards in order."""
+    """The show's crew, as at the Airshow: replaces the sheet of every board a lost or stopped
+    vehicle left half-written, or whose character a visitor takes away (``sheets:
+    per_character``), with the operator's ``fresh_sheet``, and puts a fresh battery in every
+    vehicle waiting for one (``battery_swapped``: a simulated vehicle's pack is full again); a
+    thread, for tests, benchmarks and the demo. ``replaced`` lists the boards in order,
+    ``swapped`` the vehicles. Without the batteries a soak at time scale 4 stood still after
+    10 minutes, all four vehicles waiting for a swap (issue 35's hour)."""
 
     def __init__(self, session: Session, keys: ShowKeys, *, period_s: float = 0.3) -> None:
         self._session, self._keys, self._period_s = session, keys, period_s
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="stagehand", daemon=True)
         self.replaced: list[str] = []
+        self.swapped: list[str] = []
 
     def __enter__(self) -> Stagehand:
         self._thread.start()
@@ -200,15 +204,23 @@ class Stagehand:
     def _run(self) -> None:
         while not self._stop.wait(self._period_s):
             try:
-                for board_id in _crews_boards(snapshot(self._session, self._keys, timeout_s=2.0)):
-                    command = OperatorCommand(
-                        command="fresh_sheet", board_id=board_id, operator="stagehand"
-                    )
-                    reply = query_one(self._session, self._keys.command, command, CommandReply)
-                    if reply.ok:
+                shown = snapshot(self._session, self._keys, timeout_s=2.0)
+                for board_id in _crews_boards(shown):
+                    if self._ask(OperatorCommand(command="fresh_sheet", board_id=board_id,
+                                                 operator="stagehand")):  # fmt: skip
                         self.replaced.append(board_id)
+                for vehicle in shown.vehicles:
+                    if vehicle.state == "battery_swap" and self._ask(OperatorCommand(
+                        command="battery_swapped", vehicle_id=vehicle.vehicle_id,
+                        operator="stagehand",
+                    )):  # fmt: skip
+                        self.swapped.append(vehicle.vehicle_id)
             except (NoReplyError, RemoteError):
                 continue  # the orchestrator is restarting
+
+    def _ask(self, command: OperatorCommand) -> bool:
+        """Send one crew command; whether the orchestrator took it."""
+        return query_one(self._session, self._keys.command, command, CommandReply).ok
 
 
 def wait_for_jobs(
