@@ -13,10 +13,10 @@ import pytest
 from test_orchestrator_service import (
     RunningOrchestrator,
     _snapshot,
+    _snapshot_when_up,
     _submit,
     client,  # noqa: F401 (fixture)
     endpoint,  # noqa: F401 (fixture)
-    eventually,
     make_show,
 )
 from test_orchestrator_store import _job
@@ -110,7 +110,7 @@ def test_a_nearly_full_disk_refuses_new_characters_and_keeps_those_taken(
     show = show.model_copy(update={"storage": storage})
     keys = ShowKeys(show.show_id)
     with RunningOrchestrator(show):
-        eventually(lambda: _snapshot(client, keys))
+        _snapshot_when_up(client, keys)
         taken = _submit(client, keys, SubmitRequest(text="L"))
         assert taken.ok
         ballast = _fill(own_disk, leave_bytes=2 * 1024**2)
@@ -123,5 +123,5 @@ def test_a_nearly_full_disk_refuses_new_characters_and_keeps_those_taken(
         again = _submit(client, keys, SubmitRequest(text="M"))
         assert again.ok
     with RunningOrchestrator(show):  # restarted: what was acknowledged is all there
-        jobs = {j.job_id for j in _snapshot(client, keys).jobs}
+        jobs = {j.job_id for j in _snapshot_when_up(client, keys).jobs}
         assert jobs == {taken.job_id, again.job_id}
