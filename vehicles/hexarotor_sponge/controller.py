@@ -255,13 +255,19 @@ class HybridController:
         return ControlOutput(self.allocator.allocate(wrench), f_hat)
 
     def _acceleration_mps2(self, meas: Measurement) -> FloatArray:
-        """The vehicle's acceleration (3,) in [m/s^2], world ENU: the base's momentum under the
-        last command, the arm's pull (the F/T reading, contact included) and the disturbance
-        observer's unknown force of the last tick, over the base's mass."""
-        force = self.last_command_n_enu + meas.rotation_body_to_enu @ meas.ft_force_n_sensor
-        if self.disturbance is not None:
-            force = force + self.disturbance.force_n
-        return np.asarray(force / self.params.base_mass_kg + _GRAVITY_ENU)
+        """The vehicle's acceleration (3,) in [m/s^2], world ENU: what the known forces give
+        (:meth:`_known_acceleration_mps2`) and the disturbance observer's unknown force of the
+        last tick over the base's mass."""
+        known = self._known_acceleration_mps2(meas, meas.rotation_body_to_enu)
+        if self.disturbance is None:
+            return known
+        return known + self.disturbance.force_n / self.params.base_mass_kg
+
+    def _known_acceleration_mps2(self, meas: Measurement, rot: FloatArray) -> FloatArray:
+        """The base's acceleration (3,) in [m/s^2], world ENU, under the last command and the
+        arm's pull (the F/T reading, contact included), with gravity."""
+        arm = rot @ meas.ft_force_n_sensor
+        return np.asarray((self.last_command_n_enu + arm) / self.params.base_mass_kg + _GRAVITY_ENU)
 
     def _unknown_force_n(self, meas: Measurement, rot: FloatArray) -> FloatArray:
         """The force (3,) in [N], world ENU, on the vehicle that neither the last command nor
@@ -272,8 +278,7 @@ class HybridController:
         force RMSE: the force feedback sees that disturbance already)."""
         if self.disturbance is None:
             return np.zeros(3)
-        arm = rot @ meas.ft_force_n_sensor
-        known = (self.last_command_n_enu + arm) / self.params.base_mass_kg + _GRAVITY_ENU
+        known = self._known_acceleration_mps2(meas, rot)
         return self.disturbance.update(meas.base_m_enu, meas.velocity_mps_enu, known)
 
     def _observed_normal_errors(
