@@ -3,6 +3,7 @@
     python benchmarks/bench_memory.py                  # 10 minutes at time scale 4
     python benchmarks/bench_memory.py --minutes 3
     python benchmarks/bench_memory.py --fleet-hosts 1     # the vehicles in one fleet host
+    python benchmarks/bench_memory.py --minutes 60 --png out/bench/memory.png
 
 Runs ``shows/airshow-2014.yaml`` (router, orchestrator, four simulated agents and their planning
 workers, real Zenoh on loopback) and keeps ``--waiting`` characters waiting. It samples every
@@ -16,8 +17,11 @@ process of the show (the supervisor's children and theirs, e.g. an agent's plann
 
 Printed: the table when every vehicle first reports ready (``ready``: are the workers there
 already, warm?), at the end, the peak, and the least-squares slope of each after ``--warmup-s``
-in MiB/hour; the totals the same way, then the totals of RSS and PSS against the target of
-1 GiB (ratios) and the machine's load over the run. A drawing process (a child of a planning
+in MiB/hour, beside the slope of the run's second half (``late``: a process that keeps a bounded
+history, like the orchestrator's latest finished jobs, grows until it is full and is flat after);
+the totals the same way, then the totals of RSS and PSS against the target of 1 GiB (ratios) and
+the machine's load over the run. ``--png`` draws the totals and the long-lived processes over
+the run. A drawing process (a child of a planning
 worker, ``vehicle_agent/picture_process.py``) is counted in ``all together`` while it runs, and
 left out of ``long-lived``, whose slope is the one a leak shows in. ``bench_soak.py`` is the
 long run (disk, pictures).
@@ -129,27 +133,35 @@ def slope_mib_per_h(points: list[tuple[float, int]], after_s: float) -> float | 
     return fit.slope * 3600.0 / 1024.0
 
 
+def late_s(series: Series, warmup_s: float) -> float:
+    """Where the run's second half starts, after the warm-up [s since ready]."""
+    end_s = series.points[(ALL, "rss")][-1][0] if series.points else 0.0
+    return (max(warmup_s, 0.0) + end_s) / 2.0
+
+
 def report(series: Series, warmup_s: float) -> None:
-    """One line per process: ready / end / peak / slope of RSS, PSS and anonymous memory."""
+    """One line per process: ready / end / peak / slope (after the warm-up, and in the second
+    half) of RSS, PSS and anonymous memory."""
     names = list(dict.fromkeys(name for name, _ in series.points))
     names.sort(key=lambda n: n in TOTALS)
-    heads = "".join(f" {m.upper():>5}: ready   end  peak   slope/h" for m in MEASURES)
+    half_s = late_s(series, warmup_s)
+    heads = "".join(f" {m.upper():>5}: ready   end  peak   slope/h    late/h" for m in MEASURES)
     print(f"  {'process':20}{heads}")
     for name in names:
         cells = []
         for measure in MEASURES:
             points = series.points.get((name, measure), [])
             if not points:
-                cells.append(f" {'':5}  {'-':>5} {'':5} {'':5} {'':9}")
+                cells.append(f" {'':5}  {'-':>5} {'':5} {'':5} {'':9} {'':9}")
                 continue
             ready = series.at_ready.get((name, measure))
             # a process that comes and goes has no trend: its samples are other processes
             gone = len(points) < len(series.load_1min)
-            slope = None if gone else slope_mib_per_h(points, warmup_s)
+            slopes = [None if gone else slope_mib_per_h(points, s) for s in (warmup_s, half_s)]
             cells.append(
                 f" {'':5}  {'-' if ready is None else f'{ready / 1024:.0f}':>5}"
                 f" {points[-1][1] / 1024:5.0f} {max(v for _, v in points) / 1024:5.0f}"
-                f" {'-' if slope is None else f'{slope:+7.1f}':>9}"
+                + "".join(f" {'-' if s is None else f'{s:+7.1f}':>9}" for s in slopes)
             )
         print(f"  {name:20}" + "".join(cells))
 
@@ -164,12 +176,14 @@ def verdict(series: Series, warmup_s: float) -> None:
         end_mib, peak_mib = points[-1][1] / 1024, max(v for _, v in points) / 1024
         kept = [v / 1024 for t, v in points if t >= warmup_s] or [end_mib]
         slope = slope_mib_per_h(points, warmup_s)
+        late = slope_mib_per_h(points, late_s(series, warmup_s))
         print(
             f"  {measure.upper()} {total:12} against {TARGET_MIB:.0f} MiB: end {end_mib:.0f}"
             f" ({end_mib / TARGET_MIB:.2f}), peak {peak_mib:.0f} ({peak_mib / TARGET_MIB:.2f}),"
             f" mean after {warmup_s:.0f} s {statistics.fmean(kept):.0f}"
             f" ({statistics.fmean(kept) / TARGET_MIB:.2f}), slope"
             f" {'-' if slope is None else f'{slope:+.0f} MiB/h'}"
+            f" (second half {'-' if late is None else f'{late:+.0f} MiB/h'})"
         )
     if series.load_1min:
         loads = series.load_1min
@@ -177,6 +191,38 @@ def verdict(series: Series, warmup_s: float) -> None:
             f"  load (1 min) over the samples: min {min(loads):.1f},"
             f" mean {statistics.fmean(loads):.1f}, max {max(loads):.1f}"
         )
+
+
+def figure(series: Series, path: Path) -> None:
+    """RSS over the run: the totals, and each long-lived process (PSS total dashed)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax_total, ax_each) = plt.subplots(1, 2, figsize=(12.8, 4.8))
+    for (name, measure), points in series.points.items():
+        transient = len(points) < len(series.load_1min)  # drawing processes come and go
+        if measure == "anon" or transient or (measure == "pss" and name not in TOTALS):
+            continue
+        minutes = [t / 60.0 for t, _ in points]
+        mib = [v / 1024 for _, v in points]
+        if name in TOTALS:
+            ax_total.plot(
+                minutes, mib, "--" if measure == "pss" else "-", label=f"{name} {measure}"
+            )
+        else:
+            ax_each.plot(minutes, mib, label=name)
+    ax_total.axhline(TARGET_MIB, color="red", linewidth=0.8, label="target 1 GiB")
+    for ax, title in ((ax_total, "the show together"), (ax_each, "long-lived processes (RSS)")):
+        ax.set(xlabel="minutes since every vehicle was ready", ylabel="MiB", title=title)
+        ax.legend(fontsize=7)
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    print(f"  figure: {path}")
 
 
 def run(args: argparse.Namespace, out_dir: Path) -> tuple[Series, Jobs]:
@@ -222,6 +268,7 @@ def main() -> int:
         " workers (0, the Airshow's: an agent and a worker per vehicle)",
     )
     parser.add_argument("--warmup-s", type=float, default=120.0, help="slopes after this (120 s)")
+    parser.add_argument("--png", type=Path, help="draw the memory over the run here")
     args = parser.parse_args()
     load_before = os.getloadavg()[0]
     with tempfile.TemporaryDirectory() as tmp:
@@ -235,6 +282,8 @@ def main() -> int:
     )
     report(series, args.warmup_s)
     verdict(series, args.warmup_s)
+    if args.png:
+        figure(series, args.png)
     return 0
 
 
