@@ -16,25 +16,32 @@ router and orchestrator, mutual TLS, keys made for it), the first run ("cold") a
 least of the others ("warm"), every case with one OpenBLAS thread (as ``plan`` asks), beside peers
 run in turn with the commands (a change of load on a shared machine falls on every case): the
 interpreter alone, and the imports each command cannot do without (``numpy`` + ``piqp``: the
-arrays and the QP solver, as a plan imports no SciPy; ``yaml`` + ``zenoh`` + ``msgspec``: the
-show file, the bus and its messages); the ratio is each command's warm wall time to that
-peer's. Each case runs twice: with the environment's bytecode setting (sessions here have
-``PYTHONDONTWRITEBYTECODE=1``: every project module is compiled on every run) and with bytecode
-cached (``PYTHONPYCACHEPREFIX`` in a temporary folder, written by the first run), as an installed
-``skyquill`` has it.
+arrays and the QP solver, as a plan imports no SciPy, with ``numpy`` alone beside it: a plan that
+solves no QP, as the default plans of 永, A and 国, loads no PIQP; ``yaml`` + ``zenoh`` +
+``msgspec``: the show file, the bus and its messages); the ratio is each command's warm wall
+time to that peer's. Each case runs twice: with the environment's bytecode setting (sessions here
+have ``PYTHONDONTWRITEBYTECODE=1``: every project module is compiled on every run) and with
+bytecode cached (``PYTHONPYCACHEPREFIX`` in a temporary folder, written by the first run), as an
+installed ``skyquill`` has it.
 ``--imports`` prints what each command imports, grouped, from ``python -X importtime``, which
 leaves out the modules imported by ``importlib.import_module`` (the subcommand's ``cli/cmd_*.py``,
 the kind's module) and lists only what they import.
 
-Where ``plan``'s time goes beyond the peer (2026-11-29, bytecode cached, in-process, load 2.7-4,
-beside a C++ build; the peer ``import numpy, piqp`` 0.104 s, the plan 0.157-0.182 s, ratio
-1.5-1.9 over runs of 15-31): the project's imports, about 45 ms, of which the brush's settings
-import its controller and simulated world (about 10 ms) that a plan does not use; building the
-52 dataclasses (``dataclasses`` compiles each one's methods) 38-62 ms of the 96-124 ms after
-numpy; argparse 4 ms; the plan itself 14-20 ms; the run's garbage collections 10-14 ms; the
-interpreter's teardown 40-47 ms, which the peer pays too. ``cli/main.py`` no longer imports
-``logging`` (6 ms for every command). The editable install's path finder (``.pth``) costs every
-interpreter 11 ms, the peer's included.
+Where ``plan``'s time goes beyond the peer (2026-11-30, 永, bytecode cached; instructions counted by
+``valgrind --tool=callgrind``, which no load on this shared machine changes; at about 0.2 ms per
+million): the peer ``import numpy, piqp`` 404 M (numpy alone 397 M, the interpreter alone 90 M), the
+plan 656 M: 1.62 times the peer's (798 M, 1.97 times, before issue 35: the brush's plan loaded the
+kinds' interface and its flight settings, the controller and simulated world, and PIQP though it
+solved no QP). Beyond numpy: argparse and the command's module (``json``, ``dataclasses``, the
+limits, the kinds' records) 32 M, building and reading the parser (argparse loads ``shutil`` and
+``locale`` there) 15 M, the glyph and its store 16 M, the brush's planning module, the surface and
+the summary 9 M, the planner's modules 114 M (``planner.trajectory`` and what it imports 30 M,
+``planner.fit_qp`` 42 M, the rest of ``planner.pipeline`` 42 M), the plan and its summary 75 M. The
+26 dataclasses built (about 4 M each: ``dataclasses`` compiles six methods of a frozen one from
+source) are about 107 M of it; 4 of them these plans never make (``QpData``, ``QpSolution``,
+``PreparedPlan``, ``LatinChar``). Garbage collection: 16 M (the peer 14 M); the teardown: 39 M (the
+peer 33 M). ``cli/main.py`` no longer imports ``logging`` (6 ms for every command). The editable
+install's path finder (``.pth``) costs every interpreter 11 ms, the peer's included.
 
 Figures (2026-11-26, shared 2-core machine, warm median / least wall). Plan, at load 1.0-1.4 (7
 runs): 永 0.55 / 0.36 s with bytecode not written, 0.39 / 0.29 s cached; A 0.56 / 0.40 and 0.42 /
@@ -200,6 +207,7 @@ def plan_cases(texts: list[str]) -> dict[str, list[str]]:
     return {
         **plans,
         "peer: python -c pass": [py, "-c", "pass"],
+        "peer: import numpy": [py, "-c", "import numpy"],
         PLAN_PEER: [py, "-c", "import numpy, piqp"],
         "peer: import planner.pipeline": [py, "-c", "import planner.pipeline"],
     }

@@ -1,7 +1,9 @@
 """``skyquill plan``: strokes file or text -> checked minimum-jerk trajectory (TRAJ.json, plot).
 
 ``--kind`` plans for another vehicle kind through its room (:mod:`cli.plan_kind`); the options
-marked [brush] are the brush quadrotor's own and refused for another kind. The character is laid
+marked [brush] are the brush quadrotor's own and refused for another kind. The brush quadrotor
+plans as its kind plans (:mod:`vehicles.quadrotor_brush.planning`), without building the
+settings of its flight (world, controller), which a plan does not read. The character is laid
 out as ``skyquill fly`` lays it (:mod:`cli.writing_args`). Prints a human summary with the
 verdict ``feasible: yes/no`` (:mod:`cli.summary`); ``--json`` the same facts as one JSON line."""
 
@@ -14,7 +16,7 @@ import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from cli.writing_args import (
     add_area_arguments,
@@ -30,6 +32,9 @@ from planner import defaults
 from planner.limits import VehicleLimits
 from vehicles import DEFAULT_KIND
 from vehicles.quadrotor_brush import KIND_NAME as BRUSH_KIND
+
+if TYPE_CHECKING:
+    from planner.options import PlanOptions
 
 NAME = "plan"
 HELP = "Plan a flyable minimum-jerk writing trajectory for a strokes file or text."
@@ -199,12 +204,12 @@ def _add_planner_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _settings(args: argparse.Namespace, base: Any) -> Any:
-    """The brush quadrotor's settings ``base`` (a show file's defaults) with this run's limits
-    and planner options."""
-    from dataclasses import replace
-
+def _plan_options(args: argparse.Namespace) -> PlanOptions:
+    """The brush quadrotor's planner options with this run's limits and options, the others
+    those of a show file left at its defaults (``PlanOptions()``, as the kind's settings have
+    them without a show)."""
     from planner.limits import GRAVITY_MPS2
+    from planner.options import PlanOptions
 
     a_max = args.a_max or list(VehicleLimits().a_max_mps2)
     if len(a_max) == 1:
@@ -219,8 +224,7 @@ def _settings(args: argparse.Namespace, base: Any) -> Any:
         thrust_max_n=thrust,
         body_rate_max_radps=args.body_rate_max,
     )
-    plan = replace(
-        base.plan,
+    return PlanOptions(
         limits=limits,
         write_height_m=args.write_height,
         clearance_m=args.clearance,
@@ -233,7 +237,6 @@ def _settings(args: argparse.Namespace, base: Any) -> Any:
         method=args.method,
         sample_rate_hz=args.rate,
     )
-    return replace(base, plan=plan)
 
 
 def _one_blas_thread() -> None:
@@ -252,37 +255,34 @@ def run(args: argparse.Namespace) -> int:
 
         return run_kind(args)
     from planner.errors import PlannerError
-    from planner.trajectory import PlannedTrajectory
-    from vehicles.jobs import plan_glyph
-    from vehicles.registry import vehicle_kind
+    from planner.glyphs import fit_to_area
+    from vehicles.quadrotor_brush.planning import plan_on_surface
     from vehicles.surface import Surface
 
     source = source_of(args)
-    kind = vehicle_kind(BRUSH_KIND)
     try:
-        glyph = read_glyph(args)
-        settings = _settings(args, kind.settings(None, None))
+        width_m, height_m = area_of(args)
+        glyph = fit_to_area(
+            read_glyph(args), width_m=width_m, height_m=height_m, margin_m=args.margin
+        )
         centre = tuple(args.board_center or (0.0, 0.0, 0.0))
         surface = Surface.of("horizontal", centre, math.radians(args.board_yaw_deg))
-        job = plan_glyph(kind, settings, surface, glyph, area_of(args), args.margin)
+        traj = plan_on_surface(glyph.strokes, surface, _plan_options(args))
     except (PlannerError, ValueError) as exc:
         return print_error(PROG, source, exc)
-    traj = job.plan.detail
-    if not isinstance(traj, PlannedTrajectory):
-        raise TypeError(f"the {kind.name} plan holds no planner trajectory")
     try:
         if args.out:
             Path(args.out).write_text(json.dumps(traj.to_json_dict(args.rate)), encoding="utf-8")
         if args.plot:
             from planner.plots import plot_trajectory
 
-            plot_trajectory(traj, job.glyph.strokes).savefig(args.plot, dpi=100)
+            plot_trajectory(traj, glyph.strokes).savefig(args.plot, dpi=100)
     except OSError as exc:
         return cannot_write(PROG, exc)
     if args.json:
-        print(json.dumps(_summary_json(job.glyph, traj), ensure_ascii=False))
+        print(json.dumps(_summary_json(glyph, traj), ensure_ascii=False))
     else:
-        print("\n".join(summary_lines(job.glyph, traj)))
+        print("\n".join(summary_lines(glyph, traj)))
     return 0
 
 

@@ -10,7 +10,9 @@ PIQP's dense interface (:class:`PiqpDenseBackend`) to numpy arrays, so a process
 small QPs densely never loads SciPy. Every backend returns the primal solution and the net
 multiplier ``z = z_upper - z_lower`` of each row of ``G`` (positive when the upper bound is active)
 so that ``P x + c + A^T y + G^T z + z_box = 0``. Solver errors become :class:`QpSolverError`.
-A backend object may keep its factorisation pattern between calls (PIQP ``update``).
+A backend object may keep its factorisation pattern between calls (PIQP ``update``). Each
+backend imports its solver on its first solve, not when it is made: a default plan makes one and
+often solves no QP (the closed form meets the limits: 永, A and 国 at the CLI's defaults).
 """
 
 from __future__ import annotations
@@ -126,9 +128,6 @@ class PiqpBackend:
     name = "piqp"
 
     def __init__(self) -> None:
-        import piqp
-
-        self._piqp = piqp
         self._solver: Any = None
         self._pattern: tuple[CooMatrix, CooMatrix, CooMatrix] | None = None
 
@@ -141,7 +140,8 @@ class PiqpBackend:
         )
 
     def solve(self, qp: QpData) -> QpSolution:
-        piqp = self._piqp
+        import piqp
+
         start = time.perf_counter()
         args = (
             _csc(qp.P_upper),
@@ -176,13 +176,9 @@ class PiqpDenseBackend:
 
     name = "piqp"
 
-    def __init__(self) -> None:
+    def solve(self, qp: QpData) -> QpSolution:
         import piqp
 
-        self._piqp = piqp
-
-    def solve(self, qp: QpData) -> QpSolution:
-        piqp = self._piqp
         start = time.perf_counter()
         solver = piqp.DenseSolver()
         solver.settings.verbose = False

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -12,7 +12,9 @@ from planner.board import BoardFrame
 from planner.bspline import ClampedCubicSpline, FloatArray, IntArray
 from planner.feasibility import FeasibilityReport
 from planner.limits import VehicleLimits
-from planner.samples import BoolArray, TrajectorySamples
+
+if TYPE_CHECKING:
+    from planner.samples import BoolArray, TrajectorySamples
 
 TRAJ_FORMAT = "skyquill.traj/1"
 
@@ -79,6 +81,8 @@ class PlannedTrajectory:
 
     def sample(self, rate_hz: float = 100.0) -> TrajectorySamples:
         """The reference at a fixed rate (the last sample is exactly at the end, at rest)."""
+        from planner.samples import TrajectorySamples  # here: a plan only reported is not sampled
+
         t = self.sample_times(rate_hz)
         p, v, a, _ = self.evaluate(t)
         return TrajectorySamples(t, p, v, a, self.pen_down(t))

@@ -1,6 +1,6 @@
 """The brush quadrotor over a horizontal board (Airshow, Phang et al. 2015) as a vehicle kind.
 
-Plans with the Airshow planner (:func:`planner.pipeline.plan_strokes`), flies in its own world
+Plans with the Airshow planner (:mod:`vehicles.quadrotor_brush.planning`), flies in its own world
 (:mod:`vehicles.quadrotor_brush.world`) under its RPT controller
 (:mod:`vehicles.quadrotor_brush.control`), scores tracking at the writing point and the ink IoU
 (:mod:`vehicles.quadrotor_brush.metrics`) and draws ``report.png``
@@ -14,12 +14,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from planner.board import BoardFrame
 from planner.samples import TrajectorySamples
 from vehicles.kind import (
     AutopilotWorld,
@@ -30,6 +28,7 @@ from vehicles.kind import (
     WritingScore,
 )
 from vehicles.quadrotor_brush import KIND_NAME
+from vehicles.quadrotor_brush.planning import board_of, plan_on_surface
 from vehicles.quadrotor_brush.settings import QuadrotorSettings, quadrotor_settings
 from vehicles.surface import Orientation, Surface, Vec3
 
@@ -38,12 +37,6 @@ if TYPE_CHECKING:
 
     from showfile.models import Show
     from vehicles.quadrotor_brush.loop import QuadrotorFleet, SimulatedQuadrotor
-
-
-def board_of(surface: Surface) -> BoardFrame:
-    """The planner's frame of a horizontal surface."""
-    x, y, _ = surface.x_axis_enu
-    return BoardFrame(center_m_enu=surface.origin_m_enu, yaw_rad=math.atan2(y, x))
 
 
 class QuadrotorBrush:
@@ -74,12 +67,9 @@ class QuadrotorBrush:
         self, strokes: Sequence[StrokeInput], surface: Surface, settings: QuadrotorSettings
     ) -> WritingPlan:
         """The Airshow planner's reference of the brush writing point (raises PlannerError)."""
-        from planner.pipeline import plan_strokes
-
-        options = replace(settings.plan, board=board_of(surface))
-        trajectory = plan_strokes([s.xy_m for s in strokes], options)
+        trajectory = plan_on_surface([s.xy_m for s in strokes], surface, settings.plan)
         return WritingPlan(
-            samples=trajectory.sample(options.sample_rate_hz),
+            samples=trajectory.sample(settings.plan.sample_rate_hz),
             strokes=tuple(strokes),
             surface=surface,
             feasibility=trajectory.feasibility.to_json_dict(),
