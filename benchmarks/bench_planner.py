@@ -5,6 +5,7 @@
     python benchmarks/bench_planner.py --held-out # characters the planner was never tuned on
     python benchmarks/bench_planner.py --chars 永和  # any characters
     python benchmarks/bench_planner.py --clearance 0.05   # pen-up hop of the shows
+    python benchmarks/bench_planner.py --knot-spacing 0.1 --jerk-weight 1e-5   # other fit settings
 
 Characters are laid out on a 1 m x 1 m area (5 cm margin) with the default limits. Each stage is
 timed once per character after a warm-up; printed: median and worst [ms] per character (wall
@@ -209,7 +210,7 @@ def _dense_share(traj: PlannedTrajectory) -> float:
 
 
 def _report_optimality(res: _Results) -> None:
-    print(f"  limits sampled at 1 kHz: largest share of a bound {res.dense_share:.4f} (<= 1)")
+    print(f"  limits sampled at 1 kHz: largest share of a bound {res.dense_share:.5f} (<= 1)")
     if not res.optimality:
         print("  time-optimality: TOPP-RA not installed (pip install toppra), skipped")
         return
@@ -273,10 +274,7 @@ def _report(res: _Results, n_chars: int) -> None:
         print(f"  failed: {failure}")
 
 
-def run(
-    chars: list[str], numerical_subset: int, peer_subset: int, clearance_m: float | None
-) -> None:
-    options = PlanOptions() if clearance_m is None else PlanOptions(clearance_m=clearance_m)
+def run(chars: list[str], numerical_subset: int, peer_subset: int, options: PlanOptions) -> None:
     plan_strokes(_strokes("A"), options)  # warm-up: imports, caches
     numeric, peers = _subset(chars, numerical_subset), _subset(chars, peer_subset)
     res = _Results()
@@ -312,11 +310,27 @@ def main() -> int:
     parser.add_argument(
         "--clearance", type=float, help="pen-up hop height [m] (default: PlanOptions default)"
     )
+    parser.add_argument(
+        "--knot-spacing", type=float, help="time between knots [s] (default: PlanOptions')"
+    )
+    parser.add_argument(
+        "--jerk-weight", type=float, help="jerk weight w_g [s^5] (default: PlanOptions')"
+    )
     args = parser.parse_args()
     numerical = args.numerical if args.numerical is not None else (1 if args.quick else 6)
     peer = args.peer if args.peer is not None else (2 if args.quick else 20)
-    run(_corpus(args.quick, args.held_out, args.chars), numerical, peer, args.clearance)
+    run(_corpus(args.quick, args.held_out, args.chars), numerical, peer, _options(args))
     return 0
+
+
+def _options(args: argparse.Namespace) -> PlanOptions:
+    """The default options but for the settings given on the command line."""
+    given = {
+        "clearance_m": args.clearance,
+        "knot_spacing_s": args.knot_spacing,
+        "jerk_weight_s5": args.jerk_weight,
+    }
+    return PlanOptions(**{name: value for name, value in given.items() if value is not None})
 
 
 if __name__ == "__main__":

@@ -183,7 +183,7 @@ class QpFitter:
             if not np.any(new):
                 if floor_ok:
                     return evaluate_fit(problem, free)
-                held = self._held_by_floor(problem, st, bounds, ab, rhs, free)
+                held, new = self._held_by_floor(problem, st, bounds, ab, rhs, free)
                 if held is not None:
                     return held
             self._grow(st, new)
@@ -204,22 +204,26 @@ class QpFitter:
         ab: FloatArray,
         rhs: FloatArray,
         free: FloatArray,
-    ) -> SplineFit | None:
+    ) -> tuple[SplineFit | None, NDArray[np.bool_]]:
         """The QP's optimum when the closed form ``free`` breaks only the floor: x and y as
         they are, z by the active set of planner.floor_qp; ``None`` when that breaks a row
-        (or does not settle), for the QP to solve."""
+        (or does not settle), for the QP to solve, with the rows it breaks: the QP's working
+        set starts from them (from none, its first solve is this fit again, the floor alone
+        imposed)."""
         assert self.limits.z_floor_m is not None
+        none = np.zeros(st.G.shape[0], dtype=bool)
         z = solve_floor(
             ab, rhs[:, 2], free[:, 2], fixed_indices(problem.n_ctrl), self.limits.z_floor_m
         )
         if z is None:
-            return None
+            return None, none
         tau = free.copy()
         tau[:, 2] = z
-        if np.any(self._breaking(st, bounds, tau, problem.alpha)):
-            return None
+        broken = self._breaking(st, bounds, tau, problem.alpha)
+        if np.any(broken):
+            return None, broken
         self.floor_solves += 1
-        return evaluate_fit(problem, tau, method="floor active set")
+        return evaluate_fit(problem, tau, method="floor active set"), none
 
     def _breaking(
         self, st: Structure, bounds: Bounds, tau: FloatArray, alpha: float

@@ -1,6 +1,7 @@
 """The fit held above the floor by an active set (planner.floor_qp) against PIQP solved tight,
-the lazy QP's speed rows only where the ``v_max`` ball is left (planner.fit_qp), and LAPACK's
-band solver (planner.lapack_band) against the plain-numpy one and a dense solve."""
+the lazy QP's speed rows only where the ``v_max`` ball is left and its working set from the rows
+the held fit breaks (planner.fit_qp), and LAPACK's band solver (planner.lapack_band) against the
+plain-numpy one and a dense solve."""
 
 from __future__ import annotations
 
@@ -16,9 +17,12 @@ from planner.band_solve import solve_symmetric_band_blocks
 from planner.bspline import apply_band, velocity_values
 from planner.fit_qp import QpFitter
 from planner.floor_qp import principal_band, solve_floor
+from planner.glyphs import fit_to_area, text_glyph
 from planner.lapack_band import band_solver
 from planner.minjerk import fit_closed_form, fixed_indices, normal_equations
+from planner.pipeline import PlanOptions, prepare
 from planner.qp_structure import SPEED_DIRECTIONS, SPEED_POLYTOPE_APOTHEM, QpLimits, build_qp
+from planner.timing import allocate, point_tolerances_m
 
 LOOSE = 50.0
 """Acceleration bound [m/s^2] no test fit comes near: only the floor binds."""
@@ -141,3 +145,34 @@ def test_speed_rows_are_imposed_only_where_the_ball_is_left() -> None:
     held = QpFitter(slow).fit(p).spline
     t = np.linspace(0.0, held.duration_s, 20_001)
     assert np.max(np.linalg.norm(held.evaluate(t, 1), axis=1)) <= 0.8 * fastest * (1 + 1e-9)
+
+
+def test_a_fit_the_floor_bends_past_a_bound_is_solved_once_at_the_qp_optimum() -> None:
+    """At 0.1 s knots and a jerk weight of 1e-5 s^5 the allocated fit of "i" breaks only the
+    floor (a hop dips below the writing height), and held above it breaks z's acceleration
+    bound: the QP's working set starts from the rows the held fit breaks, so one solve reaches
+    the optimum of the QP with every acceleration row (it took two: the first imposed the
+    floor alone, i.e. found the held fit again)."""
+    strokes = fit_to_area(text_glyph("i"), width_m=1.0, height_m=1.0, margin_m=0.05).strokes
+    options = PlanOptions(knot_spacing_s=0.1, jerk_weight_s5=1e-5)
+    prep = prepare(strokes, options)
+    limits = prep.qp_limits
+    problem = allocate(
+        prep.problem,
+        prep.problem.weights,
+        prep.problem.segment_durations(),
+        options,
+        limits,
+        point_tolerances_m(prep.path, options),
+    ).problem
+    free = fit_closed_form(problem).spline
+    assert limits.z_floor_m is not None
+    assert np.min(free.control_points[:, 2]) < limits.z_floor_m  # the premise: a dip ...
+    accel = free.acceleration_at_knots()
+    assert np.all(accel <= limits.accel_upper_mps2) and np.all(accel >= limits.accel_lower_mps2)
+    fitter = QpFitter(limits)
+    fit = fitter.fit(problem)
+    assert (fitter.floor_solves, fitter.solves, fit.method) == (0, 1, "piqp")  # ... bent past
+    every_row = QpLimits(limits.accel_lower_mps2, limits.accel_upper_mps2, None, limits.z_floor_m)
+    exact = QpFitter(every_row, strategy="full").fit(problem)
+    np.testing.assert_allclose(fit.spline.control_points, exact.spline.control_points, atol=1e-6)
