@@ -34,6 +34,7 @@ import msgspec
 import pytest
 import zenoh
 from bus_fuzz_payloads import Fuzzer
+from show_probe import snapshot_when
 
 from bus.codec import MessageError, decode
 from bus.messages import (
@@ -41,11 +42,12 @@ from bus.messages import (
     CommandReply,
     OperatorCommand,
     Request,
+    ShowSnapshot,
     SubmitReply,
     SubmitRequest,
     VehicleCommand,
 )
-from bus.rpc import NoReplyError, query_one
+from bus.rpc import query_one
 from bus.session import Session, open_session
 from cli.showrun import ShowRun, derived_show, snapshot
 from orchestrator.submissions import SubmissionError, validate_submission
@@ -250,6 +252,11 @@ class LiveShow:
     """A client session per identity the fuzzer speaks as."""
 
 
+def _idle(shown: ShowSnapshot) -> bool:
+    """Whether the orchestrator answers and sees the show's one vehicle alive and idle."""
+    return bool(shown.vehicles) and shown.vehicles[0].alive and shown.vehicles[0].state == "idle"
+
+
 @pytest.fixture(scope="module")
 def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveShow]:
     out = tmp_path_factory.mktemp("fuzz")
@@ -266,16 +273,7 @@ def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveShow]:
             )
             for identity in ("operator", "orchestrator", show.vehicles[0].id)
         }
-        deadline = time.monotonic() + 60.0
-        while True:  # the orchestrator answers and sees the vehicle idle
-            try:
-                vehicles = snapshot(sessions["operator"], run.keys, timeout_s=2.0).vehicles
-                if vehicles and vehicles[0].alive and vehicles[0].state == "idle":
-                    break
-            except NoReplyError:
-                pass
-            assert time.monotonic() < deadline, "the show did not start"
-            time.sleep(0.2)
+        snapshot_when(sessions["operator"], run.keys, _idle, "the show's vehicle alive and idle")
         yield LiveShow(run, sessions)
 
 

@@ -24,12 +24,13 @@ from typing import Any
 
 import pytest
 from playwright.sync_api import TimeoutError as PlaywrightTimeout
+from show_probe import snapshot_when
 from test_kiosk_support import done_metrics
 
 from bus.keys import ShowKeys
 from bus.messages import CommandReply, JobState, OperatorCommand, ShowSnapshot
 from bus.pubsub import publish
-from bus.rpc import NoReplyError, query_one
+from bus.rpc import query_one
 from bus.session import Session, free_tcp_endpoint, open_session
 from kiosk.service import serving
 from kiosk.settings import settings_from_show
@@ -113,15 +114,13 @@ def _relay_until_shown(
 
 
 def _wait_for_orchestrator(bus: Session, keys: ShowKeys, proc: subprocess.Popen[bytes]) -> None:
-    deadline = time.monotonic() + START_WAIT_S
-    while time.monotonic() < deadline:
+    def answered_while_running(_: ShowSnapshot) -> bool:
         assert proc.poll() is None, "the orchestrator exited"
-        try:
-            query_one(bus, keys.snapshot, None, ShowSnapshot, timeout_s=1.0)
-            return
-        except NoReplyError:
-            time.sleep(0.2)
-    raise AssertionError("the orchestrator did not answer its snapshot queryable")
+        return True
+
+    snapshot_when(
+        bus, keys, answered_while_running, "the orchestrator's snapshot", timeout_s=START_WAIT_S
+    )
 
 
 @pytest.fixture(scope="module")
@@ -301,13 +300,10 @@ def test_tablet_layout_and_a_friendly_refusal(browser: object, show: Show) -> No
 
 def _eventually_job(show: Show, label: str) -> list[JobState]:
     """Jobs with ``label`` once the orchestrator answers again (its clients reconnect)."""
-    deadline = time.monotonic() + START_WAIT_S
-    while True:
-        try:
-            return [j for j in show.snapshot().jobs if j.label == label]
-        except NoReplyError:
-            assert time.monotonic() < deadline, "the orchestrator did not come back"
-            time.sleep(0.2)
+    shown = snapshot_when(
+        show.bus, show.keys, lambda _: True, "the orchestrator back", timeout_s=START_WAIT_S
+    )
+    return [j for j in shown.jobs if j.label == label]
 
 
 def test_hung_orchestrator_keeps_the_ticket_and_says_the_news_is_stale(

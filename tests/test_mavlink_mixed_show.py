@@ -8,16 +8,13 @@ in this process (as ``skyquill sim-mavlink`` serves them), at the show's time sc
 from __future__ import annotations
 
 import socket
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from show_probe import all_alive, snapshot_when
 
-from bus.keys import ShowKeys
-from bus.rpc import NoReplyError
-from bus.session import Session
-from cli.showrun import ShowRun, derived_show, snapshot, submit_texts, wait_for_jobs
+from cli.showrun import ShowRun, derived_show, submit_texts, wait_for_jobs
 from mavsim.config import STIFF_EPS, PositionGains
 from mavsim.server import MavsimServer
 from mavsim.show import vehicle_configs
@@ -58,14 +55,6 @@ def mixed_show(out: Path) -> tuple[Path, Show]:
     return path, load_show(path)
 
 
-def alive(session: Session, keys: ShowKeys) -> int:
-    """How many vehicles the orchestrator sees alive (0 while it is not answering yet)."""
-    try:
-        return sum(v.alive for v in snapshot(session, keys).vehicles)
-    except NoReplyError:
-        return 0
-
-
 @pytest.fixture
 def simulated_vehicles(tmp_path: Path) -> Iterator[tuple[Path, Show]]:
     path, show = mixed_show(tmp_path)
@@ -84,10 +73,7 @@ def test_two_in_process_and_two_mavlink_vehicles_write_a_show(
     path, show = simulated_vehicles
     assert sorted(v.id for v in show.vehicles if v.backend == "mavlink") == list(MAVLINK_VEHICLES)
     with ShowRun(path, show, log_dir=tmp_path / "logs") as run, run.client() as session:
-        deadline = time.monotonic() + 60.0
-        while alive(session, run.keys) < len(show.vehicles):  # the agents start in parallel
-            assert time.monotonic() < deadline, "not every agent came up"
-            time.sleep(0.2)
+        snapshot_when(session, run.keys, all_alive, "every agent up")  # they start in parallel
         replies = submit_texts(session, run.keys, ["一", "L", "十", "I"])
         job_ids = [str(reply.job_id) for reply in replies]
         jobs = wait_for_jobs(session, run.keys, job_ids, timeout_s=150.0)

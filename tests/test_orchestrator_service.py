@@ -14,6 +14,7 @@ from typing import Any, TypeVar
 import msgspec
 import pytest
 from mcap.reader import make_reader
+from show_probe import snapshot_when
 
 from bus.keys import ShowKeys
 from bus.messages import (
@@ -30,7 +31,7 @@ from bus.messages import (
     VehicleStatus,
 )
 from bus.pubsub import Token, declare_token, publish, subscribe
-from bus.rpc import NoReplyError, query, query_one, serve
+from bus.rpc import query, query_one, serve
 from bus.session import BusSettings, Session, free_tcp_endpoint, open_session
 from cli.main import main as skyquill
 from orchestrator.app import serve_show
@@ -225,15 +226,9 @@ def _snapshot_when_up(session: Session, keys: ShowKeys) -> ShowSnapshot:
     inside the orchestrator is not yet known to every session (a fresh-clone CI run at load 3-4
     got no reply right after a restart)."""
 
-    def answered() -> ShowSnapshot | None:
-        try:
-            return _snapshot(session, keys)
-        except NoReplyError:
-            return None
-
-    shown = eventually(answered, "the orchestrator's snapshot")
-    assert shown is not None
-    return shown
+    return snapshot_when(
+        session, keys, lambda _: True, "the orchestrator's snapshot", timeout_s=WAIT_S
+    )
 
 
 def _submit(session: Session, keys: ShowKeys, payload: bytes | SubmitRequest) -> SubmitReply:

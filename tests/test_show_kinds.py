@@ -5,17 +5,14 @@ own surface, each with its kind's figures in the done report."""
 from __future__ import annotations
 
 import threading
-import time
 from pathlib import Path
 
 import pytest
+from show_probe import all_alive, snapshot_when
 
-from bus.keys import ShowKeys
 from bus.messages import Telemetry
 from bus.pubsub import subscribe
-from bus.rpc import NoReplyError
-from bus.session import Session
-from cli.showrun import ShowRun, derived_show, snapshot, submit_texts, wait_for_jobs
+from cli.showrun import ShowRun, derived_show, submit_texts, wait_for_jobs
 from showfile import load_show
 
 pytestmark = [pytest.mark.multiprocess, pytest.mark.slow, pytest.mark.timeout(300)]
@@ -23,14 +20,6 @@ pytestmark = [pytest.mark.multiprocess, pytest.mark.slow, pytest.mark.timeout(30
 MIXED = Path(__file__).resolve().parent.parent / "shows" / "mixed.yaml"
 TIME_SCALE = 2.0  # MuJoCo worlds of the wall and ground vehicles on 2 busy cores
 TEXTS = ["一", "I", "L", "十"]
-
-
-def alive(session: Session, keys: ShowKeys) -> int:
-    """How many vehicles the orchestrator sees alive (0 while it is not answering yet)."""
-    try:
-        return sum(v.alive for v in snapshot(session, keys).vehicles)
-    except NoReplyError:
-        return 0
 
 
 def test_a_mixed_show_writes_on_boards_a_wall_and_the_floor_at_once(tmp_path: Path) -> None:
@@ -46,10 +35,7 @@ def test_a_mixed_show_writes_on_boards_a_wall_and_the_floor_at_once(tmp_path: Pa
     with ShowRun(path, show, log_dir=tmp_path / "logs") as run, run.client() as session:
         wall_key = run.keys.telemetry("calligrapher")
         subscriber = subscribe(session, wall_key, Telemetry, on_telemetry)
-        deadline = time.monotonic() + 60.0
-        while alive(session, run.keys) < len(show.vehicles):  # the agents start in parallel
-            assert time.monotonic() < deadline, "not every agent came up"
-            time.sleep(0.2)
+        snapshot_when(session, run.keys, all_alive, "every agent up")  # they start in parallel
         replies = submit_texts(session, run.keys, TEXTS)
         jobs = wait_for_jobs(session, run.keys, [str(r.job_id) for r in replies], timeout_s=240.0)
         subscriber.undeclare()  # type: ignore[no-untyped-call]

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
+from show_probe import answering_snapshot
 
 from bus.keys import ShowKeys
 from bus.messages import (
@@ -39,7 +40,7 @@ from bus.messages import (
     Telemetry,
 )
 from bus.pubsub import subscribe
-from bus.rpc import NoReplyError, query_one
+from bus.rpc import query_one
 from bus.session import Session, open_session
 from cli.runstate import RunFile, run_file_path
 from cli.showrun import ShowRun, Stagehand, derived_show, snapshot, submit_texts, wait_for_jobs
@@ -141,10 +142,10 @@ class LiveShow:
 
     def snapshot(self) -> ShowSnapshot:
         """The orchestrator's view; empty while it does not answer (starting, restarting)."""
-        try:
-            return snapshot(self.session, self.keys, timeout_s=2.0)
-        except NoReplyError:
-            return ShowSnapshot(show_id="", time_s=0.0, queue_paused=False, jobs=[], vehicles=[])
+        shown = answering_snapshot(self.session, self.keys)
+        return shown or ShowSnapshot(
+            show_id="", time_s=0.0, queue_paused=False, jobs=[], vehicles=[]
+        )
 
     def events_of(self, kind: str, vehicle_id: str) -> list[Event]:
         with self.lock:

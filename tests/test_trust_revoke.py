@@ -16,6 +16,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from show_probe import all_alive, snapshot_when
 from test_orchestrator_service import make_show
 
 from bus.keys import ShowKeys
@@ -27,7 +28,7 @@ from bus.messages import (
     SubmitRequest,
     VehicleCommand,
 )
-from bus.rpc import NoReplyError, query, query_one
+from bus.rpc import query, query_one
 from bus.session import Session, SessionOpenError, free_tcp_endpoint, open_session
 from cli.main import main as skyquill
 from cli.showrun import ShowRun, Stagehand, derived_show, snapshot, wait_for_jobs
@@ -129,19 +130,9 @@ def show_run(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[ShowRun
     for name, role in (("alice", "operator"), ("press", "watcher")):
         assert skyquill(["keys", str(path), "--client", name, "--role", role]) == 0
     with ShowRun(path, show, log_dir=out / "logs") as run, run.client() as operator:
-        deadline = time.monotonic() + 60.0
-        while not _ready(operator, run.keys):
-            assert time.monotonic() < deadline, "the show did not become ready"
-            time.sleep(0.2)
+        snapshot_when(operator, run.keys, all_alive, "the show to become ready")
         with Stagehand(operator, run.keys):  # one board, a fresh sheet per character
             yield run, path
-
-
-def _ready(session: Session, keys: ShowKeys) -> bool:
-    try:
-        return all(v.alive for v in snapshot(session, keys, timeout_s=2.0).vehicles)
-    except NoReplyError:  # the orchestrator is starting
-        return False
 
 
 def _client(show: Show, name: str) -> Session:
