@@ -24,6 +24,7 @@ from mavsim.server import MavsimServer
 from showfile import load_show
 from vehicle_agent.backends.base import (
     CommandRefusedError,
+    NotReadyError,
     Setpoint,
     VehicleBackend,
     VehicleSnapshot,
@@ -502,8 +503,10 @@ def test_px4_on_mocap_gets_its_ekf_origin_at_altitude_zero_once_poses_flow() -> 
 
 
 def test_a_vehicle_whose_estimate_is_not_where_the_mocap_puts_it_is_not_armed() -> None:
-    # The autopilot's estimator has not taken the mocap (PX4 SIH: 583.85 m off): a take-off
-    # would climb from the wrong place. Refused with nothing sent; the job goes back, no fault.
+    # The autopilot's estimator has not taken the mocap (PX4 SIH: 583.85 m off; 4.46 m in its
+    # first seconds): a take-off would climb from the wrong place. Its preflight says so until
+    # the estimate comes to the mocap (the agent waits, as for the autopilot's own checks); a
+    # take-off asked meanwhile is not ready, with nothing sent and no fault.
     off = {"z_m": 0.5}
 
     def source(_now_s: float) -> MocapPose:
@@ -515,12 +518,14 @@ def test_a_vehicle_whose_estimate_is_not_where_the_mocap_puts_it_is_not_armed() 
                              set_params=False) as (backend, driver):  # fmt: skip
             backend._mocap.source = source
             await driver.until(lambda _s: backend._mocap.sent > 10, 2.0)
+            held = await driver.until(lambda s: s.preflight is not None, 2.0)
+            assert held.preflight is not None and "0.50 m from the mocap's" in held.preflight
             with pytest.raises(EstimateOffMocapError, match=r"0\.50 m from the mocap") as refused:
                 await backend.takeoff(HOVER)
-            assert isinstance(refused.value, CommandRefusedError)
+            assert isinstance(refused.value, NotReadyError)
             assert not ap.armed and backend.mode == "idle" and backend.fault is None
             off["z_m"] = 0.0
-            await driver.until(lambda _s: backend._mocap.position_m_enu == HOME, 1.0)
+            await driver.until(lambda s: s.preflight is None, 2.0)
             await airborne(backend, driver)
             assert ap.armed
 

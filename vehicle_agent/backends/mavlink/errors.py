@@ -58,14 +58,20 @@ class VehicleFaultError(MavlinkError):
     """A command while the vehicle is in a fault (pilot has control, link lost, failsafe)."""
 
 
-class EstimateOffMocapError(MavlinkError, CommandRefusedError):
+def off_the_mocap_reason(off_m: float) -> str:
+    """Why a vehicle whose position estimate is ``off_m`` [m] from the mocap does not take off."""
+    return (
+        f"the autopilot's position estimate is {off_m:.2f} m from the mocap's (its estimator"
+        " has not taken the mocap yet: restart the autopilot if it stays so)"
+    )
+
+
+class EstimateOffMocapError(MavlinkError, NotReadyError):
     """Nothing was asked of the vehicle: its position estimate is not where the mocap poses we
-    send put it (its estimator has not taken them: EKF2 with a barometer height, 583 m off); a
-    take-off would climb from the wrong place."""
+    send put it (its estimator has not taken them yet: PX4 SIH's first seconds, 4.5 m off; EKF2
+    with a barometer height, 583 m off); a take-off would climb from the wrong place. The
+    vehicle's preflight says so too, until the estimate comes to the mocap."""
 
     def __init__(self, off_m: float) -> None:
-        super().__init__(
-            f"not arming: the autopilot's position estimate is {off_m:.2f} m from the mocap's"
-            " (its estimator has not taken the mocap: restart the autopilot if it stays so)"
-        )
+        super().__init__(f"not arming: {off_the_mocap_reason(off_m)}")
         self.off_m = off_m

@@ -4,8 +4,9 @@ Position, velocity and attitude are the autopilot's own estimate (LOCAL_NED and 
 ENU, the body FLU); on the ground when EXTENDED_SYS_STATE says landed (before it does: when
 disarmed). The pen is modelled from the simulator's true pose when the backend reads it (SITL),
 otherwise from the estimate and ATTITUDE. Idle on the ground and disarmed, ``preflight`` is why
-the autopilot would not arm (SYS_STATUS, and its words in STATUSTEXT); while a landing ends (PX4
-put in Hold) it is not asked yet.
+the autopilot would not arm (SYS_STATUS, and its words in STATUSTEXT), or else why the backend
+would not arm it (its estimate off the mocap); while a landing ends (PX4 put in Hold) it is not
+asked yet.
 """
 
 from __future__ import annotations
@@ -42,11 +43,13 @@ def vehicle_snapshot(
     fault: str | None,
     reading: PenReading | None,
     health: LinkHealth | None = None,
+    not_ready: str | None = None,
 ) -> VehicleSnapshot:
     """The vehicle at ``now_s`` in [s] as ``state`` has it, at ``position_m_enu`` in [m] (the
     estimate in the show frame), with the simulator's ``truth`` if read and the backend's
     ``mode`` and ``fault``; ``reading``: the pen it carries, as :func:`pen_reading` read it
-    (None: no pen); ``health``: the figures of the agent's preflight."""
+    (None: no pen); ``health``: the figures of the agent's preflight; ``not_ready``: why the
+    backend would not arm the vehicle though its autopilot's checks pass."""
     st = state
     said = st.landed_state
     on_ground = said == MAV_LANDED_STATE_ON_GROUND if said is not None else not st.armed
@@ -69,6 +72,8 @@ def vehicle_snapshot(
         attitude_xyzw_enu=estimated_attitude,
         autopilot_mode=None if st.flavor is None else st.flavor.mode_name(st.custom_mode or 0),
         true_position_m_enu=None if truth is None else truth.position_m_enu,
-        preflight=st.preflight if mode == "idle" and on_ground and not st.armed else None,
+        preflight=(st.preflight or not_ready)
+        if mode == "idle" and on_ground and not st.armed
+        else None,
         health=health,
     )

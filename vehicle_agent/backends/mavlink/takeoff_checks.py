@@ -4,7 +4,8 @@ change or an ARM, and the proof of life PX4 needs first.
 - The autopilot's pre-arm checks: refused while SYS_STATUS says they fail, in the autopilot's
   words, asked for with MAV_CMD_RUN_PREARM_CHECKS if unsaid (and each tick while disarmed,
   :class:`PrearmAsker`, not awaited).
-- The autopilot's position estimate: refused when it is off the mocap pose sent to it.
+- The autopilot's position estimate: not ready while it is off the mocap pose sent to it (the
+  snapshot's preflight says so, :func:`off_the_mocap_m`).
 - The vehicle's heading (ATTITUDE): refused when the vehicle has not said it.
 - PX4's proof of life: a live setpoint stream before OFFBOARD and arming.
 """
@@ -52,14 +53,20 @@ async def refuse_while_prearm_fails(state: LinkState, commands: CommandChannel) 
         raise PrearmFailingError(why)
 
 
-def refuse_off_the_mocap(here_m_enu: Vec3, mocap_m_enu: Vec3 | None) -> None:
-    """Raise :class:`EstimateOffMocapError`, nothing sent, when the autopilot's position
-    (``here_m_enu``, [m]) is more than :data:`ESTIMATE_FROM_MOCAP_MAX_M` from the latest mocap
-    pose we sent it (``mocap_m_enu``; None: none sent)."""
+def off_the_mocap_m(here_m_enu: Vec3, mocap_m_enu: Vec3 | None) -> float | None:
+    """How far in [m] the autopilot's position (``here_m_enu``, [m]) is from the latest mocap
+    pose we sent it (``mocap_m_enu``) when more than :data:`ESTIMATE_FROM_MOCAP_MAX_M`; None
+    within it, or with no pose sent."""
     if mocap_m_enu is None:
-        return
+        return None
     off_m = math.dist(here_m_enu, mocap_m_enu)
-    if off_m > ESTIMATE_FROM_MOCAP_MAX_M:
+    return off_m if off_m > ESTIMATE_FROM_MOCAP_MAX_M else None
+
+
+def refuse_off_the_mocap(here_m_enu: Vec3, mocap_m_enu: Vec3 | None) -> None:
+    """Raise :class:`EstimateOffMocapError`, nothing sent, when :func:`off_the_mocap_m`."""
+    off_m = off_the_mocap_m(here_m_enu, mocap_m_enu)
+    if off_m is not None:
         raise EstimateOffMocapError(off_m)
 
 
