@@ -31,17 +31,17 @@ def answering_snapshot(
 def snapshot_when(
     session: Session,
     keys: ShowKeys,
-    ready: Callable[[ShowSnapshot], bool],
     what: str,
+    ready: Callable[[ShowSnapshot], bool] | None = None,
     *,
     timeout_s: float = 60.0,
 ) -> ShowSnapshot:
-    """The first snapshot for which ``ready`` holds, asked until ``timeout_s`` has passed;
-    fails naming ``what`` it waited for."""
+    """The first snapshot for which ``ready`` holds (None: the first answer), asked until
+    ``timeout_s`` has passed; fails naming ``what`` it waited for."""
     deadline = time.monotonic() + timeout_s
     while True:
         shown = answering_snapshot(session, keys)
-        if shown is not None and ready(shown):
+        if shown is not None and (ready is None or ready(shown)):
             return shown
         assert time.monotonic() < deadline, f"timed out after {timeout_s:.0f} s waiting for {what}"
         time.sleep(POLL_S)

@@ -273,7 +273,7 @@ def live(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveShow]:
             )
             for identity in ("operator", "orchestrator", show.vehicles[0].id)
         }
-        snapshot_when(sessions["operator"], run.keys, _idle, "the show's vehicle alive and idle")
+        snapshot_when(sessions["operator"], run.keys, "the show's vehicle alive and idle", _idle)
         yield LiveShow(run, sessions)
 
 

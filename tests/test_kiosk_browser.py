@@ -119,7 +119,7 @@ def _wait_for_orchestrator(bus: Session, keys: ShowKeys, proc: subprocess.Popen[
         return True
 
     snapshot_when(
-        bus, keys, answered_while_running, "the orchestrator's snapshot", timeout_s=START_WAIT_S
+        bus, keys, "the orchestrator's snapshot", answered_while_running, timeout_s=START_WAIT_S
     )
 
 
@@ -300,9 +300,7 @@ def test_tablet_layout_and_a_friendly_refusal(browser: object, show: Show) -> No
 
 def _eventually_job(show: Show, label: str) -> list[JobState]:
     """Jobs with ``label`` once the orchestrator answers again (its clients reconnect)."""
-    shown = snapshot_when(
-        show.bus, show.keys, lambda _: True, "the orchestrator back", timeout_s=START_WAIT_S
-    )
+    shown = snapshot_when(show.bus, show.keys, "the orchestrator back", timeout_s=START_WAIT_S)
     return [j for j in shown.jobs if j.label == label]
 
 

@@ -73,7 +73,7 @@ def test_two_in_process_and_two_mavlink_vehicles_write_a_show(
     path, show = simulated_vehicles
     assert sorted(v.id for v in show.vehicles if v.backend == "mavlink") == list(MAVLINK_VEHICLES)
     with ShowRun(path, show, log_dir=tmp_path / "logs") as run, run.client() as session:
-        snapshot_when(session, run.keys, all_alive, "every agent up")  # they start in parallel
+        snapshot_when(session, run.keys, "every agent up", all_alive)  # they start in parallel
         replies = submit_texts(session, run.keys, ["一", "L", "十", "I"])
         job_ids = [str(reply.job_id) for reply in replies]
         jobs = wait_for_jobs(session, run.keys, job_ids, timeout_s=150.0)

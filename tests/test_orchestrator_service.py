@@ -225,10 +225,7 @@ def _snapshot_when_up(session: Session, keys: ShowKeys) -> ShowSnapshot:
     """The snapshot once a (re)started orchestrator's queryable has reached ``session``: ready
     inside the orchestrator is not yet known to every session (a fresh-clone CI run at load 3-4
     got no reply right after a restart)."""
-
-    return snapshot_when(
-        session, keys, lambda _: True, "the orchestrator's snapshot", timeout_s=WAIT_S
-    )
+    return snapshot_when(session, keys, "the orchestrator's snapshot", timeout_s=WAIT_S)
 
 
 def _submit(session: Session, keys: ShowKeys, payload: bytes | SubmitRequest) -> SubmitReply:

@@ -35,7 +35,7 @@ def test_a_mixed_show_writes_on_boards_a_wall_and_the_floor_at_once(tmp_path: Pa
     with ShowRun(path, show, log_dir=tmp_path / "logs") as run, run.client() as session:
         wall_key = run.keys.telemetry("calligrapher")
         subscriber = subscribe(session, wall_key, Telemetry, on_telemetry)
-        snapshot_when(session, run.keys, all_alive, "every agent up")  # they start in parallel
+        snapshot_when(session, run.keys, "every agent up", all_alive)  # they start in parallel
         replies = submit_texts(session, run.keys, TEXTS)
         jobs = wait_for_jobs(session, run.keys, [str(r.job_id) for r in replies], timeout_s=240.0)
         subscriber.undeclare()  # type: ignore[no-untyped-call]

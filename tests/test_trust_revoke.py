@@ -130,7 +130,7 @@ def show_run(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[ShowRun
     for name, role in (("alice", "operator"), ("press", "watcher")):
         assert skyquill(["keys", str(path), "--client", name, "--role", role]) == 0
     with ShowRun(path, show, log_dir=out / "logs") as run, run.client() as operator:
-        snapshot_when(operator, run.keys, all_alive, "the show to become ready")
+        snapshot_when(operator, run.keys, "the show to become ready", all_alive)
         with Stagehand(operator, run.keys):  # one board, a fresh sheet per character
             yield run, path
 

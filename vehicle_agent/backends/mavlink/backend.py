@@ -45,7 +45,6 @@ from vehicle_agent.backends.mavlink.errors import (
     LinkLostError,
     UnsupportedAutopilotError,
     VehicleFaultError,
-    off_the_mocap_reason,
 )
 from vehicle_agent.backends.mavlink.flight_commands import (
     FlightCommands,
@@ -66,7 +65,6 @@ from vehicle_agent.backends.mavlink.stream import SetpointStream
 from vehicle_agent.backends.mavlink.takeoff_checks import (
     PrearmAsker,
     heading_ned_rad,
-    off_the_mocap_m,
     prove_life,
     refuse_off_the_mocap,
     refuse_while_prearm_fails,
@@ -396,8 +394,6 @@ class MavlinkBackend:
         losses = None if self._link is None else self._link.losses
         health = link_health(self.state, losses, self.watchdog.link_silent_s(now_s),
                              self._mocap.age_s(now_s), fence)  # fmt: skip
-        off_m = off_the_mocap_m(position, self._mocap.position_m_enu)
-        off = None if off_m is None else off_the_mocap_reason(off_m)
         return vehicle_snapshot(self.state, now_s, position, truth, mode=self.mode,
                                 fault=self.fault, reading=reading, health=health,
-                                not_ready=off)  # fmt: skip
+                                mocap_m_enu=self._mocap.position_m_enu)  # fmt: skip

@@ -12,9 +12,11 @@ asked yet.
 from __future__ import annotations
 
 from vehicle_agent.backends.base import BackendMode, LinkHealth, Vec3, VehicleSnapshot
+from vehicle_agent.backends.mavlink.errors import off_the_mocap_reason
 from vehicle_agent.backends.mavlink.frames import attitude_ned_to_xyzw_enu, ned_to_enu
 from vehicle_agent.backends.mavlink.pen import PenOverBoard
 from vehicle_agent.backends.mavlink.state import MAV_LANDED_STATE_ON_GROUND, LinkState
+from vehicle_agent.backends.mavlink.takeoff_checks import off_the_mocap_m
 from vehicle_agent.backends.mavlink.truth import TruthSample
 from vehicles.kind import PenReading
 
@@ -33,6 +35,16 @@ def pen_reading(
     return None if pen is None or attitude is None else pen.read(body, attitude)
 
 
+def preflight_of(state: LinkState, position_m_enu: Vec3, mocap_m_enu: Vec3 | None) -> str | None:
+    """Why the vehicle would not arm now: its autopilot's words (SYS_STATUS, STATUSTEXT), else its
+    estimate (``position_m_enu``, [m]) off the latest mocap pose sent to it (``mocap_m_enu``);
+    None when it would."""
+    if state.preflight is not None:
+        return state.preflight
+    off_m = off_the_mocap_m(position_m_enu, mocap_m_enu)
+    return None if off_m is None else off_the_mocap_reason(off_m)
+
+
 def vehicle_snapshot(
     state: LinkState,
     now_s: float,
@@ -43,13 +55,13 @@ def vehicle_snapshot(
     fault: str | None,
     reading: PenReading | None,
     health: LinkHealth | None = None,
-    not_ready: str | None = None,
+    mocap_m_enu: Vec3 | None = None,
 ) -> VehicleSnapshot:
     """The vehicle at ``now_s`` in [s] as ``state`` has it, at ``position_m_enu`` in [m] (the
     estimate in the show frame), with the simulator's ``truth`` if read and the backend's
     ``mode`` and ``fault``; ``reading``: the pen it carries, as :func:`pen_reading` read it
-    (None: no pen); ``health``: the figures of the agent's preflight; ``not_ready``: why the
-    backend would not arm the vehicle though its autopilot's checks pass."""
+    (None: no pen); ``health``: the figures of the agent's preflight; ``mocap_m_enu``: the
+    latest mocap pose sent to the autopilot (None: none), asked only on the ground, disarmed."""
     st = state
     said = st.landed_state
     on_ground = said == MAV_LANDED_STATE_ON_GROUND if said is not None else not st.armed
@@ -72,7 +84,7 @@ def vehicle_snapshot(
         attitude_xyzw_enu=estimated_attitude,
         autopilot_mode=None if st.flavor is None else st.flavor.mode_name(st.custom_mode or 0),
         true_position_m_enu=None if truth is None else truth.position_m_enu,
-        preflight=(st.preflight or not_ready)
+        preflight=preflight_of(st, position_m_enu, mocap_m_enu)
         if mode == "idle" and on_ground and not st.armed
         else None,
         health=health,
