@@ -5,7 +5,7 @@ change or an ARM, and the proof of life PX4 needs first.
   words, asked for with MAV_CMD_RUN_PREARM_CHECKS if unsaid (and each tick while disarmed,
   :class:`PrearmAsker`, not awaited).
 - The autopilot's position estimate: not ready while it is off the mocap pose sent to it (the
-  snapshot's preflight says so, :func:`off_the_mocap_m`).
+  snapshot's preflight says so, :func:`vehicle_agent.backends.mavlink.snapshot.off_the_mocap_m`).
 - The vehicle's heading (ATTITUDE): refused when the vehicle has not said it.
 - PX4's proof of life: a live setpoint stream before OFFBOARD and arming.
 """
@@ -25,17 +25,13 @@ from vehicle_agent.backends.mavlink.errors import (
     EstimateOffMocapError,
     PrearmFailingError,
 )
+from vehicle_agent.backends.mavlink.snapshot import off_the_mocap_m
 from vehicle_agent.backends.mavlink.state import LinkState
 from vehicle_agent.backends.mavlink.stream import SetpointStream
 
 CMD_NAV_TAKEOFF, CMD_RUN_PREARM_CHECKS = 22, 401
 PREARM_ASK_PERIOD_S = 5.0
 """How often in [s] an autopilot whose pre-arm checks fail unexplained is asked why."""
-ESTIMATE_FROM_MOCAP_MAX_M = 0.10
-"""Largest distance in [m] at take-off between the autopilot's position and the mocap pose
-sent to it. Fused, they agree within 2-8 cm after a take-off on PX4 SIH and 3 mm at rest
-(``params.PX4_HGT_REF_VISION``, ``params.PX4_MOCAP_ACC_NOISE_MPS2``); one that had not taken the
-mocap was 583.85 m off."""
 
 
 async def refuse_while_prearm_fails(state: LinkState, commands: CommandChannel) -> None:
@@ -51,16 +47,6 @@ async def refuse_while_prearm_fails(state: LinkState, commands: CommandChannel) 
     why = state.preflight  # None: they passed meanwhile
     if why is not None:
         raise PrearmFailingError(why)
-
-
-def off_the_mocap_m(here_m_enu: Vec3, mocap_m_enu: Vec3 | None) -> float | None:
-    """How far in [m] the autopilot's position (``here_m_enu``, [m]) is from the latest mocap
-    pose we sent it (``mocap_m_enu``) when more than :data:`ESTIMATE_FROM_MOCAP_MAX_M`; None
-    within it, or with no pose sent."""
-    if mocap_m_enu is None:
-        return None
-    off_m = math.dist(here_m_enu, mocap_m_enu)
-    return off_m if off_m > ESTIMATE_FROM_MOCAP_MAX_M else None
 
 
 def refuse_off_the_mocap(here_m_enu: Vec3, mocap_m_enu: Vec3 | None) -> None:
