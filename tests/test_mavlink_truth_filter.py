@@ -16,7 +16,7 @@ from vehicle_agent.backends.mavlink.truth_filter import (
     SimulatorClock,
     SmoothedTruthTracker,
     carry_s,
-    mid_truncated_cm,
+    mid_step_mps,
     simulator_time_s,
 )
 
@@ -89,7 +89,7 @@ def test_the_smoothing_removes_most_of_the_quantization() -> None:
 
 
 def test_px4s_truncated_velocity_is_read_as_the_middle_of_its_step() -> None:
-    assert [mid_truncated_cm(n) for n in (3, -3, 0)] == [0.035, -0.035, 0.0]
+    assert [mid_step_mps(n) for n in (3, -3, 0)] == pytest.approx([0.035, -0.035, 0.0])
 
 
 @pytest.mark.parametrize(("radius_m", "rate_rad_s"), [(0.1, 0.6), (0.05, 1.0), (0.2, 0.5)])

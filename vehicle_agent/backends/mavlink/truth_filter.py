@@ -5,7 +5,7 @@ in whole centimetres, PX4 SIH's HIL_STATE_QUATERNION lat/lon the same way: the t
 steps of 0.9-1.1 cm (measured on ArduCopter SITL: x holds still for 1.2 s, then jumps 9 mm). As
 the mocap forwarded to the autopilot and as the yardstick of a job's writing, that staircase is
 a centimetre of error by itself. Both messages carry the velocity (SIM_STATE in m/s, as floats;
-HIL_STATE_QUATERNION in whole cm/s, truncated: :func:`mid_truncated_cm`), so
+HIL_STATE_QUATERNION in whole cm/s, truncated: :func:`mid_step_mps`), so
 :class:`SmoothedTruthTracker` carries the position forward on the velocity between samples, over
 the simulator's own clock, and pulls it towards each quantized sample with a time constant set
 by how good that velocity is (:data:`TIME_CONSTANT_S`): the steps average out, the motion stays.
@@ -40,23 +40,23 @@ def truth_velocity_mps_enu(message: Any) -> Vec3 | None:
     if kind == "SIM_STATE":
         north, east, down = float(message.vn), float(message.ve), float(message.vd)
     elif kind == "HIL_STATE_QUATERNION":
-        north, east, down = (mid_truncated_cm(message.vx), mid_truncated_cm(message.vy),
-                             mid_truncated_cm(message.vz))  # fmt: skip
+        north, east, down = (mid_step_mps(message.vx), mid_step_mps(message.vy),
+                             mid_step_mps(message.vz))  # fmt: skip
     else:
         return None
     return (east, north, -down)
 
 
-def mid_truncated_cm(whole_cm: int) -> float:
-    """The middle in [m] of the values PX4 sends as ``whole_cm`` [cm]: HIL_STATE_QUATERNION's
-    velocity is ``lpos.vx * 1e2f`` stored in an int16 (PX4 v1.16,
+def mid_step_mps(whole_cm_s: int) -> float:
+    """The velocity in [m/s] at the middle of the step PX4 sends as ``whole_cm_s`` [cm/s]:
+    HIL_STATE_QUATERNION's velocity is ``lpos.vx * 1e2f`` stored in an int16 (PX4 v1.16,
     ``src/modules/mavlink/streams/HIL_STATE_QUATERNION.hpp``), which truncates towards zero, so
-    3 stands for [3, 4) cm/s and -3 for (-4, -3]; 0 stands for (-1, 1). Read as whole cm/s, a
-    writing stroke's velocity was 0.5 cm/s short on average and the smoothed truth trailed the
-    vehicle by that times :data:`TIME_CONSTANT_S`. Replayed on PX4 SIH's exact truth (ULogs of
-    the 50-job show, issue 31): the smoothed truth's error at 3-30 cm/s 1.8-2.8 -> 0.4-1.1 mm RMS
-    per axis."""
-    return (whole_cm + 0.5 * (whole_cm > 0) - 0.5 * (whole_cm < 0)) / 100.0
+    3 stands for [3, 4) cm/s, -3 for (-4, -3] and 0 for (-1, 1). Read as whole cm/s, a writing
+    stroke's velocity was 0.5 cm/s short on average and the smoothed truth trailed the vehicle
+    by that times :data:`TIME_CONSTANT_S`. Replayed on PX4 SIH's exact truth (four ULogs of the
+    50-job show, issue 31): the smoothed truth's error at 1-30 cm/s 2.07 -> 1.07 mm RMS per axis
+    (mean over speed bands and logs)."""
+    return (whole_cm_s + 0.5 * (whole_cm_s > 0) - 0.5 * (whole_cm_s < 0)) / 100.0
 
 
 def simulator_time_s(autopilot_time_ms: int) -> float | None:
