@@ -24,13 +24,23 @@ LAT0, LON0, ALT0 = -35.363261, 149.165230, 584.0
 HOME = (0.0, -1.0, 0.0)
 
 
+def lat_lon_deg(
+    north_m: float, east_m: float, home_deg: tuple[float, float] = (LAT0, LON0)
+) -> tuple[float, float]:
+    """Latitude and longitude in [deg] of a point ``north_m``/``east_m`` [m] from ``home_deg``."""
+    lat0, lon0 = home_deg
+    east_radius_m = EARTH_RADIUS_M * math.cos(math.radians(lat0))
+    return lat0 + math.degrees(north_m / EARTH_RADIUS_M), lon0 + math.degrees(
+        east_m / east_radius_m
+    )
+
+
 def sim_state(
     north_m: float, east_m: float, up_m: float, v_enu: tuple[float, float, float]
 ) -> mav.MAVLink_sim_state_message:
     """ArduPilot SITL's SIM_STATE of a point ``north_m``/``east_m``/``up_m`` from the start, its
     position quantized as ArduPilot sends it (1e-7 degrees, whole centimetres)."""
-    lat = LAT0 + math.degrees(north_m / EARTH_RADIUS_M)
-    lon = LON0 + math.degrees(east_m / (EARTH_RADIUS_M * math.cos(math.radians(LAT0))))
+    lat, lon = lat_lon_deg(north_m, east_m)
     alt = round((ALT0 + up_m) * 100.0) / 100.0
     return mav.MAVLink_sim_state_message(
         1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, alt, 0, 0,
@@ -45,8 +55,7 @@ def hil_state_quaternion(
     degrees, alt in millimetres and the velocity in cm/s, each a float stored in an integer
     (truncated towards zero). The home lies half-way along its 1e-7 degree steps, as
     ``scripts/sitl/start.py`` places each PX4 (the truncation's offset then averages out)."""
-    lat = LAT0 - 0.5e-7 + math.degrees(north_m / EARTH_RADIUS_M)
-    lon = LON0 + 0.5e-7 + math.degrees(east_m / (EARTH_RADIUS_M * math.cos(math.radians(LAT0))))
+    lat, lon = lat_lon_deg(north_m, east_m, home_deg=(LAT0 - 0.5e-7, LON0 + 0.5e-7))
     vx, vy, vz = (math.trunc(100.0 * c) for c in (v_enu[1], v_enu[0], -v_enu[2]))
     return mav.MAVLink_hil_state_quaternion_message(
         0, [1.0, 0.0, 0.0, 0.0], 0.0, 0.0, 0.0, math.trunc(lat * 1e7), math.trunc(lon * 1e7),

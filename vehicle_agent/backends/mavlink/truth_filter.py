@@ -13,6 +13,7 @@ by how good that velocity is (:data:`TIME_CONSTANT_S`): the steps average out, t
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -56,7 +57,7 @@ def mid_step_mps(whole_cm_s: int) -> float:
     by that times :data:`TIME_CONSTANT_S`. Replayed on PX4 SIH's exact truth (four ULogs of the
     50-job show, issue 31): the smoothed truth's error at 1-30 cm/s 2.07 -> 1.07 mm RMS per axis
     (mean over speed bands and logs)."""
-    return (whole_cm_s + 0.5 * (whole_cm_s > 0) - 0.5 * (whole_cm_s < 0)) / 100.0
+    return 0.0 if whole_cm_s == 0 else (whole_cm_s + math.copysign(0.5, whole_cm_s)) / 100.0
 
 
 def simulator_time_s(autopilot_time_ms: int) -> float | None:
