@@ -173,7 +173,7 @@ class Autopilot(AutopilotCore):
     def _check_fence(self) -> None:
         """The autopilot's own fence (:mod:`mavsim.fence`): on a breach in flight, its action,
         once per breach."""
-        breach = fence_breach(self.params, self.airframe.position_m_enu, self.config.home_m_enu)
+        breach = fence_breach(self.params, self.airframe.position_m_enu, self.home_m_enu)
         if breach is None or not self.armed or self.on_ground:
             self.fence_breached = breach is not None and self.fence_breached
             return
@@ -208,7 +208,7 @@ class Autopilot(AutopilotCore):
         self.target = descend(self.target, speed, self.airframe.ground_z_m, dt)
 
     def _advance_return(self, dt: float) -> None:
-        home = self.config.home_m_enu
+        home = self.home_m_enu
         self.target = go_home(self.target, home, self.config.land_speed_mps, dt)
         if math.dist(self.airframe.position_m_enu[:2], home[:2]) < 0.1:
             self.mode = CopterMode.LAND

@@ -81,6 +81,9 @@ class AutopilotCore:
         self.armed = False
         self.submode: Submode = "ground"
         self.target = Target(position_m_enu=config.home_m_enu)
+        (hx, hy, hz), (ox, oy, oz) = config.home_m_enu, config.boot_home_offset_m
+        self.home_m_enu: Vec3 = (hx + ox, hy + oy, hz + oz)
+        """The autopilot's home in [m], show frame ENU: its fence's centre, where RTL returns."""
         self.shaper = TargetShaper()
         """ArduCopter's jerk-limited path towards the guided target (:mod:`mavsim.shaping`)."""
         self.control: Control = "pos"
@@ -282,6 +285,15 @@ class AutopilotCore:
     def land(self) -> Result:
         """MAV_CMD_NAV_LAND: switch to LAND."""
         return self.set_mode(CopterMode.LAND)
+
+    def set_home_here(self) -> Result:
+        """MAV_CMD_DO_SET_HOME param1 = 1: home where the vehicle is (both autopilots; PX4's
+        Commander: ``setHomePosition(true)``, TEMPORARILY_REJECTED without a position)."""
+        if not self.position_source_ready:
+            return Result.TEMPORARILY_REJECTED
+        p = self.airframe.position_m_enu
+        self.home_m_enu = (float(p[0]), float(p[1]), float(p[2]))
+        return Result.ACCEPTED
 
     def terminate(self) -> Result:
         """MAV_CMD_DO_FLIGHTTERMINATION: motors off at once."""

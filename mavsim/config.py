@@ -112,6 +112,11 @@ class VehicleConfig:
     """Which autopilot it answers like (modes, OFFBOARD rules; see mavsim/px4.py)."""
     home_m_enu: Vec3 = (0.0, 0.0, 0.0)
     """Start position in the show frame [m]; also the origin of its LOCAL_NED frame."""
+    boot_home_offset_m: Vec3 = (0.0, 0.0, 0.0)
+    """Where the autopilot's home (its fence's centre, where it returns) lies at boot from the
+    start position, in [m] ENU: PX4 SIH takes its home from its GPS at boot, 3.9-4.0 m from
+    where EKF2 puts the vehicle once a companion moves its origin (issue 31);
+    MAV_CMD_DO_SET_HOME moves it."""
     mass_kg: float = 1.0
     """Vehicle mass in [kg]."""
     thrust_max_n: float = 19.6

@@ -245,6 +245,8 @@ class VehicleEndpoint:
             return self._set_interval(int(message.param1), float(message.param2))
         if command == mavlink.MAV_CMD_REQUEST_MESSAGE:
             return self._request(int(message.param1))
+        if command == mavlink.MAV_CMD_DO_SET_HOME:
+            return ap.set_home_here() if message.param1 > 0.5 else Result.UNSUPPORTED
         if command == mavlink.MAV_CMD_BATTERY_RESET:
             return ap.battery_reset(int(message.param1), float(message.param2))
         return Result.UNSUPPORTED

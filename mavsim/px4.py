@@ -21,7 +21,8 @@
 - after AUTO.LAND touches down it disarms and, in the same breath, reports the mode the pilot
   last chose again (OFFBOARD, if the companion flew it): a companion must not read that as a
   takeover;
-- its geofence is GF_MAX_HOR_DIST / GF_MAX_VER_DIST / GF_ACTION (:mod:`mavsim.fence`);
+- its geofence is GF_MAX_HOR_DIST / GF_MAX_VER_DIST / GF_ACTION (:mod:`mavsim.fence`), around
+  a home that MAV_CMD_DO_SET_HOME moves; beyond its distance it refuses to arm;
 - it sends STATUSTEXT only to links where it hears a ground station's heartbeat (the endpoint);
 - its pack is full whenever it is disarmed (SITL's battery simulator) and it has no
   MAV_CMD_BATTERY_RESET (:mod:`mavsim.battery`).
@@ -37,6 +38,7 @@ from mavsim.autopilot import Autopilot
 from mavsim.autopilot_core import SEVERITY_CRITICAL, SEVERITY_WARNING, Result
 from mavsim.config import VehicleConfig
 from mavsim.control import Target
+from mavsim.fence import fence_breach
 from mavsim.modes import NOT_ARMABLE, CopterMode
 from mavsim.params import Flavor
 from mavsim.wire import AttitudeSetpoint, GuidedSetpoint
@@ -102,6 +104,16 @@ class Px4Autopilot(Autopilot):
             if self.chosen_mode not in NOT_ARMABLE:
                 self.after_disarm_mode = self.chosen_mode
         return result
+
+    def prearm_failure(self) -> str | None:
+        """Besides the estimator's checks, PX4's geofence (``geofenceCheck.cpp``, in its words):
+        with an action (GF_ACTION) it fails while the vehicle is beyond GF_MAX_HOR_DIST of its
+        home, on the ground too."""
+        failure = super().prearm_failure()
+        beyond = fence_breach(self.params, self.airframe.position_m_enu, self.home_m_enu)
+        if failure is None and beyond == "circle" and int(self.params["GF_ACTION"]) != 0:
+            return "Geofence: exceeding maximum distance to Home"
+        return failure
 
     @property
     def prearm_bit(self) -> bool:

@@ -519,6 +519,27 @@ def test_px4_on_mocap_gets_its_ekf_origin_at_altitude_zero_once_poses_flow() -> 
         asyncio.run(scenario(server))
 
 
+def test_px4_on_mocap_gets_its_home_where_it_stands_and_its_geofence_lets_it_arm() -> None:
+    # PX4 SIH takes its home from its GPS at boot, 3.9-4.0 m from where EKF2 puts it once its
+    # origin is the show's; GF_MAX_HOR_DIST (from home) then fails its arming checks: a vehicle
+    # sat held by its preflight for a whole show (issue 31). The agent puts the home where the
+    # vehicle stands (MAV_CMD_DO_SET_HOME, param 1 = 1) once its estimate is on the mocap.
+    async def scenario(server: MavsimServer) -> None:
+        ap = server.endpoints[0].autopilot
+        settings = {"mocap": "vision_position_estimate", "set_params": False}
+        async with connected(server, **settings) as (backend, driver):
+            backend._mocap.source = lambda _now_s: MocapPose(position_m_enu=HOME)
+            said = "Geofence: exceeding maximum distance to Home"
+            await driver.until(lambda s: s.preflight == said, 3.0)
+            await driver.until(lambda s: s.preflight is None, 6.0)
+            assert math.dist(ap.home_m_enu, HOME) < 0.01
+            await airborne(backend, driver)
+
+    fence = (("GF_MAX_HOR_DIST", 3.5), ("GF_ACTION", 5.0))
+    with vehicle(autopilot="px4", boot_home_offset_m=(2.4, -3.2, 0.0), params=fence) as server:
+        asyncio.run(scenario(server))
+
+
 def test_a_vehicle_whose_estimate_is_not_where_the_mocap_puts_it_is_not_armed() -> None:
     # The autopilot's estimator has not taken the mocap (PX4 SIH: 583.85 m off; 4.46 m in its
     # first seconds): a take-off would climb from the wrong place. Its preflight says so until

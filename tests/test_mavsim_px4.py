@@ -20,9 +20,12 @@ HOME = (0.5, 0.2, 0.0)
 class Sim:
     """A PX4 autopilot, its clock and an OFFBOARD position stream (``hold``, None: silent)."""
 
-    def __init__(self, **params: float) -> None:
+    def __init__(
+        self, boot_home_offset_m: tuple[float, float, float] = (0.0, 0.0, 0.0), **params: float
+    ) -> None:
         config = VehicleConfig(vehicle_id="v", system_id=1, port=0, home_m_enu=HOME,
                                autopilot="px4", position_source_delay_s=0.0,
+                               boot_home_offset_m=boot_home_offset_m,
                                params=tuple(params.items()))  # fmt: skip
         self.ap = Px4Autopilot(config)
         self.t = 0.0
@@ -124,6 +127,29 @@ def test_the_prearm_bit_is_for_the_mode_it_is_in() -> None:
     assert sim.mode() == CopterMode.GUIDED and not sim.ap.prearm_bit
     assert sim.ap.prearm_failure() is None  # the checks themselves pass
     assert sim.ap.set_mode(CopterMode.LOITER) == Result.ACCEPTED and sim.ap.prearm_bit
+
+
+@pytest.mark.parametrize("action", [5, 0])
+def test_a_home_beyond_the_geofence_refuses_arming_until_set_where_the_vehicle_stands(
+    action: int,
+) -> None:
+    """PX4 SIH's boot home lies 4 m from where EKF2 puts it on the mocap's origin (issue 31):
+    with a fence action, beyond GF_MAX_HOR_DIST, its geofence check fails on the ground too."""
+    sim = Sim(boot_home_offset_m=(2.4, -3.2, 0.0), GF_MAX_HOR_DIST=3.5, GF_ACTION=action)
+    sim.run(0.5)
+    assert sim.ap.set_mode(CopterMode.GUIDED) == Result.ACCEPTED
+    if action:
+        assert sim.ap.prearm_failure() == "Geofence: exceeding maximum distance to Home"
+        assert not sim.ap.prearm_bit and sim.ap.arm() == Result.FAILED
+        assert sim.ap.set_home_here() == Result.ACCEPTED
+    assert sim.ap.prearm_failure() is None and sim.ap.arm() == Result.ACCEPTED
+
+
+def test_set_home_here_waits_for_a_position() -> None:
+    """PX4's Commander: TEMPORARILY_REJECTED while it has no position to put the home at."""
+    config = VehicleConfig(vehicle_id="v", system_id=1, port=0, home_m_enu=HOME, autopilot="px4",
+                           position_source_delay_s=5.0)  # fmt: skip
+    assert Px4Autopilot(config).set_home_here() == Result.TEMPORARILY_REJECTED
 
 
 def test_terminate_and_disarm_actions_stop_the_motors() -> None:

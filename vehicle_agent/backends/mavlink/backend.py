@@ -53,13 +53,14 @@ from vehicle_agent.backends.mavlink.flight_commands import (
 )
 from vehicle_agent.backends.mavlink.frames import LocalFrame
 from vehicle_agent.backends.mavlink.health import fence_problem, link_health
+from vehicle_agent.backends.mavlink.home import HomeSetter
 from vehicle_agent.backends.mavlink.link import MavlinkLink
 from vehicle_agent.backends.mavlink.mocap import MocapForwarder, MocapSource, TickTime
 from vehicle_agent.backends.mavlink.params import ParamChannel
 from vehicle_agent.backends.mavlink.pen import PenOverBoard
 from vehicle_agent.backends.mavlink.response import ResponseAid
 from vehicle_agent.backends.mavlink.settings import MavlinkSettings
-from vehicle_agent.backends.mavlink.snapshot import pen_reading, vehicle_snapshot
+from vehicle_agent.backends.mavlink.snapshot import off_the_mocap_m, pen_reading, vehicle_snapshot
 from vehicle_agent.backends.mavlink.state import SEVERITY_WARNING, LinkState
 from vehicle_agent.backends.mavlink.stream import SetpointStream
 from vehicle_agent.backends.mavlink.takeoff_checks import (
@@ -121,6 +122,7 @@ class MavlinkBackend:
         """Mode changes and arming, and the record of them the watchdog reads."""
         self._last_gcs_heartbeat_s = -math.inf
         self._prearm = PrearmAsker(self.state, self.commands)
+        self._home = HomeSetter(self.commands)
         self._hold: Setpoint | None = None
         self._climb: Move | None = None
         self._climb_to: tuple[Vec3, Vec3] | None = None  # (from, to): planned at the next tick
@@ -271,6 +273,7 @@ class MavlinkBackend:
 
     def close_link(self) -> None:
         self._mocap.stop()
+        self._home.cancel()
         self.commands.cancel_all()
         self.params.cancel_all()
         if self._link is not None:
@@ -351,8 +354,20 @@ class MavlinkBackend:
             if self.flight.landing_over(now_s):
                 self._set_backend_mode("idle")
                 self._hold = None
-        elif self.mode == "idle" and st.in_offboard_on_ground:
-            self.flight.ask_ground_mode(now_s, math.inf)  # a refused arming, or found so at connect
+        elif self.mode == "idle":
+            if st.in_offboard_on_ground:  # a refused arming, or found so at connect
+                self.flight.ask_ground_mode(now_s, math.inf)
+            self._home.step(now_s, ready=self._home_ready())
+
+    def _home_ready(self) -> bool:
+        """A PX4 on the EKF origin we gave it, disarmed on the ground, its estimate on the
+        mocap: its home can be put where it stands (:mod:`~vehicle_agent.backends.mavlink.home`)."""
+        st, mocap_m_enu = self.state, self._mocap.position_m_enu
+        if st.flavor is None or st.flavor.name != "px4" or not self._mocap.origin_sent:
+            return False
+        if mocap_m_enu is None or st.position_ned is None or not disarmed_on_ground(st):
+            return False
+        return off_the_mocap_m(self._position_m_enu(), mocap_m_enu) is None
 
     def _stream(self, setpoint: Setpoint | None, now_s: float) -> bool:
         """Send our mode's setpoint; True: the lag is to measure where the pen writes now."""

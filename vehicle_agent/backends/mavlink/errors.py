@@ -8,7 +8,8 @@ MAV_RESULT_NAMES = {0: "ACCEPTED", 1: "TEMPORARILY_REJECTED", 2: "DENIED", 3: "U
                     4: "FAILED", 5: "IN_PROGRESS", 6: "CANCELLED"}  # fmt: skip
 COMMAND_ARM_DISARM, MAV_RESULT_TEMPORARILY_REJECTED = 400, 1
 COMMAND_NAMES = {11: "SET_MODE", 21: "NAV_LAND", 22: "NAV_TAKEOFF", 176: "DO_SET_MODE",
-                 400: "COMPONENT_ARM_DISARM", 511: "SET_MESSAGE_INTERVAL"}  # fmt: skip
+                 179: "DO_SET_HOME", 400: "COMPONENT_ARM_DISARM",
+                 511: "SET_MESSAGE_INTERVAL"}  # fmt: skip
 
 
 class MavlinkError(BackendError):

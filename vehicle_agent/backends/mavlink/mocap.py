@@ -143,6 +143,11 @@ class MocapForwarder:
         None when no mocap is forwarded."""
         return None if self.kind == "none" else now_s - self.pose_at_s
 
+    @property
+    def origin_sent(self) -> bool:
+        """The autopilot's EKF has been given its origin (:meth:`set_ekf_origin`)."""
+        return self._origin_sent
+
     def set_ekf_origin(self, link: MavlinkLink, system_id: int) -> None:
         """An autopilot fusing our mocap: give its EKF an origin (once), before its GPS does;
         PX4's once poses have flowed for :data:`PX4_ORIGIN_AFTER_POSES_S` (then sent by

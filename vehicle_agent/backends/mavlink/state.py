@@ -370,10 +370,11 @@ class LinkState:
 
 MAV_SYS_STATUS_PREARM_CHECK = 0x10000000
 """SYS_STATUS sensor bit of the pre-arm checks (PX4 sets it in health only, ArduPilot in all)."""
-PREARM_EXPLANATIONS = ("PreArm:", "Preflight Fail:")
+PREARM_EXPLANATIONS = ("PreArm:", "Preflight Fail:", "Geofence:")
 """How a STATUSTEXT naming a failing pre-arm check begins: ArduPilot's (said when the failure
 begins or changes, every 30 s while it lasts, and on MAV_CMD_RUN_PREARM_CHECKS), PX4's (said
-when its health checks change, and on that command)."""
+when its health checks change, and on that command; its geofence's checks begin "Geofence:",
+``geofenceCheck.cpp``)."""
 PREARM_DENIAL = "Arming denied:"
 """PX4's refusal of an ARM, at times naming no check ("Resolve system health failures first"):
 an explanation only until a better one comes."""
