@@ -23,12 +23,18 @@ from __future__ import annotations
 
 import math
 import subprocess
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any
 
 from instances import Instance, SitlError, boot_params
 
+STOP_REQUESTED = threading.Event()
+"""Set by start.py's handler of a stop signal, which also raises KeyboardInterrupt: pymavlink
+runs bare ``except:`` clauses (``mavutil`` importing ``curses``, its wire-version sniffing) that
+swallow it when the signal lands inside one, and start.py then waited for its instances until
+the ready timeout (a test's ``kill``, about one run in six). The waits here look at this too."""
 MAV_SYS_STATUS_PREARM_CHECK = 0x10000000
 ESTIMATOR_ATTITUDE = 0x1
 EKF_MESSAGE_ID = {"ardupilot": 193, "px4": 230}
@@ -129,6 +135,7 @@ def wait_ready(inst: Instance, proc: subprocess.Popen[bytes], timeout_s: float) 
 
 def _connect(mavutil: Any, url: str, proc: subprocess.Popen[bytes], deadline: float) -> Any:
     while True:  # ArduCopter's TCP port opens a moment after the process starts
+        _stop_if_requested()
         if proc.poll() is not None:
             raise SitlError(f"SITL exited with status {proc.returncode} before {url} opened")
         try:
@@ -146,6 +153,7 @@ def _poll(
 ) -> None:
     next_ask = 0.0
     while not state.ready():
+        _stop_if_requested()
         now = time.monotonic()
         if proc.poll() is not None:
             raise SitlError(
@@ -160,6 +168,11 @@ def _poll(
         msg = conn.recv_match(blocking=True, timeout=0.2)
         if msg is not None and msg.get_srcSystem() == inst.system_id:
             state.update(msg)
+
+
+def _stop_if_requested() -> None:
+    if STOP_REQUESTED.is_set():
+        raise KeyboardInterrupt
 
 
 def _ask(conn: Any, inst: Instance, state: Readiness) -> None:

@@ -65,7 +65,7 @@ from instances import (  # scripts/sitl/, beside this file
     port_free,
     url_kind_port,
 )
-from readiness import wait_ready
+from readiness import STOP_REQUESTED, wait_ready
 
 __all__ = [  # what the tests and the other scripts use of the launcher
     "ENV_BINARY", "PX4_VIBRATION_PARAM", "READY_TIMEOUT_S", "RESEARCH_AIRFRAME_VIBRATION",
@@ -240,6 +240,7 @@ instances running (tests/test_sitl_side_by_side.py, run from a background shell)
 
 
 def _interrupt(_signum: int, _frame: object) -> None:
+    STOP_REQUESTED.set()  # seen by the waits even where pymavlink swallows the exception
     raise KeyboardInterrupt
 
 
