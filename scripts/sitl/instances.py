@@ -67,6 +67,14 @@ PX4_PORT_VARIABLES = ("PX4_SYS_ID", "PX4_OFFBOARD_REMOTE_PORT", "PX4_GCS_REMOTE_
 """What PX4's startup scripts read once scripts/sitl/source_edits.py has edited them."""
 PX4_VIBRATION_PARAM = "SIH_IMU_VIB"
 """SIH's armed IMU noise as a fraction of its own (added by scripts/sitl/source_edits.py)."""
+SIH_STOCK_VIBRATION = 1.0
+"""SIH's own IMU noise: SIH_IMU_VIB's default, and any PX4 built without our edit."""
+SIH_IMU_RATE_HZ = 250.0
+"""How often SIH samples its IMU (``sensor_combined`` in its ULogs, 4 ms apart)."""
+EKF2_STEP_HZ = 100.0
+"""EKF2's update rate (EKF2_PREDICT_US 10 ms): the gyro's samples over one step are averaged."""
+EKF2_GYR_NOISE_DEFAULT = 0.015
+"""PX4's EKF2_GYR_NOISE in [rad/s]: a real IMU's."""
 MOCAP_PARM = "mocap.parm"
 MOCAP_BOOT_PARAMS = {
     "VISO_TYPE": 1.0,
@@ -335,7 +343,21 @@ def boot_params(inst: Instance) -> dict[str, float]:
     params = dict(PX4_MOCAP_BOOT_PARAMS) if inst.mocap else {}
     if inst.imu_vibration is not None:
         params[PX4_VIBRATION_PARAM] = inst.imu_vibration
+    vibration = SIH_STOCK_VIBRATION if inst.imu_vibration is None else inst.imu_vibration
+    if sih_gyro_noise(vibration) > EKF2_GYR_NOISE_DEFAULT:
+        params["EKF2_GYR_NOISE"] = round(sih_gyro_noise(vibration), 3)
     return params
+
+
+def sih_gyro_noise(vibration: float) -> float:
+    """EKF2_GYR_NOISE in [rad/s] that describes SIH's gyro at ``vibration`` (SIH_IMU_VIB): its
+    roll axis's noise a sample, 0.01 + 0.13 x vibration rad/s (``sih.cpp``, our edit of it),
+    over one EKF2 step. On the stock airframe (0.089 against PX4's 0.015, for a real IMU) EKF2's
+    roll had wandered 9.5 mrad RMS below 0.5 Hz off SIH's truth, 0.09 m/s^2 of sideways thrust the
+    position loop chased; at 0.1 rad/s 5-6 mrad. ``shows/sitl-px4.yaml``, 12 held-out, quiet,
+    with EKF2_TAU_VEL 0.03: 8 of 12 ``done`` against 6 without (issue 31)."""
+    per_sample = 0.01 + 0.13 * vibration
+    return per_sample / math.sqrt(SIH_IMU_RATE_HZ / EKF2_STEP_HZ)
 
 
 def command(inst: Instance) -> tuple[list[str], dict[str, str]]:
