@@ -51,9 +51,9 @@ update): between updates the output predictor integrates the accelerometer, and 
 airframe (1.7 m/s^2 a sample across the body, ``sih.cpp``) that made its velocity 30-39 mm/s RMS
 off the truth across, at 0.1 s, the velocity loop passing it on: the vehicle wandered 9-18 mm
 about a still setpoint (issue 31). At 0.03 s: 22-25 mm/s; ``shows/sitl-px4.yaml``, 12 held-out,
-stock airframe, quiet: 6 of 12 ``done`` (2 at 0.1 s), pen-down RMSE median 15.9 mm (23), IoU 0.41
-(0.31); the research airframe unchanged (12 of 12, 6.7 mm, IoU 0.70, worst 0.65 against 6.6,
-0.70, 0.65)."""
+stock airframe, quiet: 5-8 of 12 ``done`` in three runs (2 at 0.1 s), pen-down RMSE median
+15.9-16.6 mm (23), IoU 0.41-0.45 (0.31); the research airframe unchanged (12 of 12, 6.7 mm, IoU
+0.70, worst 0.65 against 6.6, 0.70, 0.65)."""
 PX4_EV_CTRL_POSITION_3D = 3
 """EKF2_EV_CTRL bits 0 and 1: fuse external-vision horizontal and vertical position."""
 PX4_EV_CTRL_VELOCITY = 4
