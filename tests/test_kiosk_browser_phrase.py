@@ -83,14 +83,16 @@ def _characters(show: PhraseShow, phrase_id: str) -> list[Any]:
 
 
 def _items(page: Any) -> list[str]:
-    """The characters' lines as laid out: read once the list is rendered (read while it is
-    redrawn, an item's text comes without its line break: '新等待批准', a fresh clone's CI)."""
-    page.wait_for_function(
-        "() => [...document.querySelectorAll('#phrase-chars li')]"
-        ".every(li => li.innerText.includes('\\n'))",
+    """The characters' lines as laid out, read in the same script that sees the list rendered
+    (read while it is redrawn, an item's text comes without its line break: '新等待批准', a
+    fresh clone's CI, twice: also when read just after a wait that had seen it whole)."""
+    laid_out = page.wait_for_function(
+        "() => { const texts = [...document.querySelectorAll('#phrase-chars li')]"
+        ".map(li => li.innerText);"
+        " return texts.length && texts.every(t => t.includes('\\n')) ? texts : null; }",
         timeout=UI_WAIT_MS,
     )
-    return [str(t).replace("\n", " ") for t in page.locator("#phrase-chars li").all_inner_texts()]
+    return [str(t).replace("\n", " ") for t in laid_out.json_value()]
 
 
 def test_a_phrase_is_handed_in_and_followed_as_one_ticket_until_written(

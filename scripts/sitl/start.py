@@ -248,6 +248,7 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     run_dir = args.run_dir or Path("out") / f"{args.show.stem}-sitl"
     procs: list[subprocess.Popen[bytes]] = []
+    STOP_REQUESTED.clear()  # a main() run before in this process was stopped
     for signum in STOP_SIGNALS:
         signal.signal(signum, _interrupt)
     try:
