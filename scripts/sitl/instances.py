@@ -354,7 +354,8 @@ def sih_gyro_noise(vibration: float) -> float:
     roll axis's noise a sample, 0.01 + 0.13 x vibration rad/s (``sih.cpp``, our edit of it),
     over one EKF2 step. On the stock airframe (0.089 against PX4's 0.015, for a real IMU) EKF2's
     roll had wandered 9.5 mrad RMS below 0.5 Hz off SIH's truth, 0.09 m/s^2 of sideways thrust the
-    position loop chased; at 0.1 rad/s 5-6 mrad. ``shows/sitl-px4.yaml``, 12 held-out, quiet,
+    position loop chased; at 0.1 rad/s 5.1-6.2 mrad (4.3-8.5 with EKF2_TAU_VEL 0.03, three flights
+    each). ``shows/sitl-px4.yaml``, 12 held-out, quiet,
     with EKF2_TAU_VEL 0.03: 8 and 5 of 12 ``done`` in two runs, 6 without: within the spread of
     runs; kept as the sensor's own figure (issue 31, docs/sitl.md)."""
     per_sample = 0.01 + 0.13 * vibration
