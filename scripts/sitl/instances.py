@@ -30,6 +30,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
+from sih import PX4_VIBRATION_PARAM, airframe_params, px4_sih_degrees  # beside this file
+
 Kind = Literal["ardupilot", "px4"]
 Protocol = Literal["tcp", "udp"]
 ENV_BINARY: dict[str, str] = {
@@ -42,10 +44,6 @@ LOOPBACK_HOSTS = ("127.0.0.1", "localhost")
 REFERENCE_LLA = (-35.363261, 149.165230, 584.0)
 """Geodetic point (lat [deg], lon [deg], alt [m]) of the show frame's origin (ArduPilot's CMAC)."""
 EARTH_RADIUS_M = 6_378_137.0
-PX4_HOME_FLOAT32_STEPS = 16
-"""How many float32 steps (0.4 m north, 1.4 m east here) a PX4 home may move to sit half-way
-along the truth's 1e-7 degree step (:func:`px4_sih_degrees`); each vehicle simulates its own
-world, anchored on its own home, and fuses the mocap in the show frame."""
 MAX_INSTANCES = 20
 """Instance numbers tried, 0 .. 19: below it no two numbers' ports meet (ArduCopter's RC input
 5501 + 10*N stays under its serial ports 5760 + 10*N; PX4's probe 14560 + N under its 14580 + N)."""
@@ -65,16 +63,6 @@ CLAIM_FILE = "skyquill-sitl-{kind}-{n}.lock"
 """start.py's own lock per instance number, in the temporary directory."""
 PX4_PORT_VARIABLES = ("PX4_SYS_ID", "PX4_OFFBOARD_REMOTE_PORT", "PX4_GCS_REMOTE_PORT")
 """What PX4's startup scripts read once scripts/sitl/source_edits.py has edited them."""
-PX4_VIBRATION_PARAM = "SIH_IMU_VIB"
-"""SIH's armed IMU noise as a fraction of its own (added by scripts/sitl/source_edits.py)."""
-SIH_STOCK_VIBRATION = 1.0
-"""SIH's own IMU noise: SIH_IMU_VIB's default, and any PX4 built without our edit."""
-SIH_IMU_RATE_HZ = 250.0
-"""How often SIH samples its IMU (``sensor_combined`` in its ULogs, 4 ms apart)."""
-EKF2_STEP_HZ = 100.0
-"""EKF2's update rate (EKF2_PREDICT_US 10 ms): the gyro's samples over one step are averaged."""
-EKF2_GYR_NOISE_DEFAULT = 0.015
-"""PX4's EKF2_GYR_NOISE in [rad/s]: a real IMU's."""
 MOCAP_PARM = "mocap.parm"
 MOCAP_BOOT_PARAMS = {
     "VISO_TYPE": 1.0,
@@ -298,33 +286,6 @@ def home_lla(home_m_enu: tuple[float, float, float]) -> tuple[float, float, floa
     return (lat, lon, alt0 + up)
 
 
-def px4_sih_degrees(value_deg: float) -> float:
-    """The latitude or longitude in [deg] nearest ``value_deg`` that PX4 SIH can start at and
-    whose truth is unbiased. SIH starts at its float32 SIH_LOC_LAT0/LON0 (PX4_HOME_LAT/LON);
-    PX4 sends the true position (HIL_STATE_QUATERNION) as ``int32(lat * 1e7)``, cut towards
-    zero (1.1 cm steps north, 0.9 cm east here), and the agent anchors the show frame on the
-    first sample at rest. A flight's samples then average half a step short of the truth, the
-    anchor short by where home lies in its step: together a fixed offset of up to half a step
-    per axis, which the mocap the autopilot flies and the job metrics share (in PX4's ULogs of
-    issue 31: 4-5 mm north on both vehicles, +1.6 and -2.0 mm east; predicted from the homes'
-    place in their steps 5.2 and -2.4 mm). A home half-way along its step takes it out: of the
-    float32 values within :data:`PX4_HOME_FLOAT32_STEPS` steps of ``value_deg``, the nearest
-    whose ``abs(value * 1e7)`` lies within a tenth of a step of half-way (a bias of at most
-    1.1 mm; at the show frame's origin the home moves by up to 3.5 m)."""
-    half_way = math.copysign((math.floor(abs(value_deg) * 1e7) + 0.5) * 1e-7, value_deg)
-    candidates = [_float32(half_way)]  # exact enough where float32 steps are finer than 1e-7
-    here = struct.unpack("<i", struct.pack("<f", value_deg))[0]
-    candidates += [struct.unpack("<f", struct.pack("<i", here + k))[0]
-                   for k in range(-PX4_HOME_FLOAT32_STEPS, PX4_HOME_FLOAT32_STEPS + 1)]  # fmt: skip
-    return min(
-        candidates, key=lambda v: (abs((abs(v) * 1e7) % 1.0 - 0.5) > 0.1, abs(v - value_deg))
-    )
-
-
-def _float32(value: float) -> float:
-    return float(struct.unpack("<f", struct.pack("<f", value))[0])
-
-
 def binary_for(kind: Kind, explicit: str | None = None) -> Path:
     """The executable of ``kind``: ``explicit`` or its environment variable; SitlError if none."""
     value = explicit or os.environ.get(ENV_BINARY[kind], "")
@@ -341,25 +302,7 @@ def boot_params(inst: Instance) -> dict[str, float]:
     if inst.kind == "ardupilot":
         return dict(MOCAP_BOOT_PARAMS) if inst.mocap else {}
     params = dict(PX4_MOCAP_BOOT_PARAMS) if inst.mocap else {}
-    if inst.imu_vibration is not None:
-        params[PX4_VIBRATION_PARAM] = inst.imu_vibration
-    vibration = SIH_STOCK_VIBRATION if inst.imu_vibration is None else inst.imu_vibration
-    if sih_gyro_noise(vibration) > EKF2_GYR_NOISE_DEFAULT:
-        params["EKF2_GYR_NOISE"] = round(sih_gyro_noise(vibration), 3)
-    return params
-
-
-def sih_gyro_noise(vibration: float) -> float:
-    """EKF2_GYR_NOISE in [rad/s] that describes SIH's gyro at ``vibration`` (SIH_IMU_VIB): its
-    roll axis's noise a sample, 0.01 + 0.13 x vibration rad/s (``sih.cpp``, our edit of it),
-    over one EKF2 step. On the stock airframe (0.089 against PX4's 0.015, for a real IMU) EKF2's
-    roll had wandered 9.5 mrad RMS below 0.5 Hz off SIH's truth, 0.09 m/s^2 of sideways thrust the
-    position loop chased; at 0.1 rad/s 5.1-6.2 mrad (4.3-8.5 with EKF2_TAU_VEL 0.03, three flights
-    each). ``shows/sitl-px4.yaml``, 12 held-out, quiet,
-    with EKF2_TAU_VEL 0.03: 8 and 5 of 12 ``done`` in two runs, 6 without: within the spread of
-    runs; kept as the sensor's own figure (issue 31, docs/sitl.md)."""
-    per_sample = 0.01 + 0.13 * vibration
-    return per_sample / math.sqrt(SIH_IMU_RATE_HZ / EKF2_STEP_HZ)
+    return params | airframe_params(inst.imu_vibration)
 
 
 def command(inst: Instance) -> tuple[list[str], dict[str, str]]:

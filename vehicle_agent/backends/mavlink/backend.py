@@ -357,7 +357,7 @@ class MavlinkBackend:
         elif self.mode == "idle":
             if st.in_offboard_on_ground:  # a refused arming, or found so at connect
                 self.flight.ask_ground_mode(now_s, math.inf)
-            self._home.step(now_s, ready=self._home_ready())
+            self._home.step(now_s, self._home_ready)
 
     def _home_ready(self) -> bool:
         """A PX4 on the EKF origin we gave it, disarmed on the ground, its estimate on the

@@ -17,6 +17,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import math
+from collections.abc import Callable
 
 from vehicle_agent.backends.mavlink.commands import CommandChannel
 from vehicle_agent.backends.mavlink.errors import (
@@ -43,11 +44,12 @@ class HomeSetter:
         self._task: asyncio.Task[None] | None = None
         self._tried_s = -math.inf
 
-    def step(self, now_s: float, *, ready: bool) -> None:
-        """``ready``: the EKF is on our origin, the vehicle disarmed on the ground and its
-        estimate on the mocap. Starts a try (not awaited) at agent time ``now_s`` [s]."""
+    def step(self, now_s: float, ready: Callable[[], bool]) -> None:
+        """``ready()``: the EKF is on our origin, the vehicle disarmed on the ground and its
+        estimate on the mocap (asked only while a try is due). Starts a try (not awaited) at
+        agent time ``now_s`` [s]."""
         busy = self._task is not None and not self._task.done()
-        if self.done or not ready or busy or now_s - self._tried_s < RETRY_S:
+        if self.done or busy or now_s - self._tried_s < RETRY_S or not ready():
             return
         self._tried_s = now_s
         self._task = asyncio.get_running_loop().create_task(self._set_home_here())
