@@ -69,7 +69,7 @@ class Link:
         return True
 
 
-def _ensure(**autopilot: Any) -> tuple[float | str, int]:
+def _ensure(spec: ParamSpec = SPEC, **autopilot: Any) -> tuple[float | str, int]:
     """What ``ensure`` returns (or its error's text) and how many sets the autopilot saw."""
 
     async def scenario() -> tuple[float | str, int]:
@@ -83,7 +83,7 @@ def _ensure(**autopilot: Any) -> tuple[float | str, int]:
         )
         link.autopilot = ap = Autopilot(channel, **autopilot)
         try:
-            return await channel.ensure(SPEC), ap.sets
+            return await channel.ensure(spec), ap.sets
         except ParamError as exc:
             return str(exc), ap.sets
 
@@ -106,3 +106,14 @@ def test_a_value_the_autopilot_does_not_hold_refuses_the_vehicle_saying_what_it_
     assert said == (
         "parameter MPC_XY_VEL_I_ACC (velocity loop I) is 0.4 after setting it to 1.6 3 times"
     )
+
+
+@pytest.mark.parametrize(("at_most", "value", "sets"), [(1.6, OLD_VALUE, 0), (0.4, OLD_VALUE, 0),
+                                                         (0.1, 0.1, 1)])  # fmt: skip
+def test_a_ceiling_keeps_a_smaller_value_the_airframe_has_and_lowers_a_larger_one(
+    at_most: float, value: float, sets: int
+) -> None:
+    """EKF2_TAU_VEL: the show needs the velocity within 0.1 s of the mocap's; an airframe tuned
+    to 0.03 keeps it (the parameter stands at 0.4 here, below a ceiling of 1.6 or at 0.4)."""
+    spec = ParamSpec("MPC_XY_VEL_I_ACC", at_most, MAV_PARAM_TYPE_REAL32, at_most=True)
+    assert _ensure(spec) == (pytest.approx(value), sets)

@@ -344,16 +344,19 @@ def test_a_missing_binary_variable_is_named(
         sitl.binary_for("px4")
 
 
-def test_px4s_estimator_is_told_the_stock_airframes_gyro_noise(
+def test_px4s_estimator_is_told_the_stock_airframes_imu_noise(
     sitl: ModuleType, tmp_path: Path
 ) -> None:
-    """SIH's roll gyro, 0.14 rad/s a sample at 250 Hz, over EKF2's 10 ms step; the research
-    airframe's (0.01) is within PX4's default 0.015."""
+    """SIH's roll gyro, 0.14 rad/s a sample at 250 Hz, over EKF2's 10 ms step, and the velocity
+    pulled to the mocap's within 0.03 s, not carried on its vibrating accelerometer; the research
+    airframe's gyro (0.01) is within PX4's default 0.015, its velocity left to the agent."""
     inst = sitl.Instance("px4", 0, 1, (0.0, 0.0, 0.0), px4_binary(tmp_path), tmp_path / "run",
                          47650, mocap=True)  # fmt: skip
     assert sitl.boot_params(inst)["EKF2_GYR_NOISE"] == pytest.approx(0.14 / math.sqrt(2.5), 1e-2)
     assert sitl.command(inst)[1]["PX4_PARAM_EKF2_GYR_NOISE"] == "0.089"
-    assert "EKF2_GYR_NOISE" not in sitl.boot_params(replace(inst, imu_vibration=0.0))
+    assert sitl.command(inst)[1]["PX4_PARAM_EKF2_TAU_VEL"] == "0.03"
+    research = sitl.boot_params(replace(inst, imu_vibration=0.0))
+    assert "EKF2_GYR_NOISE" not in research and "EKF2_TAU_VEL" not in research
 
 
 def test_a_px4_research_airframe_needs_a_binary_with_the_vibration_parameter(
