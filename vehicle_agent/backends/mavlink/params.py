@@ -52,9 +52,9 @@ integrates the accelerometer. A smaller value the autopilot already has is kept 
 whose accelerometer is noisier than the mocap's velocity wants it smaller: SIH's stock airframe
 0.03, ``scripts/sitl/sih.py``), as it is a property of the airframe, not of the show. For all
 PX4s at 0.03 (2026-11-30) the research airframe's 一 at stretch 2 (``tests/test_sitl_writing.py``,
-six runs each, quiet) wrote IoU 0.57-0.69 (median 0.63, three below the test's 0.6) against
-0.64-0.73 (0.69, none below) at 0.1, with the same RMSE (7.0-10.1 against 7.1-10.0 mm): with a
-clean accelerometer the velocity is better carried on it than pulled to the mocap's."""
+quiet) wrote IoU 0.57-0.69 in six runs (median 0.63, three below the test's 0.6) against
+0.56-0.73 in eight (0.68, one below) at 0.1, with the same RMSE (7.0-10.1 against 7.1-10.0 mm):
+suggestive, not proven; with a clean accelerometer the velocity is better carried on it."""
 PX4_EV_CTRL_POSITION_3D = 3
 """EKF2_EV_CTRL bits 0 and 1: fuse external-vision horizontal and vertical position."""
 PX4_EV_CTRL_VELOCITY = 4
