@@ -25,7 +25,7 @@ VIBRATING_TAU_VEL_S = 0.03
 """EKF2_TAU_VEL in [s] of an airframe whose IMU is noisier than a real one's: the output predictor
 integrates the accelerometer between updates, and SIH's stock one (1.7 m/s^2 a sample across the
 body, ``sih.cpp``) made EKF2's velocity 30-39 mm/s RMS off the truth at the agent's 0.1 s, 22-25
-at 0.03; ``shows/sitl-px4.yaml``, 12 held-out, stock airframe, quiet: 5-8 of 12 ``done`` in three
+at 0.03; ``shows/sitl-px4.yaml``, 12 held-out, stock airframe, quiet: 5-9 of 12 ``done`` in four
 runs against 2 (issue 31, docs/sitl.md). The agent keeps a value below its own."""
 
 
