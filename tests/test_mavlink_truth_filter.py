@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mav
 
+from vehicle_agent.backends.mavlink.odometry import PoseVelocity
 from vehicle_agent.backends.mavlink.truth import EARTH_RADIUS_M, TruthTracker
 from vehicle_agent.backends.mavlink.truth_filter import (
     CLOCK_SLACK_S,
@@ -17,6 +18,7 @@ from vehicle_agent.backends.mavlink.truth_filter import (
     SmoothedTruthTracker,
     carry_s,
     mid_step_mps,
+    own_time_s,
     simulator_time_s,
 )
 
@@ -49,17 +51,23 @@ def sim_state(
 
 
 def hil_state_quaternion(
-    north_m: float, east_m: float, up_m: float, v_enu: tuple[float, float, float]
+    north_m: float,
+    east_m: float,
+    up_m: float,
+    v_enu: tuple[float, float, float],
+    taken_s: float = 0.0,
 ) -> mav.MAVLink_hil_state_quaternion_message:
     """PX4 SIH's HIL_STATE_QUATERNION of the same point, as PX4 v1.16 fills it: lat/lon in 1e-7
     degrees, alt in millimetres and the velocity in cm/s, each a float stored in an integer
     (truncated towards zero). The home lies half-way along its 1e-7 degree steps, as
-    ``scripts/sitl/start.py`` places each PX4 (the truncation's offset then averages out)."""
+    ``scripts/sitl/start.py`` places each PX4 (the truncation's offset then averages out).
+    ``taken_s``: the sample's own time in [s] (0: none, as PX4 as shipped sends it)."""
     lat, lon = lat_lon_deg(north_m, east_m, home_deg=(LAT0 - 0.5e-7, LON0 + 0.5e-7))
     vx, vy, vz = (math.trunc(100.0 * c) for c in (v_enu[1], v_enu[0], -v_enu[2]))
     return mav.MAVLink_hil_state_quaternion_message(
-        0, [1.0, 0.0, 0.0, 0.0], 0.0, 0.0, 0.0, math.trunc(lat * 1e7), math.trunc(lon * 1e7),
-        math.trunc((ALT0 + up_m) * 1e3), vx, vy, vz, 0, 0, 0, 0, 0,
+        round(taken_s * 1e6), [1.0, 0.0, 0.0, 0.0], 0.0, 0.0, 0.0,
+        math.trunc(lat * 1e7), math.trunc(lon * 1e7), math.trunc((ALT0 + up_m) * 1e3),
+        vx, vy, vz, 0, 0, 0, 0, 0,
     )  # fmt: skip
 
 
@@ -184,3 +192,40 @@ def test_a_jump_the_velocity_does_not_explain_is_taken_as_it_is() -> None:
     tracker.absorb(sim_state(0.0, 0.0, 0.0, (0.0, 0.0, 0.0)), 0.0, resting_at_home=True)
     tracker.absorb(sim_state(0.0, 0.5, 0.0, (0.0, 0.0, 0.0)), 0.02, resting_at_home=False)
     assert tracker.samples[-1].position_m_enu[0] == pytest.approx(0.5, abs=0.011)
+
+
+@pytest.mark.parametrize("stamped", [True, False])
+def test_a_stamped_truth_keeps_the_simulators_spacing_through_a_jittery_link(
+    stamped: bool,
+) -> None:
+    """PX4 SIH's truth every 20 ms of its clock, arriving 1-12 ms late at random (a loaded
+    machine; the first 15 read at once, a backlog), smoothed on the simulator's seconds and read
+    as the mocap's velocity is (differenced over the samples' times). Stamped on arrival, the
+    velocity along a 9.3 cm/s stroke wobbles by 14 mm/s; stamped with the truth's own time (PX4
+    built with scripts/sitl/source_edits.py) by what its whole-cm/s steps leave, 6 mm/s, and on
+    the right mean."""
+    rng = np.random.default_rng(7)
+    tracker, velocity, east_mps = SmoothedTruthTracker(HOME), PoseVelocity(), []
+    for k in range(600):
+        t = 100.0 + k * 0.02  # PX4's clock since boot
+        message = hil_state_quaternion(0.0, 0.093 * k * 0.02, 0.0, (0.093, 0.0, 0.0),
+                                       t if stamped else 0.0)  # fmt: skip
+        arrived_s = 5.0 + k * 0.02 + float(rng.uniform(0.001, 0.012))
+        if k < 15:  # a backlog, read at once as the agent starts
+            arrived_s = 5.3 + 1e-4 * k
+        assert tracker.absorb(message, arrived_s, resting_at_home=(k == 0), simulator_s=t)
+        sample = tracker.samples[-1]
+        if k > 15:  # never after it arrived, and the least delay soon found
+            assert arrived_s - 0.012 < sample.time_s <= arrived_s + (1e-9 if k > 60 else 0.3)
+        v = velocity.update(sample.time_s, sample.position_m_enu)
+        if k > 100 and not math.isnan(v[0]):
+            east_mps.append(v[0])
+    wobble_mps = float(np.std(east_mps))
+    mean_mps = float(np.mean(east_mps))
+    if stamped:
+        assert own_time_s(message) == pytest.approx(t)
+        assert mean_mps == pytest.approx(0.093, abs=0.0015)
+        assert wobble_mps < 0.008  # the whole-cm/s steps' share
+    else:  # 14 mm/s, and 4 mm/s slow: the 20 ms baseline picks the pairs that came further apart
+        assert own_time_s(message) is None
+        assert wobble_mps > 0.012

@@ -19,6 +19,11 @@ binary than one that listens on every interface.
   ``SIH_IMU_VIB`` (new, default 1: unchanged) scales the armed noise between SIH's own disarmed
   level (0: 0.1 m/s^2 and 0.01 rad/s on every axis) and the stock level (1); the same number of
   random draws either way. scripts/sitl/start.py sets it for vehicles on mocap.
+- **PX4's truth stamped with its own time.** HIL_STATE_QUATERNION carries SIH's true state to the
+  agent, which makes the show's mocap of it; PX4 leaves its ``time_usec`` 0, so the agent took
+  each sample's time from the last ATTITUDE and from when it arrived, 0-20 ms off the truth's
+  own. ``time_usec`` is now the truth's sample time (``timestamp_sample``, PX4's clock since
+  boot, as the message defines it).
 - **PX4's system id and two UDP ports from the environment.** ``px4 -i N`` forces MAV_SYS_ID
   N + 1 (after the PX4_PARAM_* overrides, so those cannot change it), sends its offboard link to
   14540 + N and its GCS link to 14550, one port for every instance on the machine: two shows, or
@@ -143,6 +148,8 @@ PARAM_DEFINE_FLOAT(SIH_IMU_VIB, 1.0f);
 _SIH_PARAM_ANCHOR = "PARAM_DEFINE_INT32(SIH_VEHICLE_TYPE, 0);\n"
 _SIH = "src/modules/simulation/simulator_sih/"
 _POSIX_INIT = "ROMFS/px4fmu_common/init.d-posix/"
+_TRUTH_STREAM = "src/modules/mavlink/streams/HIL_STATE_QUATERNION.hpp"
+_TRUTH_LATITUDE = "\t\t\tmsg.lat = gpos.lat * 1e7;\n"
 _OFFBOARD_REMOTE_STOCK = (
     '[ "$px4_instance" -gt 9 ] && udp_offboard_port_remote=14549 # use the same ports for more '
     "than 10 instances to avoid port overlaps\n"
@@ -193,6 +200,13 @@ PX4_EDITS = (
         _SIH_NOISE_STOCK,
         _SIH_NOISE_SCALED,
         "SIH's armed IMU noise scaled by SIH_IMU_VIB",
+    ),
+    Edit(
+        _TRUTH_STREAM,
+        _TRUTH_LATITUDE,
+        "\t\t\t// skyquill: the truth's own time (PX4 leaves it 0)\n"
+        "\t\t\tmsg.time_usec = lpos.timestamp_sample;\n" + _TRUTH_LATITUDE,
+        "HIL_STATE_QUATERNION stamped with the truth's sample time",
     ),
     Edit(
         _POSIX_INIT + "rcS",
