@@ -21,9 +21,9 @@ binary than one that listens on every interface.
   random draws either way. scripts/sitl/start.py sets it for vehicles on mocap.
 - **PX4's truth stamped with its own time.** HIL_STATE_QUATERNION carries SIH's true state to the
   agent, which makes the show's mocap of it; PX4 leaves its ``time_usec`` 0, so the agent took
-  each sample's time from the last ATTITUDE and from when it arrived, 0-20 ms off the truth's
-  own. ``time_usec`` is now the truth's sample time (``timestamp_sample``, PX4's clock since
-  boot, as the message defines it).
+  each sample's time from the last ATTITUDE (a stream of its own) and from when it arrived.
+  ``time_usec`` is now the truth's sample time (``timestamp_sample``, PX4's clock since boot, as
+  the message defines it); why: docs/sitl.md.
 - **PX4's system id and two UDP ports from the environment.** ``px4 -i N`` forces MAV_SYS_ID
   N + 1 (after the PX4_PARAM_* overrides, so those cannot change it), sends its offboard link to
   14540 + N and its GCS link to 14550, one port for every instance on the machine: two shows, or

@@ -132,16 +132,14 @@ class CaptureClock:
     """When a truth sample stamped with its own time was taken, on the agent's clock: its own
     time plus the link's least delay over the last :data:`CAPTURE_WINDOW_S` of the simulator's
     clock, taken at once when it falls and low-passed over :data:`CAPTURE_OFFSET_TIME_CONSTANT_S`
-    of it when it rises. Stamped on arrival,
-    samples taken 20 ms apart can come 1 ms apart
+    of it when it rises. Stamped on arrival, samples taken 20 ms apart can come 1 ms apart
     (:class:`~vehicle_agent.backends.mavlink.odometry.PoseVelocity`), and the mocap's velocity,
     differenced over the stamps, is off by as much as their spacing is. PX4 SIH, research
     airframe, 12 held-out jobs (issue 31, docs/sitl.md; three runs, one at load 4): EKF2's
     velocity error while writing at 0.2-1 Hz 4.9 -> 3.3-3.4 mm/s, pen-down RMSE median
-    6.6-6.8 -> 6.0-6.2 mm, IoU median 0.70 -> 0.72-0.74.
-    The least delay, not the mean: a backlog read at once (the agent starting while the
-    autopilot already streams) comes late all together, and a sample stamped after it arrived
-    is not yet the mocap's."""
+    6.6-6.8 -> 6.0-6.2 mm, IoU median 0.70 -> 0.72-0.74. The least delay, not the mean: a
+    backlog read at once (the agent starting while the autopilot already streams) comes late
+    all together, and a sample stamped after it arrived is not yet the mocap's."""
 
     def __init__(self) -> None:
         self._delays: deque[tuple[float, float]] = deque()  # (own time [s], delay [s])
