@@ -35,8 +35,9 @@ def airframe_params(imu_vibration: float | None) -> dict[str, float]:
     gyro noise (:func:`sih_gyro_noise`) and velocity time constant (:data:`VIBRATING_TAU_VEL_S`)."""
     params = {} if imu_vibration is None else {PX4_VIBRATION_PARAM: imu_vibration}
     vibration = SIH_STOCK_VIBRATION if imu_vibration is None else imu_vibration
-    if sih_gyro_noise(vibration) > EKF2_GYR_NOISE_DEFAULT:
-        params["EKF2_GYR_NOISE"] = round(sih_gyro_noise(vibration), 3)
+    gyro_noise = sih_gyro_noise(vibration)
+    if gyro_noise > EKF2_GYR_NOISE_DEFAULT:
+        params["EKF2_GYR_NOISE"] = round(gyro_noise, 3)
         params["EKF2_TAU_VEL"] = VIBRATING_TAU_VEL_S
     return params
 

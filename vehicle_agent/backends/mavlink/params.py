@@ -349,15 +349,13 @@ class ParamChannel:
 
     async def ensure(self, spec: ParamSpec) -> float:
         """Set ``spec`` and read it back; raises :class:`ParamError` unless it holds. A spec
-        ``at_most`` already met is read and left as it is."""
+        ``at_most`` or ``needs_reboot`` is read first and left as it is where it already holds."""
         want = spec.value
-        if spec.at_most:
+        if spec.at_most or spec.needs_reboot:
             current = await self.read(spec.name)
-            if current <= want or same_value(current, want):
+            if same_value(current, want) or (spec.at_most and current < want):
                 return current
-        if spec.needs_reboot:
-            current = await self.read(spec.name)
-            if not same_value(current, want):
+            if spec.needs_reboot:
                 await self.write(spec.name, want, spec.param_type)
                 raise ParamError(
                     f"parameter {spec.name} ({spec.why}) was {current:g}; set to {want:g}, it "

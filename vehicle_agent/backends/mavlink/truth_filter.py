@@ -142,20 +142,24 @@ class CaptureClock:
     all together, and a sample stamped after it arrived is not yet the mocap's."""
 
     def __init__(self) -> None:
-        self._delays: deque[tuple[float, float]] = deque()  # (own time [s], delay [s])
+        self._delays: deque[tuple[float, float]] = deque()
+        """(own time [s], delay [s]) of the window's samples that no later one undercuts: the
+        delays rise from the first, which is the least."""
         self._offset_s: float | None = None
         self._own_s = 0.0
 
     def capture_s(self, own_s: float, arrival_s: float) -> float:
         """The agent time in [s] of a sample taken at ``own_s`` [s] (simulator's clock) that
         arrived at ``arrival_s`` [s] (agent's clock)."""
-        delays = self._delays
+        delays, delay_s = self._delays, arrival_s - own_s
         if delays and own_s < delays[-1][0]:
             delays.clear()  # the simulator restarted
-        delays.append((own_s, arrival_s - own_s))
+        while delays and delays[-1][1] >= delay_s:
+            delays.pop()  # never the least again while this one is in the window
+        delays.append((own_s, delay_s))
         while own_s - delays[0][0] > CAPTURE_WINDOW_S:
             delays.popleft()
-        least_s = min(delay for _, delay in delays)
+        least_s = delays[0][1]
         offset_s = self._offset_s
         if offset_s is None or not offset_s <= least_s <= offset_s + CAPTURE_OFFSET_RESET_S:
             self._offset_s = least_s  # the first; a faster link (none stamped after it came)
