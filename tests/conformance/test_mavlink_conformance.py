@@ -123,7 +123,14 @@ def test_a_velocity_only_setpoint_flies_that_velocity(gcs: Gcs) -> None:
     """0x0FC7 (velocity; the force bit is harmless with acceleration ignored) at 0.5 m/s north.
     ArduCopter integrates a position target from it; PX4 v1.16 flies it with no position loop
     (its positions are NaN), so on SIH's GPS-grade estimate the reported position need not follow
-    the reported velocity: the velocity is what both must show, the position only its sign."""
+    the reported velocity: the velocity is what both must show, the position only its sign.
+
+    PX4 approaches it slowly: its velocity loop is a PI (``MPC_XY_VEL_P_ACC`` 1.8,
+    ``MPC_XY_VEL_I_ACC`` 0.4) against SIH's linear drag (``SIH_KDV`` 1 N s/m on 1 kg), so it
+    first settles at 0.5 x 1.8 / (1.8 + 1) = 0.32 m/s and then closes the rest with a time
+    constant of about (1.8 + 1) / 0.4 = 7 s: 0.36-0.43 m/s between 2 and 4 s, 0.43-0.48 after 10 s
+    (v1.16.0 SIH, quiet machine)."""
+    least_mps = {"ardupilot": 0.4, "px4": 0.32}[gcs.kind]
     gcs.airborne(1.0)
     x, y, _ = gcs.here()
     gcs.stream = lambda g: g.send_target(0x0FC7, v=(0.5, 0.0, 0.0))
@@ -133,7 +140,7 @@ def test_a_velocity_only_setpoint_flies_that_velocity(gcs: Gcs) -> None:
     vx = [row[4] for row in gcs.log]
     gcs.stream = lambda g: g.send_target(0x0FC7)
     gcs.pump(2.0)
-    assert len(vx) > 10 and 0.4 < sorted(vx)[len(vx) // 2] < 0.6, vx[::10]
+    assert len(vx) > 10 and least_mps < sorted(vx)[len(vx) // 2] < 0.6, vx[::10]
     assert gcs.here()[0] - x > 0.5
     if gcs.kind == "ardupilot":  # PX4 SIH drifted 1.27 m east here with no position loop
         assert abs(gcs.here()[1] - y) < HOLD_M
