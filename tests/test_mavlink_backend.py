@@ -490,26 +490,6 @@ def test_a_mocap_vehicle_is_set_up_at_connect_and_arms_only_while_poses_flow(
         asyncio.run(scenario(server))
 
 
-@pytest.mark.parametrize(("autopilot", "poses_per_s"), [("ardupilot", 50.0), ("px4", 100.0)])
-def test_mocap_goes_at_the_venues_rate_up_to_what_the_estimator_fuses(
-    autopilot: str, poses_per_s: float
-) -> None:
-    # A 100 Hz mocap: PX4's EKF2 takes a pose per 10 ms update, ArduPilot's EKF3 drops one
-    # within 20 ms of the last, so it is sent 50 a second of the agent's time.
-    async def scenario(server: MavsimServer) -> None:
-        async with connected(server, mocap="odometry", mocap_rate_hz=100.0) as (backend, driver):
-            backend._mocap.source = lambda _now_s: MocapPose(position_m_enu=HOME)
-            await driver.until(lambda _s: backend._mocap.sent > 0, 3.0)
-            sent, start_s = backend._mocap.sent, driver.now
-            for _ in range(100):
-                await driver.tick()
-            rate = (backend._mocap.sent - sent) / (driver.now - start_s)
-            assert rate == pytest.approx(poses_per_s, rel=0.25)
-
-    with vehicle(autopilot=autopilot) as server:
-        asyncio.run(scenario(server))
-
-
 def test_px4_on_mocap_gets_its_ekf_origin_at_altitude_zero_once_poses_flow() -> None:
     # EKF2 (v1.16) takes vision z as down from altitude 0: with its origin anywhere else its
     # local z is off by that altitude (SIH: +584 m on the ground). Given before the first pose

@@ -2,10 +2,9 @@
 
 With ``mocap: vision_position_estimate`` (ArduPilot with EK3_SRC1_POSXY = 6 ExternalNav, PX4 with
 EKF2_EV_CTRL) or ``att_pos_mocap`` the backend sends the pose from ``mocap_source`` at
-``mocap_rate_hz`` (at most what the autopilot's estimator fuses), converted to the vehicle's
-LOCAL_NED frame; with ``odometry`` the pose and the velocity between poses
-(:mod:`vehicle_agent.backends.mavlink.odometry`). The source is whatever the venue's mocap client
-provides; it is asked for the pose at the agent's time.
+``mocap_rate_hz``, converted to the vehicle's LOCAL_NED frame; with ``odometry`` the pose and the
+velocity between poses (:mod:`vehicle_agent.backends.mavlink.odometry`). The source is whatever
+the venue's mocap client provides; it is asked for the pose at the agent's time.
 
 The poses flow from a task of their own, not from the control loop's tick: the loop awaits the
 autopilot's answers to mode changes and arming (seconds, with retries), and an estimator left
@@ -25,7 +24,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from vehicle_agent.backends.mavlink.errors import LinkLostError
 from vehicle_agent.backends.mavlink.frames import (
     LocalFrame,
     Vec3,
@@ -55,15 +53,6 @@ first pose (a loaded machine: the simulator's truth came late), EKF2 took its he
 barometer at the origin, 583.85 m, and never took the vision's 0 after it: the vehicle armed with
 its local z at -583.85 m, climbed towards the ground and was disarmed by PX4's preflight timeout
 (PX4 1.16 SIH, load 6, issue 31). With the vision fused first its local z is the mocap's."""
-
-MOCAP_FUSION_RATE_HZ: dict[Flavor, float] = {"ardupilot": 50.0, "px4": 100.0}
-"""The most poses per second each autopilot's estimator fuses, in [Hz]. ArduPilot's EKF3 drops
-an external-navigation sample within 20 ms of the last (``extNavIntervalMin_ms``,
-AP_NavEKF3.h / AP_NavEKF3_Measurements.cpp, 4.7); PX4's EKF2 buffers one per filter update
-(EKF2_PREDICT_US 10 ms; ``_min_obs_interval_us``, estimator_interface.cpp, v1.16). Sent at 100
-rather than 50 Hz, PX4 SIH's stock airframe wrote 12 held-out characters at 14.1 mm pen-down
-RMSE median against 15.2 (10 of 12 ``done`` in both; quiet), the research airframe the same
-(6.1 mm, IoU 0.72; issue 31, docs/sitl.md)."""
 
 
 @dataclass(frozen=True)
@@ -127,8 +116,7 @@ class MocapForwarder:
         self._origin_sent = False
         self._origin_for: int | None = None
         """System id whose EKF origin is asked for and not sent yet (PX4: until poses flowed)."""
-        self.rate_hz = settings.mocap_rate_hz
-        """The venue's mocap rate in [Hz]; each autopilot gets at most what it fuses."""
+        self.period_s = 1.0 / settings.mocap_rate_hz
         self.frame = frame
         self.source = source
         self.sent = 0
@@ -154,15 +142,6 @@ class MocapForwarder:
         """Age in [s] at agent time ``now_s`` of the latest pose sent (infinite: none yet);
         None when no mocap is forwarded."""
         return None if self.kind == "none" else now_s - self.pose_at_s
-
-    def period_s(self) -> float:
-        """Time in [s] between poses: the venue's rate, at most :data:`MOCAP_FUSION_RATE_HZ` of
-        this autopilot (the venue's until its heartbeat says which it is)."""
-        try:
-            fused_hz = MOCAP_FUSION_RATE_HZ[self.flavor()]
-        except LinkLostError:
-            fused_hz = self.rate_hz
-        return 1.0 / min(self.rate_hz, fused_hz)
 
     @property
     def origin_sent(self) -> bool:
@@ -200,7 +179,7 @@ class MocapForwarder:
                 self.failed += 1
                 if self.failed in (1, 10) or self.failed % 1000 == 0:
                     log.exception("mocap pose not forwarded (%d so far)", self.failed)
-            due_s = max(due_s + self.period_s() / max(clock.rate, 1e-3), time.monotonic() - 0.1)
+            due_s = max(due_s + self.period_s / max(clock.rate, 1e-3), time.monotonic() - 0.1)
             await asyncio.sleep(max(0.0, due_s - time.monotonic()))
 
     def forward(self, link: MavlinkLink, now_s: float) -> None:

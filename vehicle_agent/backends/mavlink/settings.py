@@ -55,10 +55,8 @@ class MavlinkSettings:
     """Climb rate of our own take-off ramp (PX4 OFFBOARD) in [m/s]."""
     mocap: MocapMessage = "none"
     """Forward motion-capture poses from ``mocap_source`` with this message."""
-    mocap_rate_hz: float = 100.0
-    """The venue's mocap rate in [Hz] (from a show: its control rate, one frame per control tick
-    as the simulated vehicles' mocap); each autopilot is sent at most what its estimator fuses
-    (:data:`~vehicle_agent.backends.mavlink.mocap.MOCAP_FUSION_RATE_HZ`)."""
+    mocap_rate_hz: float = 50.0
+    """Rate of forwarded mocap poses in [Hz]."""
     truth: TruthSource = "none"
     """``sitl``: read the simulator's true state off the link (ArduPilot SIM_STATE, PX4
     HIL_STATE_QUATERNION); the pen model and the job metrics use it, and with ``mocap`` it is the
@@ -108,7 +106,6 @@ def settings_from_show(
         system_id=vehicle.mavlink_system_id,
         control_rate_hz=float(show.controller.rate_hz),
         telemetry_rate_hz=float(show.controller.rate_hz),
-        mocap_rate_hz=float(show.controller.rate_hz),
         setpoint_rate_hz=float(vehicle.mavlink_setpoint_rate_hz),
         mocap=vehicle.mavlink_mocap,
         truth=vehicle.mavlink_truth,
