@@ -20,10 +20,11 @@ from typing import Any
 import pytest
 import websockets
 from scene_decode import protobuf_class
+from show_probe import all_alive, snapshot_when
 
 from bus.session import free_tcp_endpoint
 from cli.main import main as skyquill
-from cli.showrun import ShowRun, derived_show, snapshot
+from cli.showrun import ShowRun, derived_show
 from showfile import load_show
 
 pytestmark = [pytest.mark.multiprocess, pytest.mark.slow, pytest.mark.timeout(180)]
@@ -115,6 +116,10 @@ def test_a_viewer_subscribes_decodes_the_scene_and_quitting_the_view_leaves_the_
         view.send_signal(signal.SIGINT)
         _, err = view.communicate(timeout=10)
     assert view.returncode == 0 and "Traceback" not in err, err
+    # Both vehicles stay in the show. An agent silent for lost_after_s (1.5 s) under the suite's
+    # load is briefly lost (a fresh clone's CI saw one, 2026-12-01) and back at its next status;
+    # one the view had stopped would not come back.
     with show_run.client() as operator:
-        vehicles = snapshot(operator, show_run.keys, timeout_s=5.0).vehicles
-    assert len(vehicles) == 2 and all(v.alive for v in vehicles)
+        shown = snapshot_when(operator, show_run.keys, "both vehicles alive", all_alive,
+                              timeout_s=10.0)  # fmt: skip
+    assert len(shown.vehicles) == 2
