@@ -77,16 +77,18 @@ def own_time_s(message: Any) -> float | None:
     """When in [s] on the simulator's clock a truth sample was taken, where the message says so:
     HIL_STATE_QUATERNION's ``time_usec`` from a PX4 built with scripts/sitl/source_edits.py
     (PX4 as shipped, and SIM_STATE, carry no time: None)."""
-    if message.get_type() != "HIL_STATE_QUATERNION" or int(message.time_usec) <= 0:
+    if message.get_type() != "HIL_STATE_QUATERNION":
         return None
-    return int(message.time_usec) * 1e-6
+    time_us = int(message.time_usec)
+    return time_us * 1e-6 if time_us > 0 else None
 
 
 def simulator_time_s(autopilot_time_ms: int) -> float | None:
-    """When in [s] on the simulator's clock a truth message was sent: neither carries it
-    (SIM_STATE has no stamp, PX4 leaves HIL_STATE_QUATERNION's ``time_usec`` 0), but each goes
-    out beside the ATTITUDE asked for at its rate, whose ``time_boot_ms`` (``autopilot_time_ms``,
-    0: none yet) stands for it."""
+    """When in [s] on the simulator's clock a truth message was sent, for a message that does not
+    say when its sample was taken (SIM_STATE; HIL_STATE_QUATERNION from PX4 as shipped, which
+    leaves ``time_usec`` 0: else :func:`own_time_s`, which the tracker prefers): each goes out
+    beside the ATTITUDE asked for at its rate, whose ``time_boot_ms`` (``autopilot_time_ms``, 0:
+    none yet) stands for it."""
     return autopilot_time_ms * 1e-3 if autopilot_time_ms > 0 else None
 
 
