@@ -24,7 +24,7 @@ from types import ModuleType
 from typing import Any
 
 from bus.messages import JobAssignment, JobMetrics, VehicleCommand
-from showfile import parse_show
+from showfile import load_show, parse_show
 from vehicle_agent.agent import make_backend
 from vehicle_agent.backends.base import CommandRefusedError, VehicleBackend
 from vehicle_agent.backends.mavlink.backend import MavlinkBackend
@@ -46,10 +46,12 @@ boards:
   - {{id: b1, center_m_enu: [0.0, 0.0, 0.75], size_m: [1.4, 1.4], writing_area_m: [0.6, 0.6]}}
 vehicles:
   - {{id: v1, board: b1, home_m_enu: [0.0, -1.0, 0.0], {vehicle}}}
-planning: {{write_height_m: 0.25, clearance_m: 0.05, pace: {pace}}}
+planning: {{write_height_m: 0.25, clearance_m: 0.05, pace: {pace}, pace_first_stretch: {first}}}
 storage: {{database: {database}}}
 """
 TARGETS = ("sim", "rotorpy", "mavsim", "ardupilot", "px4")
+SITL_SHOWS = {"ardupilot": ROOT / "shows/sitl-ardupilot.yaml", "px4": ROOT / "shows/sitl-px4.yaml"}
+"""The shipped show of each autopilot: its pace settings are the ones the SITL targets fly."""
 WARM_UP_S = 8.0
 """An autopilot's least time on the ground after connect (mocap fused, sources switched)."""
 READY_LIMIT_S = 240.0
@@ -172,11 +174,13 @@ def _last_texts(backend: VehicleBackend) -> list[str]:
     return [text for _, text in backend.events][-5:] if isinstance(backend, MavlinkBackend) else []
 
 
-def show_of(vehicle: str, pace: str = "tracking") -> Any:
-    """The one-board show of ``vehicle`` (its show-file fields) at ``pace``; its database, and
-    so the vehicle's tracking model, in a fresh temporary folder: every run identifies anew."""
+def show_of(vehicle: str, pace: str = "tracking", first_stretch: float = 2.0) -> Any:
+    """The one-board show of ``vehicle`` (its show-file fields) at ``pace``, its first job
+    ``first_stretch`` times slower than the limits; its database, and so the vehicle's tracking
+    model, in a fresh temporary folder: every run identifies anew."""
     database = Path(tempfile.mkdtemp(prefix="skyquill-writing-")) / "show.sqlite3"
-    return parse_show(SHOW.format(vehicle=vehicle, pace=pace, database=database))
+    text = SHOW.format(vehicle=vehicle, pace=pace, first=first_stretch, database=database)
+    return parse_show(text)
 
 
 def write(target: str, texts: list[str]) -> list[Written]:
@@ -225,7 +229,8 @@ def _write_sitl(kind: str, texts: list[str]) -> list[Written]:
             f'backend: mavlink, mavlink_url: "{inst.url}", mavlink_system_id: {inst.system_id}, '
             f"mavlink_truth: sitl, mavlink_mocap: {SITL_MOCAP[kind]}"
         )
-        return _fly_mavlink(kind, show_of(vehicle), texts)
+        first = load_show(SITL_SHOWS[kind]).planning.pace_first_stretch
+        return _fly_mavlink(kind, show_of(vehicle, first_stretch=first), texts)
     finally:
         launch.stop(process)
         if not os.environ.get("SKYQUILL_KEEP_SITL_RUN"):

@@ -167,7 +167,8 @@ class PlanningSettings(ShowModel):
     """With ``pace: tracking``: how many times slower than the limits a vehicle flies while its
     tracking is not yet identified (its first job). 2: PX4 SIH wrote a 1.2 m character 13-20 mm
     off and the same at 0.6 m, half the speed and acceleration at the same time, 8-11 mm (issue
-    31's measurement). Read by: every kind's agent."""
+    31's measurement). A vehicle whose error pace does not buy back flies its first job at
+    ``pace_max_stretch`` (``shows/sitl-px4.yaml``). Read by: every kind's agent."""
     pace_max_stretch: float = Field(default=4.0, ge=1.0)
     """With ``pace: tracking``: the slowest a job is flown, times the limits' duration, even when
     the target is below what the vehicle can reach (its prediction then says so). Read by:
