@@ -46,7 +46,7 @@ boards:
   - {{id: b1, center_m_enu: [0.0, 0.0, 0.75], size_m: [1.4, 1.4], writing_area_m: [0.6, 0.6]}}
 vehicles:
   - {{id: v1, board: b1, home_m_enu: [0.0, -1.0, 0.0], {vehicle}}}
-planning: {{write_height_m: 0.25, clearance_m: 0.05, pace: {pace}, pace_first_stretch: {first}}}
+planning: {{write_height_m: 0.25, clearance_m: 0.05, pace: {pace}{first}}}
 storage: {{database: {database}}}
 """
 TARGETS = ("sim", "rotorpy", "mavsim", "ardupilot", "px4")
@@ -174,13 +174,13 @@ def _last_texts(backend: VehicleBackend) -> list[str]:
     return [text for _, text in backend.events][-5:] if isinstance(backend, MavlinkBackend) else []
 
 
-def show_of(vehicle: str, pace: str = "tracking", first_stretch: float = 2.0) -> Any:
+def show_of(vehicle: str, pace: str = "tracking", first_stretch: float | None = None) -> Any:
     """The one-board show of ``vehicle`` (its show-file fields) at ``pace``, its first job
-    ``first_stretch`` times slower than the limits; its database, and so the vehicle's tracking
-    model, in a fresh temporary folder: every run identifies anew."""
+    ``first_stretch`` times slower than the limits (None: the show file's default); its database,
+    and so the vehicle's tracking model, in a fresh temporary folder: every run identifies anew."""
     database = Path(tempfile.mkdtemp(prefix="skyquill-writing-")) / "show.sqlite3"
-    text = SHOW.format(vehicle=vehicle, pace=pace, first=first_stretch, database=database)
-    return parse_show(text)
+    first = "" if first_stretch is None else f", pace_first_stretch: {first_stretch}"
+    return parse_show(SHOW.format(vehicle=vehicle, pace=pace, first=first, database=database))
 
 
 def write(target: str, texts: list[str]) -> list[Written]:
