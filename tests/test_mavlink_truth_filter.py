@@ -229,3 +229,69 @@ def test_a_stamped_truth_keeps_the_simulators_spacing_through_a_jittery_link(
     else:  # 14 mm/s, and 4 mm/s slow: the 20 ms baseline picks the pairs that came further apart
         assert own_time_s(message) is None
         assert wobble_mps > 0.012
+
+
+def exact_truth(
+    north_m: float, east_m: float, up_m: float, v_enu: tuple[float, float, float], taken_s: float
+) -> mav.MAVLink_local_position_ned_cov_message:
+    """What a PX4 built with scripts/sitl/source_edits.py sends right after each
+    HIL_STATE_QUATERNION: the same truth's local NED position and velocity as floats, from SIH's
+    own origin (here 3 m north of the home), stamped the same."""
+    return mav.MAVLink_local_position_ned_cov_message(
+        round(taken_s * 1e6), 0, north_m - 3.0, east_m, -up_m, v_enu[1], v_enu[0], -v_enu[2],
+        0.0, 0.0, 0.0, [math.nan] + [0.0] * 44,
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize("floats", [True, False])
+def test_px4s_truth_to_the_float_takes_the_place_of_its_steps(floats: bool) -> None:
+    """A 9.3 cm/s stroke with a turn, PX4 SIH's truth every 20 ms arriving 1-12 ms late; the
+    mocap's velocity differenced over the samples' times, as it is sent. With the floats beside
+    HIL_STATE_QUATERNION the positions are the truth's own from the anchor at rest and the
+    velocity is the stroke's; from the 1e-7 degree and whole-cm/s steps alone they are a
+    millimetre off and the velocity wobbles by several mm/s."""
+    rng = np.random.default_rng(11)
+    tracker, velocity = SmoothedTruthTracker(HOME), PoseVelocity()
+    errors_m, velocity_errors_mps = [], []
+    for k in range(600):
+        t = 100.0 + k * 0.02
+        s = k * 0.02
+        east, north = 0.093 * s, 0.05 * math.sin(0.8 * s)
+        v = (0.093, 0.04 * math.cos(0.8 * s), 0.0)
+        arrived_s = 5.0 + s + float(rng.uniform(0.001, 0.012))
+        placed = tracker.absorb(hil_state_quaternion(north, east, 0.0, v, t), arrived_s,
+                                resting_at_home=(k == 0), simulator_s=t)  # fmt: skip
+        if floats:
+            assert placed == (k == 0)  # the floats of the same truth follow
+            assert tracker.absorb(exact_truth(north, east, 0.0, v, t), arrived_s + 1e-4,
+                                  resting_at_home=(k == 0))  # fmt: skip
+        sample = tracker.samples[-1]
+        if k > 100:
+            truth = (HOME[0] + east, HOME[1] + north, HOME[2])
+            errors_m.append(float(np.linalg.norm(np.subtract(sample.position_m_enu, truth))))
+            got = velocity.update(sample.time_s, sample.position_m_enu)
+            if not math.isnan(got[0]):
+                velocity_errors_mps.append(float(np.hypot(got[0] - v[0], got[1] - v[1])))
+        else:
+            velocity.update(sample.time_s, sample.position_m_enu)
+    position_rms_m = float(np.sqrt(np.mean(np.square(errors_m))))
+    velocity_rms_mps = float(np.sqrt(np.mean(np.square(velocity_errors_mps))))
+    if floats:
+        assert tracker.exact_anchor_m_ned == pytest.approx((-3.0, 0.0, 0.0))
+        assert position_rms_m < 1e-5
+        assert velocity_rms_mps < 0.0008  # the stroke's turn over a 20 ms difference
+    else:
+        assert position_rms_m > 0.0005
+        assert velocity_rms_mps > 0.002
+
+
+def test_px4s_truth_to_the_float_is_never_anchored_in_flight() -> None:
+    """An agent started while the vehicle flies places no truth from the floats either, and the
+    floats alone (no attitude yet) place nothing."""
+    tracker = SmoothedTruthTracker(HOME)
+    assert not tracker.absorb(exact_truth(0.0, 0.0, 0.0, (0, 0, 0), 1.0), 0.0,
+                              resting_at_home=True)  # fmt: skip
+    tracker.absorb(hil_state_quaternion(0.0, 0.0, 1.0, (0, 0, 0), 1.0), 0.0, resting_at_home=False)
+    assert not tracker.absorb(exact_truth(0.0, 0.0, 1.0, (0, 0, 0), 1.0), 0.0,
+                              resting_at_home=False)  # fmt: skip
+    assert tracker.exact_anchor_m_ned is None and not tracker.samples

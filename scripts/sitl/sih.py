@@ -67,7 +67,9 @@ def px4_sih_degrees(value_deg: float) -> float:
     place in their steps 5.2 and -2.4 mm). A home half-way along its step takes it out: of the
     float32 values within :data:`PX4_HOME_FLOAT32_STEPS` steps of ``value_deg``, the nearest
     whose ``abs(value * 1e7)`` lies within a tenth of a step of half-way (a bias of at most
-    1.1 mm; at the show frame's origin the home moves by up to 3.5 m)."""
+    1.1 mm; at the show frame's origin the home moves by up to 3.5 m). A PX4 built by
+    scripts/sitl/build.py also sends the truth as floats, which the agent then reads instead:
+    this matters to PX4 as shipped."""
     half_way = math.copysign((math.floor(abs(value_deg) * 1e7) + 0.5) * 1e-7, value_deg)
     candidates = [_float32(half_way)]  # exact enough where float32 steps are finer than 1e-7
     here = struct.unpack("<i", struct.pack("<f", value_deg))[0]

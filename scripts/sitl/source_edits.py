@@ -24,6 +24,14 @@ binary than one that listens on every interface.
   each sample's time from the last ATTITUDE (a stream of its own) and from when it arrived.
   ``time_usec`` is now the truth's sample time (``timestamp_sample``, PX4's clock since boot, as
   the message defines it); why: docs/sitl.md.
+- **PX4's truth to the float.** HIL_STATE_QUATERNION carries the position in whole 1e-7 degrees
+  (1.1 cm) and the velocity in whole cm/s, truncated: smoothed, the mocap made of it was still
+  0.7-1.2 mm off the truth across the path, its velocity 4-5.5 mm/s between 0.2 and 1 Hz. The
+  same stream now also sends the truth's local position, velocity and acceleration as floats in
+  a LOCAL_POSITION_NED_COV (same ``time_usec``, ``estimator_type`` UNKNOWN, covariance
+  unknown), a message PX4 sends nowhere else; the agent's truth takes its position from it.
+  Measured (issue 31, docs/sitl.md): the mocap 0.22-0.25 mm across the path (the show's noise),
+  and the research airframe's IoU median 0.72 -> 0.82.
 - **PX4's system id and two UDP ports from the environment.** ``px4 -i N`` forces MAV_SYS_ID
   N + 1 (after the PX4_PARAM_* overrides, so those cannot change it), sends its offboard link to
   14540 + N and its GCS link to 14550, one port for every instance on the machine: two shows, or
@@ -150,6 +158,33 @@ _SIH = "src/modules/simulation/simulator_sih/"
 _POSIX_INIT = "ROMFS/px4fmu_common/init.d-posix/"
 _TRUTH_STREAM = "src/modules/mavlink/streams/HIL_STATE_QUATERNION.hpp"
 _TRUTH_LATITUDE = "\t\t\tmsg.lat = gpos.lat * 1e7;\n"
+_TRUTH_SENT = "\t\t\tmavlink_msg_hil_state_quaternion_send_struct(_mavlink->get_channel(), &msg);\n"
+_EXACT_TRUTH_SENT = (
+    "\t\t\t// skyquill: the same truth's position and velocity as floats, beside their whole\n"
+    "\t\t\t// 1e-7 degrees and cm/s above; the same time, no covariance (not an estimate)\n"
+    "\t\t\tmavlink_local_position_ned_cov_t exact{};\n"
+    "\t\t\texact.time_usec = lpos.timestamp_sample;\n"
+    "\t\t\texact.estimator_type = MAV_ESTIMATOR_TYPE_UNKNOWN;\n"
+    "\t\t\texact.x = lpos.x;\n"
+    "\t\t\texact.y = lpos.y;\n"
+    "\t\t\texact.z = lpos.z;\n"
+    "\t\t\texact.vx = lpos.vx;\n"
+    "\t\t\texact.vy = lpos.vy;\n"
+    "\t\t\texact.vz = lpos.vz;\n"
+    "\t\t\texact.ax = lpos.ax;\n"
+    "\t\t\texact.ay = lpos.ay;\n"
+    "\t\t\texact.az = lpos.az;\n"
+    "\t\t\texact.covariance[0] = NAN;\n"
+    "\t\t\tmavlink_msg_local_position_ned_cov_send_struct(_mavlink->get_channel(), &exact);\n"
+)
+_TRUTH_SIZE = (
+    "\t\t\treturn MAVLINK_MSG_ID_HIL_STATE_QUATERNION_LEN + MAVLINK_NUM_NON_PAYLOAD_BYTES;\n"
+)
+_EXACT_TRUTH_SIZE = (
+    "\t\t\t// skyquill: and the truth to the float (below)\n"
+    "\t\t\treturn MAVLINK_MSG_ID_HIL_STATE_QUATERNION_LEN + MAVLINK_NUM_NON_PAYLOAD_BYTES\n"
+    "\t\t\t       + MAVLINK_MSG_ID_LOCAL_POSITION_NED_COV_LEN + MAVLINK_NUM_NON_PAYLOAD_BYTES;\n"
+)
 _OFFBOARD_REMOTE_STOCK = (
     '[ "$px4_instance" -gt 9 ] && udp_offboard_port_remote=14549 # use the same ports for more '
     "than 10 instances to avoid port overlaps\n"
@@ -207,6 +242,18 @@ PX4_EDITS = (
         "\t\t\t// skyquill: the truth's own time (PX4 leaves it 0)\n"
         "\t\t\tmsg.time_usec = lpos.timestamp_sample;\n" + _TRUTH_LATITUDE,
         "HIL_STATE_QUATERNION stamped with the truth's sample time",
+    ),
+    Edit(
+        _TRUTH_STREAM,
+        _TRUTH_SENT,
+        _TRUTH_SENT + _EXACT_TRUTH_SENT,
+        "the truth's position and velocity as floats (LOCAL_POSITION_NED_COV)",
+    ),
+    Edit(
+        _TRUTH_STREAM,
+        _TRUTH_SIZE,
+        _EXACT_TRUTH_SIZE,
+        "the truth stream's size counts both messages",
     ),
     Edit(
         _POSIX_INIT + "rcS",

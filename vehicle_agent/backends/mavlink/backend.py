@@ -70,6 +70,7 @@ from vehicle_agent.backends.mavlink.takeoff_checks import (
     refuse_off_the_mocap,
     refuse_while_prearm_fails,
 )
+from vehicle_agent.backends.mavlink.truth import TRUTH_KINDS
 from vehicle_agent.backends.mavlink.url import parse_mavlink_url
 from vehicle_agent.backends.mavlink.watchdog import Commanded, Watchdog, WatchLimits
 from vehicle_agent.motion import Move, plan_move
@@ -183,7 +184,7 @@ class MavlinkBackend:
             self.commands.on_ack(message)
         elif kind == "PARAM_VALUE":
             self.params.on_param_value(message)
-        elif kind in ("SIM_STATE", "HIL_STATE_QUATERNION"):
+        elif kind in TRUTH_KINDS:
             now_s = self.tick_time.now_s(time.monotonic())
             self.aid.on_message(message, now_s, resting_at_home=not self.state.armed,
                                 autopilot_time_ms=self.state.attitude_time_ms)  # fmt: skip

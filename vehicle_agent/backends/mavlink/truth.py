@@ -7,7 +7,10 @@ ground-truth topics. :class:`TruthTracker` turns them into show-frame ENU positi
 sample taken while the vehicle rests disarmed at its home anchors the geodetic point to
 ``home_m_enu`` (the agent refuses a vehicle already armed at connect, so it is on its home then);
 east and north follow on a local tangent plane (metres per 1e-7 degree: about 1.1 cm, which
-bounds the resolution of the truth).
+bounds the resolution of the truth). A PX4 built by scripts/sitl/build.py also sends the same
+truth's local position and velocity as floats (:data:`EXACT_TRUTH`, right after each
+HIL_STATE_QUATERNION): once one comes, the positions are its, anchored the same way, and
+HIL_STATE_QUATERNION gives only the attitude.
 
 :func:`truth_mocap` makes a motion-capture source of it with the show's mocap latency and noise,
 as a venue's mocap would be: the agent forwards that pose to the autopilot to fuse, while the job
@@ -30,6 +33,12 @@ from vehicle_agent.backends.mavlink.mocap import MocapPose, MocapSource
 EARTH_RADIUS_M = 6_378_137.0
 TRUTH_MESSAGES: dict[str, int] = {"ardupilot": 108, "px4": 115}
 """The message id carrying the simulator's truth, per autopilot flavour."""
+EXACT_TRUTH = "LOCAL_POSITION_NED_COV"
+"""The message a PX4 built with scripts/sitl/source_edits.py sends beside each
+HIL_STATE_QUATERNION: the same truth's local NED position [m] and velocity [m/s] as floats, its
+``time_usec`` the same. PX4 sends this message nowhere else."""
+TRUTH_KINDS = frozenset({"SIM_STATE", "HIL_STATE_QUATERNION", EXACT_TRUTH})
+"""The messages :meth:`TruthTracker.absorb` takes."""
 
 
 @dataclass(frozen=True)
@@ -69,6 +78,11 @@ class TruthTracker:
         """How much history in [s] is kept (for the mocap latency)."""
         self.anchor: tuple[float, float, float] | None = None
         """Geodetic point (lat [deg], lon [deg], alt [m]) of ``home_m_enu``."""
+        self.exact_anchor_m_ned: Vec3 | None = None
+        """The simulator's local NED point in [m] of ``home_m_enu`` (None: no :data:`EXACT_TRUTH`
+        placed yet; else every position is from that message)."""
+        self._attitude_ned_rad: Vec3 | None = None
+        """The latest truth's attitude, for the :data:`EXACT_TRUTH` that follows it."""
         self.samples: deque[TruthSample] = deque()
 
     @property
@@ -77,21 +91,43 @@ class TruthTracker:
 
     def absorb(self, message: Any, now_s: float, *, resting_at_home: bool) -> bool:
         """Take one message in; True when it was a truth sample that could be placed."""
+        if message.get_type() == EXACT_TRUTH:
+            return self._absorb_exact(message, now_s, resting_at_home)
         fix = geodetic(message)
         if fix is None:
             return False
         lat, lon, alt, attitude = fix
+        self._attitude_ned_rad = attitude
+        if self.exact_anchor_m_ned is not None:
+            return False  # its position to the float follows
         if self.anchor is None:
             if not resting_at_home:
                 return False
             self.anchor = (lat, lon, alt)
         north, east = local_offset_m(self.anchor, lat, lon)
+        self._place(now_s, north, east, alt - self.anchor[2], attitude)
+        return True
+
+    def _absorb_exact(self, message: Any, now_s: float, resting_at_home: bool) -> bool:
+        attitude = self._attitude_ned_rad
+        if attitude is None:
+            return False
+        ned = (float(message.x), float(message.y), float(message.z))
+        anchor = self.exact_anchor_m_ned
+        if anchor is None:
+            if not resting_at_home:
+                return False
+            self.exact_anchor_m_ned = anchor = ned
+            self.samples.clear()  # positions to the 1e-7 degree, anchored elsewhere
+        self._place(now_s, ned[0] - anchor[0], ned[1] - anchor[1], anchor[2] - ned[2], attitude)
+        return True
+
+    def _place(self, now_s: float, north: float, east: float, up: float, attitude: Vec3) -> None:
+        """Keep a sample ``north``/``east``/``up`` [m] of the home, and the last ``history_s``."""
         hx, hy, hz = self.home_m_enu
-        up = alt - self.anchor[2]
         self.samples.append(TruthSample(now_s, (hx + east, hy + north, hz + up), attitude))
         while self.samples and self.samples[0].time_s < now_s - self.history_s:
             self.samples.popleft()
-        return True
 
     def at(self, time_s: float) -> TruthSample | None:
         """The newest sample no later than ``time_s`` [s] (None: none that old)."""

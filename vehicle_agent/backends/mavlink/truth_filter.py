@@ -11,7 +11,9 @@ the simulator's own clock, and pulls it towards each quantized sample with a tim
 by how good that velocity is (:data:`TIME_CONSTANT_S`): the steps average out, the motion stays.
 Neither message says when its sample was taken, except HIL_STATE_QUATERNION from a PX4 built by
 scripts/sitl/build.py (:func:`own_time_s`): its samples are carried over and stamped on that
-time (:class:`CaptureClock`), the others on the last ATTITUDE's and on their arrival.
+time (:class:`CaptureClock`), the others on the last ATTITUDE's and on their arrival. Such a PX4
+also sends the same truth as floats (:data:`~vehicle_agent.backends.mavlink.truth.EXACT_TRUTH`),
+whose positions have no steps to smooth: the smoothing is for ArduPilot and PX4 as shipped.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from vehicle_agent.backends.mavlink.frames import Vec3
-from vehicle_agent.backends.mavlink.truth import TruthSample, TruthTracker
+from vehicle_agent.backends.mavlink.truth import EXACT_TRUTH, TruthSample, TruthTracker
 
 TIME_CONSTANT_S = {"SIM_STATE": 2.0, "HIL_STATE_QUATERNION": 0.4}
 """How long in [s] the smoothed position takes to come to each quantized one, per message.
@@ -49,10 +51,13 @@ simulator) is taken at once."""
 
 
 def truth_velocity_mps_enu(message: Any) -> Vec3 | None:
-    """The true velocity in [m/s], ENU, of a SIM_STATE or HIL_STATE_QUATERNION; else None."""
+    """The true velocity in [m/s], ENU, of a SIM_STATE, HIL_STATE_QUATERNION or
+    :data:`~vehicle_agent.backends.mavlink.truth.EXACT_TRUTH`; else None."""
     kind = message.get_type()
     if kind == "SIM_STATE":
         north, east, down = float(message.vn), float(message.ve), float(message.vd)
+    elif kind == EXACT_TRUTH:
+        north, east, down = float(message.vx), float(message.vy), float(message.vz)
     elif kind == "HIL_STATE_QUATERNION":
         north, east, down = (mid_step_mps(message.vx), mid_step_mps(message.vy),
                              mid_step_mps(message.vz))  # fmt: skip
@@ -75,9 +80,10 @@ def mid_step_mps(whole_cm_s: int) -> float:
 
 def own_time_s(message: Any) -> float | None:
     """When in [s] on the simulator's clock a truth sample was taken, where the message says so:
-    HIL_STATE_QUATERNION's ``time_usec`` from a PX4 built with scripts/sitl/source_edits.py
-    (PX4 as shipped, and SIM_STATE, carry no time: None)."""
-    if message.get_type() != "HIL_STATE_QUATERNION":
+    HIL_STATE_QUATERNION's (and :data:`~vehicle_agent.backends.mavlink.truth.EXACT_TRUTH`'s)
+    ``time_usec`` from a PX4 built with scripts/sitl/source_edits.py (PX4 as shipped, and
+    SIM_STATE, carry no time: None)."""
+    if message.get_type() not in ("HIL_STATE_QUATERNION", EXACT_TRUTH):
         return None
     time_us = int(message.time_usec)
     return time_us * 1e-6 if time_us > 0 else None
@@ -175,7 +181,8 @@ class CaptureClock:
 class SmoothedTruthTracker(TruthTracker):
     """A :class:`TruthTracker` whose samples are the velocity-aided smoothing of the quantized
     positions (attitudes as they came; times as they came, or when taken where the message
-    carries its own: :class:`CaptureClock`)."""
+    carries its own: :class:`CaptureClock`); :data:`~vehicle_agent.backends.mavlink.truth.
+    EXACT_TRUTH`'s positions, which have no steps, as they came."""
 
     def __init__(self, home_m_enu: Vec3, history_s: float = 1.0) -> None:
         super().__init__(home_m_enu, history_s)
@@ -206,6 +213,9 @@ class SmoothedTruthTracker(TruthTracker):
             return False
         raw = self.samples[-1]
         velocity = truth_velocity_mps_enu(message) or (0.0, 0.0, 0.0)
+        if message.get_type() == EXACT_TRUTH:
+            self._last, self._velocity = raw, velocity  # no steps to smooth
+            return True
         smoothed = self._smooth(raw, velocity, simulator_s, TIME_CONSTANT_S[message.get_type()])
         self.samples[-1] = smoothed
         self._last, self._velocity = smoothed, velocity
