@@ -51,13 +51,10 @@ simulator) is taken at once."""
 
 
 def truth_velocity_mps_enu(message: Any) -> Vec3 | None:
-    """The true velocity in [m/s], ENU, of a SIM_STATE, HIL_STATE_QUATERNION or
-    :data:`~vehicle_agent.backends.mavlink.truth.EXACT_TRUTH`; else None."""
+    """The true velocity in [m/s], ENU, of a SIM_STATE or HIL_STATE_QUATERNION; else None."""
     kind = message.get_type()
     if kind == "SIM_STATE":
         north, east, down = float(message.vn), float(message.ve), float(message.vd)
-    elif kind == EXACT_TRUTH:
-        north, east, down = float(message.vx), float(message.vy), float(message.vz)
     elif kind == "HIL_STATE_QUATERNION":
         north, east, down = (mid_step_mps(message.vx), mid_step_mps(message.vy),
                              mid_step_mps(message.vz))  # fmt: skip
@@ -211,11 +208,10 @@ class SmoothedTruthTracker(TruthTracker):
             now_s = self._capture.capture_s(own_s, now_s)
         if not super().absorb(message, now_s, resting_at_home=resting_at_home):
             return False
+        if message.get_type() == EXACT_TRUTH:
+            return True  # no steps to smooth (and the quantized ones no longer come here)
         raw = self.samples[-1]
         velocity = truth_velocity_mps_enu(message) or (0.0, 0.0, 0.0)
-        if message.get_type() == EXACT_TRUTH:
-            self._last, self._velocity = raw, velocity  # no steps to smooth
-            return True
         smoothed = self._smooth(raw, velocity, simulator_s, TIME_CONSTANT_S[message.get_type()])
         self.samples[-1] = smoothed
         self._last, self._velocity = smoothed, velocity
