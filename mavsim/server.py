@@ -50,6 +50,10 @@ class MavsimServer:
         self._thread: threading.Thread | None = None
         self._t0 = wall_clock()
         self.error: BaseException | None = None
+        self.longest_behind_s = 0.0
+        """The furthest a vehicle's physics fell behind vehicle time before the loop came round
+        to step it, in [s] of vehicle time: about one physics step, more when the host stalled
+        this thread (the vehicle then flew its last setpoints that long, as no real one does)."""
 
     def endpoint(self, vehicle_id: str) -> VehicleEndpoint:
         """The endpoint of one vehicle by show id."""
@@ -79,6 +83,7 @@ class MavsimServer:
                 sockets[fd].receive(self.vehicle_time_s())
 
     def _catch_up(self, ep: VehicleEndpoint, now: float) -> None:
+        self.longest_behind_s = max(self.longest_behind_s, now - ep.next_step_s)
         steps = 0
         while ep.next_step_s <= now:
             ep.step()

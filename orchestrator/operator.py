@@ -12,9 +12,12 @@ release_all    every held vehicle may take jobs again (the queue stays as it is:
 cancel         job -> cancelled; a vehicle writing it is told to stop; with ``job_ids`` or
                ``client_id`` every waiting one named (``orchestrator/moderation.py``)
 land           vehicle lands and is held (no new job until ``release``); its job is requeued
+               (one whose brush may have gone down waits for the vehicle's word first:
+               it may have been written in full, ``orchestrator/holders.py``)
 land_all       every vehicle lands and is held; the queue is paused; jobs go back to the queue
 estop          motors off at once, vehicles held: one, or all (then the queue is paused too);
-               the job goes back to the queue (not failed: the character was not at fault)
+               the job goes back to the queue as with ``land`` (not failed: the character
+               was not at fault)
 clear_fault    ask a vehicle's agent to leave ``fault`` (``vehicle_id``); it does only when its
                backend reports it on the ground and disarmed; it stays held until ``release``
 prioritize     set a waiting job's ``priority`` (higher first)
@@ -110,8 +113,10 @@ def _stop_vehicles(
         book.vehicles[vid].paused = book.vehicles[vid].held = True
         eff.commands.append((vid, VehicleCommand(command=order)))
         job = book.active_job_of(vid)
-        if job is not None:
-            requeue(book, eff, job, now_s, f"{vid}: operator {cmd.command}", lost=False)
+        if job is not None:  # begun: it may be written in full, its result on its way
+            begun = job.writing_since_s is not None
+            why = f"{vid}: operator {cmd.command}"
+            requeue(book, eff, job, now_s, why, lost=False, wait_for_holder=begun)
     eff.settings_changed = eff.fleet_changed = True
     return vids
 

@@ -110,20 +110,27 @@ def test_a_character_written_over_mavlink_matches_the_in_process_simulator() -> 
         autopilot = server.endpoints[0].autopilot
         assert not autopilot.armed and autopilot.on_ground
         assert autopilot.setpoints_received > 0.9 * backend.setpoints_sent > 100
+        behind_s = server.longest_behind_s - autopilot.airframe.dt_s  # a step is due each loop
+        physics_behind_s = max(0.0, behind_s)
 
     for name, m in (("in-process", in_process), ("over MAVLink", over_mavlink)):
         print(f"\n{name}: rmse pen down {m.rmse_pen_down_m * 1000:.1f} mm,", end=" ")
         print(f"max {m.max_error_m * 1000:.1f} mm, IoU {m.iou:.3f}", end="")
     print()
-    print(f"longest control step {longest_step_s * 1000:.0f} ms of agent time")
+    print(f"longest control step {longest_step_s * 1000:.0f} ms of agent time;", end=" ")
+    print(f"the simulator's physics {physics_behind_s * 1000:.0f} ms more than a step behind")
     assert over_mavlink.duration_s == pytest.approx(in_process.duration_s, abs=0.05)
     assert in_process.rmse_pen_down_m < 0.01
+    # What the reference moves (at most v_max) while a loaded host stalls the paced loop (a
+    # real vehicle's loop skips those ticks: its error is real) or the simulator's thread (the
+    # vehicle flies its last setpoint meanwhile): a fresh clone's CI once wrote 8.9 mm (bound
+    # 7.5), where 2.6-4.6 mm are written alone and 2.5-3.2 mm beside three busy loops, neither
+    # stalled beyond 2 ms (2026-12-02).
+    stalled_s = max(0.0, longest_step_s - backend.control_period_s, physics_behind_s)
+    stall_m = show.vehicle_limits("mav1").v_max_mps * stalled_s
     # the same character, within a small margin of the in-process flight
-    assert over_mavlink.rmse_pen_down_m < in_process.rmse_pen_down_m + 0.005
-    # the worst sample: 10 mm, and what the reference moves (at most v_max) while a loaded
-    # host stalls the paced loop (a real vehicle's loop skips those ticks: its error is real)
-    stalled_s = max(0.0, longest_step_s - backend.control_period_s)
-    allowance_m = 0.01 + show.vehicle_limits("mav1").v_max_mps * stalled_s
-    assert over_mavlink.max_error_m < in_process.max_error_m + allowance_m
+    assert over_mavlink.rmse_pen_down_m < in_process.rmse_pen_down_m + 0.005 + stall_m
+    # the worst sample: 10 mm more
+    assert over_mavlink.max_error_m < in_process.max_error_m + 0.01 + stall_m
     assert in_process.iou is not None and over_mavlink.iou is not None  # brush from the pose
     assert over_mavlink.iou > in_process.iou - 0.05

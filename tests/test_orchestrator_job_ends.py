@@ -95,10 +95,23 @@ def _says(state: str) -> Callable[[Book], None]:
     return end
 
 
+def _stopped(command: str, state: str) -> Callable[[Book], None]:
+    """The operator's ``command`` to uav1, then uav1's statuses in ``state`` without the job: its
+    word that it did not write it in full (till then the job waits for it,
+    ``orchestrator/holders.py``: its writing may have ended just before the command)."""
+    order, word = _operator(command, vehicle_id="uav1"), _says(state)
+
+    def end(book: Book) -> None:
+        order(book)
+        word(book)
+
+    return end
+
+
 ENDS: dict[str, tuple[Callable[[Book], None], str, tuple[str, str | None]]] = {
     "cancel": (_operator("cancel", job_id="j1"), "cancelled", ("cancelled", "uav1")),
-    "land": (_operator("land", vehicle_id="uav1"), "landed_by_operator", ("assigned", "uav2")),
-    "estop": (_operator("estop", vehicle_id="uav1"), "estop", ("assigned", "uav2")),
+    "land": (_stopped("land", "landing"), "landed_by_operator", ("assigned", "uav2")),
+    "estop": (_stopped("estop", "fault"), "estop", ("assigned", "uav2")),
     "fault": (_says("fault"), "vehicle_fault", ("assigned", "uav2")),
     "lease": (_says("returning"), "given_up", ("assigned", "uav2")),
 }

@@ -96,7 +96,9 @@ def test_lost_fault_and_half_written_board_alerts_close_with_their_cause() -> No
         vehicle_id=job.vehicle_id, job_id="j1", event="started", planned_duration_s=20.0
     )
     assert book.report(report, 9.0)[0].ok
-    _op(book, 10.0, "land", vehicle_id=job.vehicle_id)  # half-written: the board is dirty
+    _op(book, 10.0, "land", vehicle_id=job.vehicle_id)
+    assert _open(book) == []  # its writing may have ended: the job waits for its word
+    _status(book, job.vehicle_id, "landing", 10.5)  # without it: half-written, board dirty
     assert ("board_dirty", job.vehicle_id) in _open(book)
     _op(book, 11.0, "fresh_sheet", board_id=job.board_id)
     assert ("board_dirty", job.vehicle_id) not in _open(book)

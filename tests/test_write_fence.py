@@ -20,7 +20,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from bus.fence import WRITING_SLOWDOWN
-from bus.messages import AgentReport, SubmitRequest, VehicleStatus
+from bus.messages import AgentReport, OperatorCommand, SubmitRequest, VehicleStatus
 from orchestrator.core import Book, CoreConfig
 from orchestrator.fleet import EtaModel, VehicleInfo
 from orchestrator.holders import writing_fence_s
@@ -269,6 +269,62 @@ def test_a_character_written_in_full_is_never_given_to_another_vehicle(
 
 
 _DONE = AgentReport(vehicle_id="uav1", job_id="j1", event="done", progress=1.0)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    planned_s=st.floats(2.0, 60.0),
+    time_scale=st.sampled_from([1.0, 6.0]),
+    stop_after_s=st.floats(0.0, 12.0),
+    command=st.sampled_from(["estop", "land", "land_all"]),
+    measure_s=st.floats(0.0, 5.0),
+)
+def test_an_operators_stop_as_the_writing_ends_never_has_the_character_written_again(
+    planned_s: float, time_scale: float, stop_after_s: float, command: str, measure_s: float
+) -> None:
+    """uav1 writes j1 from 10 s (its ready report acknowledged); the operator stops it
+    (``command``) ``stop_after_s`` later: while it writes, or after its writing ended while its
+    result, measured in ``measure_s``, is on its way (the chaos soak's ``estop_one`` struck
+    there once: the job went to uav2 at once and the character was written twice in full).
+    Written in full, j1 is uav1's until its result comes, and done by uav1; broken off, j1 goes
+    to the next vehicle and uav1's board waits for a fresh sheet."""
+    book = Book(_config(time_scale), now_s=0.0)
+    for vid in ("uav1", "uav2"):
+        book.liveliness(vid, True, 0.0)
+    book.status(_status("uav1", None), 0.0)
+    book.submit("j1", SubmitRequest(text="L"), label="L", estimate_s=9.0, now_s=1.0)
+    ready = AgentReport(
+        vehicle_id="uav1", job_id="j1", event="holding", planned_duration_s=planned_s
+    )
+    book.status(_status("uav1", "j1"), 10.0)
+    assert book.report(ready, 10.0)[0].ok
+    book.status(_status("uav2", None), 10.0)
+    end_s = 10.0 + planned_s / time_scale
+    stop_s = 10.0 + stop_after_s
+    in_full = end_s <= stop_s
+    vehicle = None if command == "land_all" else "uav1"
+    assert book.operator(OperatorCommand(command=command, vehicle_id=vehicle), stop_s)[0].ok
+    if command == "land_all":  # everyone down, then back to work
+        for reply_to in ("release_all", "resume"):
+            assert book.operator(OperatorCommand(command=reply_to), stop_s + 0.1)[0].ok
+    t, reported = stop_s, False
+    while t < stop_s + 30.0:
+        t += 0.25
+        book.tick(t)
+        book.status(_status("uav2", _job_of(book, "uav2")), t)
+        if in_full and not reported and t >= end_s + measure_s:
+            reported = book.report(_DONE, t)[0].ok
+        said = "j1" if in_full and not reported else None  # its journal names it till then
+        book.status(_status("uav1", said), t)
+        if in_full:
+            assert book.jobs["j1"].vehicle_id == "uav1", (t, book.jobs["j1"])
+    job = book.jobs["j1"]
+    if in_full:
+        assert (job.state, job.vehicle_id) == ("done", "uav1")
+        assert "b1" not in book.dirty_boards
+    else:
+        assert job.vehicle_id == "uav2" and job.state == "assigned", job
+        assert "b1" in book.dirty_boards  # half-written
 
 
 def _job_of(book: Book, vehicle_id: str) -> str | None:
