@@ -69,7 +69,8 @@ def requeue(
         return
     until_s = hold_until_s(book.config, job, now_s) if wait_for_holder else None
     if until_s is not None and job.writing_since_s is not None:
-        reason = f"{reason}; waits for it to say how it ended (it may be writing it)"
+        maybe = "it may be writing it, or have written it"
+        reason = f"{reason}; waits for it to say how it ended ({maybe})"
     elif until_s is not None:
         reason = f"{reason}; waits {until_s - now_s:.0f} s for it to come back"
     queued = transition(

@@ -9,6 +9,7 @@ answer it expects of which.
 from __future__ import annotations
 
 import math
+import statistics
 from collections.abc import Iterator
 from typing import Any
 
@@ -162,8 +163,19 @@ def test_yaw_is_held_when_given_and_turned_when_asked(gcs: Gcs) -> None:
     here, yaw = gcs.here(), gcs.yaw_rad()
     goal = (here[0] + 0.6, here[1] + 0.6, here[2])  # diagonal: a look-ahead yaw would turn
     gcs.stream = lambda g: g.send_target(0x09F8, goal, yaw=yaw)
-    gcs.pump(5.0, lambda s: math.dist(g_xy(s), goal[:2]) < 0.05)
-    assert abs(_angle(gcs.yaw_rad() - yaw)) < math.radians(3.0)
+    off_rad: list[float] = []
+
+    def arrived(seen: Any) -> bool:
+        off_rad.append(abs(_angle(float(seen.attitude.yaw) - yaw)))
+        return math.dist(g_xy(seen), goal[:2]) < 0.05
+
+    gcs.pump(5.0, arrived)
+    # Held through the move, read as the autopilot estimates it: PX4 SIH as shipped (its IMU
+    # vibrating, on GPS) wanders 0.3 m about the goal and reads its yaw up to 6.4 deg off in
+    # single samples (2026-12-02; one sample at arrival failed 3 deg four runs in five). A
+    # look-ahead yaw would turn 45 deg.
+    assert statistics.median(off_rad) < math.radians(3.0)
+    assert max(off_rad) < math.radians(20.0)
     turned = _angle(yaw + math.pi / 2)
     gcs.stream = lambda g: g.send_target(0x09F8, goal, yaw=turned)
     assert gcs.pump(6.0, lambda s: abs(_angle(float(s.attitude.yaw) - turned)) < 0.05)
