@@ -4,9 +4,9 @@ Losing a vehicle (its token gone, or silent, for ``lost_after_s``: a router rest
 drop, a crash), or restarting the orchestrator, does not say whether the vehicle is still writing
 its job, nor whether it has finished it; nor does the operator's ``land`` or ``estop`` of a vehicle
 whose brush may have gone down (its writing may have ended a moment before, its result on its
-way: the chaos soak's ``estop_one`` once had the job given to the next vehicle at once, and the
-character written twice). So the job goes back to the queue for its last holder alone and its
-board is left as it is:
+way: given to the next vehicle at once, the character was written twice in full,
+``tests/test_write_fence.py``). So the job goes back to the queue for its last holder alone and
+its board is left as it is:
 
 - back with the job (its status or a report names it: writing on, or written and its result on
   its way), the vehicle has it again (``job_reclaimed``), or its result is taken;

@@ -92,8 +92,8 @@ async def _watch(url: str, topics: set[str], timeout_s: float) -> dict[str, Any]
 
 QUIT_LIMIT_S = 30.0
 """A view not gone this long after its Ctrl-C hangs, wall [s]. It goes in 0.2 s alone and with
-four busy loops beside it (2026-12-02); a fresh clone's CI once waited more than 10 s beside
-the chaos test (2026-12-01, cause unknown: no stacks were taken then)."""
+four busy loops beside it (2026-12-02); a fresh clone's CI once waited more than 10 s for it
+(2026-12-01, cause unknown: no stacks were taken then)."""
 
 
 def _stopped_view_stderr(view: subprocess.Popen[str]) -> str:

@@ -1,5 +1,5 @@
 """The write fence (``bus/fence.py``): no character is written by two vehicles, under any
-interleaving of delays, restarts and losses.
+interleaving of delays, restarts, losses and the operator's stops.
 
 A property over random schedules, a restart of the orchestrator or a loss striking anywhere
 from before the vehicle's ready report to the end of its writing: the agent's real lease
