@@ -113,7 +113,7 @@ def _stop_vehicles(
         book.vehicles[vid].paused = book.vehicles[vid].held = True
         eff.commands.append((vid, VehicleCommand(command=order)))
         job = book.active_job_of(vid)
-        if job is not None:  # begun: it may be written in full, its result on its way
+        if job is not None:  # begun, it may be written in full: it waits for the vehicle's word
             begun = job.writing_since_s is not None
             why = f"{vid}: operator {cmd.command}"
             requeue(book, eff, job, now_s, why, lost=False, wait_for_holder=begun)

@@ -284,8 +284,8 @@ def test_an_operators_stop_as_the_writing_ends_never_has_the_character_written_a
 ) -> None:
     """uav1 writes j1 from 10 s (its ready report acknowledged); the operator stops it
     (``command``) ``stop_after_s`` later: while it writes, or after its writing ended while its
-    result, measured in ``measure_s``, is on its way (the chaos soak's ``estop_one`` struck
-    there once: the job went to uav2 at once and the character was written twice in full).
+    result, measured in ``measure_s``, is on its way (before 2026-12-02 the job went to uav2 at
+    once there, and the character was written twice in full).
     Written in full, j1 is uav1's until its result comes, and done by uav1; broken off, j1 goes
     to the next vehicle and uav1's board waits for a fresh sheet."""
     book = Book(_config(time_scale), now_s=0.0)
@@ -305,8 +305,8 @@ def test_an_operators_stop_as_the_writing_ends_never_has_the_character_written_a
     vehicle = None if command == "land_all" else "uav1"
     assert book.operator(OperatorCommand(command=command, vehicle_id=vehicle), stop_s)[0].ok
     if command == "land_all":  # everyone down, then back to work
-        for reply_to in ("release_all", "resume"):
-            assert book.operator(OperatorCommand(command=reply_to), stop_s + 0.1)[0].ok
+        for after in ("release_all", "resume"):
+            assert book.operator(OperatorCommand(command=after), stop_s + 0.1)[0].ok
     t, reported = stop_s, False
     while t < stop_s + 30.0:
         t += 0.25
