@@ -16,8 +16,9 @@ router and orchestrator, mutual TLS, keys made for it), the first run ("cold") a
 least of the others ("warm"), every case with one OpenBLAS thread (as ``plan`` asks), beside peers
 run in turn with the commands (a change of load on a shared machine falls on every case): the
 interpreter alone, and the imports each command cannot do without (``numpy`` + ``piqp``: the
-arrays and the QP solver, as a plan imports no SciPy, with ``numpy`` alone beside it: a plan that
-solves no QP, as the default plans of 永, A and 国, loads no PIQP; ``yaml`` + ``zenoh`` +
+arrays and the QP solver, as a plan imports no SciPy, with ``numpy`` alone beside it: a plan at
+a fixed total time whose closed form meets the limits loads no PIQP, a default plan always does
+for its time law, planner.time_law; ``yaml`` + ``zenoh`` +
 ``msgspec``: the show file, the bus and its messages); the ratio is each command's warm wall
 time to that peer's. Each case runs twice: with the environment's bytecode setting (sessions here
 have ``PYTHONDONTWRITEBYTECODE=1``: every project module is compiled on every run) and with

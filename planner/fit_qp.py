@@ -165,6 +165,15 @@ class QpFitter:
         dense = self._dense_for(dense_qp_seconds(3 * n, qp.G.shape[0]))
         return (dense or self._sparse).solve(qp)
 
+    def solve(self, qp: QpData) -> QpSolution:
+        """Another QP of the same plan (planner.time_law's), on the backend the dense budget
+        still allows."""
+        dense = self._dense_for(dense_qp_seconds(qp.G.shape[1], qp.G.shape[0]))
+        solution = (dense or self._sparse).solve(qp)
+        self.solves += 1
+        self.solve_ms += solution.solve_ms
+        return solution
+
     def fit(self, problem: FitProblem) -> SplineFit:
         """Optimal constrained fit; raises :class:`InfeasibleTrajectoryError` if none exists."""
         st = structure(problem.n_spans, self.limits.speed_max_mps is not None)

@@ -42,6 +42,10 @@ class PlanOptions:
     0.6 v_max and half the smallest acceleration limit, stretched only where the fit breaks a
     limit, with the time penalty balanced there (the default before issue 15: 1.5-2x longer
     flights)."""
+    time_law: bool = True
+    """At pace ``"limits"`` with a free total time: fly the fitted path on the fastest smooth time
+    law and fit the flight again in time (planner.time_law), 5-12 % shorter; False flies the
+    fit's own timing (the planner before issue 35's time law)."""
     split_threshold_m: float = defaults.SPLIT_THRESHOLD_M
     """Split-and-merge threshold, [m]."""
     resegment: bool = True

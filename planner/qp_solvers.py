@@ -11,8 +11,9 @@ small QPs densely never loads SciPy. Every backend returns the primal solution a
 multiplier ``z = z_upper - z_lower`` of each row of ``G`` (positive when the upper bound is active)
 so that ``P x + c + A^T y + G^T z + z_box = 0``. Solver errors become :class:`QpSolverError`.
 A backend object may keep its factorisation pattern between calls (PIQP ``update``). Each
-backend imports its solver on its first solve, not when it is made: a default plan makes one and
-often solves no QP (the closed form meets the limits: 永, A and 国 at the CLI's defaults).
+backend imports its solver on its first solve, not when it is made: a plan at a fixed total time
+often solves no QP (the closed form meets the limits); a default plan solves at least its time
+law's (planner.time_law).
 """
 
 from __future__ import annotations

@@ -66,7 +66,7 @@ def test_finer_knots_fly_nearer_the_time_optimum() -> None:
     with a reach of one knot spacing: the rounds then shrink the segments between acceleration
     peaks as if they were off every limit)."""
     strokes = fit_to_area(text_glyph("鸟"), width_m=1.0, height_m=1.0, margin_m=0.05).strokes
-    traj = plan_strokes(strokes, PlanOptions(knot_spacing_s=0.1))
+    traj = plan_strokes(strokes, PlanOptions(knot_spacing_s=0.1, time_law=False))
     lower, upper = traj.limits.accel_bounds_mps2()
     optimal_s = toppra_duration_s(traj.spline, lower, upper, traj.limits.v_max_mps)
     assert traj.duration_s <= 1.17 * optimal_s
