@@ -59,7 +59,7 @@ SAMPLES_PER_SPAN = 2
 exceed a bound slightly; the final re-timing reads the limits exactly)."""
 SMOOTHING = 3.0
 """Weight of the squared second differences of ``b``'s control points against ``int b dtau``,
-per second of the fit (see the module docstring for 1, 10 and 30)."""
+per second of the fit (the module docstring gives 1 and 10)."""
 RATE_SQUARED_RANGE = (0.5, 4.0)
 """Bounds of ``b``: no part of the path flown slower than 0.71x or faster than 2x the fit's own
 timing (at the rest ends, where no limit binds, ``b`` reaches the upper bound; the jerk grows
