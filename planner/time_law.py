@@ -24,8 +24,9 @@ that its exact limits (acceleration at the knots, speed on the hodograph, as pla
 reads them) are just reached. It is kept when it is shorter.
 
 Measured on ``bench_planner``'s corpus and held-out set (220 characters; ratio to TOPP-RA on
-the same path, median / worst; 2026-12-02, one core): the fit's own timing 1.11 / 1.19, the
-flight 1.069 / 1.138 (``i``), every character's flight kept. Its jerk grows: the largest per
+the same path, median / worst; 2026-12-02, one core): the fit's own timing 1.13 / 1.22 (3
+per-segment rounds of planner.timescale), the flight 1.072 / 1.136 (``j``), every character's
+flight kept (figures below with 5 rounds: 1.069 / 1.138). Its jerk grows: the largest per
 character median 3.6 -> 5.2 m/s^3, the body-rate bound of eq. (15) median 0.57 -> 0.85 rad/s
 (at most 1.11, against 3). Tried: ``SMOOTHING`` 1 and 10: 1.061 / 1.121 (jerk median 6.9 m/s^3,
 body rate up to 1.41 rad/s) and 1.080 / 1.150; 3 samples per span: no change; knots of the
@@ -49,7 +50,7 @@ from planner.bspline import (
     basis_rows_pair,
 )
 from planner.coo import CooMatrix, vstack
-from planner.minjerk import EndState, FitProblem, fit_closed_form
+from planner.minjerk import EndState, FitProblem, closed_form_points
 from planner.qp_solvers import QpData, QpSolution
 from planner.qp_structure import QpLimits
 from planner.timescale import time_factors
@@ -77,15 +78,23 @@ Solve = Callable[[QpData], QpSolution]
 _NO_INDEX = np.zeros(0, dtype=np.int64)
 
 
-def _rows(first: IntArray, values: FloatArray, n_ctrl: int) -> CooMatrix:
-    """Rows ``values[k, a]`` at columns ``first[k] + a`` (4 per row, ascending)."""
-    n = first.shape[0]
-    return CooMatrix(
-        rows=np.repeat(np.arange(n, dtype=np.int64), 4),
-        cols=(first[:, None] + np.arange(4)[None, :]).ravel(),
-        values=values.ravel(),
-        shape=(n, n_ctrl),
+def _rows_that_can_bind(
+    first: IntArray, values: FloatArray, lower: float, upper: float, n_ctrl: int
+) -> tuple[CooMatrix, FloatArray, FloatArray]:
+    """Rows ``values[k, a]`` at columns ``first[k] + a`` (4 per row) with their bounds, only
+    those some ``b`` within ``RATE_SQUARED_RANGE`` could take past a bound (the others hold
+    for every ``b`` the QP may choose: the z rows of a flat board, slow parts' speed rows)."""
+    lo, hi = RATE_SQUARED_RANGE
+    reach_hi = np.sum(np.maximum(values * lo, values * hi), axis=1)
+    reach_lo = np.sum(np.minimum(values * lo, values * hi), axis=1)
+    keep = np.flatnonzero((reach_hi > upper) | (reach_lo < lower))
+    rows = CooMatrix(
+        rows=np.repeat(np.arange(keep.shape[0], dtype=np.int64), 4),
+        cols=(first[keep, None] + np.arange(4)[None, :]).ravel(),
+        values=values[keep].ravel(),
+        shape=(keep.shape[0], n_ctrl),
     )
+    return rows, np.full(keep.shape[0], lower), np.full(keep.shape[0], upper)
 
 
 def rate_qp(spline: ClampedCubicSpline, limits: QpLimits) -> QpData:
@@ -96,17 +105,20 @@ def rate_qp(spline: ClampedCubicSpline, limits: QpLimits) -> QpData:
     value, slope = basis_rows_pair(alpha * tau, m)
     d1, d2 = spline.evaluate(tau, 1), spline.evaluate(tau, 2)
     parts = [  # q'' = p'' b + p' b' / 2 per axis, b' = alpha db/du
-        _rows(value.first, d2[:, [k]] * value.values + 0.5 * alpha * d1[:, [k]] * slope.values, n)
+        _rows_that_can_bind(
+            value.first,
+            d2[:, [k]] * value.values + 0.5 * alpha * d1[:, [k]] * slope.values,
+            limits.accel_lower_mps2[k],
+            limits.accel_upper_mps2[k],
+            n,
+        )
         for k in range(3)
     ]
-    h_l = [np.full(tau.shape[0], lo) for lo in limits.accel_lower_mps2]
-    h_u = [np.full(tau.shape[0], hi) for hi in limits.accel_upper_mps2]
-    if limits.speed_max_mps is not None:  # rows only where b's range can reach v_max
-        speed_sq = np.sum(d1 * d1, axis=1)
-        near = np.flatnonzero(speed_sq * RATE_SQUARED_RANGE[1] > limits.speed_max_mps**2)
-        parts.append(_rows(value.first[near], speed_sq[near, None] * value.values[near], n))
-        h_l.append(np.full(near.shape[0], -np.inf))
-        h_u.append(np.full(near.shape[0], limits.speed_max_mps**2))
+    if limits.speed_max_mps is not None:  # |q'|^2 = |p'|^2 b
+        speed_sq = np.sum(d1 * d1, axis=1)[:, None] * value.values
+        parts.append(
+            _rows_that_can_bind(value.first, speed_sq, -np.inf, limits.speed_max_mps**2, n)
+        )
     weights = np.full(tau.shape[0], duration / (tau.shape[0] - 1))
     weights[[0, -1]] *= 0.5
     c = -np.bincount(
@@ -119,9 +131,9 @@ def rate_qp(spline: ClampedCubicSpline, limits: QpLimits) -> QpData:
         c=c,
         A=CooMatrix(_NO_INDEX, _NO_INDEX, np.zeros(0), (0, n)),
         b=np.zeros(0),
-        G=vstack(parts),
-        h_l=np.concatenate(h_l),
-        h_u=np.concatenate(h_u),
+        G=vstack([rows for rows, _, _ in parts]),
+        h_l=np.concatenate([lower for _, lower, _ in parts]),
+        h_u=np.concatenate([upper for _, _, upper in parts]),
         x_l=np.full(n, RATE_SQUARED_RANGE[0]),
         x_u=np.full(n, RATE_SQUARED_RANGE[1]),
     )
@@ -199,7 +211,7 @@ def _fitted_in_time(
         start=EndState(points[0]),
         end=EndState(points[-1]),
     )
-    control = fit_closed_form(problem).spline.control_points
+    control, _ = closed_form_points(problem)
     if z_floor_m is not None:
         control[:, 2] = np.maximum(control[:, 2], z_floor_m)
     return ClampedCubicSpline(control, duration)

@@ -32,7 +32,7 @@ The fit at the result is the unconstrained minimum-jerk fit and respects the lim
 returns it unchanged, or holds it above the floor (planner.floor_qp). Every fit evaluated is a
 candidate: the shortest one within the limits is returned (``within_limits`` False only when
 none was, the caller's QP then imposes them). Cost: one closed-form solve per step (~0.3 ms for
-a Chinese character, its control points and residuals only), 6 to 9 in all.
+a Chinese character, its control points and residuals only), 4 to 7 in all.
 
 Measured against TOPP-RA on the plan's own path (benchmarks/bench_planner.py), the minimum-jerk
 fit alone flies 1.06-1.19x the time-optimal duration (median 1.11; planner.time_law then re-times
@@ -81,13 +81,13 @@ STRETCH_GAIN = 1.5
 """Exponent of the stretch of segments above their limit (1: taken whole; more settles the
 peaks in fewer rounds: on 21 characters of the benchmark's corpus, duration against TOPP-RA's
 median 1.105 and worst 1.193 at 1.0 with SHRINK_GAIN 0.7, 1.107 and 1.168 at 1.5 with 0.85)."""
-ROUNDS = 5
+ROUNDS = 3
 """Per-segment rounds at most, each one closed-form solve. Alone (without planner.time_law), on
 those 21 characters: 6 rounds, median 1.115 and worst 1.203; 8: 1.107, 1.170; 10: 1.101, 1.160;
-12: no better. The time law, which re-times the fit's path afterwards, leaves little to the last
+12: no better. The time law, which re-times the fit's path afterwards, leaves little to the later
 rounds: on ``bench_planner``'s corpus and held-out set (220 characters) the flight's ratio to
-TOPP-RA is median 1.064 and worst 1.124 after 10 rounds, 1.065 and 1.133 after 5, 1.067 and
-1.138 after 3, and 5 against 10 spare a third of a plan's CPU time (about 4 of 14 ms)."""
+TOPP-RA is median 1.068 and worst 1.133 after 10 rounds, 1.069 and 1.138 after 5, 1.072 and 1.136
+after 3; 3 against 10 spare about 1.5 ms of a plan's CPU time."""
 REACH_S = 0.2
 """A segment's factor is the largest of the samples within about this time of it, [s] (in whole
 knot spacings, at least one): a segment counts as at its limit when a limit is reached this
