@@ -183,7 +183,9 @@ def _measure(char: str, options: PlanOptions, res: _Results, peer: bool, numeric
     reseg_ms = _timed(lambda: resegment(problem, options, QpFitter(limits), tolerances))[1]
     res.add("re-segmentation at the limits (full)", reseg_ms)
     nominal_s = plan_strokes(strokes, replace(options, pace="nominal")).duration_s
+    cpu_start = time.process_time()
     fit_s = plan_strokes(strokes, replace(options, time_law=False)).duration_s
+    res.add("plan_strokes without the time law, CPU", (time.process_time() - cpu_start) * 1e3)
     if peer:  # at the nominal pace: at the plan's own, MinSnap's time allocation (each segment
         # distance / v_avg) breaks its v_max and it fails (19 of 20 characters)
         points = prep.path.points_m_enu
