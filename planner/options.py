@@ -44,8 +44,9 @@ class PlanOptions:
     flights)."""
     time_law: bool = True
     """At pace ``"limits"`` with a free total time: fly the fitted path on the fastest smooth time
-    law and fit the flight again in time (planner.time_law), 5-12 % shorter; False flies the
-    fit's own timing (the planner before issue 35's time law)."""
+    law and fit the flight again in time (planner.time_law), 2.5-11 % shorter (median 6.8 % on
+    220 characters); False flies the fit's own timing (the planner before issue 35's time
+    law)."""
     split_threshold_m: float = defaults.SPLIT_THRESHOLD_M
     """Split-and-merge threshold, [m]."""
     resegment: bool = True

@@ -15,8 +15,8 @@ Stages (each timed in ``PlannedTrajectory.timing_ms``):
    ``fit_tolerance_m`` the fit is tightened locally and solved again (planner.refine);
 6. ``time_law`` (pace ``"limits"``, free total time, the QP method): the fit's path flown as
    fast as its limits allow on a smooth time law and fitted again in time, with knots a third as
-   far apart (planner.time_law); kept when shorter, as close to the strokes, and within every
-   limit (measured again);
+   far apart (planner.time_law); kept when shorter, within ``fit_tolerance_m`` of the strokes
+   (or no further than the fit) and within every limit, all measured again;
 7. ``feasibility``: report, and :class:`InfeasibleTrajectoryError` if any limit is exceeded or
    the path still strays (naming the limit that pulls it off the strokes, if one does).
 

@@ -32,12 +32,16 @@ def test_fly_writes_metrics_and_report(tmp_path: Path, capsys: pytest.CaptureFix
 
 
 def test_fly_and_plan_lay_a_character_out_alike(capsys: pytest.CaptureFixture[str]) -> None:
-    """The same defaults: the planned time ``fly`` reports is the one ``plan`` prints."""
+    """The same defaults: the planned time ``fly`` reports is the one ``plan`` prints, to the
+    precision of the interior point: ``plan`` solves its QPs on PIQP's dense interface, ``fly``
+    on the sparse one, and their solutions of the time law's QP (planner.time_law) differ by
+    about 1e-6, the durations by about 1e-5 (another default, as a height or a limit, moves them
+    by far more)."""
     assert main(["plan", "--text", "I", "--json"]) == 0
     planned = json.loads(capsys.readouterr().out)
     assert main(["fly", "--text", "I", "--json"]) == 0
     flown = json.loads(capsys.readouterr().out)
-    assert flown["planned_duration_s"] == pytest.approx(planned["duration_s"], rel=1e-9)
+    assert flown["planned_duration_s"] == pytest.approx(planned["duration_s"], rel=1e-4)
     assert flown["within_bounds"] is True and 0.3 < flown["iou"] <= 1.0
     assert main(["fly", "--text", "I"]) == 0
     lines = capsys.readouterr().out.splitlines()
