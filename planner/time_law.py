@@ -2,8 +2,9 @@
 
 The minimum-jerk fit (planner.timescale) times its path with the spline itself: its acceleration
 is linear between knots 0.2 s apart and passes through zero between an acceleration and the
-next braking, so it flies 1.06-1.19x the time-optimal duration of its own path (TOPP-RA,
-planner.timeopt_reference). Here the path stays and only its timing changes: the fit ``p(tau)``,
+next braking, so it flies 1.06-1.19x the time-optimal duration of its own path after 10
+per-segment rounds (TOPP-RA, planner.timeopt_reference; median 1.15, worst 1.26 after the 3 it
+has now). Here the path stays and only its timing changes: the fit ``p(tau)``,
 ``tau`` its own time, is flown as ``q(t) = p(tau(t))``.
 
 With ``b(tau) = (dtau/dt)^2`` (the squared path speed of time-optimal path parameterisation:
@@ -23,17 +24,17 @@ within 0.03 mm of it), its z control points held at the floor, and uniformly re-
 that its exact limits (acceleration at the knots, speed on the hodograph, as planner.timescale
 reads them) are just reached. It is kept when it is shorter.
 
-Measured on ``bench_planner``'s corpus and held-out set (220 characters; ratio to TOPP-RA on
-the same path, median / worst; 2026-12-02, one core): the fit's own timing 1.13 / 1.22 (3
-per-segment rounds of planner.timescale), the flight 1.072 / 1.136 (``j``), every character's
-flight kept (figures below with 5 rounds: 1.069 / 1.138). Its jerk grows: the largest per
-character median 3.6 -> 5.2 m/s^3, the body-rate bound of eq. (15) median 0.57 -> 0.85 rad/s
-(at most 1.11, against 3). Tried: ``SMOOTHING`` 1 and 10: 1.061 / 1.121 (jerk median 6.9 m/s^3,
-body rate up to 1.41 rad/s) and 1.080 / 1.150; 3 samples per span: no change; knots of the
-flight 2, 4 per span: 1.071 / 1.141 and 1.066 / 1.135 (with ``SMOOTHING`` 1 and 2 knots per
-span 66 of the 220 flights came out no shorter than their fit, their acceleration missed by the
-coarser spline in ``t`` at the jerk's jumps and the re-timing taking that back from the whole
-flight); ``b`` on a coarser spline (every second knot of the fit): 1.080-1.091 / 1.146-1.171.
+Measured on ``bench_planner``'s corpus and held-out set (220 characters; ratio to TOPP-RA on the
+same path, median / worst; 2026-12-02, one core): the fit's own timing 1.15 / 1.26 (3 per-segment
+rounds of planner.timescale), the flight 1.071 / 1.136 (``j``), every character's flight kept
+(figures below with 5 rounds: 1.069 / 1.138). Its jerk grows (59 of them): the largest per character
+median 3.4 -> 5.6 m/s^3, the body-rate bound of eq. (15) median 0.55 -> 0.88 rad/s (at most 1.13,
+against 3). Tried: ``SMOOTHING`` 1 and 10: 1.061 / 1.121 (jerk median 6.9 m/s^3, body rate up to
+1.41 rad/s) and 1.080 / 1.150; 3 samples per span: no change; knots of the flight 2, 4 per span:
+1.071 / 1.141 and 1.066 / 1.135 (with ``SMOOTHING`` 1 and 2 knots per span 66 of the 220 flights
+came out no shorter than their fit, their acceleration missed by the coarser spline in ``t`` at the
+jerk's jumps and the re-timing taking that back from the whole flight); ``b`` on a coarser spline
+(every second knot of the fit): 1.080-1.091 / 1.146-1.171.
 """
 
 from __future__ import annotations

@@ -34,27 +34,27 @@ candidate: the shortest one within the limits is returned (``within_limits`` Fal
 none was, the caller's QP then imposes them). Cost: one closed-form solve per step (~0.3 ms for
 a Chinese character, its control points and residuals only), 4 to 7 in all.
 
-Measured against TOPP-RA on the plan's own path (benchmarks/bench_planner.py), the minimum-jerk
-fit alone flies 1.06-1.19x the time-optimal duration (median 1.11; planner.time_law then re-times
-its path, to median 1.07): the cubic spline's acceleration is piecewise linear between knots
-0.2 s apart and passes through zero between an acceleration and the next braking, where the
-time-optimal profile switches at once; short strokes, whose every part lies within a knot spacing
-of an approach or a lift, lose the most. Even the fastest cubic
-spline with knots ``h`` apart, rest to rest (zero end velocity and acceleration), needs its
-straight move's bang-coast-bang time plus about ``h`` (an LP over the control points at
-a = 0.8 m/s^2, v = 0.5 m/s: 0.2 m in 1.20 s against 1.00, 1 m in 2.83 s against 2.63 at
-h = 0.2 s; 1.10 s and 2.73 s at h = 0.1 s), and every near-stop of a character (hops, sharp
-corners) pays part of it again. At 0.1 s knots the same allocation reaches median 1.10 and
-worst 1.16, the corpus flown 0.7 % faster in all, for 1.26x the planning time. A lower jerk weight
-lowers the ratio further only by sharpening the path, which slows its time-optimal flight more
-than the plan (at 0.1 s knots and 3e-5 s^5: 1.10 and 1.14, the flights 6.5 % longer).
-Weighting the fit's error along the path less than across it does not help alone (corpus and
-held-out, median / worst: 0.3 at points within 20 degrees of straight 1.113 / 1.197 and
-1.116 / 1.166, against 1.112 / 1.185 and 1.112 / 1.186): the fit drifts back to minimum-jerk
-timing. At 0.5 within 45 degrees it helps characters of many strokes (鸟 1.19 -> 1.14) but takes
-那 to 1.33, its along-path offsets at turning points read as strays by planner.refine. The
-flight's first and last 0.4 s (rest, zero acceleration) cost 0.22-0.25 s per character, 24 % of
-``i``'s gap: finer knots at the ends, not weights, is what the worst characters need.
+Measured against TOPP-RA on the plan's own path (benchmarks/bench_planner.py), the minimum-jerk fit
+alone flies 1.06-1.19x the time-optimal duration after 10 rounds (median 1.11; 1.15 after the 3 of
+``ROUNDS``, planner.time_law then re-times its path, to median 1.07): the cubic spline's
+acceleration is piecewise linear between knots 0.2 s apart and passes through zero between an
+acceleration and the next braking, where the time-optimal profile switches at once; short strokes,
+whose every part lies within a knot spacing of an approach or a lift, lose the most. Even the
+fastest cubic spline with knots ``h`` apart, rest to rest (zero end velocity and acceleration),
+needs its straight move's bang-coast-bang time plus about ``h`` (an LP over the control points at a
+= 0.8 m/s^2, v = 0.5 m/s: 0.2 m in 1.20 s against 1.00, 1 m in 2.83 s against 2.63 at h = 0.2 s;
+1.10 s and 2.73 s at h = 0.1 s), and every near-stop of a character (hops, sharp corners) pays part
+of it again. At 0.1 s knots the same allocation reaches median 1.10 and worst 1.16, the corpus flown
+0.7 % faster in all, for 1.26x the planning time. A lower jerk weight lowers the ratio further only
+by sharpening the path, which slows its time-optimal flight more than the plan (at 0.1 s knots and
+3e-5 s^5: 1.10 and 1.14, the flights 6.5 % longer). Weighting the fit's error along the path less
+than across it does not help alone (corpus and held-out, median / worst: 0.3 at points within 20
+degrees of straight 1.113 / 1.197 and 1.116 / 1.166, against 1.112 / 1.185 and 1.112 / 1.186): the
+fit drifts back to minimum-jerk timing. At 0.5 within 45 degrees it helps characters of many strokes
+(鸟 1.19 -> 1.14) but takes 那 to 1.33, its along-path offsets at turning points read as strays by
+planner.refine. The flight's first and last 0.4 s (rest, zero acceleration) cost 0.22-0.25 s per
+character, 24 % of ``i``'s gap: finer knots at the ends, not weights, is what the worst characters
+need.
 """
 
 from __future__ import annotations
@@ -87,7 +87,7 @@ those 21 characters: 6 rounds, median 1.115 and worst 1.203; 8: 1.107, 1.170; 10
 12: no better. The time law, which re-times the fit's path afterwards, leaves little to the later
 rounds: on ``bench_planner``'s corpus and held-out set (220 characters) the flight's ratio to
 TOPP-RA is median 1.068 and worst 1.133 after 10 rounds, 1.069 and 1.138 after 5, 1.072 and 1.136
-after 3; 3 against 10 spare about 1.5 ms of a plan's CPU time."""
+after 3; 3 against 10 spare a plan 6 or 7 closed-form solves (about 0.3 ms each)."""
 REACH_S = 0.2
 """A segment's factor is the largest of the samples within about this time of it, [s] (in whole
 knot spacings, at least one): a segment counts as at its limit when a limit is reached this
