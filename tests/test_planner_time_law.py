@@ -10,7 +10,6 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from planner.bspline import ClampedCubicSpline
 from planner.errors import PlannerError
 from planner.feasibility import RELATIVE_TOLERANCE
 from planner.glyphs import fit_to_area, text_glyph
@@ -169,4 +168,3 @@ def test_random_drawings_fly_no_longer_than_their_fit_and_within_every_limit(
     assert flight.feasibility.feasible
     assert flight.feasibility.path_error_max_m <= max(0.025, fit.feasibility.path_error_max_m)
     assert np.all(np.diff(flight.data_times_s) >= 0.0)
-    assert isinstance(flight.spline, ClampedCubicSpline)
