@@ -170,7 +170,7 @@ def _measure(char: str, options: PlanOptions, res: _Results, peer: bool, numeric
         return
     res.add("plan_strokes (everything)", plan_ms)
     res.add("plan_strokes, CPU time", (time.process_time() - cpu_start) * 1e3)
-    res.add("  of it the time law (stage 6, wall)", traj.timing_ms.get("time_law", 0.0))
+    res.add("  of it the time law (stage 5, wall)", traj.timing_ms.get("time_law", 0.0))
     res.refine_rounds.append(int(traj.info.get("refine_rounds", 0)))
     prep = prepare(strokes, options)
     problem, limits = prep.problem, prep.qp_limits

@@ -141,7 +141,7 @@ def _power_rows(x: FloatArray, derivative: int) -> FloatArray:
     return np.asarray(powers * _POWER_DERIVATIVE_FACTORS[derivative])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class BasisRows:
     """The 4 non-zero basis values per sample: a compact, vectorised sparse matrix."""
 
@@ -343,7 +343,7 @@ def jerk_gram(n_spans: int, alpha: float) -> FloatArray:
 # --- a spline as a value ----------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ClampedCubicSpline:
     """A clamped uniform cubic B-spline trajectory ``p(t)``, ``t`` in [0, duration_s]."""
 

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class CooMatrix:
     """A sparse matrix: ``values[k]`` at ``(rows[k], cols[k])``, no two entries at one place."""
 

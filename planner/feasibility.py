@@ -2,11 +2,12 @@
 
 Peaks are exact where the spline structure allows it: acceleration is piecewise linear (extremes
 at knots), jerk piecewise constant, thrust ``m ||a - g||`` convex in ``a`` (maximum at knots).
-Speed is a quartic per span and is sampled 33 times per span (relative error < 1e-4). Besides,
-acceleration and speed are sampled at ``SAMPLED_RATE_HZ`` (every span, both ends included) and
-their largest share of the bounds is reported and checked: the limits hold densely, not only
-where the QP imposes them (the hodograph control points are kept in the ``v_max`` ball, which
-bounds the speed everywhere; acceleration bounds are exact).
+Speed is a quartic per span and is sampled at ``SAMPLED_RATE_HZ`` (every span, both ends
+included), at least ``PEAK_SAMPLES_PER_SPAN`` times per span (relative error < 1e-4), as is the
+height above the board; the acceleration is read at the knots, which bound its samples. The
+largest share of the bounds of those samples is reported and checked: the limits hold densely,
+not only where the QP imposes them (the hodograph control points are kept in the ``v_max``
+ball, which bounds the speed everywhere; acceleration bounds are exact).
 """
 
 from __future__ import annotations
@@ -27,6 +28,9 @@ RELATIVE_TOLERANCE = 1e-6
 """Slack allowed over a limit for solver round-off (relative to the bound)."""
 SAMPLED_RATE_HZ = 1000.0
 """Rate of the dense check of the acceleration and speed limits, [Hz]."""
+PEAK_SAMPLES_PER_SPAN = 33
+"""Fewest samples per span of the peak speed and the lowest height (relative error of the peak
+speed < 1e-4; more where the dense check samples faster)."""
 
 _GRAVITY = np.array([0.0, 0.0, -GRAVITY_MPS2])
 
@@ -195,36 +199,37 @@ def _span_polynomials(spline: ClampedCubicSpline) -> FloatArray:
     return np.asarray(np.einsum("sap,sad->spd", table, spline.control_points[idx]))
 
 
-def _speeds_sq(spline: ClampedCubicSpline, x: FloatArray) -> FloatArray:
-    """Squared speed (m, K) at ``x`` (K,) in [0, 1] on every span, in u units (times alpha^2
-    for time units): the hodograph polynomials (m, 3, 4) times the power rows (4, K)."""
+def _speeds_sq(polynomials: FloatArray, x: FloatArray) -> FloatArray:
+    """Squared speed (m, K) at ``x`` (K,) in [0, 1] on every span of the span ``polynomials``
+    (m, 4, 3), in u units (times alpha^2 for time units): the hodograph polynomials (m, 3, 3)
+    times the power rows (3, K)."""
     powers = np.stack([np.ones_like(x), 2.0 * x, 3.0 * x**2])  # d/dx of x, x^2, x^3
-    hodograph = np.swapaxes(_span_polynomials(spline)[:, 1:], 1, 2) @ powers
+    hodograph = np.swapaxes(polynomials[:, 1:], 1, 2) @ powers
     return np.asarray(np.einsum("sdk,sdk->sk", hodograph, hodograph))
 
 
-def _speed_peak(spline: ClampedCubicSpline, samples_per_span: int = 33) -> tuple[float, float]:
-    x = np.linspace(0.0, 1.0, samples_per_span)
-    speed_sq = _speeds_sq(spline, x)
-    s, k = np.unravel_index(int(np.argmax(speed_sq)), speed_sq.shape)
-    return math.sqrt(float(speed_sq[s, k])) * spline.alpha, float((s + x[k]) / spline.alpha)
+def _samples_per_span(spline: ClampedCubicSpline, rate_hz: float) -> int:
+    """Samples per span, both ends included, for ``rate_hz`` or faster."""
+    return max(2, math.ceil(rate_hz * spline.duration_s / spline.n_spans) + 1)
+
+
+def _accel_share(accel_at_knots: FloatArray, limits: VehicleLimits) -> float:
+    """Largest share of its bound of the acceleration, read at the knots (it is linear on each
+    span, so no sample's share exceeds that of a span end)."""
+    lower, upper = limits.accel_bounds_mps2()
+    share = np.maximum(accel_at_knots / np.asarray(upper), accel_at_knots / np.asarray(lower))
+    return float(np.max(share))
 
 
 def sampled_shares(
     spline: ClampedCubicSpline, limits: VehicleLimits, rate_hz: float = SAMPLED_RATE_HZ
 ) -> tuple[float, float]:
     """Largest share of its bound of the acceleration (per axis) and of the speed, sampled at
-    ``rate_hz`` or faster (every span from end to end).
-
-    The acceleration is linear on each span, so its samples are extreme at the span ends, which
-    are samples too: it is read at the knots (the same values, without the dense samples)."""
-    per_span = max(2, math.ceil(rate_hz * spline.duration_s / spline.n_spans) + 1)
-    acc = spline.acceleration_at_knots()
-    lower, upper = limits.accel_bounds_mps2()
-    share_a = np.maximum(acc / np.asarray(upper), acc / np.asarray(lower))
-    speed_sq = np.max(_speeds_sq(spline, np.linspace(0.0, 1.0, per_span)))
+    ``rate_hz`` or faster (every span from end to end; the acceleration at the knots)."""
+    x = np.linspace(0.0, 1.0, _samples_per_span(spline, rate_hz))
+    speed_sq = np.max(_speeds_sq(_span_polynomials(spline), x))
     speed = math.sqrt(float(speed_sq)) * spline.alpha
-    return float(np.max(share_a)), speed / limits.v_max_mps
+    return _accel_share(spline.acceleration_at_knots(), limits), speed / limits.v_max_mps
 
 
 def _min_norm_on_segments(a0: FloatArray, a1: FloatArray) -> float:
@@ -264,13 +269,18 @@ def assess(
     min_sq = sum(_min_square_piecewise_linear(specific[:, i]) for i in range(3))
     max_jerk_sq = float(np.sum(np.max(jerk**2, axis=0)))
     body_rate = math.sqrt(max_jerk_sq / min_sq) if min_sq > 0.0 else math.inf
-    speed, speed_t = _speed_peak(spline)
-    share_a, share_v = sampled_shares(spline, limits)
+    polynomials = _span_polynomials(spline)
+    x = np.linspace(
+        0.0, 1.0, max(PEAK_SAMPLES_PER_SPAN, _samples_per_span(spline, SAMPLED_RATE_HZ))
+    )
+    speeds_sq = _speeds_sq(polynomials, x)
+    span, sample = np.unravel_index(int(np.argmax(speeds_sq)), speeds_sq.shape)
+    speed = math.sqrt(float(speeds_sq[span, sample])) * spline.alpha
+    heights = polynomials[:, :, 2] @ np.stack([np.ones_like(x), x, x**2, x**3])
     dist = np.linalg.norm(turning_residuals_m, axis=1)
     per_stroke = tuple(
         float(np.max(dist[turning_stroke_index == k], initial=0.0)) for k in range(n_strokes)
     )
-    z_dense = spline.evaluate(np.linspace(0.0, spline.duration_s, 8 * spline.n_spans + 1))[:, 2]
     peak = np.abs(accel[k_peak, np.arange(3)])
     return FeasibilityReport(
         peak_accel_mps2=_tuple3(peak),
@@ -280,7 +290,7 @@ def assess(
         accel_lower_mps2=lower,
         accel_upper_mps2=upper,
         peak_speed_mps=speed,
-        peak_speed_time_s=speed_t,
+        peak_speed_time_s=float((span + x[sample]) / spline.alpha),
         v_max_mps=limits.v_max_mps,
         peak_thrust_n=float(np.max(thrust_norm)) * limits.mass_kg,
         min_thrust_n=min_thrust,
@@ -292,11 +302,11 @@ def assess(
         fit_error_max_m=float(np.max(dist, initial=0.0)),
         fit_error_rms_m=float(np.sqrt(np.mean(dist**2))) if dist.size else 0.0,
         fit_error_max_per_stroke_m=per_stroke,
-        min_height_above_board_m=float(np.min(z_dense)) - board_surface_z_m,
+        min_height_above_board_m=float(np.min(heights)) - board_surface_z_m,
         path_error_max_per_stroke_m=path_error_per_stroke_m,
         sampled_rate_hz=SAMPLED_RATE_HZ,
-        sampled_accel_share=share_a,
-        sampled_speed_share=share_v,
+        sampled_accel_share=_accel_share(accel, limits),
+        sampled_speed_share=speed / limits.v_max_mps,
     )
 
 

@@ -17,7 +17,6 @@ against 0.30 ms at 162 (a Chinese character), 1.7 against 17 ms at 5750; equal t
 from __future__ import annotations
 
 import ctypes
-import glob
 import os
 from collections.abc import Callable
 from functools import lru_cache
@@ -34,14 +33,18 @@ BandSolver = Callable[[NDArray[np.float64], NDArray[np.float64]], NDArray[np.flo
 
 
 def _library_paths() -> list[str]:
-    """Where numpy's wheels put their bundled OpenBLAS."""
-    root = os.path.dirname(os.path.dirname(np.__file__))
+    """Where numpy's wheels put their bundled OpenBLAS (listed without ``glob``, which a
+    one-off ``skyquill plan`` would import for this alone)."""
     here = os.path.dirname(np.__file__)
-    patterns = [
-        os.path.join(root, "numpy.libs", "*scipy_openblas*"),
-        os.path.join(here, ".dylibs", "*scipy_openblas*"),
-    ]
-    return sorted(path for pattern in patterns for path in glob.glob(pattern))
+    folders = [os.path.join(os.path.dirname(here), "numpy.libs"), os.path.join(here, ".dylibs")]
+    found = []
+    for folder in folders:
+        try:
+            names = os.listdir(folder)
+        except OSError:
+            continue
+        found += [os.path.join(folder, name) for name in names if "scipy_openblas" in name]
+    return sorted(found)
 
 
 @lru_cache(maxsize=1)

@@ -38,7 +38,7 @@ def _zeros3() -> FloatArray:
     return np.zeros(3)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class EndState:
     """Position, velocity and acceleration imposed at one end of the trajectory."""
 
@@ -55,7 +55,7 @@ class EndState:
         return not (np.any(self.velocity_mps) or np.any(self.acceleration_mps2))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class FitProblem:
     """Data, times and spline size of one minimum-jerk regression."""
 
@@ -105,7 +105,7 @@ class FitProblem:
         return np.diff(self.times_s)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SplineFit:
     """Optimal spline of a :class:`FitProblem` and the numbers the re-segmentation needs."""
 

@@ -11,18 +11,20 @@ Stages (each timed in ``PlannedTrajectory.timing_ms``):
    re-segmentation (planner.retime);
 4. ``fit``: the QP with acceleration, speed and floor limits (or the closed form); the paper's
    re-segmentation ends with it (its last solve is the final fit);
-5. ``refine``: the pen-down path is measured against the strokes; where it strays beyond
-   ``fit_tolerance_m`` the fit is tightened locally and solved again (planner.refine);
-6. ``time_law`` (pace ``"limits"``, free total time, the QP method): the fit's path flown as
+5. ``time_law`` (pace ``"limits"``, free total time, the QP method): the fit's path flown as
    fast as its limits allow on a smooth time law and fitted again in time, with knots a third as
-   far apart (planner.time_law); kept when shorter, within ``fit_tolerance_m`` of the strokes
-   (or no further than the fit) and within every limit, all measured again;
+   far apart (planner.time_law); kept when shorter, within ``fit_tolerance_m`` of the strokes and
+   within every limit, all measured on the flight itself;
+6. ``refine`` (when no flight was kept): the pen-down path is measured against the strokes;
+   where it strays beyond ``fit_tolerance_m`` the fit is tightened locally and solved again
+   (planner.refine) and flown as it is (a fit that strays at pace ``"limits"`` is rare: none
+   of ``bench_planner``'s 220 characters);
 7. ``feasibility``: report, and :class:`InfeasibleTrajectoryError` if any limit is exceeded or
    the path still strays (naming the limit that pulls it off the strokes, if one does).
 
 Spline size: uniform knots ``knot_spacing_s`` apart (default 0.2 s: 5 control points per second
 per axis, finer than the shortest leg time ``min_leg_time_s`` of the path), at least 8 spans; the
-flight of stage 6 has three times as many.
+flight of stage 5 has three times as many.
 Jerk weight: ``w_g = jerk_weight_s5`` (default 1e-4 s^5): for 1 m characters flown at the
 default limits the pen-down path stays within about 1 cm of the strokes (median of the largest
 error per character; a few millimetres at the slower ``"nominal"`` pace).
@@ -90,7 +92,7 @@ class _Clock:
         return {**self.stages, "total": (time.perf_counter() - self._t0) * 1e3}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PreparedPlan:
     """The data path and the fit problem before re-segmentation (for benchmarks and tools)."""
 
@@ -197,24 +199,23 @@ def plan_strokes(strokes_board_m: Sequence[FloatArray], options: PlanOptions) ->
     else:
         fit = fitter.fit(problem) if fitter is not None else fit_closed_form(problem)
         clock.lap("fit")
-    refined = _within_tolerance(path, problem, fit, fitter, options, limits)
-    problem, fit, errors = refined.problem, refined.fit, refined.errors
-    info["refine_rounds"] = refined.rounds
-    clock.lap("refine")
+    at_limits = options.total_time_s is None and options.pace == "limits"
+    flier = fitter if options.time_law and at_limits else None
     flown = None
-    if (
-        fitter is not None
-        and options.time_law
-        and options.total_time_s is None
-        and options.pace == "limits"
-    ):
-        flown = _flown_at_limits(path, problem, fit, errors, fitter, options)
+    if flier is not None:  # a flight within the tolerance needs no refinement of its fit
+        flown = _flown_at_limits(path, problem, fit, flier, options)
         clock.lap("time_law")
-    if flown is not None:
-        info["time_law_gain"] = fit.spline.duration_s / flown[1].spline.duration_s
-        problem, fit, errors, report = flown
-    else:
+    if flown is None:
+        refined = _within_tolerance(path, problem, fit, fitter, options, limits)
+        problem, fit, errors = refined.problem, refined.fit, refined.errors
+        info["refine_rounds"] = refined.rounds
+        clock.lap("refine")
         report = _assess(path, fit, errors, options)
+    else:
+        info.update(
+            refine_rounds=0, time_law_gain=fit.spline.duration_s / flown[1].spline.duration_s
+        )
+        problem, fit, errors, report = flown
     check(report)
     if options.fit_tolerance_m is not None and errors.worst_m > options.fit_tolerance_m:
         raise stray_error(problem, limits, errors, options.fit_tolerance_m)
@@ -241,13 +242,12 @@ def _flown_at_limits(
     path: WritingPath,
     problem: FitProblem,
     fit: SplineFit,
-    errors: StrokeErrors,
     fitter: QpFitter,
     options: PlanOptions,
 ) -> tuple[FitProblem, SplineFit, StrokeErrors, FeasibilityReport] | None:
-    """Stage 6: the fit's path flown on the fastest smooth time law (planner.time_law), measured
-    again; ``None`` when it is not shorter, strays further than the tolerance allows, or breaks a
-    limit the time law does not impose (the body rate of eq. 15)."""
+    """Stage 5: the fit's path flown on the fastest smooth time law (planner.time_law), measured;
+    ``None`` when it is not shorter, strays further than ``fit_tolerance_m`` from the strokes,
+    or breaks a limit the time law does not impose (the body rate of eq. 15)."""
     flight = fly_at_limits(fit.spline, fitter.limits, fitter.solve)
     if flight is None:
         return None
@@ -262,9 +262,8 @@ def _flown_at_limits(
     flown_errors = measure(
         spline, flown, flown_fit.residuals_m, path, options.board, options.pen_contact_tolerance_m
     )
-    if options.fit_tolerance_m is not None and flown_errors.worst_m > max(
-        options.fit_tolerance_m, errors.worst_m
-    ):
+    tolerance_m = options.fit_tolerance_m
+    if tolerance_m is not None and flown_errors.worst_m > tolerance_m:
         return None
     report = _assess(path, flown_fit, flown_errors, options)
     if not report.feasible:

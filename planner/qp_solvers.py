@@ -38,7 +38,7 @@ class QpSolverError(PlannerError):
     """The QP solver failed for a reason other than infeasibility (numerics, iteration limit)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class QpData:
     """Matrices and bounds of one QP (see module docstring)."""
 
@@ -62,7 +62,7 @@ class QpData:
     """Upper bounds of ``x`` (``+inf`` for none), shape (n,)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class QpSolution:
     """Primal solution, net inequality multipliers and solver bookkeeping."""
 

@@ -62,7 +62,7 @@ class QpLimits:
     """Lowest allowed z in [m] (via the z control points); ``None`` for none."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Structure:
     """What a QP of ``n_spans`` spans has whatever the data and ``alpha``: its rows and the
     pattern of its cost (cached per size)."""
@@ -130,7 +130,7 @@ def structure(n_spans: int, with_speed: bool) -> Structure:
     )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Bounds:
     """Row bounds (``h_l <= G x <= h_u``, divided by ``alpha^e``) and lower box bounds."""
 

@@ -144,7 +144,7 @@ def tighten(
     return weights, new
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Refinement:
     """Outcome of :func:`refine`: the best fit seen and its errors."""
 

@@ -110,7 +110,7 @@ SCALE_STEPS = 6
 """Secant steps of each global scale at most."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Allocation:
     """An allocation of segment durations and its fit (see :class:`LimitSearch`)."""
 

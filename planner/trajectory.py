@@ -19,7 +19,7 @@ if TYPE_CHECKING:
 TRAJ_FORMAT = "skyquill.traj/1"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PlannedTrajectory:
     """A smooth rest-to-rest reference that writes one character, with its own report."""
 

@@ -80,7 +80,7 @@ class PathSettings:
     0.5 a 2 cm hop flown at the limits let the brush run on 9 mm past the end, at 2.0 3.5 mm)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class WritingPath:
     """Data points of one character, world ENU, with their initial time allocation."""
 

@@ -42,6 +42,7 @@ def test_plan_of_chinese_text_imports_no_font_plot_or_show_models() -> None:
     unwanted = ("HersheyFonts", "matplotlib", "pydantic", "yaml", "showfile")
     unwanted += ("planner.retime", "planner.lbfgs")  # the paper's re-segmentation: not the default
     unwanted += ("numpy.ma.",)  # np.unique loads numpy.ma (10 ms): a plan needs no masked arrays
+    unwanted += ("shutil", "glob")  # 2-3 ms: argparse's help width, the OpenBLAS file's name
     flight = ("loop", "world", "dynamics", "autopilot_pen")  # the closed loop: flights, not plans
     flight += ("control.controller", "control.tip")  # the control law: the settings hold its config
     unwanted += tuple(f"vehicles.quadrotor_brush.{name}" for name in flight)
@@ -68,6 +69,24 @@ def test_plan_of_one_character_imports_no_scipy(text: str) -> None:
         f"    assert main(['plan', '--text', {text!r}]) == 0\n" + _loaded(("scipy",))
     )
     assert _probe(code) == []
+
+
+@pytest.mark.parametrize("columns", [None, "50", "120"])
+def test_help_is_laid_out_as_argparse_does_without_importing_shutil(columns: str | None) -> None:
+    code = (
+        "import argparse, contextlib, io, json, sys\n"
+        "from cli.main import main\n"
+        "out = io.StringIO()\n"
+        "with contextlib.redirect_stdout(out), contextlib.suppress(SystemExit):\n"
+        "    main(['plan', '--help'])\n"
+        "ours = 'shutil' in sys.modules\n"
+        "import cli.cmd_plan as command\n"
+        "parser = argparse.ArgumentParser(prog='skyquill plan', description=command.HELP)\n"
+        "command.add_arguments(parser)\n"
+        "print(json.dumps([ours, out.getvalue() == parser.format_help()]))"
+    )
+    env = {"COLUMNS": columns} if columns else {}
+    assert _probe(code, env) == [False, True]
 
 
 def test_plan_asks_for_one_blas_thread_before_numpy_loads() -> None:
