@@ -43,6 +43,12 @@ source) are about 107 M of it; 4 of them these plans never make (``QpData``, ``Q
 ``PreparedPlan``, ``LatinChar``). Garbage collection: 16 M (the peer 14 M); the teardown: 39 M (the
 peer 33 M). ``cli/main.py`` no longer imports ``logging`` (6 ms for every command). The editable
 install's path finder (``.pth``) costs every interpreter 11 ms, the peer's included.
+2026-12-02 (callgrind, bytecode cached): the peer 401 M; the plan of 永 713 M with the time law
+(planner.time_law: its QP on PIQP's dense interface, 3.6 ms), 674 M (1.68 times) once argparse's
+help width no longer imports ``shutil`` (with ``bz2`` and ``lzma``), the OpenBLAS file is found
+without ``glob``, the planner's array records skip their generated ``__eq__`` and the flight is
+measured once; A 800 -> 775 M. 1.3 times the peer would be 521 M: less than the plan's own
+imports and its work leave (the planner's 21 frozen dataclasses alone about 7 ms).
 
 Figures (2026-11-26, shared 2-core machine, warm median / least wall). Plan, at load 1.0-1.4 (7
 runs): 永 0.55 / 0.36 s with bytecode not written, 0.39 / 0.29 s cached; A 0.56 / 0.40 and 0.42 /
