@@ -221,17 +221,6 @@ def _accel_share(accel_at_knots: FloatArray, limits: VehicleLimits) -> float:
     return float(np.max(share))
 
 
-def sampled_shares(
-    spline: ClampedCubicSpline, limits: VehicleLimits, rate_hz: float = SAMPLED_RATE_HZ
-) -> tuple[float, float]:
-    """Largest share of its bound of the acceleration (per axis) and of the speed, sampled at
-    ``rate_hz`` or faster (every span from end to end; the acceleration at the knots)."""
-    x = np.linspace(0.0, 1.0, _samples_per_span(spline, rate_hz))
-    speed_sq = np.max(_speeds_sq(_span_polynomials(spline), x))
-    speed = math.sqrt(float(speed_sq)) * spline.alpha
-    return _accel_share(spline.acceleration_at_knots(), limits), speed / limits.v_max_mps
-
-
 def _min_norm_on_segments(a0: FloatArray, a1: FloatArray) -> float:
     """min over x in [0,1] of ||a0 + x (a1 - a0)|| for rows of a0, a1 (n, 3)."""
     d = a1 - a0

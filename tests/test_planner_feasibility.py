@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from planner.bspline import ClampedCubicSpline
-from planner.feasibility import distance_to_polyline, sampled_shares
+from planner.feasibility import assess, distance_to_polyline
 from planner.limits import VehicleLimits
 
 
@@ -18,9 +18,10 @@ def _spline(m: int, duration_s: float, seed: int) -> ClampedCubicSpline:
 
 
 @pytest.mark.parametrize(("m", "duration_s", "seed"), [(8, 3.0, 1), (40, 7.9, 2), (123, 24.6, 3)])
-def test_sampled_shares_are_those_of_every_sample(m: int, duration_s: float, seed: int) -> None:
-    """Acceleration read at the knots and speed from the span polynomials: the same shares as
-    evaluating the spline at every sample (each span from end to end at >= 1 kHz)."""
+def test_the_report_reads_every_sample(m: int, duration_s: float, seed: int) -> None:
+    """Acceleration read at the knots, speed and height from the span polynomials: the same
+    shares, peak and lowest height as evaluating the spline at every sample (each span from end
+    to end at >= 1 kHz)."""
     spline = _spline(m, duration_s, seed)
     limits = VehicleLimits()
     per_span = max(2, math.ceil(1000.0 * duration_s / m) + 1)
@@ -29,10 +30,21 @@ def test_sampled_shares_are_those_of_every_sample(m: int, duration_s: float, see
     lower, upper = limits.accel_bounds_mps2()
     accel = spline.evaluate(t, 2)
     share_a = float(np.max(np.maximum(accel / np.asarray(upper), accel / np.asarray(lower))))
-    share_v = float(np.max(np.linalg.norm(spline.evaluate(t, 1), axis=1))) / limits.v_max_mps
-    got_a, got_v = sampled_shares(spline, limits)
-    assert got_a == pytest.approx(share_a, rel=1e-12)
-    assert got_v == pytest.approx(share_v, rel=1e-12)
+    speed = np.linalg.norm(spline.evaluate(t, 1), axis=1)
+    report = assess(
+        spline,
+        limits,
+        turning_residuals_m=np.zeros((0, 3)),
+        turning_stroke_index=np.zeros(0, dtype=np.int64),
+        n_strokes=0,
+        board_surface_z_m=-1.0,
+    )
+    assert report.sampled_accel_share == pytest.approx(share_a, rel=1e-12)
+    assert report.sampled_speed_share == pytest.approx(np.max(speed) / limits.v_max_mps, rel=1e-12)
+    assert report.peak_speed_mps == pytest.approx(np.max(speed), rel=1e-12)
+    assert report.peak_speed_time_s == pytest.approx(t[np.argmax(speed)], abs=1e-12)
+    lowest = float(np.min(spline.evaluate(t)[:, 2]))
+    assert report.min_height_above_board_m == pytest.approx(lowest + 1.0, rel=1e-12)
 
 
 def test_distance_to_polyline_known_answers() -> None:

@@ -144,6 +144,21 @@ def test_a_fixed_total_time_and_the_nominal_pace_keep_their_own_timing() -> None
     assert fixed.duration_s == pytest.approx(30.0) and "time_law" not in fixed.timing_ms
     nominal = plan_strokes(strokes, PlanOptions(pace="nominal"))
     assert "time_law" not in nominal.timing_ms
+    assert "refine" in fixed.timing_ms and "refine" in nominal.timing_ms
+
+
+def test_a_flight_kept_is_measured_and_its_fit_is_not() -> None:
+    """The flight's own errors and limits decide (planner.pipeline, stage 5); the fit it came
+    from is measured only when no flight is kept (stage 6)."""
+    strokes = _glyph("永")
+    flown = plan_strokes(strokes, PlanOptions())
+    assert "time_law_gain" in flown.info and "refine" not in flown.timing_ms
+    report = flown.feasibility
+    assert report.path_error_max_m <= PlanOptions().fit_tolerance_m  # type: ignore[operator]
+    samples = flown.spline.evaluate(np.arange(0.0, flown.duration_s, 1e-3), 1)
+    assert report.peak_speed_mps == pytest.approx(np.max(np.linalg.norm(samples, axis=1)), 1e-4)
+    fit_only = plan_strokes(strokes, PlanOptions(time_law=False))
+    assert "refine" in fit_only.timing_ms and fit_only.info["refine_rounds"] == 0
 
 
 _POINT = st.tuples(st.floats(-0.45, 0.45), st.floats(-0.45, 0.45))
