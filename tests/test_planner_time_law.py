@@ -153,8 +153,8 @@ def test_a_flight_kept_is_measured_and_its_fit_is_not() -> None:
     strokes = _glyph("永")
     flown = plan_strokes(strokes, PlanOptions())
     assert "time_law_gain" in flown.info and "refine" not in flown.timing_ms
-    report = flown.feasibility
-    assert report.path_error_max_m <= PlanOptions().fit_tolerance_m  # type: ignore[operator]
+    report, tolerance_m = flown.feasibility, PlanOptions().fit_tolerance_m
+    assert tolerance_m is not None and report.path_error_max_m <= tolerance_m
     samples = flown.spline.evaluate(np.arange(0.0, flown.duration_s, 1e-3), 1)
     assert report.peak_speed_mps == pytest.approx(np.max(np.linalg.norm(samples, axis=1)), 1e-4)
     fit_only = plan_strokes(strokes, PlanOptions(time_law=False))

@@ -108,10 +108,13 @@ def _stopped_view_stderr(view: subprocess.Popen[str]) -> str:
 
 
 def _ctrl_c_as_in_a_terminal() -> None:
-    """The view's Ctrl-C as a terminal's foreground command has it, at its default: a suite
+    """The view's Ctrl-C as a terminal's foreground command has it, at its default. A suite
     started in the background by a non-interactive shell (``bash -c '...' &``) ignores SIGINT,
-    and every child inherits that, the view too, which then sat out its Ctrl-C (2 of about 10
-    fresh-clone runs, 2026-12-01: its main thread still in its loop 30 s later)."""
+    its xdist workers too, and a child inherits that; a worker's SIGINT is Python's own again
+    only after an in-process test removed an asyncio signal handler (the agent's, the
+    orchestrator's). A view started with SIGINT ignored sat out its Ctrl-C, its main thread
+    still in its loop 30 s later: 2 of about 10 fresh-clone runs (2026-12-01), as the tests
+    before it on its worker had it."""
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
