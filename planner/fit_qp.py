@@ -162,14 +162,17 @@ class QpFitter:
                     for part, sol in zip(parts, known, strict=True)
                 ]
                 return joined(solutions, axes)
-        dense = self._dense_for(dense_qp_seconds(3 * n, qp.G.shape[0]))
+        return self._on_budget(qp)
+
+    def _on_budget(self, qp: QpData) -> QpSolution:
+        """``qp`` whole, on the dense backend while the budget holds it, else the sparse one."""
+        dense = self._dense_for(dense_qp_seconds(qp.G.shape[1], qp.G.shape[0]))
         return (dense or self._sparse).solve(qp)
 
     def solve(self, qp: QpData) -> QpSolution:
         """Another QP of the same plan (planner.time_law's), on the backend the dense budget
         still allows."""
-        dense = self._dense_for(dense_qp_seconds(qp.G.shape[1], qp.G.shape[0]))
-        solution = (dense or self._sparse).solve(qp)
+        solution = self._on_budget(qp)
         self.solves += 1
         self.solve_ms += solution.solve_ms
         return solution
